@@ -1,0 +1,25 @@
+"""The exceptions rigopt raises for bad input; each message says what is wrong and how to fix it.
+
+The CLI prints any :class:`RigoptError` as one line and exits with code 2.
+"""
+
+
+class RigoptError(Exception):
+    """Base of every error caused by the user's input (files, names, values)."""
+
+
+class RigFileError(RigoptError, ValueError):
+    """A rig file or rig value is malformed: missing keys, wrong types, NaN/inf, no cameras."""
+
+
+class UnknownNameError(RigoptError, LookupError):
+    """A rig, vehicle or weights name is not known; the message lists the valid names."""
+
+
+class DataError(RigoptError, ValueError):
+    """Transfer results, weights or other data files are malformed or inconsistent."""
+
+
+def unknown_name(kind: str, name: str, valid) -> UnknownNameError:
+    """Build the error for an unknown ``name`` of ``kind``, listing the ``valid`` names."""
+    return UnknownNameError(f"unknown {kind} {name!r}; valid names: {', '.join(valid)}")

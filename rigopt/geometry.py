@@ -1,0 +1,171 @@
+"""Frames and SO(3): the one frame convention of rigopt and the named conversions at its edges.
+
+Conventions
+-----------
+Vehicle frame (everywhere inside rigopt): ISO 8855, right-handed, origin at the vehicle's reference
+point on the ground, x forward, y left, z up. Positions are in metres.
+
+Camera body frame: x along the optical axis (forward), y left, z up, so that a camera with the identity
+rotation looks straight ahead. ``R_vehicle_cam`` (3, 3) maps camera-body directions into the vehicle
+frame: ``d_vehicle = R_vehicle_cam @ d_cam``.
+
+Camera optical frame (pinhole, OpenCV, nuScenes): z forward, x right, y down.
+``R_cam_optical`` maps optical directions into the camera body frame.
+
+CARLA frame (the PCCR benchmark's files): x forward, y right, z up (left-handed); rotations as
+``[pitch, yaw, roll]`` degrees with ``R_carla = Rz(yaw) @ Ry(-pitch) @ Rx(roll)`` (right-handed
+elementary rotations, yaw > 0 turns right, pitch > 0 tilts up). Going to ISO 8855 is a reflection
+``S = diag(1, -1, 1)``: ``t_iso = S t_carla`` and ``R_iso = S R_carla S``. Distances and geodesic angles
+are invariant under that conjugation, so metrics are the same in either frame.
+
+Angles are radians inside rigopt; degrees appear only at the file and CLI edges (and in FOVs).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+#: Reflection between the CARLA frame (y right) and ISO 8855 (y left); its own inverse.
+S_CARLA_ISO = np.diag([1.0, -1.0, 1.0])
+S_CARLA_ISO.flags.writeable = False
+
+#: Optical frame (z forward, x right, y down) -> camera body frame (x forward, y left, z up).
+R_CAM_OPTICAL = np.array([[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]])
+R_CAM_OPTICAL.flags.writeable = False
+
+
+def rot_x(angle):
+    """Right-handed rotation about x. angle : (...,) float, radians -> (..., 3, 3) float."""
+    c, s = np.cos(angle), np.sin(angle)
+    o, z = np.ones_like(c), np.zeros_like(c)
+    return np.stack([np.stack([o, z, z], -1), np.stack([z, c, -s], -1), np.stack([z, s, c], -1)], -2)
+
+
+def rot_y(angle):
+    """Right-handed rotation about y. angle : (...,) float, radians -> (..., 3, 3) float."""
+    c, s = np.cos(angle), np.sin(angle)
+    o, z = np.ones_like(c), np.zeros_like(c)
+    return np.stack([np.stack([c, z, s], -1), np.stack([z, o, z], -1), np.stack([-s, z, c], -1)], -2)
+
+
+def rot_z(angle):
+    """Right-handed rotation about z. angle : (...,) float, radians -> (..., 3, 3) float."""
+    c, s = np.cos(angle), np.sin(angle)
+    o, z = np.ones_like(c), np.zeros_like(c)
+    return np.stack([np.stack([c, -s, z], -1), np.stack([s, c, z], -1), np.stack([z, z, o], -1)], -2)
+
+
+def rotation_from_yaw_pitch_roll(yaw, pitch, roll):
+    """ISO 8855 rotation ``Rz(yaw) @ Ry(-pitch) @ Rx(roll)`` of a camera body.
+
+    yaw, pitch, roll : (...,) float, radians; yaw > 0 turns left, pitch > 0 tilts the lens up.
+    Returns R_vehicle_cam : (..., 3, 3) float.
+    """
+    return rot_z(yaw) @ rot_y(-np.asarray(pitch, dtype=float)) @ rot_x(roll)
+
+
+def yaw_pitch_roll_from_rotation(rotation):
+    """Inverse of :func:`rotation_from_yaw_pitch_roll`.
+
+    rotation : (..., 3, 3) float. Returns yaw, pitch, roll : (...,) float radians, yaw and roll in
+    (-pi, pi], pitch in [-pi/2, pi/2]. At pitch = +-pi/2 roll is set to 0 (gimbal lock).
+    """
+    r = np.asarray(rotation, dtype=float)
+    pitch = np.arcsin(np.clip(r[..., 2, 0], -1.0, 1.0))
+    cos_p = np.hypot(r[..., 0, 0], r[..., 1, 0])
+    locked = cos_p < 1e-12
+    yaw = np.where(locked, np.arctan2(-r[..., 0, 1], r[..., 1, 1]), np.arctan2(r[..., 1, 0], r[..., 0, 0]))
+    roll = np.where(locked, 0.0, np.arctan2(r[..., 2, 1], r[..., 2, 2]))
+    return yaw, pitch, roll
+
+
+def carla_to_iso(location, rotation_deg):
+    """CARLA pose -> ISO 8855 pose.
+
+    location : (..., 3) float, metres, CARLA frame (y right).
+    rotation_deg : (..., 3) float, CARLA ``[pitch, yaw, roll]`` in degrees (any multiple of 360 apart).
+    Returns (position (..., 3) float metres ISO, R_vehicle_cam (..., 3, 3) float ISO).
+    """
+    location = np.asarray(location, dtype=float)
+    pitch, yaw, roll = np.moveaxis(np.deg2rad(np.asarray(rotation_deg, dtype=float)), -1, 0)
+    # S Rz(a) S = Rz(-a), S Ry(a) S = Ry(a), S Rx(a) S = Rx(-a): the reflection flips yaw and roll.
+    return location * np.array([1.0, -1.0, 1.0]), rotation_from_yaw_pitch_roll(-yaw, pitch, -roll)
+
+
+def iso_to_carla(position, rotation):
+    """ISO 8855 pose -> CARLA pose; inverse of :func:`carla_to_iso`.
+
+    position : (..., 3) float metres ISO; rotation : (..., 3, 3) float ISO R_vehicle_cam.
+    Returns (location (..., 3) metres CARLA, rotation_deg (..., 3) CARLA ``[pitch, yaw, roll]`` in
+    degrees, yaw and roll in (-180, 180]).
+    """
+    yaw, pitch, roll = yaw_pitch_roll_from_rotation(rotation)
+    angles = np.stack([np.rad2deg(pitch), -np.rad2deg(yaw), -np.rad2deg(roll)], axis=-1)
+    location = np.asarray(position, dtype=float) * np.array([1.0, -1.0, 1.0])
+    return location, wrap_degrees(angles)
+
+
+def wrap_degrees(angle_deg):
+    """Wrap angles to (-180, 180] degrees. angle_deg : (...,) float -> (...,) float."""
+    wrapped = -np.mod(-np.asarray(angle_deg, dtype=float) + 180.0, 360.0) + 180.0
+    return wrapped + 0.0  # normalises -0.0 to 0.0
+
+
+def geodesic_distance(rotation_a, rotation_b):
+    """Angle of ``Ra^T Rb``: ``arccos(clip((trace(Ra^T Rb) - 1) / 2, -1, 1))``.
+
+    rotation_a, rotation_b : (..., 3, 3) float, broadcastable. Returns (...,) float radians in [0, pi].
+    """
+    trace = np.einsum("...ij,...ij->...", rotation_a, rotation_b)  # trace(Ra^T Rb)
+    return np.arccos(np.clip((trace - 1.0) / 2.0, -1.0, 1.0))
+
+
+def quaternion_to_matrix(quaternion):
+    """Unit quaternion ``(w, x, y, z)`` (scalar first) -> rotation matrix.
+
+    quaternion : (..., 4) float, normalised here. Returns (..., 3, 3) float.
+    """
+    q = np.asarray(quaternion, dtype=float)
+    q = q / np.linalg.norm(q, axis=-1, keepdims=True)
+    w, x, y, z = np.moveaxis(q, -1, 0)
+    return np.stack(
+        [
+            np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)], -1),
+            np.stack([2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)], -1),
+            np.stack([2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)], -1),
+        ],
+        -2,
+    )
+
+
+def matrix_to_quaternion(rotation):
+    """Rotation matrix -> unit quaternion ``(w, x, y, z)`` with w >= 0.
+
+    rotation : (3, 3) float. Returns (4,) float.
+    """
+    r = np.asarray(rotation, dtype=float)
+    trace = np.trace(r)
+    # Shepperd's method: branch on the largest diagonal term for numerical stability.
+    i = int(np.argmax([trace, r[0, 0], r[1, 1], r[2, 2]]))
+    if i == 0:
+        s = 2.0 * np.sqrt(1.0 + trace)
+        q = [0.25 * s, (r[2, 1] - r[1, 2]) / s, (r[0, 2] - r[2, 0]) / s, (r[1, 0] - r[0, 1]) / s]
+    elif i == 1:
+        s = 2.0 * np.sqrt(1.0 + r[0, 0] - r[1, 1] - r[2, 2])
+        q = [(r[2, 1] - r[1, 2]) / s, 0.25 * s, (r[0, 1] + r[1, 0]) / s, (r[0, 2] + r[2, 0]) / s]
+    elif i == 2:
+        s = 2.0 * np.sqrt(1.0 + r[1, 1] - r[0, 0] - r[2, 2])
+        q = [(r[0, 2] - r[2, 0]) / s, (r[0, 1] + r[1, 0]) / s, 0.25 * s, (r[1, 2] + r[2, 1]) / s]
+    else:
+        s = 2.0 * np.sqrt(1.0 + r[2, 2] - r[0, 0] - r[1, 1])
+        q = [(r[1, 0] - r[0, 1]) / s, (r[0, 2] + r[2, 0]) / s, (r[1, 2] + r[2, 1]) / s, 0.25 * s]
+    q = np.asarray(q)
+    return q if q[0] >= 0 else -q
+
+
+def is_rotation(rotation, atol=1e-6):
+    """True where ``rotation`` (..., 3, 3) is orthonormal with determinant +1 within ``atol``."""
+    r = np.asarray(rotation, dtype=float)
+    eye = np.broadcast_to(np.eye(3), r.shape)
+    orthonormal = np.all(np.abs(np.swapaxes(r, -1, -2) @ r - eye) < atol, axis=(-1, -2))
+    return orthonormal & (np.abs(np.linalg.det(r) - 1.0) < atol)

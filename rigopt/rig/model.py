@@ -1,0 +1,151 @@
+"""Camera and Rig: frozen values in the ISO 8855 vehicle frame (see :mod:`rigopt.geometry`)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import numpy as np
+
+from rigopt.errors import RigFileError
+from rigopt.geometry import is_rotation
+
+#: The benchmark's image size (width, height) in pixels.
+DEFAULT_IMAGE_SIZE = (1280, 720)
+
+
+def _frozen_array(values, shape, what: str) -> np.ndarray:
+    array = np.array(values, dtype=float)
+    if array.shape != shape:
+        raise RigFileError(f"{what} must have shape {shape}, got {array.shape}")
+    if not np.all(np.isfinite(array)):
+        raise RigFileError(f"{what} contains NaN or inf: {array.tolist()}")
+    array.flags.writeable = False
+    return array
+
+
+@dataclass(frozen=True, eq=False)
+class Camera:
+    """One camera of a rig.
+
+    Attributes
+    ----------
+    id : str
+        Unique name inside its rig, e.g. ``CAM_BUMPER_FRONT``.
+    position : (3,) float
+        Lens centre in metres, ISO 8855 vehicle frame (x forward, y left, z up).
+    rotation : (3, 3) float
+        ``R_vehicle_cam``: camera body (x along the optical axis, y left, z up) -> vehicle frame.
+    fov : float
+        Horizontal field of view in degrees, in (0, 180).
+    image_size : (int, int)
+        ``(width, height)`` in pixels of an ideal centred pinhole.
+    zone : str or None
+        Name of the mounting zone the camera sits in, when known.
+    """
+
+    id: str
+    position: np.ndarray
+    rotation: np.ndarray
+    fov: float
+    image_size: tuple[int, int] = DEFAULT_IMAGE_SIZE
+    zone: str | None = None
+
+    def __post_init__(self):
+        if not isinstance(self.id, str) or not self.id:
+            raise RigFileError(f"camera id must be a non-empty string, got {self.id!r}")
+        what = f"camera {self.id!r}"
+        object.__setattr__(self, "position", _frozen_array(self.position, (3,), f"{what} position"))
+        rotation = _frozen_array(self.rotation, (3, 3), f"{what} rotation")
+        if not is_rotation(rotation):
+            raise RigFileError(f"{what} rotation is not a proper rotation matrix (orthonormal, det +1)")
+        object.__setattr__(self, "rotation", rotation)
+        try:
+            fov = float(self.fov)
+        except (TypeError, ValueError):
+            raise RigFileError(f"{what} fov must be a number of degrees, got {self.fov!r}") from None
+        if not (np.isfinite(fov) and 0.0 < fov < 180.0):
+            raise RigFileError(f"{what} fov must be in (0, 180) degrees, got {self.fov!r}")
+        object.__setattr__(self, "fov", fov)
+        size = tuple(self.image_size)
+        if len(size) != 2 or not all(isinstance(v, (int, np.integer)) and v > 0 for v in size):
+            raise RigFileError(f"{what} image_size must be two positive integers (width, height), got {self.image_size!r}")
+        object.__setattr__(self, "image_size", (int(size[0]), int(size[1])))
+
+    @property
+    def forward(self) -> np.ndarray:
+        """(3,) float: the optical axis as a unit vector in the vehicle frame."""
+        return self.rotation[:, 0]
+
+    def same_as(self, other: "Camera", atol: float = 1e-9) -> bool:
+        """True when every field agrees (arrays within ``atol``)."""
+        return (
+            self.id == other.id
+            and np.allclose(self.position, other.position, atol=atol, rtol=0)
+            and np.allclose(self.rotation, other.rotation, atol=atol, rtol=0)
+            and abs(self.fov - other.fov) <= atol
+            and self.image_size == other.image_size
+            and self.zone == other.zone
+        )
+
+
+@dataclass(frozen=True, eq=False)
+class Rig:
+    """An ordered set of N >= 1 cameras on one vehicle.
+
+    Attributes
+    ----------
+    name : str
+        The rig's name (a library name such as ``R1``, or the file stem).
+    vehicle : str
+        The vehicle the rig is mounted on, as the benchmark names it (a CARLA blueprint such as
+        ``vehicle.audi.etron``) or a rigopt vehicle name.
+    cameras : tuple of Camera
+        At least one camera, ids unique.
+    """
+
+    name: str
+    vehicle: str
+    cameras: tuple[Camera, ...] = field(default_factory=tuple)
+
+    def __post_init__(self):
+        cameras = tuple(self.cameras)
+        if not cameras:
+            raise RigFileError(f"rig {self.name!r} has no cameras; a rig needs at least one")
+        ids = [c.id for c in cameras]
+        duplicated = sorted({i for i in ids if ids.count(i) > 1})
+        if duplicated:
+            raise RigFileError(f"rig {self.name!r} repeats camera ids {duplicated}; ids must be unique")
+        object.__setattr__(self, "cameras", cameras)
+
+    def __len__(self) -> int:
+        return len(self.cameras)
+
+    @cached_property
+    def positions(self) -> np.ndarray:
+        """(N, 3) float: lens centres in metres, vehicle frame."""
+        return _read_only(np.stack([c.position for c in self.cameras]))
+
+    @cached_property
+    def rotations(self) -> np.ndarray:
+        """(N, 3, 3) float: ``R_vehicle_cam`` of each camera."""
+        return _read_only(np.stack([c.rotation for c in self.cameras]))
+
+    @cached_property
+    def fovs(self) -> np.ndarray:
+        """(N,) float: horizontal FOVs in degrees."""
+        return _read_only(np.array([c.fov for c in self.cameras]))
+
+    def same_as(self, other: "Rig", atol: float = 1e-9) -> bool:
+        """True when names, vehicles and every camera agree (arrays within ``atol``)."""
+        return (
+            self.name == other.name
+            and self.vehicle == other.vehicle
+            and len(self) == len(other)
+            and all(a.same_as(b, atol) for a, b in zip(self.cameras, other.cameras))
+        )
+
+
+def _read_only(array: np.ndarray) -> np.ndarray:
+    array.flags.writeable = False
+    return array

@@ -1,0 +1,128 @@
+"""The PCCR benchmark's rig JSON (CARLA frame), read into and written from :class:`Rig`.
+
+File layout::
+
+    {"vehicle_type": "vehicle.audi.etron",
+     "cameras": [{"id": "CAM_BUMPER_FRONT", "location": [x, y, z], "rotation": [pitch, yaw, roll],
+                  "fov": 65}, ...]}
+
+``location`` in metres, CARLA frame (x forward, y right, z up); ``rotation`` in degrees, CARLA order,
+any multiple of 360 apart; ``fov`` horizontal, degrees. Other keys (the benchmark's ``lidar``) are
+ignored. rigopt adds two optional keys per camera, written only when they differ from the benchmark's
+defaults: ``image_size`` ``[width, height]`` (default 1280 x 720) and ``zone``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+
+from rigopt.errors import RigFileError
+from rigopt.geometry import carla_to_iso, iso_to_carla
+from rigopt.rig.model import DEFAULT_IMAGE_SIZE, Camera, Rig
+
+#: Decimals kept when writing angles (degrees) and locations (metres): far below any mounting tolerance,
+#: and enough to give back the numbers of a file that was read.
+WRITE_DECIMALS = 9
+
+
+def rig_from_dict(data, name: str, source: str = "<rig>") -> Rig:
+    """Build a Rig from the parsed JSON ``data`` of a benchmark rig file; ``source`` names it in errors."""
+    if not isinstance(data, dict):
+        raise RigFileError(f"{source}: a rig file must hold a JSON object with 'vehicle_type' and 'cameras'")
+    for key in ("vehicle_type", "cameras"):
+        if key not in data:
+            raise RigFileError(f"{source}: missing key {key!r}; a rig file needs 'vehicle_type' and 'cameras'")
+    vehicle = data["vehicle_type"]
+    if not isinstance(vehicle, str) or not vehicle:
+        raise RigFileError(f"{source}: 'vehicle_type' must be a non-empty string, got {vehicle!r}")
+    cameras = data["cameras"]
+    if not isinstance(cameras, list) or not cameras:
+        raise RigFileError(f"{source}: 'cameras' must be a non-empty list of cameras")
+    try:
+        return Rig(name, vehicle, tuple(_camera_from_dict(c, k, source) for k, c in enumerate(cameras)))
+    except RigFileError as error:
+        message = str(error)
+        raise RigFileError(message if message.startswith(source) else f"{source}: {message}") from None
+
+
+def _camera_from_dict(entry, index: int, source: str) -> Camera:
+    where = f"{source}: camera {index}"
+    if not isinstance(entry, dict):
+        raise RigFileError(f"{where} must be an object with 'id', 'location', 'rotation', 'fov'")
+    missing = [k for k in ("id", "location", "rotation", "fov") if k not in entry]
+    if missing:
+        raise RigFileError(f"{where} ({entry.get('id', 'no id')}) is missing {missing}")
+    location = _numbers(entry["location"], 3, f"{where} ({entry['id']}) 'location' [x, y, z] metres")
+    rotation = _numbers(entry["rotation"], 3, f"{where} ({entry['id']}) 'rotation' [pitch, yaw, roll] degrees")
+    fov = _numbers([entry["fov"]], 1, f"{where} ({entry['id']}) 'fov' degrees")[0]
+    size = entry.get("image_size", DEFAULT_IMAGE_SIZE)
+    if not (isinstance(size, (list, tuple)) and len(size) == 2 and all(isinstance(v, int) and v > 0 for v in size)):
+        raise RigFileError(f"{where} ({entry['id']}) 'image_size' must be [width, height] in pixels, got {size!r}")
+    position, rotation_matrix = carla_to_iso(location, rotation)
+    return Camera(str(entry["id"]), position, rotation_matrix, fov, tuple(size), entry.get("zone"))
+
+
+def _numbers(values, count: int, what: str) -> list[float]:
+    if not isinstance(values, (list, tuple)) or len(values) != count:
+        raise RigFileError(f"{what}: expected {count} number(s), got {values!r}")
+    out = []
+    for v in values:
+        if isinstance(v, bool) or not isinstance(v, (int, float)):
+            raise RigFileError(f"{what}: expected numbers, got {values!r}")
+        if not math.isfinite(v):
+            raise RigFileError(f"{what}: NaN or inf is not allowed, got {values!r}")
+        out.append(float(v))
+    return out
+
+
+def rig_to_dict(rig: Rig) -> dict:
+    """The benchmark JSON object of ``rig`` (CARLA frame, degrees)."""
+    location, rotation = iso_to_carla(rig.positions, rig.rotations)
+    cameras = []
+    for camera, loc, rot in zip(rig.cameras, location, rotation):
+        entry = {
+            "id": camera.id,
+            "location": _rounded(loc),
+            "rotation": _rounded(rot),
+            "fov": _rounded([camera.fov])[0],
+        }
+        if camera.image_size != DEFAULT_IMAGE_SIZE:
+            entry["image_size"] = list(camera.image_size)
+        if camera.zone is not None:
+            entry["zone"] = camera.zone
+        cameras.append(entry)
+    return {"vehicle_type": rig.vehicle, "cameras": cameras}
+
+
+def _rounded(values) -> list:
+    """Round to WRITE_DECIMALS, drop -0.0, and write whole numbers as integers like the benchmark does."""
+    out = []
+    for v in np.round(np.asarray(values, dtype=float), WRITE_DECIMALS) + 0.0:
+        out.append(int(v) if float(v).is_integer() else float(v))
+    return out
+
+
+def read_rig(path, name: str | None = None) -> Rig:
+    """Read a benchmark rig file. ``name`` defaults to the file stem."""
+    path = Path(path)
+    try:
+        text = path.read_text()
+    except OSError as error:
+        raise RigFileError(f"{path}: cannot read the rig file ({error.strerror})") from None
+    try:
+        data = json.loads(text)
+    except json.JSONDecodeError as error:
+        raise RigFileError(f"{path}: not valid JSON (line {error.lineno}, column {error.colno}: {error.msg})") from None
+    return rig_from_dict(data, name or path.stem, str(path))
+
+
+def write_rig(rig: Rig, path) -> Path:
+    """Write ``rig`` as a benchmark rig file; returns the path."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(rig_to_dict(rig), indent=2) + "\n")
+    return path
