@@ -1,0 +1,18 @@
+"""rigopt's command line: thin commands over the library. ``main`` is the console script."""
+
+from __future__ import annotations
+
+import sys
+
+from rigopt.cli.app import app
+from rigopt.cli import calibrate_command, metric_commands, rig_commands  # noqa: F401  (they register commands)
+from rigopt.errors import RigoptError
+
+
+def main() -> None:
+    """Run the CLI; input errors print one line on stderr and exit with code 2."""
+    try:
+        app()
+    except RigoptError as error:
+        print(f"rigopt: error: {error}", file=sys.stderr)
+        sys.exit(2)

@@ -1,0 +1,47 @@
+"""The ``rigopt`` command-line application object and the output helpers its commands share."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import typer
+from rich.console import Console
+from rich.table import Table
+
+app = typer.Typer(
+    name="rigopt",
+    help="Design automotive camera rigs that transfer: rig metrics, calibration, ranking.",
+    no_args_is_help=True,
+    add_completion=False,
+    pretty_exceptions_enable=False,
+)
+import_app = typer.Typer(help="Convert rigs from other formats into rigopt's (the benchmark's) JSON.", no_args_is_help=True)
+app.add_typer(import_app, name="import")
+
+console = Console()
+
+
+def print_json(data) -> None:
+    """Print ``data`` as JSON on stdout; NaN and inf become null."""
+    print(json.dumps(_finite(data), indent=2))
+
+
+def _finite(value):
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    if isinstance(value, dict):
+        return {k: _finite(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_finite(v) for v in value]
+    return value
+
+
+def print_table(title: str, columns: list[str], rows: list[list]) -> None:
+    """Print a rich table; numbers are shown with 3 decimals."""
+    table = Table(title=title)
+    for column in columns:
+        table.add_column(column, justify="left" if column in ("rig", "vehicle", "model", "fovs") else "right")
+    for row in rows:
+        table.add_row(*(f"{v:.3f}" if isinstance(v, float) else str(v) for v in row))
+    console.print(table)

@@ -1,0 +1,83 @@
+"""``rigopt calibrate``: the benchmark's calibration protocol on measured cross-rig transfer."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Optional
+
+import typer
+
+from rigopt.cli.app import app, console, print_json, print_table
+from rigopt.errors import RigoptError
+from rigopt.metrics.protocol import CONTROL_RIGS, calibrate
+from rigopt.metrics.reliability import DEFAULT_BOOTSTRAP, DEFAULT_SEED
+from rigopt.metrics.transfer import read_transfer
+from rigopt.report.calibration_tables import study_dict, write_study_tables
+from rigopt.rig.library import load_rig
+
+
+def _rig_lookup(rigs_dir: Optional[Path]):
+    """Resolve a rig name: ``<rigs_dir>/<name>.json`` when given and present, else the library."""
+    def lookup(name: str):
+        if rigs_dir is not None and (rigs_dir / f"{name}.json").is_file():
+            return load_rig(rigs_dir / f"{name}.json")
+        return load_rig(name)
+    return lookup
+
+
+@app.command("calibrate")
+def calibrate_command(
+    results: Path = typer.Option(..., help="Measured transfer: a benchmark results folder "
+                                           "(<model>/trained_on_<rig>.json) or a CSV model,train_rig,test_rig,mAP."),
+    control: str = typer.Option(",".join(CONTROL_RIGS), help="Comma-separated control rigs (the calibration set)."),
+    bootstrap: int = typer.Option(DEFAULT_BOOTSTRAP, help="Bootstrap resamples for the 95 % interval of rho."),
+    seed: int = typer.Option(DEFAULT_SEED, help="Seed of the bootstrap."),
+    rigs: Optional[Path] = typer.Option(None, help="Folder of <rig>.json files for rigs not in the library."),
+    solver: str = typer.Option("lbfgsb", help="Whose beta is reported: lbfgsb (the benchmark's) or qp (cvxpy)."),
+    out: Optional[Path] = typer.Option(None, help="Folder for the JSON, pairs CSV, weights and figures."),
+    as_json: bool = typer.Option(False, "--json", help="Print the JSON report instead of tables."),
+):
+    """Fit calibrated RigCD per detector and jointly; report reliability on control and held-out pairs."""
+    if bootstrap < 0:
+        raise RigoptError(f"--bootstrap must be >= 0, got {bootstrap}")
+    control_rigs = tuple(r.strip() for r in control.split(",") if r.strip())
+    study = calibrate(read_transfer(results), control_rigs, _rig_lookup(rigs), bootstrap, seed, solver)
+    report = study_dict(study)
+    if out is not None:
+        from rigopt.report.calibration_figures import write_calibration_figures
+
+        out.mkdir(parents=True, exist_ok=True)
+        (out / "calibration.json").write_text(json.dumps(report, indent=2) + "\n")
+        written = [out / "calibration.json", *write_study_tables(study, out), *write_calibration_figures(study, out)]
+        if not as_json:
+            console.print(f"wrote {len(written)} files to {out}")
+    if as_json:
+        print_json(report)
+        return
+    _print_tables(report)
+
+
+def _print_tables(report: dict) -> None:
+    models = report["models"]
+    print_table("Per-detector weights", ["model", "K", "alpha", "l_t", "l_r", "l_f", "fallback", "QP agrees"],
+                [[m, e["weights"]["K"], e["weights"]["alpha"], e["weights"]["lambda_t"], e["weights"]["lambda_r"],
+                  e["weights"]["lambda_f"], "yes" if e["weights"]["fallback"] else "no",
+                  "yes" if e["weights"]["qp_agrees"] else "NO"] for m, e in models.items()])
+    joint = report["joint"]
+    rows = [[m, e["control"]["rho"], e["heldout"]["rho"], _ci(e["heldout"]["ci"]), e["heldout"]["mae"]]
+            for m, e in models.items()]
+    rows += [[f"{m} (joint)", e["control"]["rho"], e["heldout"]["rho"], _ci(e["heldout"]["ci"]), e["heldout"]["mae"]]
+             for m, e in joint["models"].items()]
+    print_table("Reliability (Spearman rho, 95 % bootstrap CI)", ["model", "rho ctrl", "rho held", "CI held",
+                                                                  "MAE held"], rows)
+    w = joint["weights"]
+    console.print(f"joint weights: K {w['K']:.3f}  alpha {w['alpha']:.3f}  lambdas {w['lambda_t']:.3f} "
+                  f"{w['lambda_r']:.3f} {w['lambda_f']:.3f}  QP agrees: {'yes' if w['qp_agrees'] else 'NO'}")
+    print_table("Knockout: held-out rho without one component", ["model", "full", "no t", "no r", "no f", "no count"],
+                [[m, *(e["knockout"][k] for k in ("full", "lambda_t", "lambda_r", "lambda_f", "count"))]
+                 for m, e in models.items()])
+
+
+def _ci(ci) -> str:
+    return "-" if None in ci else f"[{ci[0]:.3f}, {ci[1]:.3f}]"

@@ -1,0 +1,72 @@
+"""``rigopt rigv``, ``rigopt rigcd`` and ``rigopt rank``: rig metrics and predicted transfer."""
+
+from __future__ import annotations
+
+from dataclasses import asdict
+from typing import List, Optional
+
+import typer
+
+from rigopt.cli.app import app, print_json, print_table
+from rigopt.metrics.calibration import load_weights
+from rigopt.metrics.ranking import predict_transfer, rank_candidates
+from rigopt.metrics.rigcd import DEFAULT_LAMBDAS
+from rigopt.metrics.rigv import rigv
+from rigopt.rig.library import load_rig
+
+WEIGHTS_HELP = "Calibrated weights: a shipped name (BEVDet, BEVFusion, Fast-BEV, PETR, joint) or a weights JSON file."
+JSON_HELP = "Print JSON instead of a table."
+
+
+@app.command("rigv")
+def rigv_command(
+    rigs: List[str] = typer.Argument(..., help="Library rig names or rig files."),
+    weights: Optional[str] = typer.Option(None, help=WEIGHTS_HELP + " Its lambdas weight the three terms."),
+    as_json: bool = typer.Option(False, "--json", help=JSON_HELP),
+):
+    """Rig Variance of each rig: how diverse its cameras are (positions, orientations, FOVs)."""
+    lambdas = load_weights(weights).lambdas if weights else DEFAULT_LAMBDAS
+    results = [rigv(load_rig(name), lambdas) for name in rigs]
+    if as_json:
+        print_json([{k: v for k, v in asdict(r).items() if k != "lambdas"} for r in results])
+        return
+    print_table("Rig Variance", ["rig", "rigv", "tv (m)", "rv (rad)", "fv (deg)", "dmax (m)"],
+                [[r.rig, r.rigv, r.tv, r.rv, r.fv, r.dmax] for r in results])
+
+
+@app.command("rigcd")
+def rigcd_command(
+    a: str = typer.Argument(..., help="First rig: library name or rig file."),
+    b: str = typer.Argument(..., help="Second rig: library name or rig file."),
+    weights: Optional[str] = typer.Option(None, help=WEIGHTS_HELP + " Adds the predicted drop a -> b."),
+    as_json: bool = typer.Option(False, "--json", help=JSON_HELP),
+):
+    """Rig Contrastive Distance between two rigs, its components and (with --weights) the predicted drop."""
+    calibration = load_weights(weights) if weights else None
+    p = predict_transfer(load_rig(a), [load_rig(b)], calibration)[0]
+    data = {"a": p.reference, "b": p.rig, "rigcd": p.rigcd, "match": p.match, "count": p.count,
+            "t": p.t, "r": p.r, "f": p.f, "predicted_drop": p.predicted_drop}
+    if as_json:
+        print_json(data)
+        return
+    columns = ["rigcd", "match", "count", "t (m)", "r (rad)", "f (deg)", "predicted drop"]
+    drop = "-" if p.predicted_drop is None else p.predicted_drop
+    print_table(f"RigCD {p.reference} -> {p.rig}", columns, [[p.rigcd, p.match, p.count, p.t, p.r, p.f, drop]])
+
+
+@app.command("rank")
+def rank_command(
+    candidates: List[str] = typer.Argument(..., help="Candidate rigs: library names or rig files."),
+    ref: str = typer.Option(..., "--ref", help="Reference rig the detector was trained on."),
+    weights: str = typer.Option("joint", help=WEIGHTS_HELP),
+    as_json: bool = typer.Option(False, "--json", help=JSON_HELP),
+):
+    """Rank candidate rigs by the predicted relative mAP drop of a detector trained on the reference."""
+    ranked = rank_candidates(load_rig(ref), [load_rig(c) for c in candidates], load_weights(weights))
+    if as_json:
+        print_json([{"rig": p.rig, "predicted_drop": p.predicted_drop, "rigcd": p.rigcd, "t": p.t, "r": p.r,
+                     "f": p.f, "count": p.count} for p in ranked])
+        return
+    print_table(f"Candidates ranked by predicted drop from {ref} ({weights} weights)",
+                ["rank", "rig", "predicted drop", "rigcd", "t (m)", "r (rad)", "f (deg)", "count"],
+                [[k + 1, p.rig, p.predicted_drop, p.rigcd, p.t, p.r, p.f, p.count] for k, p in enumerate(ranked)])

@@ -1,0 +1,221 @@
+"""Calibrated RigCD: fit non-negative weights that turn rig-pair features into predicted mAP drops.
+
+Features of a pair (A, B) are the unit-weight RigCD components ``x = (t, r, f, count)`` (m, rad, deg, -).
+The model ``delta_hat = beta . x`` with ``beta >= 0`` is fitted by least squares twice: with L-BFGS-B
+from ``beta0 = (0.5, 0.5, 0.5, 0.5)`` (the benchmark's method) and as a convex QP with cvxpy + HiGHS,
+whose optimum certifies the first (they must agree). The fit is reported as
+
+    avg = (beta_t + beta_r + beta_f) / 3,  K = avg + beta_count,  alpha = avg / K,  lambda_x = beta_x / avg
+    delta_hat = K (alpha (lt x_t + lr x_r + lf x_f) + (1 - alpha) x_count)
+
+with the fallback alpha = 0.9, lambdas = 1, K = max(avg + beta_count, 1) when ``avg <= 1e-9``.
+Predictions always come from (K, alpha, lambdas).
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Sequence
+
+import numpy as np
+
+from rigopt.errors import DataError, RigoptError, unknown_name
+from rigopt.metrics.rigcd import DEFAULT_ALPHA, rigcd_matrix
+from rigopt.resources import data_dir
+from rigopt.rig.model import Rig
+
+FEATURES = ("t", "r", "f", "count")
+BETA0 = (0.5, 0.5, 0.5, 0.5)
+#: Below this the geometric weights are taken as absent and the fallback applies.
+AVG_EPSILON = 1e-9
+#: Largest difference in fitted objective (relative) and in beta (absolute) for the two fits to agree.
+AGREEMENT_OBJECTIVE_RTOL = 1e-6
+AGREEMENT_BETA_ATOL = 1e-3
+FIT_SOLVERS = ("lbfgsb", "qp")
+
+
+@dataclass(frozen=True)
+class Calibration:
+    """Calibrated RigCD weights; ``predict`` maps unit-weight features to a relative mAP drop.
+
+    Attributes: ``name``; ``K`` (scale), ``alpha`` in [0, 1], ``lambda_t`` (1/m), ``lambda_r`` (1/rad),
+    ``lambda_f`` (1/deg) relative to their mean; ``beta`` (t, r, f, count) the fitted linear weights;
+    ``fallback`` true when no geometric weight survived the fit.
+    """
+
+    name: str
+    K: float
+    alpha: float
+    lambda_t: float
+    lambda_r: float
+    lambda_f: float
+    beta: tuple[float, float, float, float]
+    fallback: bool
+
+    @property
+    def lambdas(self) -> tuple[float, float, float]:
+        return (self.lambda_t, self.lambda_r, self.lambda_f)
+
+    def predict(self, t, r, f, count) -> np.ndarray:
+        """Predicted relative drop; t (m), r (rad), f (deg), count (-) are broadcastable arrays."""
+        match = self.lambda_t * np.asarray(t) + self.lambda_r * np.asarray(r) + self.lambda_f * np.asarray(f)
+        return self.K * (self.alpha * match + (1.0 - self.alpha) * np.asarray(count))
+
+    def knocked_out(self, component: str) -> "Calibration":
+        """The same weights with one component removed: lambda_t, lambda_r, lambda_f (set to 0) or count
+        (alpha = 1)."""
+        if component == "count":
+            return _replace(self, alpha=1.0)
+        if component in ("lambda_t", "lambda_r", "lambda_f"):
+            return _replace(self, **{component: 0.0})
+        raise RigoptError(f"unknown knockout component {component!r}; use lambda_t, lambda_r, lambda_f or count")
+
+    def to_dict(self) -> dict:
+        data = asdict(self)
+        data["beta"] = dict(zip(FEATURES, self.beta))
+        return data
+
+
+def _replace(calibration: Calibration, **changes) -> Calibration:
+    return Calibration(**{**asdict(calibration), **changes})
+
+
+def reparameterise(beta: Sequence[float], name: str) -> Calibration:
+    """The reported (K, alpha, lambdas) of fitted ``beta`` = (t, r, f, count), fallback included."""
+    bt, br, bf, bc = (float(b) for b in beta)
+    avg = (bt + br + bf) / 3.0
+    if avg <= AVG_EPSILON:
+        return Calibration(name, max(avg + bc, 1.0), DEFAULT_ALPHA, 1.0, 1.0, 1.0, (bt, br, bf, bc), True)
+    k = avg + bc
+    return Calibration(name, k, avg / k, bt / avg, br / avg, bf / avg, (bt, br, bf, bc), False)
+
+
+def pair_features(rigs: Sequence[Rig], train: Sequence[str], test: Sequence[str]) -> np.ndarray:
+    """Unit-weight features (P, 4) = (t m, r rad, f deg, count) of the pairs (train[p] -> test[p]).
+
+    ``rigs`` holds every rig named in ``train`` and ``test`` (matched by ``Rig.name``).
+    """
+    index = {rig.name: k for k, rig in enumerate(rigs)}
+    matrix = rigcd_matrix(rigs, rigs)
+    ia = np.array([index[name] for name in train], dtype=int)
+    ib = np.array([index[name] for name in test], dtype=int)
+    return np.stack([getattr(matrix, key)[ia, ib] for key in FEATURES], axis=1)
+
+
+@dataclass(frozen=True)
+class CalibrationFit:
+    """The two fits of one calibration set and the reported weights.
+
+    ``calibration`` uses ``beta_lbfgsb`` or ``beta_qp`` as chosen by ``solver``; ``qp_agrees`` tells
+    whether both optima agree within AGREEMENT_OBJECTIVE_RTOL / AGREEMENT_BETA_ATOL. ``n`` pairs.
+    """
+
+    calibration: Calibration
+    solver: str
+    beta_lbfgsb: tuple[float, float, float, float]
+    beta_qp: tuple[float, float, float, float]
+    objective_lbfgsb: float
+    objective_qp: float
+    qp_agrees: bool
+    n: int
+
+
+def _objective(beta, features, delta) -> float:
+    residual = features @ beta - delta
+    return float(residual @ residual)
+
+
+def fit_lbfgsb(features: np.ndarray, delta: np.ndarray) -> np.ndarray:
+    """beta >= 0 minimising sum (beta . x - delta)^2 by L-BFGS-B from BETA0; features (P, 4), delta (P,)."""
+    from scipy.optimize import minimize
+
+    def value_and_gradient(beta):
+        residual = features @ beta - delta
+        return float(residual @ residual), 2.0 * features.T @ residual
+
+    result = minimize(value_and_gradient, np.array(BETA0), jac=True, method="L-BFGS-B",
+                      bounds=[(0.0, None)] * features.shape[1])
+    return result.x
+
+
+def fit_qp(features: np.ndarray, delta: np.ndarray) -> np.ndarray:
+    """The same least squares with beta >= 0 as a convex QP (cvxpy + HiGHS, active set: exact zeros)."""
+    import cvxpy as cp
+
+    beta = cp.Variable(features.shape[1], nonneg=True)
+    problem = cp.Problem(cp.Minimize(cp.sum_squares(features @ beta - delta)))
+    problem.solve(solver=cp.HIGHS)
+    if problem.status != cp.OPTIMAL:
+        raise RigoptError(f"the calibration QP did not solve to optimality (status {problem.status})")
+    return np.maximum(beta.value, 0.0)
+
+
+def fit_calibration(features: np.ndarray, delta: np.ndarray, name: str, solver: str = "lbfgsb") -> CalibrationFit:
+    """Fit beta both ways, check they agree, and reparameterise the ``solver``'s one.
+
+    features : (P, 4) float unit-weight features; delta : (P,) float relative drops.
+    """
+    if solver not in FIT_SOLVERS:
+        raise RigoptError(f"unknown fit solver {solver!r}; use one of {', '.join(FIT_SOLVERS)}")
+    features, delta = np.asarray(features, dtype=float), np.asarray(delta, dtype=float)
+    if len(delta) == 0:
+        raise DataError(f"no calibration pairs for {name!r}: check the control rigs and the results")
+    beta_l, beta_q = fit_lbfgsb(features, delta), fit_qp(features, delta)
+    obj_l, obj_q = _objective(beta_l, features, delta), _objective(beta_q, features, delta)
+    agrees = bool(abs(obj_l - obj_q) <= AGREEMENT_OBJECTIVE_RTOL * max(obj_q, 1e-12)
+                  and np.max(np.abs(beta_l - beta_q)) <= AGREEMENT_BETA_ATOL)
+    chosen = beta_l if solver == "lbfgsb" else beta_q
+    return CalibrationFit(reparameterise(chosen, name), solver, tuple(map(float, beta_l)), tuple(map(float, beta_q)),
+                          obj_l, obj_q, agrees, len(delta))
+
+
+# --- Weights files: shipped calibrations and the user's own JSON ---------------------------------------
+
+def shipped_weight_names() -> list[str]:
+    """Names of the calibrations shipped in ``metrics/weights/`` (the four detectors and ``joint``)."""
+    return sorted(p.stem for p in (data_dir("metrics") / "weights").glob("*.json"))
+
+
+def write_weights(calibration: Calibration, path) -> Path:
+    """Write a weights JSON file; returns the path."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(calibration.to_dict(), indent=2) + "\n")
+    return path
+
+
+def load_weights(name_or_path) -> Calibration:
+    """Calibrated weights from a shipped name (case-insensitive) or a JSON file written by rigopt."""
+    text = str(name_or_path)
+    path = Path(text)
+    if path.suffix.lower() != ".json" and not path.exists():
+        by_lower = {n.lower(): n for n in shipped_weight_names()}
+        if text.lower() not in by_lower:
+            raise unknown_name("weights", text, shipped_weight_names())
+        path = data_dir("metrics") / "weights" / f"{by_lower[text.lower()]}.json"
+    try:
+        data = json.loads(path.read_text())
+    except OSError as error:
+        raise DataError(f"{path}: cannot read the weights file ({error.strerror})") from None
+    except json.JSONDecodeError as error:
+        raise DataError(f"{path}: not valid JSON (line {error.lineno}: {error.msg})") from None
+    return _calibration_from_dict(data, path)
+
+
+def _calibration_from_dict(data, path: Path) -> Calibration:
+    keys = ("K", "alpha", "lambda_t", "lambda_r", "lambda_f")
+    if not isinstance(data, dict) or any(k not in data for k in keys):
+        raise DataError(f"{path}: a weights file needs the keys {', '.join(keys)}")
+    values = {}
+    for key in keys:
+        value = data[key]
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not np.isfinite(value) or value < 0:
+            raise DataError(f"{path}: {key} must be a finite, non-negative number, got {value!r}")
+        values[key] = float(value)
+    if values["alpha"] > 1:
+        raise DataError(f"{path}: alpha must be in [0, 1], got {values['alpha']}")
+    beta = data.get("beta", {})
+    beta = tuple(float(beta.get(k, np.nan)) for k in FEATURES) if isinstance(beta, dict) else (np.nan,) * 4
+    return Calibration(str(data.get("name", path.stem)), **values, beta=beta, fallback=bool(data.get("fallback", False)))

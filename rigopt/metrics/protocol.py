@@ -1,0 +1,168 @@
+"""The benchmark's calibration protocol: fit on control-rig pairs, evaluate on held-out pairs.
+
+The calibration set of a detector is every pair whose training and test rigs are both control rigs
+(diagonal included); the held-out set is every other pair. Each detector is fitted on its own, and all
+detectors jointly (calibration pairs stacked, one beta) with each detector then evaluated separately.
+Component knockout re-evaluates held-out rho with one fitted component removed (no refit).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable, Sequence
+
+import numpy as np
+
+from rigopt.errors import DataError
+from rigopt.metrics.calibration import Calibration, CalibrationFit, fit_calibration, pair_features
+from rigopt.metrics.reliability import DEFAULT_BOOTSTRAP, DEFAULT_SEED, Reliability, drop_ranks, reliability, spearman
+from rigopt.metrics.transfer import TransferDrops, TransferTable
+from rigopt.rig.library import load_rig
+from rigopt.rig.model import Rig
+
+CONTROL_RIGS = ("R1", "R1-c10", "R1-c6", "R1-f", "R1-r", "R1-t")
+KNOCKOUTS = ("lambda_t", "lambda_r", "lambda_f", "count")
+JOINT = "joint"
+
+
+@dataclass(frozen=True)
+class PairPredictions:
+    """Every evaluated pair; arrays (P,) unless stated.
+
+    ``features`` (P, 4): unit-weight (t m, r rad, f deg, count); ``delta``: observed relative drop;
+    ``predicted``: calibrated prediction; ``control``: both rigs are control rigs;
+    ``rank_observed`` / ``rank_predicted``: rank of the drop among the test rigs of the same
+    (model, training rig), largest drop = 1, ties averaged.
+    """
+
+    model: np.ndarray
+    train: np.ndarray
+    test: np.ndarray
+    features: np.ndarray
+    delta: np.ndarray
+    predicted: np.ndarray
+    control: np.ndarray
+    rank_observed: np.ndarray
+    rank_predicted: np.ndarray
+
+    @property
+    def rank_error(self) -> np.ndarray:
+        """(P,) float: predicted rank - observed rank."""
+        return self.rank_predicted - self.rank_observed
+
+
+@dataclass(frozen=True)
+class Knockout:
+    """Held-out rho of the full fitted metric and with each component removed."""
+
+    full: float
+    lambda_t: float
+    lambda_r: float
+    lambda_f: float
+    count: float
+
+
+@dataclass(frozen=True)
+class ModelCalibration:
+    """One detector's own fit and its reliability on control and held-out pairs."""
+
+    model: str
+    fit: CalibrationFit
+    control: Reliability
+    heldout: Reliability
+    knockout: Knockout
+    pairs: PairPredictions
+
+
+@dataclass(frozen=True)
+class ModelReliability:
+    """One detector's pairs evaluated under the joint fit."""
+
+    model: str
+    control: Reliability
+    heldout: Reliability
+
+
+@dataclass(frozen=True)
+class JointCalibration:
+    """The joint fit over every detector's calibration pairs, evaluated per detector."""
+
+    fit: CalibrationFit
+    models: tuple[ModelReliability, ...]
+    pairs: PairPredictions
+
+
+@dataclass(frozen=True)
+class CalibrationStudy:
+    """The whole protocol's outcome; ``skipped`` lists (model, training rig) pairs without a positive own mAP."""
+
+    control_rigs: tuple[str, ...]
+    models: tuple[ModelCalibration, ...]
+    joint: JointCalibration
+    skipped: tuple[tuple[str, str], ...]
+
+
+def _predictions(drops: TransferDrops, features: np.ndarray, calibration: Calibration,
+                 control: np.ndarray) -> PairPredictions:
+    predicted = calibration.predict(*features.T)
+    rank_observed, rank_predicted = np.zeros(len(predicted)), np.zeros(len(predicted))
+    groups = {}
+    for k, key in enumerate(zip(drops.model, drops.train)):
+        groups.setdefault(key, []).append(k)
+    for rows in groups.values():
+        rank_observed[rows] = drop_ranks(drops.delta[rows])
+        rank_predicted[rows] = drop_ranks(predicted[rows])
+    return PairPredictions(drops.model, drops.train, drops.test, features, drops.delta, predicted, control,
+                           rank_observed, rank_predicted)
+
+
+def _split_reliability(pairs: PairPredictions, resamples: int, seed: int) -> tuple[Reliability, Reliability]:
+    return tuple(reliability(pairs.predicted[mask], pairs.delta[mask], resamples, seed)
+                 for mask in (pairs.control, ~pairs.control))
+
+
+def _knockout(calibration: Calibration, pairs: PairPredictions) -> Knockout:
+    held = ~pairs.control
+    x, delta = pairs.features[held], pairs.delta[held]
+    rhos = {name: spearman(calibration.knocked_out(name).predict(*x.T), delta)[0] for name in KNOCKOUTS}
+    return Knockout(full=spearman(calibration.predict(*x.T), delta)[0], **rhos)
+
+
+def calibrate(table: TransferTable, control_rigs: Sequence[str] = CONTROL_RIGS,
+              rig_lookup: Callable[[str], Rig] = load_rig, resamples: int = DEFAULT_BOOTSTRAP,
+              seed: int = DEFAULT_SEED, solver: str = "lbfgsb") -> CalibrationStudy:
+    """Run the protocol on measured transfer ``table``; rigs are resolved by name with ``rig_lookup``."""
+    control_rigs = tuple(control_rigs)
+    drops = table.drops()
+    if len(drops.delta) == 0:
+        raise DataError("no pair has a training rig with a positive own mAP; nothing to calibrate")
+    rig_names = list(dict.fromkeys(drops.train.tolist() + drops.test.tolist()))
+    rigs = [_named(rig_lookup(name), name) for name in rig_names]
+    features = pair_features(rigs, drops.train, drops.test)
+    control = np.isin(drops.train, control_rigs) & np.isin(drops.test, control_rigs)
+    if not control.any():
+        raise DataError(f"no pair has both rigs among the control rigs {', '.join(control_rigs)}; "
+                        "name control rigs present in the results with --control")
+
+    models = []
+    for model in dict.fromkeys(drops.model.tolist()):
+        mine = drops.model == model
+        fit = fit_calibration(features[mine & control], drops.delta[mine & control], model, solver)
+        pairs = _predictions(drops.select(mine), features[mine], fit.calibration, control[mine])
+        control_rel, heldout_rel = _split_reliability(pairs, resamples, seed)
+        models.append(ModelCalibration(model, fit, control_rel, heldout_rel, _knockout(fit.calibration, pairs), pairs))
+
+    joint_fit = fit_calibration(features[control], drops.delta[control], JOINT, solver)
+    joint_pairs = _predictions(drops, features, joint_fit.calibration, control)
+    per_model = []
+    for model in dict.fromkeys(drops.model.tolist()):
+        mine = joint_pairs.model == model
+        subset = PairPredictions(*(getattr(joint_pairs, f)[mine] for f in PairPredictions.__dataclass_fields__))
+        per_model.append(ModelReliability(model, *_split_reliability(subset, resamples, seed)))
+    joint = JointCalibration(joint_fit, tuple(per_model), joint_pairs)
+    return CalibrationStudy(control_rigs, tuple(models), joint, drops.skipped)
+
+
+def _named(rig: Rig, name: str) -> Rig:
+    """The rig under the name the results use (a library lookup may differ in letter case)."""
+    return rig if rig.name == name else Rig(name, rig.vehicle, rig.cameras)

@@ -1,0 +1,86 @@
+"""How well predicted drops track measured ones: Spearman rho with a bootstrap interval, MAE, RMSE, ranks."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.stats import rankdata, spearmanr
+
+DEFAULT_BOOTSTRAP = 1000
+DEFAULT_SEED = 0
+
+
+@dataclass(frozen=True)
+class Reliability:
+    """Agreement of ``n`` predictions with observations.
+
+    ``rho`` and ``p``: Spearman rank correlation and its two-sided p-value (NaN when either side is
+    constant or n < 3); ``ci``: (2.5, 97.5) percentiles of rho over bootstrap resamples of the pairs;
+    ``mae``, ``rmse``: in units of relative drop.
+    """
+
+    rho: float
+    p: float
+    ci: tuple[float, float]
+    mae: float
+    rmse: float
+    n: int
+
+    def to_dict(self) -> dict:
+        return {"rho": finite_or_none(self.rho), "p": finite_or_none(self.p), "ci": [finite_or_none(v) for v in self.ci],
+                "mae": finite_or_none(self.mae), "rmse": finite_or_none(self.rmse), "n": self.n}
+
+
+def finite_or_none(value: float):
+    """The float, or None (JSON null) when it is NaN or infinite."""
+    return None if not np.isfinite(value) else float(value)
+
+
+def spearman(predicted: np.ndarray, observed: np.ndarray) -> tuple[float, float]:
+    """Spearman rho and p-value; (nan, nan) when a side is constant or there are fewer than 3 pairs."""
+    if len(observed) < 3 or np.ptp(observed) == 0 or np.ptp(predicted) == 0:
+        return float("nan"), float("nan")
+    result = spearmanr(predicted, observed)
+    return float(result.statistic), float(result.pvalue)
+
+
+def bootstrap_rho(predicted: np.ndarray, observed: np.ndarray, resamples: int = DEFAULT_BOOTSTRAP,
+                  seed: int = DEFAULT_SEED) -> tuple[float, float]:
+    """95 % interval (2.5, 97.5 percentiles) of Spearman rho over resamples of the pairs with replacement.
+
+    Resamples whose observed or predicted values are constant are skipped; (nan, nan) if none remain.
+    """
+    n = len(observed)
+    if n < 3 or resamples <= 0:
+        return float("nan"), float("nan")
+    index = np.random.default_rng(seed).integers(0, n, (resamples, n))
+    p, o = predicted[index], observed[index]  # (resamples, n)
+    usable = (np.ptp(p, axis=1) > 0) & (np.ptp(o, axis=1) > 0)
+    if not usable.any():
+        return float("nan"), float("nan")
+    rhos = _pearson_rows(rankdata(p[usable], axis=1), rankdata(o[usable], axis=1))  # Spearman = Pearson of ranks
+    low, high = np.percentile(rhos, [2.5, 97.5])
+    return float(low), float(high)
+
+
+def _pearson_rows(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Pearson correlation of each row of a (m, n) with the same row of b (m, n) -> (m,)."""
+    a = a - a.mean(axis=1, keepdims=True)
+    b = b - b.mean(axis=1, keepdims=True)
+    return np.einsum("ij,ij->i", a, b) / np.sqrt(np.einsum("ij,ij->i", a, a) * np.einsum("ij,ij->i", b, b))
+
+
+def reliability(predicted, observed, resamples: int = DEFAULT_BOOTSTRAP, seed: int = DEFAULT_SEED) -> Reliability:
+    """All agreement measures of predictions (n,) against observations (n,)."""
+    predicted, observed = np.asarray(predicted, dtype=float), np.asarray(observed, dtype=float)
+    rho, p = spearman(predicted, observed)
+    error = predicted - observed
+    mae = float(np.mean(np.abs(error))) if len(error) else float("nan")
+    rmse = float(np.sqrt(np.mean(error**2))) if len(error) else float("nan")
+    return Reliability(rho, p, bootstrap_rho(predicted, observed, resamples, seed), mae, rmse, len(observed))
+
+
+def drop_ranks(drops) -> np.ndarray:
+    """Ranks (n,) float of drops, largest drop = rank 1, ties sharing their average rank."""
+    return rankdata(-np.asarray(drops, dtype=float), method="average")

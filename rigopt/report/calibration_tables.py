@@ -1,0 +1,80 @@
+"""Calibration study as data: the JSON report, the pairs CSV and the weights files of every fit."""
+
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+
+from rigopt.metrics.calibration import FEATURES, CalibrationFit, write_weights
+from rigopt.metrics.protocol import CalibrationStudy, PairPredictions
+from rigopt.metrics.reliability import finite_or_none
+
+
+def weights_dict(fit: CalibrationFit) -> dict:
+    """Reported weights of one fit, with both solvers' beta and their agreement."""
+    c = fit.calibration
+    data = {"K": c.K, "alpha": c.alpha, "lambda_t": c.lambda_t, "lambda_r": c.lambda_r, "lambda_f": c.lambda_f}
+    data.update({f"beta_{k}": v for k, v in zip(FEATURES, c.beta)})
+    data.update({
+        "fallback": c.fallback,
+        "solver": fit.solver,
+        "beta_lbfgsb": dict(zip(FEATURES, fit.beta_lbfgsb)),
+        "beta_qp": dict(zip(FEATURES, fit.beta_qp)),
+        "objective_lbfgsb": fit.objective_lbfgsb,
+        "objective_qp": fit.objective_qp,
+        "qp_agrees": fit.qp_agrees,
+        "n": fit.n,
+    })
+    return data
+
+
+def study_dict(study: CalibrationStudy) -> dict:
+    """The JSON of ``rigopt calibrate``:
+    ``{"models": {M: {"weights", "control", "heldout", "knockout"}}, "joint": {"weights", "models": {M:
+    {"control", "heldout"}}}}`` plus the control rigs and the skipped training rigs."""
+    models = {
+        m.model: {
+            "weights": weights_dict(m.fit),
+            "control": m.control.to_dict(),
+            "heldout": m.heldout.to_dict(),
+            "knockout": {k: finite_or_none(getattr(m.knockout, k))
+                         for k in ("full", "lambda_t", "lambda_r", "lambda_f", "count")},
+        }
+        for m in study.models
+    }
+    joint = {
+        "weights": weights_dict(study.joint.fit),
+        "models": {r.model: {"control": r.control.to_dict(), "heldout": r.heldout.to_dict()}
+                   for r in study.joint.models},
+    }
+    return {"control_rigs": list(study.control_rigs), "models": models, "joint": joint,
+            "skipped": [list(s) for s in study.skipped]}
+
+
+PAIRS_HEADER = ["fit", "model", "train_rig", "test_rig", "split", *FEATURES, "delta", "predicted",
+                "rank_observed", "rank_predicted", "rank_error"]
+
+
+def pair_rows(pairs: PairPredictions, fit_name: str):
+    """Rows of PAIRS_HEADER, one per pair: rigs, split, features, observed and predicted drop, ranks."""
+    for k in range(len(pairs.delta)):
+        split = "control" if pairs.control[k] else "heldout"
+        numbers = [*pairs.features[k], pairs.delta[k], pairs.predicted[k], pairs.rank_observed[k],
+                   pairs.rank_predicted[k], pairs.rank_error[k]]
+        yield [fit_name, pairs.model[k], pairs.train[k], pairs.test[k], split, *(f"{float(v):.10g}" for v in numbers)]
+
+
+def write_study_tables(study: CalibrationStudy, out_dir) -> list[Path]:
+    """Write ``pairs.csv`` (every detector's own fit, then the joint fit) and ``weights/<fit>.json``."""
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    pairs_path = out_dir / "pairs.csv"
+    with pairs_path.open("w", newline="") as handle:
+        writer = csv.writer(handle)
+        writer.writerow(PAIRS_HEADER)
+        for m in study.models:
+            writer.writerows(pair_rows(m.pairs, m.model))
+        writer.writerows(pair_rows(study.joint.pairs, "joint"))
+    weights = [write_weights(m.fit.calibration, out_dir / "weights" / f"{m.model}.json") for m in study.models]
+    weights.append(write_weights(study.joint.fit.calibration, out_dir / "weights" / "joint.json"))
+    return [pairs_path, *weights]
