@@ -21,7 +21,6 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from rigopt.errors import RigoptError
-from rigopt.geometry import geodesic_distance
 from rigopt.rig.model import Rig
 
 DEFAULT_ALPHA = 0.9
@@ -36,8 +35,13 @@ def camera_costs(positions_a, rotations_a, fovs_a, positions_b, rotations_b, fov
     Returns (t, r, f), each (..., Na, Nb) float: metres, radians, degrees.
     """
     pa, pb = np.asarray(positions_a, dtype=float), np.asarray(positions_b, dtype=float)
-    t = np.linalg.norm(pa[..., :, None, :] - pb[..., None, :, :], axis=-1)
-    r = geodesic_distance(np.asarray(rotations_a)[..., :, None, :, :], np.asarray(rotations_b)[..., None, :, :, :])
+    d = pa[..., :, None, :] - pb[..., None, :, :]
+    t = np.sqrt(np.einsum("...k,...k->...", d, d))
+    # trace(Ra^T Rb) is the dot product of the flattened matrices: one matmul for all pairs.
+    ra = np.asarray(rotations_a, dtype=float)
+    rb = np.asarray(rotations_b, dtype=float)
+    trace = ra.reshape(*ra.shape[:-2], 9) @ np.swapaxes(rb.reshape(*rb.shape[:-2], 9), -1, -2)
+    r = np.arccos(np.clip((trace - 1.0) / 2.0, -1.0, 1.0))
     f = np.abs(np.asarray(fovs_a, dtype=float)[..., :, None] - np.asarray(fovs_b, dtype=float)[..., None, :])
     return t, r, f
 
@@ -89,21 +93,45 @@ class RigCDBreakdown:
     pairs: tuple[tuple[str, str], ...]
 
 
-class _RigPack:
-    """Rigs padded to one camera count: positions (n, Nmax, 3), rotations (n, Nmax, 3, 3), fovs (n, Nmax)."""
+class RigBatch:
+    """Many rigs as concatenated camera arrays, the input of the batched metric core.
 
-    def __init__(self, rigs: Sequence[Rig]):
+    positions : (C, 3) float metres; rotations : (C, 3, 3) float; fovs : (C,) float degrees;
+    counts : (n,) int cameras per rig, each >= 1; rig k owns rows ``offsets[k] : offsets[k] + counts[k]``.
+    """
+
+    def __init__(self, positions, rotations, fovs, counts):
+        self.counts = np.asarray(counts, dtype=int)
+        if self.counts.ndim != 1 or len(self.counts) == 0 or np.any(self.counts < 1):
+            raise RigoptError("a rig batch needs at least one rig and at least one camera per rig")
+        self.offsets = np.cumsum(self.counts) - self.counts
+        self.positions = np.asarray(positions, dtype=float)
+        self.rotations = np.asarray(rotations, dtype=float)
+        self.fovs = np.asarray(fovs, dtype=float)
+        total = int(self.counts.sum())
+        if self.positions.shape != (total, 3) or self.rotations.shape != (total, 3, 3) or self.fovs.shape != (total,):
+            raise RigoptError(f"rig batch arrays must be ({total}, 3), ({total}, 3, 3) and ({total},) for "
+                              f"{total} cameras")
+
+    @classmethod
+    def from_rigs(cls, rigs: Sequence[Rig]) -> "RigBatch":
+        """The batch of ``rigs``, in order."""
         if len(rigs) == 0:
             raise RigoptError("no rigs given; pass at least one rig")
-        self.counts = np.array([len(rig) for rig in rigs])
-        n, width = len(rigs), int(self.counts.max())
-        self.positions = np.zeros((n, width, 3))
-        self.rotations = np.broadcast_to(np.eye(3), (n, width, 3, 3)).copy()
-        self.fovs = np.zeros((n, width))
-        for k, rig in enumerate(rigs):
-            self.positions[k, : len(rig)] = rig.positions
-            self.rotations[k, : len(rig)] = rig.rotations
-            self.fovs[k, : len(rig)] = rig.fovs
+        return cls(np.concatenate([rig.positions for rig in rigs]), np.concatenate([rig.rotations for rig in rigs]),
+                   np.concatenate([rig.fovs for rig in rigs]), [len(rig.cameras) for rig in rigs])
+
+    def __len__(self) -> int:
+        return len(self.counts)
+
+    def gather(self, index: np.ndarray, n: int):
+        """Cameras of rigs ``index`` (G,), all with ``n`` cameras: (G, n, 3), (G, n, 3, 3), (G, n)."""
+        rows = self.offsets[index][:, None] + np.arange(n)
+        return self.positions[rows], self.rotations[rows], self.fovs[rows]
+
+
+def _as_batch(rigs) -> RigBatch:
+    return rigs if isinstance(rigs, RigBatch) else RigBatch.from_rigs(rigs)
 
 
 def _match_pairs(pack_a, index_a, pack_b, index_b, alpha, lambdas, keep_assignment=False):
@@ -122,10 +150,7 @@ def _match_pairs(pack_a, index_a, pack_b, index_b, alpha, lambdas, keep_assignme
     for na, nb in shapes:
         group = np.flatnonzero((na_all == na) & (nb_all == nb))
         ia, ib = index_a[group], index_b[group]
-        t, r, f = camera_costs(
-            pack_a.positions[ia, :na], pack_a.rotations[ia, :na], pack_a.fovs[ia, :na],
-            pack_b.positions[ib, :nb], pack_b.rotations[ib, :nb], pack_b.fovs[ib, :nb],
-        )  # each (G, na, nb)
+        t, r, f = camera_costs(*pack_a.gather(ia, na), *pack_b.gather(ib, nb))  # each (G, na, nb)
         cost = lt * t + lr * r + lf * f
         m = min(na, nb)
         rows = np.empty((len(group), m), dtype=int)
@@ -144,25 +169,28 @@ def _match_pairs(pack_a, index_a, pack_b, index_b, alpha, lambdas, keep_assignme
     return out, assignments
 
 
-def rigcd_matrix(rigs_a: Sequence[Rig], rigs_b: Sequence[Rig], alpha: float = DEFAULT_ALPHA,
+def rigcd_matrix(rigs_a: Sequence[Rig] | RigBatch, rigs_b: Sequence[Rig] | RigBatch, alpha: float = DEFAULT_ALPHA,
                  lambdas: Sequence[float] = DEFAULT_LAMBDAS) -> RigCDMatrix:
-    """RigCD of every rig in ``rigs_a`` against every rig in ``rigs_b``; arrays (len(a), len(b))."""
+    """RigCD of every rig in ``rigs_a`` against every rig in ``rigs_b``; arrays (len(a), len(b)).
+
+    Either side is a sequence of Rig or a prebuilt RigBatch.
+    """
     alpha, lambdas = check_weights(alpha, lambdas)
-    pack_a, pack_b = _RigPack(rigs_a), _RigPack(rigs_b)
+    pack_a, pack_b = _as_batch(rigs_a), _as_batch(rigs_b)
     ia, ib = np.meshgrid(np.arange(len(rigs_a)), np.arange(len(rigs_b)), indexing="ij")
     out, _ = _match_pairs(pack_a, ia.ravel(), pack_b, ib.ravel(), alpha, lambdas)
     shape = (len(rigs_a), len(rigs_b))
     return RigCDMatrix(**{k: v.reshape(shape) for k, v in out.items()}, alpha=alpha, lambdas=lambdas)
 
 
-def rigcd_pairs(rigs_a: Sequence[Rig], rigs_b: Sequence[Rig], alpha: float = DEFAULT_ALPHA,
+def rigcd_pairs(rigs_a: Sequence[Rig] | RigBatch, rigs_b: Sequence[Rig] | RigBatch, alpha: float = DEFAULT_ALPHA,
                 lambdas: Sequence[float] = DEFAULT_LAMBDAS) -> RigCDMatrix:
-    """RigCD of the pairs ``(rigs_a[p], rigs_b[p])``; arrays (P,) instead of a matrix."""
+    """RigCD of the pairs ``(rigs_a[p], rigs_b[p])``; arrays (P,) instead of a matrix. Sides as rigcd_matrix."""
     if len(rigs_a) != len(rigs_b):
         raise RigoptError(f"rigcd_pairs needs two lists of equal length, got {len(rigs_a)} and {len(rigs_b)}")
     alpha, lambdas = check_weights(alpha, lambdas)
     index = np.arange(len(rigs_a))
-    out, _ = _match_pairs(_RigPack(rigs_a), index, _RigPack(rigs_b), index, alpha, lambdas)
+    out, _ = _match_pairs(_as_batch(rigs_a), index, _as_batch(rigs_b), index, alpha, lambdas)
     return RigCDMatrix(**out, alpha=alpha, lambdas=lambdas)
 
 
@@ -171,7 +199,7 @@ def rigcd(rig_a: Rig, rig_b: Rig, alpha: float = DEFAULT_ALPHA,
     """RigCD of one pair with every component and the matched camera pairs."""
     alpha, lambdas = check_weights(alpha, lambdas)
     zero = np.zeros(1, dtype=int)
-    out, assignments = _match_pairs(_RigPack([rig_a]), zero, _RigPack([rig_b]), zero, alpha, lambdas, True)
+    out, assignments = _match_pairs(RigBatch.from_rigs([rig_a]), zero, RigBatch.from_rigs([rig_b]), zero, alpha, lambdas, True)
     rows, cols = assignments[0]
     pairs = tuple((rig_a.cameras[i].id, rig_b.cameras[j].id) for i, j in zip(rows, cols))
     values = {k: float(v[0]) for k, v in out.items()}
