@@ -76,7 +76,12 @@ def yaw_pitch_roll_from_rotation(rotation):
     locked = cos_p < 1e-12
     yaw = np.where(locked, np.arctan2(-r[..., 0, 1], r[..., 1, 1]), np.arctan2(r[..., 1, 0], r[..., 0, 0]))
     roll = np.where(locked, 0.0, np.arctan2(r[..., 2, 1], r[..., 2, 2]))
-    return yaw, pitch, roll
+    return _half_open(yaw, np.pi), pitch, _half_open(roll, np.pi)
+
+
+def _half_open(angle, half_turn):
+    """Map an angle in [-half_turn, half_turn] into (-half_turn, half_turn] (arctan2 can return -pi)."""
+    return np.where(angle <= -half_turn, angle + 2 * half_turn, angle) + 0.0
 
 
 def carla_to_iso(location, rotation_deg):
@@ -108,7 +113,7 @@ def iso_to_carla(position, rotation):
 def wrap_degrees(angle_deg):
     """Wrap angles to (-180, 180] degrees. angle_deg : (...,) float -> (...,) float."""
     wrapped = -np.mod(-np.asarray(angle_deg, dtype=float) + 180.0, 360.0) + 180.0
-    return wrapped + 0.0  # normalises -0.0 to 0.0
+    return _half_open(wrapped, 180.0)  # also normalises -0.0 to 0.0
 
 
 def geodesic_distance(rotation_a, rotation_b):

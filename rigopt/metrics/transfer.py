@@ -112,10 +112,15 @@ def _table(rows: list[tuple[str, str, str, float]], source: Path) -> TransferTab
     return TransferTable(np.array(model), np.array(train), np.array(test), np.array(value, dtype=float))
 
 
-def _check_map(value, where: str) -> float | None:
-    """A finite mAP in [0, 1], or None for a missing value (null / empty)."""
-    if value is None or value == "":
+def _check_map(value, where: str, text: bool = False) -> float | None:
+    """A finite mAP in [0, 1], or None for a missing value (null / empty CSV field).
+
+    ``text``: the value comes from a CSV field (a string); JSON values must be numbers or null.
+    """
+    if value is None or (text and value == ""):
         return None
+    if not text and not isinstance(value, (int, float)):
+        raise DataError(f"{where}: mAP must be a number or null, got {value!r}")
     try:
         number = float(value)
     except (TypeError, ValueError):
@@ -159,7 +164,7 @@ def _read_csv(path: Path) -> TransferTable:
             if len(record) != 4:
                 raise DataError(f"{path}: line {line} has {len(record)} fields, expected 4 ({','.join(CSV_HEADER)})")
             model, train, test = (v.strip() for v in record[:3])
-            value = _check_map(record[3].strip(), f"{path}: line {line}")
+            value = _check_map(record[3].strip(), f"{path}: line {line}", text=True)
             if value is not None:
                 rows.append((model, train, test, value))
     return _table(rows, path)

@@ -15,7 +15,10 @@ DEFAULT_IMAGE_SIZE = (1280, 720)
 
 
 def _frozen_array(values, shape, what: str) -> np.ndarray:
-    array = np.array(values, dtype=float)
+    try:
+        array = np.array(values, dtype=float)
+    except (TypeError, ValueError):
+        raise RigFileError(f"{what} must be numbers of shape {shape}, got {values!r}") from None
     if array.shape != shape:
         raise RigFileError(f"{what} must have shape {shape}, got {array.shape}")
     if not np.all(np.isfinite(array)):
@@ -67,7 +70,7 @@ class Camera:
         if not (np.isfinite(fov) and 0.0 < fov < 180.0):
             raise RigFileError(f"{what} fov must be in (0, 180) degrees, got {self.fov!r}")
         object.__setattr__(self, "fov", fov)
-        size = tuple(self.image_size)
+        size = tuple(self.image_size) if isinstance(self.image_size, (tuple, list)) else ()
         if len(size) != 2 or not all(isinstance(v, (int, np.integer)) and v > 0 for v in size):
             raise RigFileError(f"{what} image_size must be two positive integers (width, height), got {self.image_size!r}")
         object.__setattr__(self, "image_size", (int(size[0]), int(size[1])))

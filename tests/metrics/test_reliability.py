@@ -1,0 +1,150 @@
+"""Reliability of predictions: Spearman rho, its bootstrap interval, MAE, RMSE and drop ranks.
+
+Oracles: scipy.stats.spearmanr, a plain per-resample bootstrap loop written here, and hand arithmetic.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+from scipy.stats import spearmanr
+
+from rigopt.metrics.reliability import bootstrap_rho, drop_ranks, reliability, spearman
+
+
+def loop_bootstrap(predicted, observed, resamples, seed):
+    """The definition, one resample at a time."""
+    rng = np.random.default_rng(seed)
+    n = len(observed)
+    rhos = []
+    for _ in range(resamples):
+        idx = rng.integers(0, n, n)
+        p, o = predicted[idx], observed[idx]
+        if np.ptp(p) == 0 or np.ptp(o) == 0:
+            continue
+        rhos.append(spearmanr(p, o).statistic)
+    low, high = np.percentile(rhos, [2.5, 97.5])
+    return float(low), float(high)
+
+
+def correlated(n, seed, noise=0.3):
+    rng = np.random.default_rng(seed)
+    observed = rng.uniform(0.0, 1.0, n)
+    return observed + rng.normal(0.0, noise, n), observed
+
+
+# --- Spearman ---------------------------------------------------------------------------------------
+
+
+@given(st.lists(st.tuples(st.integers(0, 6), st.floats(-5, 5, allow_nan=False)), min_size=3, max_size=40))
+def test_spearman_equals_scipy(pairs):
+    predicted = np.array([float(p) for p, _ in pairs])  # small integers: plenty of ties
+    observed = np.array([o for _, o in pairs])
+    rho, p = spearman(predicted, observed)
+    if np.ptp(predicted) == 0 or np.ptp(observed) == 0:
+        assert math.isnan(rho) and math.isnan(p)
+        return
+    expected = spearmanr(predicted, observed)
+    assert rho == pytest.approx(expected.statistic, abs=1e-12)
+    if not math.isnan(expected.pvalue):
+        assert p == pytest.approx(expected.pvalue, rel=1e-9, abs=1e-15)
+
+
+def test_spearman_of_a_monotone_map_is_one():
+    x = np.array([0.1, 0.5, 0.2, 0.9, 0.3])
+    assert spearman(np.exp(x), x)[0] == pytest.approx(1.0)
+    assert spearman(-x, x)[0] == pytest.approx(-1.0)
+
+
+@pytest.mark.parametrize("predicted, observed", [
+    ([0.2, 0.2, 0.2, 0.2], [0.1, 0.4, 0.3, 0.2]),
+    ([0.1, 0.4, 0.3, 0.2], [0.5, 0.5, 0.5, 0.5]),
+    ([0.1, 0.2], [0.3, 0.1]),
+])
+def test_spearman_is_nan_for_constant_input_or_fewer_than_three(predicted, observed):
+    rho, p = spearman(np.array(predicted), np.array(observed))
+    assert math.isnan(rho) and math.isnan(p)
+
+
+def test_reliability_of_constant_prediction_has_nan_rho_and_ci():
+    r = reliability([0.3] * 10, np.linspace(0, 1, 10), resamples=50)
+    assert math.isnan(r.rho) and math.isnan(r.p)
+    assert all(math.isnan(v) for v in r.ci)
+    assert r.to_dict()["rho"] is None and r.to_dict()["ci"] == [None, None]
+
+
+# --- bootstrap --------------------------------------------------------------------------------------
+
+
+def test_bootstrap_is_reproducible_with_a_seed():
+    predicted, observed = correlated(50, 1)
+    assert bootstrap_rho(predicted, observed, 200, seed=7) == bootstrap_rho(predicted, observed, 200, seed=7)
+
+
+def test_bootstrap_depends_on_the_seed():
+    predicted, observed = correlated(50, 1)
+    assert bootstrap_rho(predicted, observed, 200, seed=7) != bootstrap_rho(predicted, observed, 200, seed=8)
+
+
+def test_bootstrap_interval_contains_rho_of_a_strongly_correlated_sample():
+    predicted, observed = correlated(80, 2, noise=0.1)
+    rho = spearmanr(predicted, observed).statistic
+    assert rho > 0.8
+    low, high = bootstrap_rho(predicted, observed, 500, seed=0)
+    assert low <= rho <= high
+    assert high - low < 0.3
+
+
+@pytest.mark.parametrize("n, seed", [(36, 0), (37, 3), (160, 0), (161, 11), (5, 1)])
+def test_vectorised_bootstrap_equals_a_plain_loop(n, seed):
+    predicted, observed = correlated(n, seed + 100, noise=0.5)
+    assert bootstrap_rho(predicted, observed, 300, seed) == pytest.approx(
+        loop_bootstrap(predicted, observed, 300, seed), abs=1e-12)
+
+
+def test_vectorised_bootstrap_equals_a_plain_loop_with_ties_and_skipped_resamples():
+    # Four pairs, two distinct predictions: many resamples are constant and must be skipped the same way.
+    predicted = np.array([0.1, 0.1, 0.2, 0.2])
+    observed = np.array([0.3, 0.1, 0.4, 0.2])
+    assert bootstrap_rho(predicted, observed, 400, 5) == pytest.approx(
+        loop_bootstrap(predicted, observed, 400, 5), abs=1e-12)
+
+
+def test_reliability_uses_the_default_seed_and_1000_resamples():
+    predicted, observed = correlated(30, 4)
+    assert reliability(predicted, observed).ci == pytest.approx(loop_bootstrap(predicted, observed, 1000, 0),
+                                                                abs=1e-12)
+
+
+def test_bootstrap_without_resamples_is_nan():
+    predicted, observed = correlated(10, 0)
+    assert all(math.isnan(v) for v in bootstrap_rho(predicted, observed, 0))
+
+
+# --- MAE, RMSE, ranks -------------------------------------------------------------------------------
+
+
+def test_mae_and_rmse_by_hand():
+    r = reliability([0.1, 0.2, 0.4], [0.0, 0.4, 0.1], resamples=0)
+    # errors 0.1, -0.2, 0.3
+    assert r.mae == pytest.approx(0.6 / 3)
+    assert r.rmse == pytest.approx(math.sqrt(0.14 / 3))
+    assert r.n == 3
+
+
+def test_reliability_rho_by_hand():
+    r = reliability([0.1, 0.2, 0.4, 0.3], [0.0, 0.4, 0.1, 0.2], resamples=0)
+    # ranks of predicted: 1 2 4 3; of observed: 1 4 2 3; d = 0 -2 2 0; rho = 1 - 6 * 8 / (4 * 15)
+    assert r.rho == pytest.approx(1 - 6 * 8 / 60)
+
+
+def test_drop_ranks_largest_drop_is_rank_one():
+    assert drop_ranks([0.1, 0.5, 0.3, -0.2]).tolist() == [3.0, 1.0, 2.0, 4.0]
+
+
+def test_drop_ranks_average_ties():
+    assert drop_ranks([0.5, 0.2, 0.5, 0.1, 0.2, 0.2]).tolist() == [1.5, 4.0, 1.5, 6.0, 4.0, 4.0]
