@@ -5,7 +5,7 @@ from __future__ import annotations
 import sys
 
 from rigopt.cli.app import app
-from rigopt.cli import calibrate_command, metric_commands, rig_commands  # noqa: F401  (they register commands)
+from rigopt.cli import calibrate_command, metric_commands, rig_commands, vehicle_commands  # noqa: F401
 from rigopt.errors import RigoptError
 
 

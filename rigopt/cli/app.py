@@ -20,6 +20,8 @@ import_app = typer.Typer(help="Convert rigs from other formats into rigopt's (th
 app.add_typer(import_app, name="import")
 
 console = Console()
+if not console.is_terminal:
+    console.width = 160  # piped or captured output: wide enough for every table
 
 
 def print_json(data) -> None:

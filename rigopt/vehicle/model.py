@@ -1,0 +1,98 @@
+"""Vehicle: a body mesh with named mounting zones, and the surface queries every other part asks of it."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+import trimesh
+
+from rigopt.vehicle.build import build_mesh
+from rigopt.vehicle.spec import VehicleSpec, ZoneSpec
+
+
+@dataclass(frozen=True)
+class Zone:
+    """One mounting region: box [``min``, ``max``] (3,) m and outward-normal cone around ``normal`` (3,)."""
+
+    name: str
+    min: np.ndarray
+    max: np.ndarray
+    normal: np.ndarray
+    cone_deg: float
+
+    def contains(self, points, normals) -> np.ndarray:
+        """(n,) bool: surface points (n, 3) m with outward normals (n, 3) inside the zone."""
+        points, normals = np.atleast_2d(points), np.atleast_2d(normals)
+        inside = np.all((points >= self.min) & (points <= self.max), axis=1)
+        return inside & (normals @ self.normal >= np.cos(np.deg2rad(self.cone_deg)) - 1e-12)
+
+
+def _zones(specs: tuple[ZoneSpec, ...]) -> tuple[Zone, ...]:
+    zones = []
+    flip = np.array([1.0, -1.0, 1.0])
+    for z in specs:
+        zones.append(Zone(z.name, z.min, z.max, z.normal, z.cone_deg))
+        if z.mirrored:
+            low, high = z.min * flip, z.max * flip
+            zones.append(Zone(z.name, np.minimum(low, high), np.maximum(low, high), z.normal * flip, z.cone_deg))
+    return tuple(zones)
+
+
+@dataclass(frozen=True)
+class SurfaceQuery:
+    """Nearest body surface of query points: ``foot`` (n, 3) m, ``distance`` (n,) m signed (> 0 outside
+    the body, < 0 inside), ``normal`` (n, 3) outward unit normal at the foot, ``face`` (n,) int."""
+
+    foot: np.ndarray
+    distance: np.ndarray
+    normal: np.ndarray
+    face: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
+class Vehicle:
+    """A vehicle built from its spec: ``mesh`` is watertight, ISO vehicle frame, metres."""
+
+    spec: VehicleSpec
+    mesh: trimesh.Trimesh
+
+    @classmethod
+    def from_spec(cls, spec: VehicleSpec) -> "Vehicle":
+        return cls(spec, build_mesh(spec))
+
+    @property
+    def name(self) -> str:
+        return self.spec.name
+
+    @property
+    def blueprint(self) -> str:
+        return self.spec.blueprint
+
+    @cached_property
+    def zones(self) -> tuple[Zone, ...]:
+        """Zones with mirrored copies expanded (a mirrored zone appears twice under one name)."""
+        return _zones(self.spec.zones)
+
+    @cached_property
+    def size(self) -> np.ndarray:
+        """(3,) float: the mesh's extent (length, width, height) in metres."""
+        return np.ptp(self.mesh.bounds, axis=0)
+
+    def surface(self, points) -> SurfaceQuery:
+        """Nearest surface of ``points`` (n, 3) m; the sign of the distance comes from containment."""
+        points = np.atleast_2d(np.asarray(points, dtype=float))
+        foot, unsigned, face = trimesh.proximity.closest_point(self.mesh, points)
+        inside = self.mesh.contains(points)
+        normal = self.mesh.face_normals[face]
+        return SurfaceQuery(foot, np.where(inside, -unsigned, unsigned), normal, face)
+
+    def zone_names(self, points, normals) -> list[str | None]:
+        """Name of the first zone containing each surface point (n, 3) with normal (n, 3); None if none."""
+        points, normals = np.atleast_2d(points), np.atleast_2d(normals)
+        names: list[str | None] = [None] * len(points)
+        for zone in self.zones:
+            for k in np.flatnonzero(zone.contains(points, normals)):
+                names[k] = names[k] or zone.name
+        return names

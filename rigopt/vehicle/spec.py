@@ -1,0 +1,236 @@
+"""Vehicle specs: the TOML description of a body as parametric solids plus its named mounting zones.
+
+Everything is in the ISO 8855 vehicle frame (x forward, y left, z up; metres, origin at the benchmark's
+vehicle origin on the ground). A spec file::
+
+    name = "etron"
+    blueprint = "vehicle.audi.etron"       # the CARLA blueprint the benchmark's rigs name
+    aliases = ["suv"]
+    box = [4.8557, 2.0328, 1.6494]         # CARLA bounding box length, width, height (m), for checks
+
+    [[solids]]                              # intersection of a side profile extruded across y and a
+    name = "body"                           # plan outline extruded along z
+    type = "prism"
+    side = [[x, z], ...]                    # closed polygon in the x-z plane
+    plan = [[x, y], ...]                    # half outline, y >= 0, from the front centre to the rear
+    taper = [1.0, 0.8]                      # optional: plan scaled by (sx, sy) at the top (tumblehome)
+
+    [[solids]]
+    type = "wheels"                         # one wheel per axle and side
+    axles = [1.45, -1.48]                   # x of each axle
+    radius = 0.37
+    width = 0.26
+    track = 1.66                            # distance between the wheels' centre planes
+
+    [[solids]]
+    type = "box"                            # a box; mirrored = true adds its copy at -y
+    center = [x, y, z]
+    size = [dx, dy, dz]
+    mirrored = true
+
+    [[solids]]
+    type = "mesh"                           # a mesh file in the ISO frame (user vehicles)
+    file = "body.ply"
+
+    [[zones]]                               # a mounting zone: surface inside the box whose outward
+    name = "bumper_front"                   # normal lies within cone_deg of normal
+    min = [x, y, z]
+    max = [x, y, z]
+    normal = [1, 0, 0]
+    cone_deg = 80
+    mirrored = false                        # true adds the zone reflected to -y under the same name
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from rigopt.errors import DataError
+
+SOLID_TYPES = ("prism", "wheels", "box", "mesh")
+
+
+@dataclass(frozen=True)
+class Prism:
+    """Side profile (n, 2) float (x, z) extruded across y, intersected with a plan outline (m, 2) float
+    (x, y >= 0 half, mirrored) extruded along z; ``taper`` (sx, sy) scales the plan at the top."""
+
+    name: str
+    side: np.ndarray
+    plan: np.ndarray
+    taper: tuple[float, float] = (1.0, 1.0)
+
+
+@dataclass(frozen=True)
+class Wheels:
+    """Cylinders of ``radius`` and ``width`` (m) on each axle x in ``axles``, centre planes at +-track/2."""
+
+    name: str
+    axles: tuple[float, ...]
+    radius: float
+    width: float
+    track: float
+
+
+@dataclass(frozen=True)
+class Box:
+    """Axis-aligned box: ``center`` (3,) and ``size`` (3,) in metres; ``mirrored`` adds the -y copy."""
+
+    name: str
+    center: np.ndarray
+    size: np.ndarray
+    mirrored: bool = False
+
+
+@dataclass(frozen=True)
+class MeshSolid:
+    """A triangle mesh file (any format trimesh reads), already in the ISO vehicle frame, metres;
+    ``path`` is resolved against the spec file's folder."""
+
+    name: str
+    path: Path
+
+
+@dataclass(frozen=True)
+class ZoneSpec:
+    """A mounting zone: surface points in the box [``min``, ``max``] (3,) m whose outward normal lies
+    within ``cone_deg`` degrees of ``normal`` (3,) unit; ``mirrored`` adds the -y reflection."""
+
+    name: str
+    min: np.ndarray
+    max: np.ndarray
+    normal: np.ndarray
+    cone_deg: float
+    mirrored: bool = False
+
+
+@dataclass(frozen=True)
+class VehicleSpec:
+    """A vehicle: ``name``, CARLA ``blueprint``, ``aliases``, ``box`` (length, width, height) m, solids,
+    zones, and the file it came from."""
+
+    name: str
+    blueprint: str
+    aliases: tuple[str, ...]
+    box: tuple[float, float, float]
+    solids: tuple[Prism | Wheels | Box | MeshSolid, ...]
+    zones: tuple[ZoneSpec, ...]
+    source: str = field(default="<spec>", compare=False)
+
+
+def read_spec(path) -> VehicleSpec:
+    """Read and validate a vehicle spec TOML file."""
+    path = Path(path)
+    try:
+        data = tomllib.loads(path.read_text())
+    except OSError as error:
+        raise DataError(f"{path}: cannot read the vehicle spec ({error.strerror})") from None
+    except tomllib.TOMLDecodeError as error:
+        raise DataError(f"{path}: not valid TOML ({error})") from None
+    return spec_from_dict(data, str(path))
+
+
+def spec_from_dict(data: dict, source: str = "<spec>") -> VehicleSpec:
+    """Validate the parsed TOML ``data`` of a vehicle spec; errors name ``source``."""
+    reader = _Reader(source)
+    name = reader.text(data, "name")
+    solids = tuple(reader.solid(s, k) for k, s in enumerate(reader.table_list(data, "solids")))
+    if not solids:
+        raise DataError(f"{source}: a vehicle needs at least one [[solids]] entry")
+    zones = tuple(reader.zone(z, k) for k, z in enumerate(data.get("zones", [])))
+    box = tuple(reader.numbers(data, "box", 3, positive=True)) if "box" in data else (0.0, 0.0, 0.0)
+    aliases = data.get("aliases", [])
+    if not isinstance(aliases, list) or not all(isinstance(a, str) for a in aliases):
+        raise DataError(f"{source}: 'aliases' must be a list of strings")
+    return VehicleSpec(name, str(data.get("blueprint", name)), tuple(aliases), box, solids, zones, source)
+
+
+class _Reader:
+    """Typed access to TOML tables with errors that name the file and the entry."""
+
+    def __init__(self, source: str):
+        self.source = source
+
+    def fail(self, where: str, message: str) -> DataError:
+        return DataError(f"{self.source}: {where}: {message}")
+
+    def text(self, table: dict, key: str, where: str = "top level") -> str:
+        value = table.get(key)
+        if not isinstance(value, str) or not value:
+            raise self.fail(where, f"'{key}' must be a non-empty string")
+        return value
+
+    def table_list(self, table: dict, key: str) -> list:
+        value = table.get(key, [])
+        if not isinstance(value, list) or not all(isinstance(v, dict) for v in value):
+            raise self.fail("top level", f"'{key}' must be an array of tables ([[{key}]])")
+        return value
+
+    def numbers(self, table: dict, key: str, count: int, where: str = "top level", positive: bool = False):
+        value = table.get(key)
+        if not isinstance(value, list) or len(value) != count or not all(_is_number(v) for v in value):
+            raise self.fail(where, f"'{key}' must be {count} finite numbers, got {value!r}")
+        if positive and not all(v > 0 for v in value):
+            raise self.fail(where, f"'{key}' must be positive, got {value!r}")
+        return [float(v) for v in value]
+
+    def number(self, table: dict, key: str, where: str, positive: bool = True) -> float:
+        value = table.get(key)
+        if not _is_number(value) or (positive and value <= 0):
+            raise self.fail(where, f"'{key}' must be a {'positive ' if positive else ''}number, got {value!r}")
+        return float(value)
+
+    def polygon(self, table: dict, key: str, where: str) -> np.ndarray:
+        value = table.get(key)
+        points = np.array(value, dtype=float) if isinstance(value, list) and value else np.zeros((0, 2))
+        if (not isinstance(value, list) or points.ndim != 2 or points.shape[1] != 2 or len(points) < 3
+                or not np.all(np.isfinite(points))):
+            raise self.fail(where, f"'{key}' must be a list of at least 3 [a, b] points")
+        return points
+
+    def solid(self, table: dict, index: int):
+        kind = table.get("type")
+        where = f"solid {index} ({table.get('name', kind)})"
+        name = str(table.get("name", f"{kind}{index}"))
+        if kind == "prism":
+            plan = self.polygon(table, "plan", where)
+            if np.any(plan[:, 1] < -1e-9):
+                raise self.fail(where, "'plan' is the half outline with y >= 0 (it is mirrored to -y)")
+            taper = tuple(self.numbers(table, "taper", 2, where, positive=True)) if "taper" in table else (1.0, 1.0)
+            return Prism(name, self.polygon(table, "side", where), plan, taper)
+        if kind == "wheels":
+            axles = table.get("axles")
+            if not isinstance(axles, list) or not axles or not all(_is_number(a) for a in axles):
+                raise self.fail(where, "'axles' must be a list of axle x positions (m)")
+            return Wheels(name, tuple(float(a) for a in axles), self.number(table, "radius", where),
+                          self.number(table, "width", where), self.number(table, "track", where))
+        if kind == "box":
+            return Box(name, np.array(self.numbers(table, "center", 3, where)),
+                       np.array(self.numbers(table, "size", 3, where, positive=True)), bool(table.get("mirrored", False)))
+        if kind == "mesh":
+            file = Path(self.text(table, "file", where))
+            return MeshSolid(name, file if file.is_absolute() else Path(self.source).parent / file)
+        raise self.fail(where, f"unknown solid type {kind!r}; use one of {', '.join(SOLID_TYPES)}")
+
+    def zone(self, table: dict, index: int) -> ZoneSpec:
+        where = f"zone {index} ({table.get('name', '?')})"
+        name = self.text(table, "name", where)
+        low, high = np.array(self.numbers(table, "min", 3, where)), np.array(self.numbers(table, "max", 3, where))
+        if np.any(low >= high):
+            raise self.fail(where, f"'min' must be below 'max' on every axis, got {low.tolist()} and {high.tolist()}")
+        normal = np.array(self.numbers(table, "normal", 3, where))
+        if np.linalg.norm(normal) < 1e-9:
+            raise self.fail(where, "'normal' must be a non-zero vector")
+        cone = self.number(table, "cone_deg", where)
+        if cone > 180:
+            raise self.fail(where, f"'cone_deg' must be in (0, 180], got {cone}")
+        return ZoneSpec(name, low, high, normal / np.linalg.norm(normal), cone, bool(table.get("mirrored", False)))
+
+
+def _is_number(value) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
