@@ -18,6 +18,8 @@ app = typer.Typer(
 )
 import_app = typer.Typer(help="Convert rigs from other formats into rigopt's (the benchmark's) JSON.", no_args_is_help=True)
 app.add_typer(import_app, name="import")
+vehicle_app = typer.Typer(help="Vehicles: show, export and add your own.", no_args_is_help=True)
+app.add_typer(vehicle_app, name="vehicle")
 
 console = Console()
 if not console.is_terminal:
@@ -40,10 +42,11 @@ def _finite(value):
 
 
 def print_table(title: str, columns: list[str], rows: list[list]) -> None:
-    """Print a rich table; numbers are shown with 3 decimals."""
+    """Print a rich table; numbers are right-aligned with 3 decimals, text left-aligned."""
     table = Table(title=title)
-    for column in columns:
-        table.add_column(column, justify="left" if column in ("rig", "vehicle", "model", "fovs") else "right")
+    first = rows[0] if rows else [None] * len(columns)
+    for column, sample in zip(columns, first):
+        table.add_column(column, justify="right" if isinstance(sample, (int, float)) else "left")
     for row in rows:
         table.add_row(*(f"{v:.3f}" if isinstance(v, float) else str(v) for v in row))
     console.print(table)

@@ -1,4 +1,4 @@
-"""``rigopt check``: mount validity of a rig's cameras on a vehicle."""
+"""``rigopt check``, ``rigopt vehicles`` and ``rigopt vehicle show|export|add``."""
 
 from __future__ import annotations
 
@@ -7,7 +7,10 @@ from typing import Optional
 
 import typer
 
-from rigopt.cli.app import app, print_json, print_table
+from pathlib import Path
+
+from rigopt.cli.app import app, console, print_json, print_table, vehicle_app
+from rigopt.errors import RigoptError
 from rigopt.rig.library import load_rig
 
 
@@ -33,3 +36,75 @@ def check_command(
                       "; ".join(c.problems) or "-"] for c in result.cameras])
     if not result.valid:
         raise typer.Exit(1)
+
+
+FRAME_HELP = "Frame of the mesh file: iso (x forward, y left, z up; rigopt's) or carla (y right)."
+
+
+@app.command("vehicles")
+def vehicles_command(as_json: bool = typer.Option(False, "--json", help="Print JSON instead of a table.")):
+    """List the known vehicles (built-in and your own) with their size and zones."""
+    from rigopt.vehicle.library import load_vehicle, vehicle_names
+
+    rows = []
+    for name in vehicle_names():
+        v = load_vehicle(name)
+        rows.append({"vehicle": v.name, "blueprint": v.blueprint, "aliases": list(v.spec.aliases),
+                     "length": float(v.size[0]), "width": float(v.size[1]), "height": float(v.size[2]),
+                     "zones": sorted({z.name for z in v.zones})})
+    if as_json:
+        print_json(rows)
+        return
+    print_table("vehicles", ["vehicle", "blueprint", "aliases", "length (m)", "width (m)", "height (m)", "zones"],
+                [[r["vehicle"], r["blueprint"], ", ".join(r["aliases"]), r["length"], r["width"], r["height"],
+                  len(r["zones"])] for r in rows])
+
+
+@vehicle_app.command("show")
+def vehicle_show_command(
+    name: str = typer.Argument(..., help="Vehicle name, alias or blueprint."),
+    out: Path = typer.Option(..., "--out", help="PNG file to write."),
+    rig: Optional[str] = typer.Option(None, "--rig", help="Draw this rig's cameras and frustums too."),
+):
+    """Draw top and side views of a vehicle with its zones coloured (and a rig's cameras)."""
+    from rigopt.report.vehicle_figures import write_vehicle_figure
+    from rigopt.vehicle.library import load_vehicle
+
+    path = write_vehicle_figure(load_vehicle(name), out, load_rig(rig) if rig else None)
+    console.print(f"wrote {path}")
+
+
+@vehicle_app.command("export")
+def vehicle_export_command(
+    name: str = typer.Argument(..., help="Vehicle name, alias or blueprint."),
+    out: Path = typer.Option(..., "--out", help="Mesh file to write; the format follows the extension (.ply .stl .obj .glb)."),
+    frame: str = typer.Option("iso", help=FRAME_HELP),
+):
+    """Write a vehicle's body mesh in the internal (ISO) or the benchmark's CARLA frame."""
+    from rigopt.vehicle.library import load_vehicle
+    from rigopt.vehicle.user import FRAMES, carla_mesh_to_iso
+
+    if frame not in FRAMES:
+        raise RigoptError(f"--frame must be one of {', '.join(FRAMES)}, got {frame!r}")
+    mesh = load_vehicle(name).mesh
+    mesh = carla_mesh_to_iso(mesh) if frame == "carla" else mesh  # the reflection is its own inverse
+    out.parent.mkdir(parents=True, exist_ok=True)
+    try:
+        mesh.export(out)
+    except (ValueError, KeyError) as error:
+        raise RigoptError(f"{out}: cannot write this mesh format ({error}); use .ply, .stl, .obj or .glb") from None
+    console.print(f"wrote {out} ({len(mesh.faces)} triangles, {frame} frame)")
+
+
+@vehicle_app.command("add")
+def vehicle_add_command(
+    name: str = typer.Argument(..., help="Name to give the vehicle."),
+    mesh: Path = typer.Option(..., "--mesh", help="Mesh file (OBJ, STL, PLY, GLB, ...), metres, wheels on z = 0."),
+    zones: Optional[Path] = typer.Option(None, "--zones", help="TOML file of [[zones]]; default: zones from the box."),
+    frame: str = typer.Option("iso", help=FRAME_HELP),
+):
+    """Check a mesh and store it as a vehicle so that --vehicle NAME works everywhere."""
+    from rigopt.vehicle.user import add_user_vehicle
+
+    path = add_user_vehicle(name, mesh, zones, frame)
+    console.print(f"added vehicle {name!r}: {path}")

@@ -12,6 +12,10 @@ from rigopt.vehicle.build import build_mesh
 from rigopt.vehicle.spec import VehicleSpec, ZoneSpec
 
 
+#: Longest edge (m) of the subdivided mesh used for per-face zone queries.
+ZONE_QUERY_EDGE = 0.05
+
+
 @dataclass(frozen=True)
 class Zone:
     """One mounting region: box [``min``, ``max``] (3,) m and outward-normal cone around ``normal`` (3,)."""
@@ -29,7 +33,7 @@ class Zone:
         return inside & (normals @ self.normal >= np.cos(np.deg2rad(self.cone_deg)) - 1e-12)
 
 
-def _zones(specs: tuple[ZoneSpec, ...]) -> tuple[Zone, ...]:
+def expand_zones(specs: tuple[ZoneSpec, ...]) -> tuple[Zone, ...]:
     zones = []
     flip = np.array([1.0, -1.0, 1.0])
     for z in specs:
@@ -73,7 +77,14 @@ class Vehicle:
     @cached_property
     def zones(self) -> tuple[Zone, ...]:
         """Zones with mirrored copies expanded (a mirrored zone appears twice under one name)."""
-        return _zones(self.spec.zones)
+        return expand_zones(self.spec.zones)
+
+    @cached_property
+    def fine_mesh(self) -> trimesh.Trimesh:
+        """The body subdivided to edges of at most ZONE_QUERY_EDGE m: zone membership is decided per face
+        (centre and normal), so large flat faces of the built mesh are split first."""
+        vertices, faces = trimesh.remesh.subdivide_to_size(self.mesh.vertices, self.mesh.faces, ZONE_QUERY_EDGE)
+        return trimesh.Trimesh(vertices, faces, process=False)
 
     @cached_property
     def size(self) -> np.ndarray:
