@@ -123,16 +123,20 @@ class VehicleSpec:
     source: str = field(default="<spec>", compare=False)
 
 
-def read_spec(path) -> VehicleSpec:
-    """Read and validate a vehicle spec TOML file."""
+def read_toml(path, what: str) -> dict:
+    """Parse the TOML file ``path``; errors name the file and ``what`` it should be."""
     path = Path(path)
     try:
-        data = tomllib.loads(path.read_text())
+        return tomllib.loads(path.read_text())
     except OSError as error:
-        raise DataError(f"{path}: cannot read the vehicle spec ({error.strerror})") from None
+        raise DataError(f"{path}: cannot read the {what} ({error.strerror})") from None
     except tomllib.TOMLDecodeError as error:
         raise DataError(f"{path}: not valid TOML ({error})") from None
-    return spec_from_dict(data, str(path))
+
+
+def read_spec(path) -> VehicleSpec:
+    """Read and validate a vehicle spec TOML file."""
+    return spec_from_dict(read_toml(path, "vehicle spec"), str(path))
 
 
 def spec_from_dict(data: dict, source: str = "<spec>") -> VehicleSpec:

@@ -7,7 +7,6 @@ A stored vehicle is ``$RIGOPT_HOME/vehicles/<name>/`` holding ``body.ply`` (ISO 
 from __future__ import annotations
 
 import re
-import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -16,7 +15,7 @@ import trimesh
 from rigopt.errors import DataError, RigoptError
 from rigopt.vehicle.library import SPEC_FILE, find_spec, user_vehicles_dir
 from rigopt.vehicle.model import ZONE_QUERY_EDGE, expand_zones
-from rigopt.vehicle.spec import spec_from_dict
+from rigopt.vehicle.spec import read_toml, spec_from_dict
 
 FRAMES = ("carla", "iso")
 #: Plausible road-vehicle extents in metres: (length, width, height) lower and upper bounds.
@@ -156,14 +155,7 @@ def add_user_vehicle(name: str, mesh_path, zones_path=None, frame: str = "iso") 
 
 
 def _read_zones(path) -> list[dict]:
-    path = Path(path)
-    try:
-        data = tomllib.loads(path.read_text())
-    except OSError as error:
-        raise DataError(f"{path}: cannot read the zones file ({error.strerror})") from None
-    except tomllib.TOMLDecodeError as error:
-        raise DataError(f"{path}: not valid TOML ({error})") from None
-    zones = data.get("zones")
+    zones = read_toml(path, "zones file").get("zones")
     if not isinstance(zones, list) or not zones:
         raise DataError(f"{path}: expected one or more [[zones]] tables (name, min, max, normal, cone_deg)")
     return zones
