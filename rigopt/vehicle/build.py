@@ -55,7 +55,10 @@ def _box(solid: Box):
 
 def _mesh_solid(solid: MeshSolid):
     m3d = _manifold()
-    mesh = trimesh.load_mesh(solid.path, process=True)
+    try:
+        mesh = trimesh.load_mesh(solid.path, process=True)
+    except (OSError, ValueError) as error:
+        raise DataError(f"{solid.path}: cannot read the vehicle's mesh file ({error})") from None
     return m3d.Manifold(m3d.Mesh(np.asarray(mesh.vertices, dtype=np.float32), np.asarray(mesh.faces, dtype=np.uint32)))
 
 

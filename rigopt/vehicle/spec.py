@@ -146,12 +146,13 @@ def spec_from_dict(data: dict, source: str = "<spec>") -> VehicleSpec:
     solids = tuple(reader.solid(s, k) for k, s in enumerate(reader.table_list(data, "solids")))
     if not solids:
         raise DataError(f"{source}: a vehicle needs at least one [[solids]] entry")
-    zones = tuple(reader.zone(z, k) for k, z in enumerate(data.get("zones", [])))
+    zones = tuple(reader.zone(z, k) for k, z in enumerate(reader.table_list(data, "zones")))
     box = tuple(reader.numbers(data, "box", 3, positive=True)) if "box" in data else (0.0, 0.0, 0.0)
     aliases = data.get("aliases", [])
     if not isinstance(aliases, list) or not all(isinstance(a, str) for a in aliases):
         raise DataError(f"{source}: 'aliases' must be a list of strings")
-    return VehicleSpec(name, str(data.get("blueprint", name)), tuple(aliases), box, solids, zones, source)
+    blueprint = reader.text(data, "blueprint") if "blueprint" in data else name
+    return VehicleSpec(name, blueprint, tuple(aliases), box, solids, zones, source)
 
 
 class _Reader:
@@ -183,6 +184,12 @@ class _Reader:
             raise self.fail(where, f"'{key}' must be positive, got {value!r}")
         return [float(v) for v in value]
 
+    def flag(self, table: dict, key: str, where: str) -> bool:
+        value = table.get(key, False)
+        if not isinstance(value, bool):
+            raise self.fail(where, f"'{key}' must be true or false, got {value!r}")
+        return value
+
     def number(self, table: dict, key: str, where: str, positive: bool = True) -> float:
         value = table.get(key)
         if not _is_number(value) or (positive and value <= 0):
@@ -191,11 +198,11 @@ class _Reader:
 
     def polygon(self, table: dict, key: str, where: str) -> np.ndarray:
         value = table.get(key)
-        points = np.array(value, dtype=float) if isinstance(value, list) and value else np.zeros((0, 2))
-        if (not isinstance(value, list) or points.ndim != 2 or points.shape[1] != 2 or len(points) < 3
-                or not np.all(np.isfinite(points))):
-            raise self.fail(where, f"'{key}' must be a list of at least 3 [a, b] points")
-        return points
+        valid = (isinstance(value, list) and len(value) >= 3
+                 and all(isinstance(p, list) and len(p) == 2 and all(_is_number(v) for v in p) for p in value))
+        if not valid:
+            raise self.fail(where, f"'{key}' must be a list of at least 3 [a, b] points (finite numbers)")
+        return np.array(value, dtype=float)
 
     def solid(self, table: dict, index: int):
         kind = table.get("type")
@@ -215,7 +222,7 @@ class _Reader:
                           self.number(table, "width", where), self.number(table, "track", where))
         if kind == "box":
             return Box(name, np.array(self.numbers(table, "center", 3, where)),
-                       np.array(self.numbers(table, "size", 3, where, positive=True)), bool(table.get("mirrored", False)))
+                       np.array(self.numbers(table, "size", 3, where, positive=True)), self.flag(table, "mirrored", where))
         if kind == "mesh":
             file = Path(self.text(table, "file", where))
             return MeshSolid(name, file if file.is_absolute() else Path(self.source).parent / file)
@@ -233,7 +240,7 @@ class _Reader:
         cone = self.number(table, "cone_deg", where)
         if cone > 180:
             raise self.fail(where, f"'cone_deg' must be in (0, 180], got {cone}")
-        return ZoneSpec(name, low, high, normal / np.linalg.norm(normal), cone, bool(table.get("mirrored", False)))
+        return ZoneSpec(name, low, high, normal / np.linalg.norm(normal), cone, self.flag(table, "mirrored", where))
 
 
 def _is_number(value) -> bool:

@@ -1,7 +1,9 @@
 """rigopt.metrics.rigcd: Rig Contrastive Distance, checked against its definition and the slow reference.
 
 Tolerances: the geodesic angle is an arccos of a trace, which near the identity only resolves angles to
-about sqrt(machine epsilon) ~ 1e-8 rad, so anything containing the rotation term is compared to 1e-7.
+about sqrt(machine epsilon) ~ 1e-8 rad (a one-ulp change in the trace, e.g. from another summation order
+or array layout, moves it by ~2e-8), so anything containing the rotation term (r, match, rigcd) is
+compared to 1e-7 and the rest (t, f, count) to 1e-9. The strict xfail tests below pin that imprecision.
 Where two matchings tie, the per-component means (t, r, f) depend on which one the solver returns, so
 the components are compared only where the optimal matching is unique.
 """
@@ -13,7 +15,7 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 from scipy.optimize import linear_sum_assignment
 
@@ -82,9 +84,18 @@ def _unique_optimum(a, b, lambdas=(1.0, 1.0, 1.0), margin=1e-6):
     return True
 
 
+def _atol(key, scale=1.0):
+    """Absolute tolerance of a component: 1e-9 without the rotation term, ROTATION_ATOL (scaled) with it."""
+    return 1e-9 if key in ("count", "t", "f") else ROTATION_ATOL * scale
+
+
 def _assert_close(x, y, key, scale=1.0):
-    atol = 1e-12 if key in ("count", "t", "f") else ROTATION_ATOL * scale
-    assert x == pytest.approx(y, rel=1e-9, abs=atol), key
+    assert x == pytest.approx(y, rel=1e-9, abs=_atol(key, scale)), key
+
+
+#: A rotation rigopt accepts (orthonormal to 1e-9, within is_rotation's 1e-6) whose trace(R^T R) is
+#: 3 - 2e-9: the arccos formula gives it a distance of ~4.5e-5 rad from itself on any platform.
+NEARLY_ORTHONORMAL = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0 - 1e-9]])
 
 
 # --- definition-level properties ------------------------------------------------------------------------
@@ -97,6 +108,19 @@ def test_rigcd_of_a_rig_with_itself_is_zero(a):
     assert result.t == pytest.approx(0.0, abs=1e-9)
     assert result.f == pytest.approx(0.0, abs=1e-9)
     assert result.rigcd == pytest.approx(0.0, abs=1e-6)
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="bug: camera_costs' arccos((trace - 1) / 2) gives a camera a non-zero rotation distance from "
+    "itself (~1e-8 rad for many exact rotations, ~4.5e-5 rad for one orthonormal to 1e-9), so RigCD(A, A) > 0; "
+    "the trace comes from a matmul whose rounding depends on the array shapes, so RigCD(a, b) and "
+    "RigCD(b, a) differ by up to ~1e-8",
+)
+@given(a=rigs)
+@example(a=_rig([([0.0, 0.0, 0.0], NEARLY_ORTHONORMAL, 60.0)], "nearly"))
+def test_rigcd_of_a_rig_with_itself_is_exactly_zero(a):
+    assert rigcd(a, a).rigcd == pytest.approx(0.0, abs=1e-12)
 
 
 @pytest.mark.parametrize("name", ["R1", "R1-c10", "R6", "R9"])
@@ -112,7 +136,7 @@ def test_rigcd_is_symmetric(a, b):
     ab, ba = rigcd(a, b), rigcd(b, a)
     keys = COMPONENTS if _unique_optimum(a, b) else TOTALS
     for key in keys:
-        assert getattr(ab, key) == pytest.approx(getattr(ba, key), rel=1e-9, abs=1e-9), key
+        assert getattr(ab, key) == pytest.approx(getattr(ba, key), rel=1e-9, abs=_atol(key)), key
 
 
 @given(a=rigs, b=rigs, data=st.data())
@@ -122,7 +146,7 @@ def test_rigcd_is_invariant_to_camera_order(a, b, data):
     before, after = rigcd(a, b), rigcd(_permuted(a, order_a), _permuted(b, order_b))
     keys = COMPONENTS if _unique_optimum(a, b) else TOTALS
     for key in keys:
-        assert getattr(after, key) == pytest.approx(getattr(before, key), rel=1e-9, abs=1e-9), key
+        assert getattr(after, key) == pytest.approx(getattr(before, key), rel=1e-9, abs=_atol(key)), key
     if _unique_optimum(a, b):
         assert sorted(after.pairs) == sorted(before.pairs)
 
@@ -320,16 +344,18 @@ def test_pairs_equal_the_matrix_diagonal(pairs, alpha, lambdas):
     rigs_a, rigs_b = [p[0] for p in pairs], [p[1] for p in pairs]
     diagonal = rigcd_pairs(rigs_a, rigs_b, alpha, lambdas)
     matrix = rigcd_matrix(rigs_a, rigs_b, alpha, lambdas)
-    for key in COMPONENTS:
-        np.testing.assert_allclose(getattr(diagonal, key), np.diag(getattr(matrix, key)), rtol=1e-12, atol=1e-12,
-                                   err_msg=key)
+    # the two group the pairs differently, so the trace sums may round differently (see module docstring)
+    unique = all(_unique_optimum(a, b) for a, b in pairs)
+    for key in COMPONENTS if unique else TOTALS:
+        np.testing.assert_allclose(getattr(diagonal, key), np.diag(getattr(matrix, key)), rtol=1e-9,
+                                   atol=_atol(key, 1.0 + sum(lambdas)), err_msg=key)
 
 
 @given(a=rigs, b=rigs, alpha=alphas, lambdas=lambda_values)
 def test_single_pair_equals_its_matrix_entry(a, b, alpha, lambdas):
     one, matrix = rigcd(a, b, alpha, lambdas), rigcd_matrix([a], [b], alpha, lambdas)
     for key in COMPONENTS:
-        assert getattr(one, key) == pytest.approx(getattr(matrix, key)[0, 0], rel=1e-12, abs=1e-12), key
+        assert getattr(one, key) == pytest.approx(getattr(matrix, key)[0, 0], rel=1e-9, abs=_atol(key)), key
 
 
 @given(a=rigs, b=rigs)

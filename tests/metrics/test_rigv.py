@@ -132,7 +132,8 @@ def test_invariant_to_camera_order(rig, data):
     shuffled = Rig(rig.name, rig.vehicle, tuple(rig.cameras[k] for k in order))
     before, after = rigv(rig), rigv(shuffled)
     for key in ("rigv", "tv", "rv", "fv", "dmax", "tv_norm", "rv_norm", "fv_norm"):
-        assert getattr(after, key) == pytest.approx(getattr(before, key), rel=1e-9, abs=1e-12), key
+        atol = ROTATION_ATOL if key in ("rigv", "rv", "rv_norm") else 1e-12  # trace sums may round differently
+        assert getattr(after, key) == pytest.approx(getattr(before, key), rel=1e-9, abs=atol), key
 
 
 @given(rig=rigs, lambdas=lambda_values)

@@ -1,0 +1,229 @@
+"""User vehicles: a mesh file checked, brought into the ISO frame, given zones and stored under RIGOPT_HOME.
+
+Every test runs with ``rigopt_home`` (conftest): RIGOPT_HOME in a tmp folder and the built-in vehicles
+replaced by one fake built-in "etron", so that no real home or built-in spec is read or written.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import trimesh
+
+from rigopt.errors import DataError, RigoptError
+from rigopt.vehicle.library import find_spec, load_vehicle, user_vehicles_dir, vehicle_names
+from rigopt.vehicle.user import add_user_vehicle, carla_mesh_to_iso, load_user_mesh
+
+pytestmark = pytest.mark.usefixtures("rigopt_home")
+
+BOX_BOUNDS = [[-2, -0.9, 0.3], [2, 0.9, 1.5]]
+BOX_VOLUME = 4 * 1.8 * 1.2
+
+
+@pytest.fixture
+def export(tmp_path):
+    """Factory: write a mesh to ``tmp_path/<name>`` and return its path."""
+
+    def write(mesh: trimesh.Trimesh, name: str = "car.stl"):
+        path = tmp_path / name
+        mesh.export(path)
+        return path
+
+    return write
+
+
+@pytest.fixture
+def box_stl(box_car, export):
+    return export(box_car.mesh, "box.stl")
+
+
+def transformed(mesh: trimesh.Trimesh, matrix) -> trimesh.Trimesh:
+    out = mesh.copy()
+    out.apply_transform(matrix)
+    return out
+
+
+# --- round trip -------------------------------------------------------------------------------------------
+
+
+def test_added_vehicle_is_stored_under_rigopt_home(box_stl, rigopt_home):
+    path = add_user_vehicle("mycar", box_stl)
+    assert path == rigopt_home / "vehicles" / "mycar" / "vehicle.toml"
+    assert path.is_file() and (path.parent / "body.ply").is_file()
+    assert user_vehicles_dir() == rigopt_home / "vehicles"
+
+
+def test_round_trip_keeps_the_bounds(box_stl):
+    add_user_vehicle("mycar", box_stl)
+    np.testing.assert_allclose(load_vehicle("mycar").mesh.bounds, BOX_BOUNDS, atol=1e-4)
+
+
+def test_round_trip_keeps_the_volume(box_stl):
+    add_user_vehicle("mycar", box_stl)
+    mesh = load_vehicle("mycar").mesh
+    assert mesh.is_watertight
+    assert mesh.volume == pytest.approx(BOX_VOLUME, abs=1e-4)
+
+
+def test_added_vehicle_is_listed_and_found(box_stl):
+    add_user_vehicle("mycar", box_stl)
+    assert "mycar" in vehicle_names()
+    assert find_spec("MyCar").name == "mycar"
+
+
+def test_carla_frame_is_reflected_back(asymmetric_car, export):
+    mirrored = carla_mesh_to_iso(asymmetric_car.mesh)  # the same reflection takes ISO to CARLA
+    np.testing.assert_allclose(mirrored.bounds[:, 1], [-1.15, 0.9], atol=1e-5)  # it really is different
+    add_user_vehicle("carlacar", export(mirrored, "carla.ply"), frame="carla")
+    loaded = load_vehicle("carlacar").mesh
+    np.testing.assert_allclose(loaded.bounds, asymmetric_car.mesh.bounds, atol=1e-4)
+    assert loaded.volume == pytest.approx(asymmetric_car.mesh.volume, abs=1e-4)
+
+
+def test_iso_frame_is_kept(asymmetric_car, export):
+    add_user_vehicle("isocar", export(asymmetric_car.mesh, "iso.ply"))
+    np.testing.assert_allclose(load_vehicle("isocar").mesh.bounds, asymmetric_car.mesh.bounds, atol=1e-4)
+
+
+def test_carla_reflection_keeps_normals_outward(asymmetric_car):
+    mirrored = carla_mesh_to_iso(asymmetric_car.mesh)
+    assert mirrored.volume == pytest.approx(asymmetric_car.mesh.volume, rel=1e-9)
+
+
+def test_unknown_frame_raises(box_stl):
+    with pytest.raises(RigoptError, match="frame"):
+        load_user_mesh(box_stl, frame="unreal")
+
+
+# --- rejected meshes ------------------------------------------------------------------------------------------
+
+
+def test_millimetre_mesh_raises(box_car, export):
+    path = export(transformed(box_car.mesh, np.diag([1000.0, 1000.0, 1000.0, 1.0])), "mm.stl")
+    with pytest.raises(DataError, match="millimetres"):
+        add_user_vehicle("mmcar", path)
+
+
+def test_mesh_on_its_side_raises(box_car, export):
+    standing = transformed(box_car.mesh, trimesh.transformations.rotation_matrix(np.pi / 2, [0, 1, 0]))
+    standing.apply_translation([0, 0, -standing.bounds[0, 2]])
+    assert np.argmax(np.ptp(standing.bounds, axis=0)) == 2
+    with pytest.raises(DataError, match="side"):
+        add_user_vehicle("standing", export(standing, "standing.stl"))
+
+
+def test_lifted_mesh_raises(box_car, export):
+    lifted = transformed(box_car.mesh, trimesh.transformations.translation_matrix([0, 0, 2.0]))
+    with pytest.raises(DataError, match=r"z = 0|lowest point"):
+        add_user_vehicle("lifted", export(lifted, "lifted.stl"))
+
+
+def test_open_mesh_raises(box_car, export):
+    fine = box_car.fine_mesh
+    keep = fine.triangles_center[:, 0] < 2.0 - 1e-6  # the whole front face is missing
+    open_mesh = trimesh.Trimesh(fine.vertices, fine.faces[keep], process=False)
+    assert not open_mesh.is_watertight
+    with pytest.raises(DataError, match="watertight"):
+        add_user_vehicle("opencar", export(open_mesh, "open.ply"))
+
+
+def test_mesh_with_one_missing_triangle_is_repaired(box_car, export):
+    mesh = box_car.mesh
+    holed = trimesh.Trimesh(mesh.vertices, mesh.faces[1:], process=False)
+    add_user_vehicle("holed", export(holed, "holed.ply"))
+    assert load_vehicle("holed").mesh.volume == pytest.approx(BOX_VOLUME, abs=1e-4)
+
+
+def test_unreadable_file_raises(tmp_path):
+    path = tmp_path / "junk.ply"
+    path.write_bytes(b"\x00 this is not a mesh \xff" * 50)
+    with pytest.raises(DataError, match="junk.ply"):
+        add_user_vehicle("junk", path)
+
+
+def test_missing_file_raises(tmp_path):
+    with pytest.raises(DataError, match="no such mesh file"):
+        add_user_vehicle("nothing", tmp_path / "nothing.stl")
+
+
+def test_failed_add_writes_nothing(box_car, export, rigopt_home):
+    lifted = transformed(box_car.mesh, trimesh.transformations.translation_matrix([0, 0, 2.0]))
+    with pytest.raises(DataError):
+        add_user_vehicle("lifted", export(lifted, "lifted.stl"))
+    assert not (rigopt_home / "vehicles" / "lifted").exists()
+
+
+# --- zones -------------------------------------------------------------------------------------------------------
+
+
+def test_zone_that_selects_no_surface_raises(box_stl, tmp_path):
+    zones = tmp_path / "zones.toml"
+    zones.write_text('[[zones]]\nname = "nowhere"\nmin = [10, 10, 10]\nmax = [11, 11, 11]\nnormal = [1, 0, 0]\n'
+                     'cone_deg = 30\n')
+    with pytest.raises(DataError, match="selects no surface"):
+        add_user_vehicle("zoned", box_stl, zones)
+
+
+def test_zones_file_is_used(box_stl, tmp_path):
+    zones = tmp_path / "zones.toml"
+    zones.write_text('[[zones]]\nname = "nose"\nmin = [1.9, -1, 0.2]\nmax = [2.1, 1, 1.6]\nnormal = [1, 0, 0]\n'
+                     'cone_deg = 30\n')
+    add_user_vehicle("zoned", box_stl, zones)
+    vehicle = load_vehicle("zoned")
+    assert [z.name for z in vehicle.zones] == ["nose"]
+    assert vehicle.zone_names([[2.0, 0.0, 1.0]], [[1.0, 0.0, 0.0]]) == ["nose"]
+
+
+def test_zones_file_without_zones_raises(box_stl, tmp_path):
+    zones = tmp_path / "zones.toml"
+    zones.write_text('name = "nothing here"\n')
+    with pytest.raises(DataError, match="zones"):
+        add_user_vehicle("zoned", box_stl, zones)
+
+
+def test_default_zones(box_stl):
+    add_user_vehicle("mycar", box_stl)
+    names = {z.name for z in load_vehicle("mycar").zones}
+    assert {"bumper_front", "roof_front", "b_pillar"} <= names
+
+
+def test_default_zones_select_the_right_faces(box_stl):
+    add_user_vehicle("mycar", box_stl)
+    vehicle = load_vehicle("mycar")
+    points = [[2.0, 0.0, 0.5], [-2.0, 0.0, 0.5], [1.0, 0.0, 1.5], [0.0, 0.9, 1.3], [0.0, -0.9, 1.3]]
+    normals = [[1, 0, 0], [-1, 0, 0], [0, 0, 1], [0, 1, 0], [0, -1, 0]]
+    assert vehicle.zone_names(points, normals) == ["bumper_front", "bumper_rear", "roof_front", "b_pillar",
+                                                   "b_pillar"]
+
+
+# --- names -------------------------------------------------------------------------------------------------------
+
+
+def test_builtin_name_raises(box_stl):
+    with pytest.raises(RigoptError, match="built-in"):
+        add_user_vehicle("etron", box_stl)
+
+
+def test_builtin_alias_raises(box_stl):
+    with pytest.raises(RigoptError, match="built-in"):
+        add_user_vehicle("suv", box_stl)
+
+
+def test_bad_name_raises(box_stl, rigopt_home):
+    with pytest.raises(RigoptError, match="name"):
+        add_user_vehicle("my car!", box_stl)
+    assert not (rigopt_home / "vehicles").exists()
+
+
+def test_user_vehicle_can_be_replaced(box_car, asymmetric_car, export):
+    add_user_vehicle("mycar", export(box_car.mesh, "a.stl"))
+    add_user_vehicle("mycar", export(asymmetric_car.mesh, "b.stl"))
+    assert vehicle_names().count("mycar") == 1
+    np.testing.assert_allclose(find_spec("mycar").box, np.ptp(asymmetric_car.mesh.bounds, axis=0), atol=1e-4)
+
+
+def test_replaced_vehicle_is_reloaded(box_car, asymmetric_car, export):
+    add_user_vehicle("mycar", export(box_car.mesh, "a.stl"))
+    np.testing.assert_allclose(load_vehicle("mycar").mesh.bounds, BOX_BOUNDS, atol=1e-4)
+    add_user_vehicle("mycar", export(asymmetric_car.mesh, "b.stl"))
+    np.testing.assert_allclose(load_vehicle("mycar").mesh.bounds, asymmetric_car.mesh.bounds, atol=1e-4)

@@ -1,0 +1,78 @@
+"""Vehicle surface queries and zones on the box car [-2, 2] x [-0.9, 0.9] x [0.3, 1.5]."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from rigopt.vehicle.model import ZONE_QUERY_EDGE
+
+
+def test_point_in_front_of_the_front_face_is_3cm_outside(box_car):
+    query = box_car.surface([[2.03, 0.1, 1.0]])
+    assert query.distance[0] == pytest.approx(0.03, abs=1e-6)
+
+
+def test_point_inside_is_negative(box_car):
+    query = box_car.surface([[1.9, 0.1, 1.0]])
+    assert query.distance[0] == pytest.approx(-0.1, abs=1e-6)
+
+
+def test_foot_is_the_nearest_surface_point(box_car):
+    query = box_car.surface([[2.03, 0.1, 1.0], [1.9, 0.1, 1.0], [0.5, 0.95, 0.8]])
+    np.testing.assert_allclose(query.foot, [[2.0, 0.1, 1.0], [2.0, 0.1, 1.0], [0.5, 0.9, 0.8]], atol=1e-6)
+
+
+def test_normal_points_outward(box_car):
+    query = box_car.surface([[2.03, 0.1, 1.0], [1.9, 0.1, 1.0], [0.5, -0.95, 0.8], [0.0, 0.1, 1.6]])
+    np.testing.assert_allclose(query.normal, [[1, 0, 0], [1, 0, 0], [0, -1, 0], [0, 0, 1]], atol=1e-9)
+
+
+def test_face_indexes_the_mesh(box_car):
+    query = box_car.surface([[2.03, 0.1, 1.0]])
+    np.testing.assert_allclose(box_car.mesh.face_normals[query.face[0]], [1, 0, 0], atol=1e-9)
+
+
+def test_zone_picked_by_position(box_car):
+    names = box_car.zone_names([[2.0, 0.0, 1.0], [-2.0, 0.0, 1.0]], [[1, 0, 0], [1, 0, 0]])
+    assert names == ["front", None]
+
+
+def test_zone_requires_the_normal_in_its_cone(box_car):
+    # on the front face, but with a sideways normal: outside the 45 deg cone around +x
+    assert box_car.zone_names([[2.0, 0.0, 1.0]], [[0.0, 1.0, 0.0]]) == [None]
+
+
+def test_zone_cone_edge(box_car):
+    inside = [np.cos(np.deg2rad(44)), np.sin(np.deg2rad(44)), 0.0]
+    outside = [np.cos(np.deg2rad(46)), np.sin(np.deg2rad(46)), 0.0]
+    assert box_car.zone_names([[2.0, 0.0, 1.0]] * 2, [inside, outside]) == ["front", None]
+
+
+def test_mirrored_zone_covers_both_sides_under_one_name(box_car):
+    names = box_car.zone_names([[0.0, 0.9, 1.0], [0.0, -0.9, 1.0]], [[0, 1, 0], [0, -1, 0]])
+    assert names == ["side", "side"]
+
+
+def test_mirrored_zone_keeps_its_normal_per_side(box_car):
+    # the right-hand copy wants -y normals: a +y normal at y = -0.9 is in neither copy
+    assert box_car.zone_names([[0.0, -0.9, 1.0]], [[0, 1, 0]]) == [None]
+
+
+def test_mirrored_zone_expands_to_two_zones(box_car):
+    assert [z.name for z in box_car.zones] == ["front", "side", "side"]
+
+
+def test_unmirrored_zone_covers_one_side(build_vehicle, make_spec_text, box_zones):
+    car = build_vehicle(make_spec_text(zones=box_zones.replace("mirrored = true", "mirrored = false")))
+    names = car.zone_names([[0.0, 0.9, 1.0], [0.0, -0.9, 1.0]], [[0, 1, 0], [0, -1, 0]])
+    assert names == ["side", None]
+
+
+def test_fine_mesh_edges_are_short(box_car):
+    lengths = box_car.fine_mesh.edges_unique_length
+    assert lengths.max() <= ZONE_QUERY_EDGE + 1e-9
+
+
+def test_fine_mesh_keeps_the_surface(box_car):
+    assert box_car.fine_mesh.area == pytest.approx(box_car.mesh.area, rel=1e-9)
