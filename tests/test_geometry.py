@@ -318,12 +318,6 @@ def test_geodesic_distance_to_itself_is_zero(rotation):
 NEARLY_ORTHONORMAL = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0 - 1e-9]])
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="bug: arccos((trace(Ra^T Rb) - 1) / 2) amplifies a rounding of the trace to sqrt(error): "
-    "dR(R, R) is ~1e-8 rad for about a third of exact rotations and ~4.5e-5 rad for a matrix orthonormal "
-    "to 1e-9; 2 * arcsin(||Ra - Rb||_F / (2 sqrt 2)) is the same angle and exact near 0",
-)
 @given(rotation=rotations)
 @example(rotation=NEARLY_ORTHONORMAL)
 def test_geodesic_distance_to_itself_is_exactly_zero(rotation):

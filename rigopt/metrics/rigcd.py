@@ -21,6 +21,7 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from rigopt.errors import RigoptError
+from rigopt.geometry import geodesic_distance
 from rigopt.rig.model import Rig
 
 DEFAULT_ALPHA = 0.9
@@ -37,11 +38,8 @@ def camera_costs(positions_a, rotations_a, fovs_a, positions_b, rotations_b, fov
     pa, pb = np.asarray(positions_a, dtype=float), np.asarray(positions_b, dtype=float)
     d = pa[..., :, None, :] - pb[..., None, :, :]
     t = np.sqrt(np.einsum("...k,...k->...", d, d))
-    # trace(Ra^T Rb) is the dot product of the flattened matrices: one matmul for all pairs.
-    ra = np.asarray(rotations_a, dtype=float)
-    rb = np.asarray(rotations_b, dtype=float)
-    trace = ra.reshape(*ra.shape[:-2], 9) @ np.swapaxes(rb.reshape(*rb.shape[:-2], 9), -1, -2)
-    r = np.arccos(np.clip((trace - 1.0) / 2.0, -1.0, 1.0))
+    r = geodesic_distance(np.asarray(rotations_a, dtype=float)[..., :, None, :, :],
+                          np.asarray(rotations_b, dtype=float)[..., None, :, :, :])
     f = np.abs(np.asarray(fovs_a, dtype=float)[..., :, None] - np.asarray(fovs_b, dtype=float)[..., None, :])
     return t, r, f
 

@@ -3,7 +3,8 @@
 Tolerances: the geodesic angle is an arccos of a trace, which near the identity only resolves angles to
 about sqrt(machine epsilon) ~ 1e-8 rad (a one-ulp change in the trace, e.g. from another summation order
 or array layout, moves it by ~2e-8), so anything containing the rotation term (r, match, rigcd) is
-compared to 1e-7 and the rest (t, f, count) to 1e-9. The strict xfail tests below pin that imprecision.
+compared to 1e-7 and the rest (t, f, count) to 1e-9; rigopt's own geodesic distance is exact near 0,
+so RigCD(A, A) is exactly 0.
 Where two matchings tie, the per-component means (t, r, f) depend on which one the solver returns, so
 the components are compared only where the optimal matching is unique.
 """
@@ -110,13 +111,6 @@ def test_rigcd_of_a_rig_with_itself_is_zero(a):
     assert result.rigcd == pytest.approx(0.0, abs=1e-6)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="bug: camera_costs' arccos((trace - 1) / 2) gives a camera a non-zero rotation distance from "
-    "itself (~1e-8 rad for many exact rotations, ~4.5e-5 rad for one orthonormal to 1e-9), so RigCD(A, A) > 0; "
-    "the trace comes from a matmul whose rounding depends on the array shapes, so RigCD(a, b) and "
-    "RigCD(b, a) differ by up to ~1e-8",
-)
 @given(a=rigs)
 @example(a=_rig([([0.0, 0.0, 0.0], NEARLY_ORTHONORMAL, 60.0)], "nearly"))
 def test_rigcd_of_a_rig_with_itself_is_exactly_zero(a):
