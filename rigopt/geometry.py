@@ -117,21 +117,20 @@ def wrap_degrees(angle_deg):
 
 
 def geodesic_distance(rotation_a, rotation_b):
-    """Angle of ``Ra^T Rb`` in radians, in [0, pi]: the metric's ``arccos((trace(Ra^T Rb) - 1) / 2)``.
+    """Angle of ``M = Ra^T Rb`` in radians, in [0, pi]: the metric's ``arccos((trace(M) - 1) / 2)``.
 
     rotation_a, rotation_b : (..., 3, 3) float, broadcastable. Returns (...,) float radians.
-    Below a quarter turn the same angle is computed as ``2 arcsin(||Ra - Rb||_F / (2 sqrt 2))``
-    (``||Ra - Rb||_F^2 = 8 sin^2(angle / 2)`` for rotations), which is exact near 0 where the arccos of
-    a rounded trace is off by up to sqrt(machine epsilon) ~ 1e-8 rad; above it the arccos is the
-    well-conditioned one.
+    Computed as ``atan2(||M - M^T||_F / (2 sqrt 2), (trace(M) - 1) / 2)``: the sine and cosine of the same
+    angle for a rotation, but well conditioned everywhere, where the arccos of a rounded trace is off by up
+    to sqrt(machine epsilon) ~ 1e-8 rad near 0 and pi. ``M`` of a rotation with itself is exactly
+    symmetric, so the distance of a rotation to itself is exactly 0.
     """
-    a = np.asarray(rotation_a, dtype=float)
-    b = np.asarray(rotation_b, dtype=float)
-    a, b = a.reshape(*a.shape[:-2], 9), b.reshape(*b.shape[:-2], 9)
-    cos_angle = np.clip((np.einsum("...k,...k->...", a, b) - 1.0) / 2.0, -1.0, 1.0)
-    difference = a - b
-    half_chord = np.sqrt(np.einsum("...k,...k->...", difference, difference) / 8.0)
-    return np.where(cos_angle > 0.0, 2.0 * np.arcsin(np.minimum(half_chord, 1.0)), np.arccos(cos_angle))
+    a, b = np.asarray(rotation_a, dtype=float), np.asarray(rotation_b, dtype=float)
+    m = np.swapaxes(a, -1, -2) @ b
+    skew = m - np.swapaxes(m, -1, -2)
+    sine = np.sqrt(np.einsum("...ij,...ij->...", skew, skew) / 8.0)
+    cosine = (np.trace(m, axis1=-2, axis2=-1) - 1.0) / 2.0
+    return np.arctan2(sine, cosine)
 
 
 def quaternion_to_matrix(quaternion):

@@ -63,15 +63,15 @@ class Camera:
         if not is_rotation(rotation):
             raise RigFileError(f"{what} rotation is not a proper rotation matrix (orthonormal, det +1)")
         object.__setattr__(self, "rotation", rotation)
-        try:
-            fov = float(self.fov)
-        except (TypeError, ValueError):
-            raise RigFileError(f"{what} fov must be a number of degrees, got {self.fov!r}") from None
+        if isinstance(self.fov, (bool, str)) or not isinstance(self.fov, (int, float, np.number)):
+            raise RigFileError(f"{what} fov must be a number of degrees, got {self.fov!r}")
+        fov = float(self.fov)
         if not (np.isfinite(fov) and 0.0 < fov < 180.0):
             raise RigFileError(f"{what} fov must be in (0, 180) degrees, got {self.fov!r}")
         object.__setattr__(self, "fov", fov)
         size = tuple(self.image_size) if isinstance(self.image_size, (tuple, list)) else ()
-        if len(size) != 2 or not all(isinstance(v, (int, np.integer)) and v > 0 for v in size):
+        if len(size) != 2 or not all(isinstance(v, (int, np.integer)) and not isinstance(v, bool) and v > 0
+                                     for v in size):
             raise RigFileError(f"{what} image_size must be two positive integers (width, height), got {self.image_size!r}")
         object.__setattr__(self, "image_size", (int(size[0]), int(size[1])))
 
