@@ -1,0 +1,280 @@
+"""The design pipeline: candidates -> coverage requirements -> MILP selection -> validated rig.
+
+``design_rig`` proposes a rig on ``vehicle`` that minimises the calibrated RigCD to the reference rig
+(the objective of :mod:`rigopt.design.selection`) while every ring sector the reference sees on its own
+vehicle stays seen (plus optional stricter requirements), and every camera passes the mount checks.
+A selected camera that fails the python-fcl checks is removed from the candidates and the MILP solved
+again, so a returned design is always valid.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from rigopt.collision import MountRules, RigCheck, check_rig
+from rigopt.coverage.footprint import Footprint
+from rigopt.coverage.matrix import rig_coverage_matrix, sector_points
+from rigopt.coverage.measures import CoverageSettings
+from rigopt.coverage.visibility import visible
+from rigopt.design.candidates import CandidateSet, build_candidates
+from rigopt.design.selection import DesignInfeasible, Selection, prune, select_cameras
+from rigopt.metrics.calibration import Calibration
+from rigopt.metrics.ranking import TransferPrediction, predict_transfer
+from rigopt.metrics.rigcd import camera_costs
+from rigopt.rig.model import Camera, Rig
+from rigopt.vehicle.library import load_vehicle
+from rigopt.vehicle.model import Vehicle
+
+DEFAULT_LENSES = (60.0, 65.0, 70.0, 75.0, 80.0, 90.0, 100.0, 110.0, 120.0)
+#: Mount points closer than this (m) may not both hold a camera (8 cm housings plus a margin).
+CLASH_DISTANCE = 0.10
+#: How many validation rounds (re-solves after removing cameras that fail the fcl checks) at most.
+MAX_REPAIRS = 5
+
+
+@dataclass(frozen=True)
+class DesignSettings:
+    """What the designer may choose from and what it must achieve.
+
+    ``cameras``: (min, max) camera count, None for the reference's; ``lenses``: catalogue FOVs (deg);
+    ``zones``: allowed zone names (None: all); ``pitches_deg`` and ``yaw_step_deg``: the orientation grid;
+    ``spacing``: mount point spacing (m), None to size it from the vehicle (about ``target_mounts`` points);
+    ``min_coverage``: cameras every sector point needs (0: only where the reference sees it, 1);
+    ``min_overlap``: cameras needed where the reference sees with >= 2 (0: no overlap requirement);
+    pruning sizes, MILP ``time_limit`` (s) and ``mip_gap``; coverage ring settings.
+    """
+
+    cameras: tuple[int, int] | None = None
+    lenses: tuple[float, ...] = DEFAULT_LENSES
+    zones: tuple[str, ...] | None = None
+    pitches_deg: tuple[float, ...] = (-20.0, -10.0, 0.0, 10.0)
+    yaw_step_deg: float = 10.0
+    spacing: float | None = None
+    target_mounts: int = 400
+    min_coverage: int = 0
+    min_overlap: int = 0
+    keep_per_reference: int = 150
+    keep_per_sector: int = 6
+    coverage_mounts: int = 80
+    time_limit: float = 60.0
+    mip_gap: float = 1e-4
+    coverage: CoverageSettings = field(default_factory=lambda: CoverageSettings(ring_distances=(2.0, 5.0, 10.0, 20.0),
+                                                                                sectors=36))
+    rules: MountRules = field(default_factory=MountRules)
+
+
+@dataclass(frozen=True)
+class RigSummary:
+    """A rig judged against the reference: predicted transfer, coverage (fraction of sector points seen),
+    and whether it meets the design's coverage requirements."""
+
+    rig: Rig
+    prediction: TransferPrediction
+    coverage: float
+    meets_requirements: bool
+    check: RigCheck | None = None
+
+
+@dataclass(frozen=True)
+class DesignResult:
+    """The validated design and its comparisons; solver facts of the final MILP."""
+
+    design: RigSummary
+    reference: Rig
+    reference_coverage: float
+    selection: Selection
+    n_candidates: int
+    n_offered: int
+    repairs: int
+    seconds: float
+    naive_transfer: RigSummary | None
+    benchmark_rigs: tuple[RigSummary, ...]
+
+
+def _progress_none(message: str) -> None:
+    return None
+
+
+def default_spacing(vehicle: Vehicle, settings: DesignSettings) -> float:
+    """A spacing (m) that puts about ``target_mounts`` mount points on the allowed zones (at least 0.1 m)."""
+    fine = vehicle.fine_mesh
+    area = 0.0
+    taken = np.zeros(len(fine.faces), dtype=bool)
+    for zone in vehicle.zones:
+        if settings.zones and zone.name not in settings.zones:
+            continue
+        inside = zone.contains(fine.triangles_center, fine.face_normals) & ~taken
+        taken |= inside
+        area += float(fine.area_faces[inside].sum())
+    return max(0.1, float(np.sqrt(area / settings.target_mounts)))
+
+
+def requirements(reference: Rig, reference_vehicle: Vehicle, settings: DesignSettings) -> np.ndarray:
+    """(q,) int cameras needed at each sector point: where the reference (on its own vehicle) sees a point,
+    one; where it sees it twice, ``min_overlap``; everywhere at least ``min_coverage``."""
+    counts = rig_coverage_matrix(reference, reference_vehicle, settings.coverage).sees.sum(axis=0)
+    needed = np.minimum(counts, 1)
+    if settings.min_overlap:
+        needed = np.where(counts >= 2, np.maximum(needed, settings.min_overlap), needed)
+    return np.maximum(needed, settings.min_coverage).astype(int)
+
+
+def _coverage_pool(candidates: CandidateSet, reference: Rig, settings: DesignSettings) -> np.ndarray:
+    """Candidates offered for coverage: on a coarse subset of mount points (about ``coverage_mounts``),
+    every clear orientation with the reference's lenses and the widest lens."""
+    points = candidates.mount_points
+    step = max(1, len(points) // settings.coverage_mounts)
+    order = np.lexsort((points[:, 1], points[:, 0]))
+    chosen_mounts = set(order[::step].tolist())
+    lenses = set(np.round(reference.fovs, 6).tolist()) | {float(candidates.fovs.max())}
+    mask = np.isin(candidates.mount, list(chosen_mounts)) & np.isin(np.round(candidates.fovs, 6), list(lenses))
+    return np.flatnonzero(mask)
+
+
+def _explain_uncoverable(needed: np.ndarray, seen: np.ndarray, distance, height, azimuth) -> str:
+    bad = np.flatnonzero(seen < needed)
+    lines = []
+    for q in bad[:8]:
+        lines.append(f"ring {distance[q]:g} m at height {height[q]:g} m, azimuth {np.rad2deg(azimuth[q]):+.0f} deg "
+                     f"(needs {needed[q]} camera(s), at most {seen[q]} candidate(s) see it)")
+    more = f" and {len(bad) - 8} more" if len(bad) > 8 else ""
+    return ("no valid camera position covers " + "; ".join(lines) + more +
+            ". To make it feasible: allow more zones, more pitch angles (e.g. --pitch -30,-20,-10,0,10), "
+            "wider lenses, or lower --min-coverage / --min-overlap")
+
+
+def design_rig(vehicle: Vehicle, reference: Rig, calibration: Calibration, settings: DesignSettings = DesignSettings(),
+               progress: Callable[[str], None] = _progress_none) -> DesignResult:
+    """Design a rig on ``vehicle`` for a detector trained on ``reference`` (see the module docstring)."""
+    start = time.perf_counter()
+    reference_vehicle = load_vehicle(reference.vehicle)
+    spacing = settings.spacing or default_spacing(vehicle, settings)
+    progress(f"sampling mount candidates on {vehicle.name} (spacing {spacing:.2f} m)")
+    yaws = np.arange(-180.0, 180.0, settings.yaw_step_deg)
+    candidates = build_candidates(vehicle, settings.lenses, spacing, yaws, settings.pitches_deg, settings.zones,
+                                  settings.rules)
+    lt, lr, lf = calibration.lambdas
+    t, r, f = camera_costs(candidates.positions, candidates.rotations, candidates.fovs,
+                           reference.positions, reference.rotations, reference.fovs)
+    cost = lt * t + lr * r + lf * f  # (n, R)
+
+    progress(f"coverage requirements from {reference.name} on {reference_vehicle.name}")
+    needed = requirements(reference, reference_vehicle, settings)
+    points, distance, height, _, azimuth = sector_points(Footprint.of_mesh(vehicle.mesh), settings.coverage)
+    pool = np.union1d(prune(cost, np.zeros((len(cost), 0), bool), np.zeros(0, int), settings.keep_per_reference, 0),
+                      _coverage_pool(candidates, reference, settings))
+    progress(f"coverage of {len(pool)} of {len(candidates)} candidates")
+    sees_pool = visible(vehicle.mesh, candidates.positions[pool], candidates.rotations[pool], candidates.fovs[pool],
+                        np.tile([1280, 720], (len(pool), 1)), points, settings.coverage.max_range,
+                        settings.coverage.backend)
+    seen = np.minimum(sees_pool.sum(axis=0), needed.max(initial=1))
+    if np.any(seen < needed):
+        raise DesignInfeasible(_explain_uncoverable(needed, seen, distance, height, azimuth))
+    offered = pool[prune(cost[pool], sees_pool, needed, settings.keep_per_reference, settings.keep_per_sector)]
+    sees = sees_pool[np.searchsorted(pool, offered)]
+
+    counts = settings.cameras or (len(reference), len(reference))
+    excluded: set[int] = set()
+    repairs = 0
+    while True:
+        keep = np.array([k for k, c in enumerate(offered) if c not in excluded], dtype=int)
+        best = _best_selection(cost[offered[keep]], sees[keep], needed, candidates.mount[offered[keep]],
+                               candidates.mount_points, counts, calibration.alpha, settings, progress)
+        chosen = offered[keep][best.chosen]
+        rig = _rig_from(candidates.subset(chosen), best.matched, reference, vehicle)
+        check = check_rig(rig, vehicle, settings.rules)
+        failed = [chosen[k] for k, c in enumerate(check.cameras) if not c.valid]
+        if not failed:
+            break
+        repairs += 1
+        if repairs > MAX_REPAIRS:
+            problems = "; ".join(f"{c.id}: {', '.join(c.problems)}" for c in check.cameras if not c.valid)
+            raise DesignInfeasible(f"after {MAX_REPAIRS} repairs the design still fails the mount checks ({problems})")
+        progress(f"{len(failed)} camera(s) failed the mount checks; solving again without them")
+        excluded.update(int(c) for c in failed)
+
+    progress("validating the design: mount checks, coverage, RigCD")
+    design = summarise(rig, vehicle, reference, calibration, needed, settings, check)
+    if not design.meets_requirements:
+        raise DesignInfeasible("the selected rig does not meet the coverage requirements when recomputed; "
+                               "this should not happen: please report it")
+    reference_summary = rig_coverage_matrix(reference, reference_vehicle, settings.coverage).sees.any(axis=0).mean()
+    naive = naive_transfer(vehicle, reference, candidates, settings)
+    naive_summary = summarise(naive, vehicle, reference, calibration, needed, settings) if naive else None
+    benchmark = tuple(summarise(b, vehicle, reference, calibration, needed, settings)
+                      for b in benchmark_rigs(vehicle))
+    return DesignResult(design, reference, float(reference_summary), best, len(candidates), len(offered), repairs,
+                        time.perf_counter() - start, naive_summary, benchmark)
+
+
+def _best_selection(cost, sees, needed, mount, mount_points, counts, alpha, settings, progress) -> Selection:
+    clashes = cKDTree(mount_points).query_pairs(CLASH_DISTANCE, output_type="ndarray")
+    best = None
+    for n_cameras in range(counts[0], counts[1] + 1):
+        progress(f"MILP: {n_cameras} cameras from {len(cost)} candidates")
+        try:
+            selection = select_cameras(cost, sees, needed, mount, n_cameras, alpha, clashes, settings.time_limit,
+                                       settings.mip_gap)
+        except DesignInfeasible:
+            if n_cameras == counts[1] and best is None:
+                raise
+            continue
+        if best is None or selection.objective < best.objective:
+            best = selection
+    return best
+
+
+def _rig_from(chosen: CandidateSet, matched: np.ndarray, reference: Rig, vehicle: Vehicle) -> Rig:
+    """A rig of the chosen candidates; cameras take the id of the reference camera they match."""
+    cameras = []
+    for k in range(len(chosen)):
+        ident = reference.cameras[matched[k]].id if matched[k] >= 0 else f"CAM_EXTRA_{k}"
+        cameras.append(Camera(ident, chosen.positions[k], chosen.rotations[k], float(chosen.fovs[k]),
+                              zone=str(chosen.mount_zones[chosen.mount[k]])))
+    order = np.argsort([m if m >= 0 else len(reference) + k for k, m in enumerate(matched)])
+    return Rig(f"design_{vehicle.name}_from_{reference.name}", vehicle.blueprint, tuple(cameras[k] for k in order))
+
+
+def summarise(rig: Rig, vehicle: Vehicle, reference: Rig, calibration: Calibration, needed: np.ndarray,
+              settings: DesignSettings, check: RigCheck | None = None) -> RigSummary:
+    """Predicted transfer from the reference, coverage fraction and requirement check of ``rig``."""
+    counts = rig_coverage_matrix(rig, vehicle, settings.coverage).sees.sum(axis=0)
+    prediction = predict_transfer(reference, [rig], calibration)[0]
+    return RigSummary(rig, prediction, float(np.mean(counts >= 1)), bool(np.all(counts >= needed)), check)
+
+
+def naive_transfer(vehicle: Vehicle, reference: Rig, candidates: CandidateSet, settings: DesignSettings) -> Rig | None:
+    """Each reference camera moved to the nearest mount point where it can face the same way (its yaw and
+    pitch on the grid, nearest catalogue lens), one camera per mount point; None if some camera finds none."""
+    cameras = []
+    used: set[int] = set()
+    lenses = np.unique(candidates.fovs)
+    for camera in reference.cameras:
+        yaw = np.arctan2(camera.forward[1], camera.forward[0])
+        pitch = np.arcsin(np.clip(camera.forward[2], -1.0, 1.0))
+        lens = lenses[np.argmin(np.abs(lenses - camera.fov))]
+        same_way = (np.abs(np.angle(np.exp(1j * (candidates.yaws - yaw)))) <= np.deg2rad(settings.yaw_step_deg) / 2
+                    + 1e-9) & (candidates.fovs == lens)
+        pitch_gap = np.abs(candidates.pitches - pitch)
+        same_way &= pitch_gap <= pitch_gap[same_way].min(initial=np.inf) + 1e-9
+        options = np.flatnonzero(same_way & ~np.isin(candidates.mount, list(used)))
+        if len(options) == 0:
+            return None
+        best = options[np.argmin(np.linalg.norm(candidates.positions[options] - camera.position, axis=1))]
+        used.add(int(candidates.mount[best]))
+        cameras.append(Camera(camera.id, candidates.positions[best], candidates.rotations[best],
+                              float(candidates.fovs[best])))
+    return Rig(f"naive_{vehicle.name}_from_{reference.name}", vehicle.blueprint, tuple(cameras))
+
+
+def benchmark_rigs(vehicle: Vehicle) -> list[Rig]:
+    """The library's hand-designed rigs for ``vehicle`` (R6 on the firetruck, R9 on the hgv, ...)."""
+    from rigopt.rig.library import library_rig, rig_names
+
+    rigs = [library_rig(name) for name in rig_names()]
+    return [rig for rig in rigs if rig.vehicle.lower() == vehicle.blueprint.lower()]

@@ -1,0 +1,143 @@
+"""The discrete stage: choose cameras among candidates and match them to the reference (cvxpy + HiGHS MILP).
+
+For a camera count N and a reference of R cameras, with M = min(N, R):
+
+    minimise   alpha / M * sum_e cost_e y_e  +  (1 - alpha) |N - R| / max(N, R)
+    subject to sum_c x_c = N
+               N >= R: every reference camera matched once (sum_c y_cr = 1), sum_r y_cr <= x_c
+               N <  R: every chosen camera matched once (sum_r y_cr = x_c), sum_c y_cr <= 1
+               coverage: sum_c sees_cq x_c >= required_q for every sector point q
+               housings: at most one camera per mount point and per pair of clashing mount points
+               x, y binary
+
+``cost[c, r]`` is the raw-unit matching cost ``lt ||t_c - t_r|| + lr dR + lf |f_c - f_r|`` (the weighted
+matching of RigCD), so the objective is exactly the calibrated RigCD of the chosen rig to the reference
+when the matching is optimal, which the MILP guarantees on the candidate set.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sparse
+
+from rigopt.errors import RigoptError
+
+
+class DesignInfeasible(RigoptError):
+    """The requirements cannot be met by any choice of candidates; the message says which and why."""
+
+
+@dataclass(frozen=True)
+class Selection:
+    """The MILP's answer: ``chosen`` (k,) candidate indices, ``matched`` (k,) reference index or -1,
+    ``objective`` (calibrated RigCD), solver ``status``, relative ``gap``, ``seconds``, ``n_candidates``."""
+
+    chosen: np.ndarray
+    matched: np.ndarray
+    objective: float
+    status: str
+    gap: float
+    seconds: float
+    n_candidates: int
+
+
+def count_term(n_cameras: int, n_reference: int) -> float:
+    return abs(n_cameras - n_reference) / max(n_cameras, n_reference)
+
+
+def prune(cost: np.ndarray, sees: np.ndarray, required: np.ndarray, keep_per_reference: int = 150,
+          keep_per_sector: int = 6) -> np.ndarray:
+    """Candidates worth offering the MILP: each reference camera's ``keep_per_reference`` cheapest, plus for
+    every required sector point the ``keep_per_sector`` cheapest candidates that see it. Returns (k,) int."""
+    keep = set()
+    for r in range(cost.shape[1]):
+        keep.update(np.argsort(cost[:, r], kind="stable")[:keep_per_reference].tolist())
+    cheapest = cost.min(axis=1)
+    for q in np.flatnonzero(required > 0):
+        seeing = np.flatnonzero(sees[:, q])
+        keep.update(seeing[np.argsort(cheapest[seeing], kind="stable")[:keep_per_sector]].tolist())
+    return np.array(sorted(keep), dtype=int)
+
+
+def select_cameras(cost: np.ndarray, sees: np.ndarray, required: np.ndarray, mount: np.ndarray, n_cameras: int,
+                   alpha: float, clash_pairs=(), time_limit: float = 60.0, mip_gap: float = 1e-4) -> Selection:
+    """Solve the selection MILP above.
+
+    cost : (n, R) float raw-unit matching costs; sees : (n, q) bool; required : (q,) int cameras needed per
+    sector point; mount : (n,) int mount point of each candidate; clash_pairs : (p, 2) int mount points whose
+    housings collide. Raises DesignInfeasible when the MILP has no solution.
+    """
+    import cvxpy as cp
+
+    n, n_ref = cost.shape
+    if n_cameras < 1:
+        raise RigoptError(f"the camera count must be at least 1, got {n_cameras}")
+    if len(np.unique(mount)) < n_cameras:
+        raise DesignInfeasible(f"only {len(np.unique(mount))} mount points are available for {n_cameras} cameras; "
+                               "lower the camera count, allow more zones or a finer --spacing")
+    m = min(n_cameras, n_ref)
+    x = cp.Variable(n, boolean=True)
+    y = cp.Variable(n * n_ref, boolean=True)  # y[c * n_ref + r]
+    rows = np.repeat(np.arange(n), n_ref)
+    cols = np.tile(np.arange(n_ref), n)
+    per_candidate = sparse.csr_matrix((np.ones(n * n_ref), (rows, np.arange(n * n_ref))), shape=(n, n * n_ref))
+    per_reference = sparse.csr_matrix((np.ones(n * n_ref), (cols, np.arange(n * n_ref))), shape=(n_ref, n * n_ref))
+    constraints = [cp.sum(x) == n_cameras]
+    if n_cameras >= n_ref:
+        constraints += [per_reference @ y == 1, per_candidate @ y <= x]
+    else:
+        constraints += [per_candidate @ y == x, per_reference @ y <= 1]
+    needed = np.flatnonzero(required > 0)
+    if len(needed):
+        constraints.append(sparse.csr_matrix(sees[:, needed].T.astype(float)) @ x >= required[needed])
+    groups = _mount_groups(mount, clash_pairs)
+    if groups.shape[0]:
+        constraints.append(groups @ x <= 1)
+    objective = cp.Minimize(alpha / m * (cost.ravel() @ y) + (1.0 - alpha) * count_term(n_cameras, n_ref))
+    problem = cp.Problem(objective, constraints)
+    start = time.perf_counter()
+    try:
+        problem.solve(solver=cp.HIGHS, time_limit=float(time_limit), mip_rel_gap=float(mip_gap))
+    except cp.error.SolverError as error:
+        raise RigoptError(f"the MIP solver failed ({error}); is highspy installed? pip install highspy") from None
+    seconds = time.perf_counter() - start
+    if problem.status in (cp.INFEASIBLE, cp.INFEASIBLE_INACCURATE):
+        raise DesignInfeasible(f"no choice of {n_cameras} candidate cameras meets the coverage and housing "
+                               "requirements; allow more cameras (--cameras), more zones, wider lenses or lower "
+                               "the coverage requirement")
+    if x.value is None:
+        raise RigoptError(f"the MIP solver stopped without a solution (status {problem.status}); raise --time-limit")
+    chosen = np.flatnonzero(x.value > 0.5)
+    pairs = y.value.reshape(n, n_ref) > 0.5
+    matched = np.array([int(np.argmax(pairs[c])) if pairs[c].any() else -1 for c in chosen])
+    gap = _gap(problem)
+    status = "optimal" if problem.status == cp.OPTIMAL else "time_limit" if problem.status == cp.USER_LIMIT else problem.status
+    return Selection(chosen, matched, float(problem.value), status, gap, seconds, n)
+
+
+def _gap(problem) -> float:
+    info = (problem.solver_stats.extra_stats if problem.solver_stats else None)
+    gap = getattr(info, "mip_gap", None)
+    return float(gap) if gap is not None and np.isfinite(gap) else 0.0
+
+
+def _mount_groups(mount: np.ndarray, clash_pairs) -> sparse.csr_matrix:
+    """Rows of candidates that may hold at most one camera: each mount point, and each clashing pair."""
+    points = np.unique(mount)
+    index = {p: k for k, p in enumerate(points)}
+    rows, cols = [], []
+    for c, p in enumerate(mount):
+        rows.append(index[p])
+        cols.append(c)
+    row = len(points)
+    members = {p: np.flatnonzero(mount == p) for p in points}
+    for a, b in np.asarray(clash_pairs, dtype=int).reshape(-1, 2):
+        if a in members and b in members:
+            for c in np.concatenate([members[a], members[b]]):
+                rows.append(row)
+                cols.append(c)
+            row += 1
+    return sparse.csr_matrix((np.ones(len(rows)), (rows, cols)), shape=(row, len(mount)))
