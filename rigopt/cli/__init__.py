@@ -5,7 +5,9 @@ from __future__ import annotations
 import sys
 
 from rigopt.cli.app import app
-from rigopt.cli import calibrate_command, metric_commands, rig_commands, vehicle_commands  # noqa: F401
+from rigopt.cli import (  # noqa: F401  (importing registers the commands)
+    calibrate_command, coverage_command, design_command, metric_commands, rig_commands, vehicle_commands,
+)
 from rigopt.errors import RigoptError
 
 

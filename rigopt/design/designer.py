@@ -94,6 +94,7 @@ class DesignResult:
     seconds: float
     naive_transfer: RigSummary | None
     benchmark_rigs: tuple[RigSummary, ...]
+    refine_status: str = "not run"
 
 
 def _progress_none(message: str) -> None:

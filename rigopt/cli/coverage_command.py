@@ -1,0 +1,146 @@
+"""``rigopt coverage``: rings, bird's-eye map, blind zone and per-camera coverage of a rig, optionally
+against a second rig, as tables, JSON or a folder with figures and a self-contained HTML page."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Optional
+
+import typer
+
+from rigopt.cli.app import _finite, app, console, print_json, print_table
+from rigopt.errors import RigoptError
+from rigopt.rig.library import load_rig
+
+OUT_FILES = ("coverage.json", "bev.png", "rings.png", "blind.png", "report.html")
+
+
+def _out_dir(text: str) -> Path:
+    """The output folder, created; a RigoptError when it cannot be (empty name, a file, no permission)."""
+    if not text.strip():
+        raise RigoptError("--out needs a folder name, got an empty string")
+    path = Path(text)
+    if path.exists() and not path.is_dir():
+        raise RigoptError(f"--out {path}: exists and is not a folder; give a new or existing folder")
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except OSError as error:
+        raise RigoptError(f"--out {path}: cannot create the folder ({error.strerror or error})") from None
+    return path
+
+
+def _warn_inside(report) -> None:
+    if report.cameras_inside:
+        typer.echo(f"rigopt: warning: {report.rig}: cameras inside the body of {report.vehicle}: "
+                   f"{', '.join(report.cameras_inside)} (still used; the body blocks their view)", err=True)
+
+
+def _report(rig_name: str, vehicle: Optional[str]):
+    from rigopt.coverage.measures import coverage_report
+    from rigopt.vehicle.library import load_vehicle
+
+    rig = load_rig(rig_name)
+    report = coverage_report(rig, load_vehicle(vehicle or rig.vehicle))
+    _warn_inside(report)
+    return rig, report
+
+
+@app.command("coverage")
+def coverage_command(
+    rig: str = typer.Argument(..., help="Library rig name or rig file."),
+    vehicle: Optional[str] = typer.Option(None, help="Vehicle name, alias or blueprint (default: the rig's own, "
+                                                     "its vehicle_type for files)."),
+    compare: Optional[str] = typer.Option(None, "--compare", help="A second rig (name or file) to compare with, "
+                                                                  "on its own vehicle; differences are RIG minus it."),
+    out: Optional[str] = typer.Option(None, "--out", help="Folder for coverage.json, bev.png, rings.png, blind.png "
+                                                          "and report.html (self-contained)."),
+    as_json: bool = typer.Option(False, "--json", help="Print the JSON report instead of tables."),
+):
+    """Coverage of a rig around its vehicle: rings at 2-50 m, bird's-eye counts, near-field blind zone, per camera."""
+    from rigopt.coverage.measures import compare_coverage
+    from rigopt.report.coverage_figures import comparison_dict, report_dict
+
+    out_dir = _out_dir(out) if out is not None else None
+    loaded, report = _report(rig, vehicle)
+    other = comparison = None
+    if compare is not None:
+        _, other = _report(compare, None)
+        comparison = compare_coverage(other, report)  # differences: RIG minus --compare
+    data = report_dict(report)
+    if comparison is not None:
+        data["compare"] = comparison_dict(comparison)
+
+    if out_dir is not None:
+        written = _write_out(out_dir, data, report, loaded, other, comparison)
+        message = f"wrote {', '.join(p.name for p in written)} to {out_dir}"
+        if as_json:
+            typer.echo(message, err=True)
+        else:
+            console.print(message)
+    if as_json:
+        print_json(data)
+        return
+    _print_tables(data, report_dict(other) if other is not None else None)
+
+
+def _write_out(out_dir: Path, data: dict, report, rig, other, comparison) -> list[Path]:
+    from rigopt.report.coverage_figures import write_bev_figure, write_blind_figure, write_rings_figure
+    from rigopt.report.coverage_html import write_html_report
+
+    try:
+        json_path = out_dir / "coverage.json"
+        json_path.write_text(json.dumps(_finite(data), indent=2) + "\n")
+        figures = {"bev": write_bev_figure(report, out_dir / "bev.png", rig),
+                   "rings": write_rings_figure(report, out_dir / "rings.png", other),
+                   "blind": write_blind_figure(report, out_dir / "blind.png")}
+        page = write_html_report(report, out_dir, rig, comparison, other, figures=figures)
+    except OSError as error:
+        raise RigoptError(f"--out {out_dir}: cannot write the report ({error.strerror or error})") from None
+    return [json_path, *figures.values(), page]
+
+
+def _print_tables(data: dict, other: dict | None) -> None:
+    others = {(r["distance_m"], r["height_m"]): r for r in other["rings"]} if other is not None else {}
+    columns = ["distance (m)", "height (m)", "covered", "overlap >= 2"]
+    if other is not None:
+        columns += [f"covered {other['rig']}", f"overlap >= 2 {other['rig']}"]
+    rows = []
+    for ring in data["rings"]:
+        row = [ring["distance_m"], ring["height_m"], ring["covered_frac"], ring["overlap2_frac"]]
+        if other is not None:
+            match = others.get((ring["distance_m"], ring["height_m"]), {})
+            row += [match.get("covered_frac", "-"), match.get("overlap2_frac", "-")]
+        rows.append(row)
+    print_table(f"{data['rig']} on {data['vehicle']}: ring coverage (fraction of azimuths)", columns, rows)
+
+    inside = set(data["cameras_inside"])
+    ring = data["overlap_ring"]
+    print_table(f"cameras (overlap: degrees of the {ring['distance_m']:g} m ring at {ring['height_m']:g} m seen by both)",
+                ["camera", "self-occluded", "overlaps (deg)"],
+                [[c["id"] + (" (INSIDE BODY)" if c["id"] in inside else ""), c["self_occluded_frac"],
+                  ", ".join(f"{k} {v:.1f}" for k, v in c["overlap_deg"].items()) or "-"] for c in data["cameras"]])
+
+    blind, bev = data["blind_distance_m"], data["bev"]
+    maximum = (f"not found within {data['blind_search_m']:g} m on {100 * data['blind_not_found_frac']:.1f} % of azimuths"
+               if data["blind_not_found_frac"] > 0 else f"{blind['max']:.2f} m")
+    console.print(f"blind zone: {data['blind_area_m2_within_5m']:.1f} m² of ground unseen within "
+                  f"{data['blind_radius_m']:g} m of the body; ground visible from {blind['min']:.2f} m (min), "
+                  f"{blind['median']:.2f} m (median), {maximum} (max)" if blind["min"] is not None else
+                  f"blind zone: {data['blind_area_m2_within_5m']:.1f} m² of ground unseen within "
+                  f"{data['blind_radius_m']:g} m; no ground seen within {data['blind_search_m']:g} m")
+    console.print(f"bird's-eye ({bev['height_m']:g} m height, {bev['cell_m']:g} m cells): "
+                  f"{100 * bev['covered_frac_within_20m']:.1f} % of cells within 20 m seen, "
+                  f"{100 * bev['overlap2_frac_within_20m']:.1f} % by >= 2 cameras, at most {bev['max_count']}")
+
+    if "compare" in data:
+        diff = data["compare"]
+        print_table(f"comparison: {diff['b']} minus {diff['a']}",
+                    ["distance (m)", "height (m)", "covered diff", "overlap >= 2 diff", "sectors better",
+                     "sectors worse"],
+                    [[r["distance_m"], r["height_m"], r["covered_diff"], r["overlap2_diff"],
+                      sum(v > 1e-9 for v in r["sector_diff"]), sum(v < -1e-9 for v in r["sector_diff"])]
+                     for r in diff["rings"]])
+        area = diff["blind_area_diff_m2"]
+        console.print(f"unseen ground within the blind radius: {area:+.1f} m² ({diff['b']} minus {diff['a']})"
+                      if area is not None else "unseen ground within the blind radius: -")

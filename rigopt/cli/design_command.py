@@ -1,0 +1,99 @@
+"""``rigopt design``: a rig on a vehicle that a detector trained on the reference transfers to best."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+from typing import Optional
+
+import typer
+from rich.console import Console
+
+from rigopt.cli.app import app, print_json, print_table
+from rigopt.errors import RigoptError
+
+DEFAULT_FOVS = "60,65,70,75,80,90,100,110,120"
+
+
+def parse_numbers(text: str, what: str) -> tuple[float, ...]:
+    """``"60,65,70"`` -> (60.0, 65.0, 70.0); raises RigoptError naming ``what`` otherwise."""
+    try:
+        values = tuple(float(v) for v in text.split(",") if v.strip())
+    except ValueError:
+        raise RigoptError(f"{what} must be comma-separated numbers, got {text!r}") from None
+    if not values:
+        raise RigoptError(f"{what} needs at least one number")
+    return values
+
+
+def parse_camera_count(text: Optional[str]) -> tuple[int, int] | None:
+    """``"8"`` -> (8, 8); ``"6-10"`` -> (6, 10); None stays None (the reference's count)."""
+    if text is None:
+        return None
+    low, _, high = text.partition("-")
+    try:
+        counts = (int(low), int(high or low))
+    except ValueError:
+        raise RigoptError(f"--cameras must be a count or a range like 6-10, got {text!r}") from None
+    if counts[0] < 1 or counts[1] < counts[0]:
+        raise RigoptError(f"--cameras must be 1 or more and low <= high, got {text!r}")
+    return counts
+
+
+@app.command("design")
+def design_command(
+    vehicle: str = typer.Option(..., help="Vehicle to design for: name, alias or CARLA blueprint."),
+    ref: str = typer.Option(..., help="Reference rig the detector was trained on: library name or rig file."),
+    weights: str = typer.Option("joint", help="Calibrated weights: BEVDet, BEVFusion, Fast-BEV, PETR, joint, or a file."),
+    cameras: Optional[str] = typer.Option(None, help="Camera count or range (e.g. 6-10); default: the reference's."),
+    fov: str = typer.Option(DEFAULT_FOVS, help="Lens catalogue: horizontal FOVs in degrees."),
+    zones: Optional[str] = typer.Option(None, help="Allowed zones, comma-separated (default: all of the vehicle's)."),
+    pitch: str = typer.Option("-20,-10,0,10", help="Pitch angles to consider, degrees (> 0 up)."),
+    yaw_step: float = typer.Option(10.0, help="Yaw grid step, degrees."),
+    spacing: Optional[float] = typer.Option(None, help="Mount point spacing (m); default: sized to the vehicle."),
+    min_coverage: int = typer.Option(0, help="Cameras every ring sector needs, beyond the reference's coverage."),
+    min_overlap: int = typer.Option(0, help="Cameras needed where the reference sees a sector twice (e.g. 2)."),
+    time_limit: float = typer.Option(60.0, help="MILP time limit (s); the best design found is returned."),
+    out: Optional[Path] = typer.Option(None, help="Output folder (default: design-<vehicle>-<ref>)."),
+    as_json: bool = typer.Option(False, "--json", help="Print the JSON summary."),
+):
+    """Design a rig on VEHICLE that minimises the calibrated RigCD to REF while covering what REF covers."""
+    from rigopt.design.designer import DesignSettings, design_rig
+    from rigopt.metrics.calibration import load_weights
+    from rigopt.report.design_report import design_dict, write_design_outputs
+    from rigopt.rig.library import load_rig
+    from rigopt.vehicle.library import load_vehicle
+
+    settings = DesignSettings(
+        cameras=parse_camera_count(cameras), lenses=parse_numbers(fov, "--fov"),
+        zones=tuple(z.strip() for z in zones.split(",")) if zones else None,
+        pitches_deg=parse_numbers(pitch, "--pitch"), yaw_step_deg=yaw_step, spacing=spacing,
+        min_coverage=min_coverage, min_overlap=min_overlap, time_limit=time_limit)
+    target, reference, calibration = load_vehicle(vehicle), load_rig(ref), load_weights(weights)
+    out = out or Path(f"design-{target.name}-{reference.name}")
+    status = Console(stderr=True)
+    with status.status(f"designing a rig on {target.name} from {reference.name}") as spinner:
+        result = design_rig(target, reference, calibration, settings,
+                            progress=lambda message: spinner.update(message) or status.print(f"  {message}"))
+    try:
+        files = write_design_outputs(result, out)
+    except OSError as error:
+        raise RigoptError(f"{out}: cannot write the design there ({error.strerror})") from None
+    summary = design_dict(result, files[0])
+    if as_json:
+        print_json(summary)
+        return
+    rows = [["design", summary["predicted_drop"], summary["rigcd"], summary["n_cameras"], summary["coverage"], "yes"]]
+    for label, entry in (("naive transfer", summary["comparisons"]["naive_transfer"]),
+                         *((f"benchmark {s['name']}", s) for s in summary["comparisons"]["benchmark_rigs"])):
+        if entry:
+            rows.append([label, entry["predicted_drop"], entry["rigcd"], entry["n_cameras"], entry["coverage"],
+                         "yes" if entry["meets_coverage_requirements"] else "no"])
+    print_table(f"{reference.name} -> {target.name} ({weights} weights); reference coverage "
+                f"{summary['reference_coverage']:.3f}", ["rig", "predicted drop", "rigcd", "cameras", "coverage",
+                                                           "meets coverage"], rows)
+    solver = summary["solver"]
+    print(f"MILP {solver['milp_status']} (gap {solver['milp_gap']:.2e}) on {solver['offered_to_milp']} of "
+          f"{solver['candidates']} candidates; refinement {solver['refine_status']}; {solver['seconds']:.1f} s",
+          file=sys.stderr)
+    print(f"wrote {', '.join(str(f) for f in files)}")

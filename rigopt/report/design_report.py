@@ -1,0 +1,61 @@
+"""Design results as data and files: the report JSON, the rig file, the pictures."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from rigopt.design.designer import DesignResult, RigSummary
+from rigopt.rig.pccr_format import write_rig
+
+
+def summary_dict(summary: RigSummary) -> dict:
+    p = summary.prediction
+    return {"name": summary.rig.name, "predicted_drop": p.predicted_drop, "rigcd": p.rigcd, "t": p.t, "r": p.r,
+            "f": p.f, "count": p.count, "n_cameras": len(summary.rig), "coverage": summary.coverage,
+            "meets_coverage_requirements": summary.meets_requirements}
+
+
+def design_dict(result: DesignResult, rig_file: Path | None) -> dict:
+    """The ``rigopt design --json`` object (and the body of report.json)."""
+    design, selection = result.design, result.selection
+    best_benchmark = min(result.benchmark_rigs, key=lambda s: s.prediction.predicted_drop, default=None)
+    return {
+        "rig_file": str(rig_file) if rig_file else None,
+        "vehicle": design.rig.vehicle,
+        "reference": result.reference.name,
+        "predicted_drop": design.prediction.predicted_drop,
+        "rigcd": design.prediction.rigcd,
+        "n_cameras": len(design.rig),
+        "coverage": design.coverage,
+        "reference_coverage": result.reference_coverage,
+        "solver": {"milp_status": selection.status, "milp_gap": selection.gap, "milp_seconds": selection.seconds,
+                   "refine_status": result.refine_status, "candidates": result.n_candidates,
+                   "offered_to_milp": result.n_offered, "repairs": result.repairs, "seconds": result.seconds},
+        "cameras": [{"id": c.id, "zone": c.zone, "fov": c.fov, "position": c.position.tolist()}
+                    for c in design.rig.cameras],
+        "comparisons": {
+            "naive_transfer": summary_dict(result.naive_transfer) if result.naive_transfer else None,
+            "benchmark_rig": summary_dict(best_benchmark) if best_benchmark else None,
+            "benchmark_rigs": [summary_dict(s) for s in result.benchmark_rigs],
+        },
+    }
+
+
+def write_design_outputs(result: DesignResult, out_dir) -> list[Path]:
+    """Write rig.json (benchmark format), report.json and the pictures into ``out_dir``."""
+    from rigopt.report.vehicle_figures import write_vehicle_figure
+    from rigopt.vehicle.library import load_vehicle
+
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    rig_file = write_rig(result.design.rig, out_dir / "rig.json")
+    report = out_dir / "report.json"
+    report.write_text(json.dumps(design_dict(result, rig_file), indent=2) + "\n")
+    vehicle = load_vehicle(result.design.rig.vehicle)
+    pictures = [write_vehicle_figure(vehicle, out_dir / "design.png", result.design.rig),
+                write_vehicle_figure(load_vehicle(result.reference.vehicle), out_dir / "reference.png",
+                                     result.reference)]
+    if result.naive_transfer is not None:
+        pictures.append(write_vehicle_figure(vehicle, out_dir / "naive_transfer.png", result.naive_transfer.rig))
+    return [rig_file, report, *pictures]
