@@ -22,6 +22,7 @@ from rigopt.coverage.matrix import rig_coverage_matrix, sector_points
 from rigopt.coverage.measures import CoverageSettings
 from rigopt.coverage.visibility import visible
 from rigopt.design.candidates import CandidateSet, build_candidates
+from rigopt.design.refine import RefineProblem, duty_points, frustum_margins, project_to_surface, refine
 from rigopt.design.selection import DesignInfeasible, Selection, prune, select_cameras
 from rigopt.metrics.calibration import Calibration
 from rigopt.metrics.ranking import TransferPrediction, predict_transfer
@@ -46,7 +47,9 @@ class DesignSettings:
     ``spacing``: mount point spacing (m), None to size it from the vehicle (about ``target_mounts`` points);
     ``min_coverage``: cameras every sector point needs (0: only where the reference sees it, 1);
     ``min_overlap``: cameras needed where the reference sees with >= 2 (0: no overlap requirement);
-    pruning sizes, MILP ``time_limit`` (s) and ``mip_gap``; coverage ring settings.
+    pruning sizes, MILP ``time_limit`` (s) and ``mip_gap``; ``refine``: run the continuous stage;
+    ``fov_range``: (min, max) deg when the lens is continuous (the refinement then adjusts FOVs);
+    coverage ring settings.
     """
 
     cameras: tuple[int, int] | None = None
@@ -63,6 +66,8 @@ class DesignSettings:
     coverage_mounts: int = 80
     time_limit: float = 60.0
     mip_gap: float = 1e-4
+    refine: bool = True
+    fov_range: tuple[float, float] | None = None
     coverage: CoverageSettings = field(default_factory=lambda: CoverageSettings(ring_distances=(2.0, 5.0, 10.0, 20.0),
                                                                                 sectors=36))
     rules: MountRules = field(default_factory=MountRules)
@@ -201,6 +206,10 @@ def design_rig(vehicle: Vehicle, reference: Rig, calibration: Calibration, setti
 
     progress("validating the design: mount checks, coverage, RigCD")
     design = summarise(rig, vehicle, reference, calibration, needed, settings, check)
+    refine_status = "off"
+    if settings.refine and design.meets_requirements:
+        progress("continuous refinement (casadi + IPOPT)")
+        design, refine_status = _refined(design, vehicle, reference, calibration, needed, points, spacing, settings)
     if not design.meets_requirements:
         raise DesignInfeasible("the selected rig does not meet the coverage requirements when recomputed; "
                                "this should not happen: please report it")
@@ -210,7 +219,34 @@ def design_rig(vehicle: Vehicle, reference: Rig, calibration: Calibration, setti
     benchmark = tuple(summarise(b, vehicle, reference, calibration, needed, settings)
                       for b in benchmark_rigs(vehicle))
     return DesignResult(design, reference, float(reference_summary), best, len(candidates), len(offered), repairs,
-                        time.perf_counter() - start, naive_summary, benchmark)
+                        time.perf_counter() - start, naive_summary, benchmark, refine_status)
+
+
+def _refined(design: RigSummary, vehicle: Vehicle, reference: Rig, calibration: Calibration, needed: np.ndarray,
+             points: np.ndarray, spacing: float, settings: DesignSettings) -> tuple[RigSummary, str]:
+    """The refined design when it validates, meets the requirements and lowers the calibrated RigCD; else
+    the MILP design, with a status saying why."""
+    rig = design.rig
+    sees = rig_coverage_matrix(rig, vehicle, settings.coverage).sees
+    index = {c.id: k for k, c in enumerate(reference.cameras)}
+    problem = RefineProblem(
+        rig, reference, np.array([index.get(c.id, -1) for c in rig.cameras]), vehicle.surface(rig.positions).normal,
+        duty_points(sees, needed, frustum_margins(rig, points)), points, calibration.alpha, calibration.lambdas,
+        (float(np.deg2rad(min(settings.pitches_deg))), float(np.deg2rad(max(settings.pitches_deg)))),
+        settings.fov_range, spacing)
+    outcome = refine(problem)
+    if outcome.rig is None:
+        return design, f"rejected: IPOPT {outcome.status}"
+    refined_rig = project_to_surface(Rig(rig.name, rig.vehicle, outcome.rig.cameras), vehicle, settings.rules)
+    check = check_rig(refined_rig, vehicle, settings.rules)
+    if not check.valid:
+        return design, f"rejected: IPOPT {outcome.status}, refined cameras fail the mount checks"
+    refined = summarise(refined_rig, vehicle, reference, calibration, needed, settings, check)
+    if not refined.meets_requirements:
+        return design, f"rejected: IPOPT {outcome.status}, refined rig loses required coverage"
+    if refined.prediction.rigcd >= design.prediction.rigcd:
+        return design, f"rejected: IPOPT {outcome.status}, no improvement"
+    return refined, f"accepted: IPOPT {outcome.status}, RigCD {design.prediction.rigcd:.4f} -> {refined.prediction.rigcd:.4f}"
 
 
 def _best_selection(cost, sees, needed, mount, mount_points, counts, alpha, settings, progress) -> Selection:

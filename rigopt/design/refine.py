@@ -1,0 +1,171 @@
+"""The continuous stage: move the MILP's cameras off the sampling grid (casadi + IPOPT).
+
+With the matching to the reference and the sector duties fixed, each camera k may slide in the tangent
+plane of its mount point (offsets u, v within ``radius`` m), turn (yaw, pitch within the pitch limits) and,
+for a continuous lens range, change its FOV. The objective is the calibrated matching cost of the fixed
+matching, smoothed (``sqrt(. + eps)``) where the distances have kinks. Each sector point a camera is on
+duty for must stay inside its frustum by a margin (a smooth stand-in for coverage; the body's occlusion is
+not modelled here). The result is projected back onto the body's surface and kept only when it passes the
+mount checks, still meets every coverage requirement, and lowers the calibrated RigCD.
+
+Steps follow the usual Opti shape: build, solve (solver output silenced, status checked), extract.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from rigopt.camera import vertical_fov
+from rigopt.collision import MountRules, surface_frame
+from rigopt.geometry import rotation_from_yaw_pitch_roll
+from rigopt.rig.model import Camera, Rig
+from rigopt.vehicle.model import Vehicle
+
+#: Smoothing of norms and angles at zero (m^2 and rad^2).
+SMOOTHING = 1e-6
+#: Duty points must stay this fraction of the half-angle tangent inside the frustum.
+FRUSTUM_INSET = 0.03
+
+
+@dataclass(frozen=True)
+class RefineProblem:
+    """Inputs of the refinement.
+
+    design : the MILP's rig; matched : (k,) int reference camera of each design camera (-1 none);
+    normals : (k, 3) outward normals at the design cameras' mount points; duties : (k, q) bool sector points
+    each camera must keep in view; points : (q, 3) m sector points; weights: ``alpha``, ``lambdas``;
+    ``pitch_range`` (rad); ``fov_range`` (deg) or None to keep each camera's FOV; ``radius`` (m).
+    """
+
+    design: Rig
+    reference: Rig
+    matched: np.ndarray
+    normals: np.ndarray
+    duties: np.ndarray
+    points: np.ndarray
+    alpha: float
+    lambdas: tuple[float, float, float]
+    pitch_range: tuple[float, float]
+    fov_range: tuple[float, float] | None
+    radius: float
+
+
+@dataclass(frozen=True)
+class RefineOutcome:
+    """IPOPT's ``status`` and, when it converged, the refined (not yet validated) ``rig``."""
+
+    status: str
+    rig: Rig | None
+
+
+def _rotation(ca, yaw, pitch):
+    """Symbolic Rz(yaw) @ Ry(-pitch) (roll 0), the ISO camera convention."""
+    cy, sy, cp, sp = ca.cos(yaw), ca.sin(yaw), ca.cos(pitch), ca.sin(pitch)
+    return ca.vertcat(ca.horzcat(cy * cp, -sy, -cy * sp), ca.horzcat(sy * cp, cy, -sy * sp), ca.horzcat(sp, 0, cp))
+
+
+def refine(problem: RefineProblem, max_iter: int = 200) -> RefineOutcome:
+    """Solve the continuous problem from the MILP design; see the module docstring."""
+    import casadi as ca
+
+    design, reference = problem.design, problem.reference
+    lt, lr, lf = problem.lambdas
+    n = len(design)
+    forward = design.rotations[:, :, 0]
+    yaw0 = np.arctan2(forward[:, 1], forward[:, 0])
+    pitch0 = np.arcsin(np.clip(forward[:, 2], -1.0, 1.0))
+
+    # Build.
+    opti = ca.Opti()
+    u, v = opti.variable(n), opti.variable(n)
+    yaw, pitch = opti.variable(n), opti.variable(n)
+    fov = opti.variable(n) if problem.fov_range else None
+    cost = 0
+    for k, camera in enumerate(design.cameras):
+        frame = ca.DM(surface_frame(problem.normals[k], camera.forward))
+        position = ca.DM(camera.position) + frame[:, 0] * u[k] + frame[:, 1] * v[k]
+        rotation = _rotation(ca, yaw[k], pitch[k])
+        lens = fov[k] if fov is not None else camera.fov
+        r = problem.matched[k]
+        if r >= 0:
+            target = reference.cameras[r]
+            offset = position - ca.DM(target.position)
+            m = ca.mtimes(ca.DM(target.rotation.T), rotation)
+            skew = m - m.T
+            angle = ca.atan2(ca.sqrt(ca.sumsqr(skew) / 8 + SMOOTHING), (ca.trace(m) - 1) / 2)
+            cost += lt * ca.sqrt(ca.sumsqr(offset) + SMOOTHING) + lr * angle + lf * ca.sqrt((lens - target.fov) ** 2
+                                                                                           + SMOOTHING)
+        half_h = np.deg2rad(camera.fov) / 2 if fov is None else ca.pi / 360 * lens
+        tan_h = ca.tan(half_h) * (1 - FRUSTUM_INSET)
+        aspect = camera.image_size[1] / camera.image_size[0]
+        tan_v = ca.tan(half_h) * aspect * (1 - FRUSTUM_INSET)
+        for q in np.flatnonzero(problem.duties[k]):
+            local = ca.mtimes(rotation.T, ca.DM(problem.points[q]) - position)
+            opti.subject_to(local[0] >= 0.1)
+            opti.subject_to(opti.bounded(-local[0] * tan_h, local[1], local[0] * tan_h))
+            opti.subject_to(opti.bounded(-local[0] * tan_v, local[2], local[0] * tan_v))
+        opti.subject_to(u[k] ** 2 + v[k] ** 2 <= problem.radius**2)
+    opti.subject_to(opti.bounded(problem.pitch_range[0], pitch, problem.pitch_range[1]))
+    if fov is not None:
+        opti.subject_to(opti.bounded(problem.fov_range[0], fov, problem.fov_range[1]))
+        opti.set_initial(fov, design.fovs)
+    matched = problem.matched >= 0
+    m_count = max(int(matched.sum()), 1)
+    opti.minimize(problem.alpha / m_count * cost)
+    opti.set_initial(u, 0)
+    opti.set_initial(v, 0)
+    opti.set_initial(yaw, yaw0)
+    opti.set_initial(pitch, pitch0)
+
+    # Solve.
+    opti.solver("ipopt", {"print_time": False}, {"print_level": 0, "sb": "yes", "max_iter": max_iter})
+    try:
+        solution = opti.solve()
+    except RuntimeError:
+        return RefineOutcome(str(opti.stats().get("return_status", "failed")), None)
+    status = str(solution.stats().get("return_status", "unknown"))
+
+    # Extract.
+    values = [np.atleast_1d(solution.value(x)) for x in (u, v, yaw, pitch)]
+    lenses = np.atleast_1d(solution.value(fov)) if fov is not None else design.fovs
+    cameras = []
+    for k, camera in enumerate(design.cameras):
+        frame = surface_frame(problem.normals[k], camera.forward)
+        position = camera.position + frame[:, 0] * values[0][k] + frame[:, 1] * values[1][k]
+        rotation = rotation_from_yaw_pitch_roll(values[2][k], values[3][k], 0.0)
+        cameras.append(Camera(camera.id, position, rotation, float(lenses[k]), camera.image_size, camera.zone))
+    return RefineOutcome(status, Rig(design.name, design.vehicle, tuple(cameras)))
+
+
+def project_to_surface(rig: Rig, vehicle: Vehicle, rules: MountRules = MountRules()) -> Rig:
+    """Each lens moved to half a housing depth off its nearest surface point (the tangent-plane moves of the
+    refinement leave it slightly off a curved surface)."""
+    surface = vehicle.surface(rig.positions)
+    offset = rules.housing[2] / 2.0
+    cameras = [Camera(c.id, surface.foot[k] + surface.normal[k] * offset, c.rotation, c.fov, c.image_size, c.zone)
+               for k, c in enumerate(rig.cameras)]
+    return Rig(rig.name, rig.vehicle, tuple(cameras))
+
+
+def duty_points(sees: np.ndarray, needed: np.ndarray, margins: np.ndarray) -> np.ndarray:
+    """(k, q) bool: for each required sector point, the ``needed`` cameras that see it deepest inside their
+    frustum (``margins`` (k, q), larger is deeper) keep it in view."""
+    duties = np.zeros_like(sees)
+    for q in np.flatnonzero(needed > 0):
+        seeing = np.flatnonzero(sees[:, q])
+        chosen = seeing[np.argsort(-margins[seeing, q], kind="stable")[:needed[q]]]
+        duties[chosen, q] = True
+    return duties
+
+
+def frustum_margins(rig: Rig, points: np.ndarray) -> np.ndarray:
+    """(k, q) float: how deep each point lies inside each camera's frustum, as the smallest of
+    1 - |y| / (x tan h) and 1 - |z| / (x tan v) (negative outside)."""
+    local = np.einsum("kji,kqj->kqi", rig.rotations, points[None] - rig.positions[:, None])
+    x = np.maximum(local[..., 0], 1e-9)
+    tan_h = np.tan(np.deg2rad(rig.fovs) / 2)[:, None]
+    sizes = np.array([c.image_size for c in rig.cameras], dtype=float)
+    tan_v = np.tan(np.deg2rad(vertical_fov(rig.fovs, sizes[:, 0], sizes[:, 1])) / 2)[:, None]
+    return np.minimum(1 - np.abs(local[..., 1]) / (x * tan_h), 1 - np.abs(local[..., 2]) / (x * tan_v))
