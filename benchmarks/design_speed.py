@@ -1,0 +1,72 @@
+"""Designer speed and quality: `rigopt design --vehicle firetruck --ref R1` with default settings.
+
+Prints the time of each stage, the candidate set sizes, the MILP status and gap, the refinement outcome,
+and the design's predicted drop and coverage beside the naive transfer and the benchmark's own rig for the
+vehicle. As a simple reference in the same run it solves the coverage-free assignment (each reference
+camera's candidate by scipy's Hungarian method on the full candidate set): a lower bound on the
+calibrated RigCD that any rig meeting the coverage requirements can reach on this grid.
+
+Usage: python benchmarks/design_speed.py [--vehicle firetruck] [--ref R1] [--weights joint]
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+from scipy.optimize import linear_sum_assignment
+
+from rigopt.design.candidates import build_candidates
+from rigopt.design.designer import DesignSettings, default_spacing, design_rig
+from rigopt.metrics.calibration import load_weights
+from rigopt.metrics.rigcd import camera_costs
+from rigopt.rig.library import load_rig
+from rigopt.vehicle.library import load_vehicle
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--vehicle", default="firetruck")
+    parser.add_argument("--ref", default="R1")
+    parser.add_argument("--weights", default="joint")
+    args = parser.parse_args()
+    vehicle, reference, calibration = load_vehicle(args.vehicle), load_rig(args.ref), load_weights(args.weights)
+    settings = DesignSettings()
+    stamps = []
+    start = time.perf_counter()
+    result = design_rig(vehicle, reference, calibration, settings,
+                        progress=lambda message: stamps.append((time.perf_counter() - start, message)))
+    total = time.perf_counter() - start
+    print(f"design of {args.ref} -> {vehicle.name} ({args.weights} weights): {total:.1f} s in all")
+    for (t0, message), (t1, _) in zip(stamps, stamps[1:] + [(total, "")]):
+        print(f"  {t1 - t0:6.2f} s  {message}")
+    s = result.selection
+    print(f"candidates {result.n_candidates}, offered to the MILP {result.n_offered}; MILP {s.status}, gap {s.gap:.2e}, "
+          f"{s.seconds:.2f} s; repairs {result.repairs}; refinement {result.refine_status}")
+
+    spacing = settings.spacing or default_spacing(vehicle, settings)
+    candidates = build_candidates(vehicle, settings.lenses, spacing, np.arange(-180.0, 180.0, settings.yaw_step_deg),
+                                  settings.pitches_deg, settings.zones, settings.rules)
+    lt, lr, lf = calibration.lambdas
+    t, r, f = camera_costs(candidates.positions, candidates.rotations, candidates.fovs, reference.positions,
+                           reference.rotations, reference.fovs)
+    cost = lt * t + lr * r + lf * f
+    rows, cols = linear_sum_assignment(cost)
+    bound = calibration.alpha * cost[rows, cols].mean()
+    print(f"coverage-free lower bound on the grid (Hungarian, no coverage, no housing clashes): RigCD {bound:.4f}")
+
+    print(f"\n{'rig':<26} {'predicted drop':>14} {'RigCD':>8} {'coverage':>9} {'meets req.':>10}")
+    rows = [("design", result.design)]
+    if result.naive_transfer:
+        rows.append(("naive transfer", result.naive_transfer))
+    rows += [(f"benchmark {b.rig.name}", b) for b in result.benchmark_rigs]
+    for name, summary in rows:
+        p = summary.prediction
+        print(f"{name:<26} {p.predicted_drop:14.3f} {p.rigcd:8.3f} {summary.coverage:9.3f} "
+              f"{'yes' if summary.meets_requirements else 'no':>10}")
+    print(f"{'reference ' + reference.name + ' on its vehicle':<26} {'':>14} {'':>8} {result.reference_coverage:9.3f}")
+
+
+if __name__ == "__main__":
+    main()
