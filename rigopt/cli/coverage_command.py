@@ -13,8 +13,6 @@ from rigopt.cli.app import _finite, app, console, print_json, print_table
 from rigopt.errors import RigoptError
 from rigopt.rig.library import load_rig
 
-OUT_FILES = ("coverage.json", "bev.png", "rings.png", "blind.png", "report.html")
-
 
 def _out_dir(text: str) -> Path:
     """The output folder, created; a RigoptError when it cannot be (empty name, a file, no permission)."""
@@ -71,17 +69,16 @@ def coverage_command(
     if comparison is not None:
         data["compare"] = comparison_dict(comparison)
 
-    if out_dir is not None:
-        written = _write_out(out_dir, data, report, loaded, other, comparison)
-        message = f"wrote {', '.join(p.name for p in written)} to {out_dir}"
-        if as_json:
-            typer.echo(message, err=True)
-        else:
-            console.print(message)
+    written = _write_out(out_dir, data, report, loaded, other, comparison) if out_dir is not None else []
+    message = f"wrote {', '.join(p.name for p in written)} to {out_dir}"
     if as_json:
         print_json(data)
+        if written:
+            typer.echo(message, err=True)
         return
     _print_tables(data, report_dict(other) if other is not None else None)
+    if written:
+        console.print(message)
 
 
 def _write_out(out_dir: Path, data: dict, report, rig, other, comparison) -> list[Path]:
@@ -116,19 +113,20 @@ def _print_tables(data: dict, other: dict | None) -> None:
 
     inside = set(data["cameras_inside"])
     ring = data["overlap_ring"]
-    print_table(f"cameras (overlap: degrees of the {ring['distance_m']:g} m ring at {ring['height_m']:g} m seen by both)",
+    print_table(f"cameras (overlap: degrees of the {ring['distance_m']:g} m ring at {ring['height_m']:g} m "
+                "seen by both)",
                 ["camera", "self-occluded", "overlaps (deg)"],
                 [[c["id"] + (" (INSIDE BODY)" if c["id"] in inside else ""), c["self_occluded_frac"],
                   ", ".join(f"{k} {v:.1f}" for k, v in c["overlap_deg"].items()) or "-"] for c in data["cameras"]])
 
     blind, bev = data["blind_distance_m"], data["bev"]
-    maximum = (f"not found within {data['blind_search_m']:g} m on {100 * data['blind_not_found_frac']:.1f} % of azimuths"
-               if data["blind_not_found_frac"] > 0 else f"{blind['max']:.2f} m")
+    search = f"not within {data['blind_search_m']:g} m"
+    shown = {k: search if v is None else f"{v:.2f} m" for k, v in blind.items()}
+    missing = (f"; {100 * data['blind_not_found_frac']:.1f} % of azimuths see no ground within "
+               f"{data['blind_search_m']:g} m" if data["blind_not_found_frac"] > 0 else "")
     console.print(f"blind zone: {data['blind_area_m2_within_5m']:.1f} m² of ground unseen within "
-                  f"{data['blind_radius_m']:g} m of the body; ground visible from {blind['min']:.2f} m (min), "
-                  f"{blind['median']:.2f} m (median), {maximum} (max)" if blind["min"] is not None else
-                  f"blind zone: {data['blind_area_m2_within_5m']:.1f} m² of ground unseen within "
-                  f"{data['blind_radius_m']:g} m; no ground seen within {data['blind_search_m']:g} m")
+                  f"{data['blind_radius_m']:g} m of the body; ground visible from {shown['min']} (min), "
+                  f"{shown['median']} (median), {shown['max']} (max){missing}")
     console.print(f"bird's-eye ({bev['height_m']:g} m height, {bev['cell_m']:g} m cells): "
                   f"{100 * bev['covered_frac_within_20m']:.1f} % of cells within 20 m seen, "
                   f"{100 * bev['overlap2_frac_within_20m']:.1f} % by >= 2 cameras, at most {bev['max_count']}")

@@ -43,7 +43,8 @@ def parse_camera_count(text: Optional[str]) -> tuple[int, int] | None:
 @app.command("design")
 def design_command(
     vehicle: str = typer.Option(..., help="Vehicle to design for: name, alias or CARLA blueprint."),
-    ref: str = typer.Option(..., help="Reference rig the detector was trained on: library name or rig file."),
+    ref: str = typer.Option(..., help="Reference rig the detector was trained on: library name or rig file; "
+                                      "several, comma-separated, for a fleet (minimise the worst predicted drop)."),
     weights: str = typer.Option("joint", help="Calibrated weights: BEVDet, BEVFusion, Fast-BEV, PETR, joint, or a file."),
     cameras: Optional[str] = typer.Option(None, help="Camera count or range (e.g. 6-10); default: the reference's."),
     fov: str = typer.Option(DEFAULT_FOVS, help="Lens catalogue: horizontal FOVs in degrees."),
@@ -69,11 +70,15 @@ def design_command(
         zones=tuple(z.strip() for z in zones.split(",")) if zones else None,
         pitches_deg=parse_numbers(pitch, "--pitch"), yaw_step_deg=yaw_step, spacing=spacing,
         min_coverage=min_coverage, min_overlap=min_overlap, time_limit=time_limit)
-    target, reference, calibration = load_vehicle(vehicle), load_rig(ref), load_weights(weights)
-    out = out or Path(f"design-{target.name}-{reference.name}")
+    references = [load_rig(name.strip()) for name in ref.split(",") if name.strip()]
+    if not references:
+        raise RigoptError("--ref needs at least one rig")
+    target, calibration = load_vehicle(vehicle), load_weights(weights)
+    label = "+".join(r.name for r in references)
+    out = out or Path(f"design-{target.name}-{label}")
     status = Console(stderr=True)
-    with status.status(f"designing a rig on {target.name} from {reference.name}") as spinner:
-        result = design_rig(target, reference, calibration, settings,
+    with status.status(f"designing a rig on {target.name} from {label}") as spinner:
+        result = design_rig(target, references, calibration, settings,
                             progress=lambda message: spinner.update(message) or status.print(f"  {message}"))
     try:
         files = write_design_outputs(result, out)
@@ -84,12 +89,12 @@ def design_command(
         print_json(summary)
         return
     rows = [["design", summary["predicted_drop"], summary["rigcd"], summary["n_cameras"], summary["coverage"], "yes"]]
-    for label, entry in (("naive transfer", summary["comparisons"]["naive_transfer"]),
+    for name, entry in (("naive transfer", summary["comparisons"]["naive_transfer"]),
                          *((f"benchmark {s['name']}", s) for s in summary["comparisons"]["benchmark_rigs"])):
         if entry:
-            rows.append([label, entry["predicted_drop"], entry["rigcd"], entry["n_cameras"], entry["coverage"],
+            rows.append([name, entry["predicted_drop"], entry["rigcd"], entry["n_cameras"], entry["coverage"],
                          "yes" if entry["meets_coverage_requirements"] else "no"])
-    print_table(f"{reference.name} -> {target.name} ({weights} weights); reference coverage "
+    print_table(f"{label} -> {target.name} ({weights} weights); reference coverage "
                 f"{summary['reference_coverage']:.3f}", ["rig", "predicted drop", "rigcd", "cameras", "coverage",
                                                            "meets coverage"], rows)
     solver = summary["solver"]

@@ -3,6 +3,8 @@
 ``design_rig`` proposes a rig on ``vehicle`` that minimises the calibrated RigCD to the reference rig
 (the objective of :mod:`rigopt.design.selection`) while every ring sector the reference sees on its own
 vehicle stays seen (plus optional stricter requirements), and every camera passes the mount checks.
+With several reference rigs (a fleet) it minimises the largest RigCD over them and meets the union of
+their coverage requirements; the continuous refinement then stays off.
 A selected camera that fails the python-fcl checks is removed from the candidates and the MILP solved
 again, so a returned design is always valid.
 """
@@ -11,7 +13,8 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
-from typing import Callable
+from functools import reduce
+from typing import Callable, Sequence
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -75,14 +78,19 @@ class DesignSettings:
 
 @dataclass(frozen=True)
 class RigSummary:
-    """A rig judged against the reference: predicted transfer, coverage (fraction of sector points seen),
-    and whether it meets the design's coverage requirements."""
+    """A rig judged against the reference(s): predicted transfer from each, coverage (fraction of sector
+    points seen), and whether it meets the design's coverage requirements."""
 
     rig: Rig
-    prediction: TransferPrediction
+    predictions: tuple[TransferPrediction, ...]
     coverage: float
     meets_requirements: bool
     check: RigCheck | None = None
+
+    @property
+    def prediction(self) -> TransferPrediction:
+        """The worst (largest predicted drop) of the predictions: the single one without a fleet."""
+        return max(self.predictions, key=lambda p: p.predicted_drop)
 
 
 @dataclass(frozen=True)
@@ -90,7 +98,7 @@ class DesignResult:
     """The validated design and its comparisons; solver facts of the final MILP."""
 
     design: RigSummary
-    reference: Rig
+    references: tuple[Rig, ...]
     reference_coverage: float
     selection: Selection
     n_candidates: int
@@ -100,6 +108,11 @@ class DesignResult:
     naive_transfer: RigSummary | None
     benchmark_rigs: tuple[RigSummary, ...]
     refine_status: str = "not run"
+
+    @property
+    def reference(self) -> Rig:
+        """The (first) reference rig."""
+        return self.references[0]
 
 
 def _progress_none(message: str) -> None:
@@ -130,14 +143,14 @@ def requirements(reference: Rig, reference_vehicle: Vehicle, settings: DesignSet
     return np.maximum(needed, settings.min_coverage).astype(int)
 
 
-def _coverage_pool(candidates: CandidateSet, reference: Rig, settings: DesignSettings) -> np.ndarray:
+def _coverage_pool(candidates: CandidateSet, references: list[Rig], settings: DesignSettings) -> np.ndarray:
     """Candidates offered for coverage: on a coarse subset of mount points (about ``coverage_mounts``),
     every clear orientation with the reference's lenses and the widest lens."""
     points = candidates.mount_points
     step = max(1, len(points) // settings.coverage_mounts)
     order = np.lexsort((points[:, 1], points[:, 0]))
     chosen_mounts = set(order[::step].tolist())
-    lenses = set(np.round(reference.fovs, 6).tolist()) | {float(candidates.fovs.max())}
+    lenses = {float(f) for rig in references for f in np.round(rig.fovs, 6)} | {float(candidates.fovs.max())}
     mask = np.isin(candidates.mount, list(chosen_mounts)) & np.isin(np.round(candidates.fovs, 6), list(lenses))
     return np.flatnonzero(mask)
 
@@ -154,26 +167,27 @@ def _explain_uncoverable(needed: np.ndarray, seen: np.ndarray, distance, height,
             "wider lenses, or lower --min-coverage / --min-overlap")
 
 
-def design_rig(vehicle: Vehicle, reference: Rig, calibration: Calibration, settings: DesignSettings = DesignSettings(),
-               progress: Callable[[str], None] = _progress_none) -> DesignResult:
-    """Design a rig on ``vehicle`` for a detector trained on ``reference`` (see the module docstring)."""
+def design_rig(vehicle: Vehicle, reference: Rig | Sequence[Rig], calibration: Calibration,
+               settings: DesignSettings = DesignSettings(), progress: Callable[[str], None] = _progress_none
+               ) -> DesignResult:
+    """Design a rig on ``vehicle`` for a detector trained on ``reference`` (one rig, or a fleet of rigs;
+    see the module docstring)."""
     start = time.perf_counter()
-    reference_vehicle = load_vehicle(reference.vehicle)
+    references = [reference] if isinstance(reference, Rig) else list(reference)
+    reference = references[0]
     spacing = settings.spacing or default_spacing(vehicle, settings)
     progress(f"sampling mount candidates on {vehicle.name} (spacing {spacing:.2f} m)")
     yaws = np.arange(-180.0, 180.0, settings.yaw_step_deg)
     candidates = build_candidates(vehicle, settings.lenses, spacing, yaws, settings.pitches_deg, settings.zones,
                                   settings.rules)
-    lt, lr, lf = calibration.lambdas
-    t, r, f = camera_costs(candidates.positions, candidates.rotations, candidates.fovs,
-                           reference.positions, reference.rotations, reference.fovs)
-    cost = lt * t + lr * r + lf * f  # (n, R)
+    costs = [matching_costs(candidates, rig, calibration) for rig in references]  # each (n, R_k)
 
-    progress(f"coverage requirements from {reference.name} on {reference_vehicle.name}")
-    needed = requirements(reference, reference_vehicle, settings)
+    progress(f"coverage requirements from {', '.join(r.name for r in references)}")
+    needed = np.max([requirements(rig, load_vehicle(rig.vehicle), settings) for rig in references], axis=0)
     points, distance, height, _, azimuth = sector_points(Footprint.of_mesh(vehicle.mesh), settings.coverage)
-    pool = np.union1d(prune(cost, np.zeros((len(cost), 0), bool), np.zeros(0, int), settings.keep_per_reference, 0),
-                      _coverage_pool(candidates, reference, settings))
+    no_sees, no_needs = np.zeros((len(candidates), 0), bool), np.zeros(0, int)
+    pool = reduce(np.union1d, [prune(c, no_sees, no_needs, settings.keep_per_reference, 0) for c in costs],
+                  _coverage_pool(candidates, references, settings))
     progress(f"coverage of {len(pool)} of {len(candidates)} candidates")
     sees_pool = visible(vehicle.mesh, candidates.positions[pool], candidates.rotations[pool], candidates.fovs[pool],
                         np.tile([1280, 720], (len(pool), 1)), points, settings.coverage.max_range,
@@ -181,7 +195,8 @@ def design_rig(vehicle: Vehicle, reference: Rig, calibration: Calibration, setti
     seen = np.minimum(sees_pool.sum(axis=0), needed.max(initial=1))
     if np.any(seen < needed):
         raise DesignInfeasible(_explain_uncoverable(needed, seen, distance, height, azimuth))
-    offered = pool[prune(cost[pool], sees_pool, needed, settings.keep_per_reference, settings.keep_per_sector)]
+    offered = pool[reduce(np.union1d, [prune(c[pool], sees_pool, needed, settings.keep_per_reference,
+                                             settings.keep_per_sector) for c in costs])]
     sees = sees_pool[np.searchsorted(pool, offered)]
 
     counts = settings.cameras or (len(reference), len(reference))
@@ -189,7 +204,7 @@ def design_rig(vehicle: Vehicle, reference: Rig, calibration: Calibration, setti
     repairs = 0
     while True:
         keep = np.array([k for k, c in enumerate(offered) if c not in excluded], dtype=int)
-        best = _best_selection(cost[offered[keep]], sees[keep], needed, candidates.mount[offered[keep]],
+        best = _best_selection([c[offered[keep]] for c in costs], sees[keep], needed, candidates.mount[offered[keep]],
                                candidates.mount_points, counts, calibration.alpha, settings, progress)
         chosen = offered[keep][best.chosen]
         rig = _rig_from(candidates.subset(chosen), best.matched, reference, vehicle)
@@ -205,20 +220,22 @@ def design_rig(vehicle: Vehicle, reference: Rig, calibration: Calibration, setti
         excluded.update(int(c) for c in failed)
 
     progress("validating the design: mount checks, coverage, RigCD")
-    design = summarise(rig, vehicle, reference, calibration, needed, settings, check)
-    refine_status = "off"
-    if settings.refine and design.meets_requirements:
+    design = summarise(rig, vehicle, references, calibration, needed, settings, check)
+    refine_status = "off" if len(references) == 1 else "off (fleet design)"
+    if settings.refine and design.meets_requirements and len(references) == 1:
         progress("continuous refinement (casadi + IPOPT)")
         design, refine_status = _refined(design, vehicle, reference, calibration, needed, points, spacing, settings)
     if not design.meets_requirements:
         raise DesignInfeasible("the selected rig does not meet the coverage requirements when recomputed; "
                                "this should not happen: please report it")
-    reference_summary = rig_coverage_matrix(reference, reference_vehicle, settings.coverage).sees.any(axis=0).mean()
+    reference_summary = rig_coverage_matrix(reference, load_vehicle(reference.vehicle),
+                                            settings.coverage).sees.any(axis=0).mean()
     naive = naive_transfer(vehicle, reference, candidates, settings)
-    naive_summary = summarise(naive, vehicle, reference, calibration, needed, settings) if naive else None
-    benchmark = tuple(summarise(b, vehicle, reference, calibration, needed, settings)
+    naive_summary = summarise(naive, vehicle, references, calibration, needed, settings) if naive else None
+    benchmark = tuple(summarise(b, vehicle, references, calibration, needed, settings)
                       for b in benchmark_rigs(vehicle))
-    return DesignResult(design, reference, float(reference_summary), best, len(candidates), len(offered), repairs,
+    return DesignResult(design, tuple(references), float(reference_summary), best, len(candidates), len(offered),
+                        repairs,
                         time.perf_counter() - start, naive_summary, benchmark, refine_status)
 
 
@@ -241,7 +258,7 @@ def _refined(design: RigSummary, vehicle: Vehicle, reference: Rig, calibration: 
     check = check_rig(refined_rig, vehicle, settings.rules)
     if not check.valid:
         return design, f"rejected: IPOPT {outcome.status}, refined cameras fail the mount checks"
-    refined = summarise(refined_rig, vehicle, reference, calibration, needed, settings, check)
+    refined = summarise(refined_rig, vehicle, [reference], calibration, needed, settings, check)
     if not refined.meets_requirements:
         return design, f"rejected: IPOPT {outcome.status}, refined rig loses required coverage"
     if refined.prediction.rigcd >= design.prediction.rigcd:
@@ -249,13 +266,13 @@ def _refined(design: RigSummary, vehicle: Vehicle, reference: Rig, calibration: 
     return refined, f"accepted: IPOPT {outcome.status}, RigCD {design.prediction.rigcd:.4f} -> {refined.prediction.rigcd:.4f}"
 
 
-def _best_selection(cost, sees, needed, mount, mount_points, counts, alpha, settings, progress) -> Selection:
+def _best_selection(costs, sees, needed, mount, mount_points, counts, alpha, settings, progress) -> Selection:
     clashes = cKDTree(mount_points).query_pairs(CLASH_DISTANCE, output_type="ndarray")
     best = None
     for n_cameras in range(counts[0], counts[1] + 1):
-        progress(f"MILP: {n_cameras} cameras from {len(cost)} candidates")
+        progress(f"MILP: {n_cameras} cameras from {len(costs[0])} candidates")
         try:
-            selection = select_cameras(cost, sees, needed, mount, n_cameras, alpha, clashes, settings.time_limit,
+            selection = select_cameras(costs, sees, needed, mount, n_cameras, alpha, clashes, settings.time_limit,
                                        settings.mip_gap)
         except DesignInfeasible:
             if n_cameras == counts[1] and best is None:
@@ -277,12 +294,20 @@ def _rig_from(chosen: CandidateSet, matched: np.ndarray, reference: Rig, vehicle
     return Rig(f"design_{vehicle.name}_from_{reference.name}", vehicle.blueprint, tuple(cameras[k] for k in order))
 
 
-def summarise(rig: Rig, vehicle: Vehicle, reference: Rig, calibration: Calibration, needed: np.ndarray,
+def summarise(rig: Rig, vehicle: Vehicle, references: Sequence[Rig], calibration: Calibration, needed: np.ndarray,
               settings: DesignSettings, check: RigCheck | None = None) -> RigSummary:
-    """Predicted transfer from the reference, coverage fraction and requirement check of ``rig``."""
+    """Predicted transfer from each reference, coverage fraction and requirement check of ``rig``."""
     counts = rig_coverage_matrix(rig, vehicle, settings.coverage).sees.sum(axis=0)
-    prediction = predict_transfer(reference, [rig], calibration)[0]
-    return RigSummary(rig, prediction, float(np.mean(counts >= 1)), bool(np.all(counts >= needed)), check)
+    predictions = tuple(predict_transfer(reference, [rig], calibration)[0] for reference in references)
+    return RigSummary(rig, predictions, float(np.mean(counts >= 1)), bool(np.all(counts >= needed)), check)
+
+
+def matching_costs(candidates: CandidateSet, reference: Rig, calibration: Calibration) -> np.ndarray:
+    """(n, R) float: the calibrated raw-unit cost of matching each candidate to each reference camera."""
+    lt, lr, lf = calibration.lambdas
+    t, r, f = camera_costs(candidates.positions, candidates.rotations, candidates.fovs,
+                           reference.positions, reference.rotations, reference.fovs)
+    return lt * t + lr * r + lf * f
 
 
 def naive_transfer(vehicle: Vehicle, reference: Rig, candidates: CandidateSet, settings: DesignSettings) -> Rig | None:

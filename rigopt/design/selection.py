@@ -32,8 +32,10 @@ class DesignInfeasible(RigoptError):
 
 @dataclass(frozen=True)
 class Selection:
-    """The MILP's answer: ``chosen`` (k,) candidate indices, ``matched`` (k,) reference index or -1,
-    ``objective`` (calibrated RigCD), solver ``status``, relative ``gap``, ``seconds``, ``n_candidates``."""
+    """The MILP's answer: ``chosen`` (k,) candidate indices, ``matched`` (k,) index into the (first)
+    reference or -1, ``objective`` (calibrated RigCD; in fleet mode the largest over the references), solver
+    ``status``, relative ``gap``, ``seconds``, ``n_candidates``, and ``matchings``: one ``matched`` per
+    reference."""
 
     chosen: np.ndarray
     matched: np.ndarray
@@ -42,6 +44,7 @@ class Selection:
     gap: float
     seconds: float
     n_candidates: int
+    matchings: tuple[np.ndarray, ...] = ()
 
 
 def count_term(n_cameras: int, n_reference: int) -> float:
@@ -62,42 +65,58 @@ def prune(cost: np.ndarray, sees: np.ndarray, required: np.ndarray, keep_per_ref
     return np.array(sorted(keep), dtype=int)
 
 
-def select_cameras(cost: np.ndarray, sees: np.ndarray, required: np.ndarray, mount: np.ndarray, n_cameras: int,
+def _matching(cp, x, cost: np.ndarray, n_cameras: int, alpha: float):
+    """Matching variables of one reference and the calibrated RigCD they give; returns (y, constraints, rigcd)."""
+    n, n_ref = cost.shape
+    y = cp.Variable(n * n_ref, boolean=True)  # y[c * n_ref + r]
+    edges = np.arange(n * n_ref)
+    per_candidate = sparse.csr_matrix((np.ones(n * n_ref), (np.repeat(np.arange(n), n_ref), edges)), shape=(n, n * n_ref))
+    per_reference = sparse.csr_matrix((np.ones(n * n_ref), (np.tile(np.arange(n_ref), n), edges)),
+                                      shape=(n_ref, n * n_ref))
+    if n_cameras >= n_ref:
+        constraints = [per_reference @ y == 1, per_candidate @ y <= x]
+    else:
+        constraints = [per_candidate @ y == x, per_reference @ y <= 1]
+    rigcd = alpha / min(n_cameras, n_ref) * (cost.ravel() @ y) + (1.0 - alpha) * count_term(n_cameras, n_ref)
+    return y, constraints, rigcd
+
+
+def select_cameras(cost, sees: np.ndarray, required: np.ndarray, mount: np.ndarray, n_cameras: int,
                    alpha: float, clash_pairs=(), time_limit: float = 60.0, mip_gap: float = 1e-4) -> Selection:
     """Solve the selection MILP above.
 
-    cost : (n, R) float raw-unit matching costs; sees : (n, q) bool; required : (q,) int cameras needed per
-    sector point; mount : (n,) int mount point of each candidate; clash_pairs : (p, 2) int mount points whose
-    housings collide. Raises DesignInfeasible when the MILP has no solution.
+    cost : (n, R) float raw-unit matching costs, or a list of them (one per reference rig: the fleet mode,
+    which minimises the largest calibrated RigCD over the references); sees : (n, q) bool; required : (q,)
+    int cameras needed per sector point; mount : (n,) int mount point of each candidate; clash_pairs :
+    (p, 2) int mount points whose housings collide. Raises DesignInfeasible when the MILP has no solution.
     """
     import cvxpy as cp
 
-    n, n_ref = cost.shape
+    costs = [np.asarray(c, dtype=float) for c in (cost if isinstance(cost, (list, tuple)) else [cost])]
+    n = costs[0].shape[0]
     if n_cameras < 1:
         raise RigoptError(f"the camera count must be at least 1, got {n_cameras}")
     if len(np.unique(mount)) < n_cameras:
         raise DesignInfeasible(f"only {len(np.unique(mount))} mount points are available for {n_cameras} cameras; "
                                "lower the camera count, allow more zones or a finer --spacing")
-    m = min(n_cameras, n_ref)
     x = cp.Variable(n, boolean=True)
-    y = cp.Variable(n * n_ref, boolean=True)  # y[c * n_ref + r]
-    rows = np.repeat(np.arange(n), n_ref)
-    cols = np.tile(np.arange(n_ref), n)
-    per_candidate = sparse.csr_matrix((np.ones(n * n_ref), (rows, np.arange(n * n_ref))), shape=(n, n * n_ref))
-    per_reference = sparse.csr_matrix((np.ones(n * n_ref), (cols, np.arange(n * n_ref))), shape=(n_ref, n * n_ref))
     constraints = [cp.sum(x) == n_cameras]
-    if n_cameras >= n_ref:
-        constraints += [per_reference @ y == 1, per_candidate @ y <= x]
-    else:
-        constraints += [per_candidate @ y == x, per_reference @ y <= 1]
+    matchings = [_matching(cp, x, c, n_cameras, alpha) for c in costs]
+    for _, matching_constraints, _ in matchings:
+        constraints += matching_constraints
     needed = np.flatnonzero(required > 0)
     if len(needed):
         constraints.append(sparse.csr_matrix(sees[:, needed].T.astype(float)) @ x >= required[needed])
     groups = _mount_groups(mount, clash_pairs)
     if groups.shape[0]:
         constraints.append(groups @ x <= 1)
-    objective = cp.Minimize(alpha / m * (cost.ravel() @ y) + (1.0 - alpha) * count_term(n_cameras, n_ref))
-    problem = cp.Problem(objective, constraints)
+    if len(matchings) == 1:
+        objective = matchings[0][2]
+    else:
+        worst = cp.Variable()
+        constraints += [worst >= rigcd for _, _, rigcd in matchings]
+        objective = worst
+    problem = cp.Problem(cp.Minimize(objective), constraints)
     start = time.perf_counter()
     try:
         problem.solve(solver=cp.HIGHS, time_limit=float(time_limit), mip_rel_gap=float(mip_gap))
@@ -111,11 +130,13 @@ def select_cameras(cost: np.ndarray, sees: np.ndarray, required: np.ndarray, mou
     if x.value is None:
         raise RigoptError(f"the MIP solver stopped without a solution (status {problem.status}); raise --time-limit")
     chosen = np.flatnonzero(x.value > 0.5)
-    pairs = y.value.reshape(n, n_ref) > 0.5
-    matched = np.array([int(np.argmax(pairs[c])) if pairs[c].any() else -1 for c in chosen])
+    matched = []
+    for (y, _, _), c in zip(matchings, costs):
+        pairs = y.value.reshape(n, c.shape[1]) > 0.5
+        matched.append(np.array([int(np.argmax(pairs[k])) if pairs[k].any() else -1 for k in chosen]))
     gap = _gap(problem)
     status = "optimal" if problem.status == cp.OPTIMAL else "time_limit" if problem.status == cp.USER_LIMIT else problem.status
-    return Selection(chosen, matched, float(problem.value), status, gap, seconds, n)
+    return Selection(chosen, matched[0], float(problem.value), status, gap, seconds, n, tuple(matched))
 
 
 def _gap(problem) -> float:

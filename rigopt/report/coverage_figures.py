@@ -166,19 +166,25 @@ def _count_colours(top: int) -> tuple[ListedColormap, BoundaryNorm]:
     return cmap, BoundaryNorm(np.arange(-0.5, top + 1.0), cmap.N)
 
 
-def _draw_frustums(ax, rig: Rig, labels: bool) -> None:
+def _draw_frustums(ax, rig: Rig, labels: bool, inside: tuple[str, ...] = ()) -> None:
+    """Cameras as dots with their horizontal frustum wedge; cameras inside the body as black crosses."""
     for camera in rig.cameras:
         half = np.deg2rad(camera.fov / 2.0)
         rays = [camera.rotation @ np.array([np.cos(a), np.sin(a), 0.0]) for a in np.linspace(-half, half, 16)]
         tips = np.array([camera.position + FRUSTUM_DRAW_LENGTH * r for r in rays])
         wedge = np.vstack([camera.position, tips, camera.position])
         ax.plot(*_top(wedge), color="tab:red", linewidth=0.7, alpha=0.85, zorder=6)
-        ax.plot(*_top(camera.position), "o", color="tab:red", markersize=3.5, markeredgecolor="white",
-                markeredgewidth=0.5, zorder=7)
+        if camera.id in inside:
+            ax.plot(*_top(camera.position), "X", color="black", markersize=6, zorder=7)
+        else:
+            ax.plot(*_top(camera.position), "o", color="tab:red", markersize=3.5, markeredgecolor="white",
+                    markeredgewidth=0.5, zorder=7)
         if labels:
             tip = camera.position + 2.2 * camera.forward
-            ax.annotate(camera.id.removeprefix("CAM_"), _top(tip), fontsize=6, color="darkred", ha="center",
-                        va="center", zorder=8, bbox={"boxstyle": "round,pad=0.15", "fc": "white", "ec": "none", "alpha": 0.7})
+            text = camera.id.removeprefix("CAM_") + (" (inside the body)" if camera.id in inside else "")
+            ax.annotate(text, _top(tip), fontsize=6, color="darkred", ha="center",
+                        va="center", zorder=8,
+                        bbox={"boxstyle": "round,pad=0.15", "fc": "white", "ec": "none", "alpha": 0.7})
 
 
 def _draw_bev_panel(ax, report: CoverageReport, rig: Rig | None, half: float, cmap, norm, near: bool):
@@ -198,7 +204,7 @@ def _draw_bev_panel(ax, report: CoverageReport, rig: Rig | None, half: float, cm
             ax.annotate(f"{distance:g} m", _top(label), fontsize=6 if near else 7, color="black", zorder=5,
                         bbox={"boxstyle": "round,pad=0.1", "fc": "white", "ec": "none", "alpha": 0.6})
     if rig is not None:
-        _draw_frustums(ax, rig, labels=near)
+        _draw_frustums(ax, rig, labels=near, inside=report.cameras_inside)
     cx, cy = footprint.centre
     ax.set_xlim(cy + half, cy - half)  # +y (left) on the left
     ax.set_ylim(cx - half, cx + half)
@@ -218,9 +224,9 @@ def bev_figure(report: CoverageReport, rig: Rig | None = None) -> Figure:
     _draw_bev_panel(near, report, rig, NEAR_HALF_SIZE, cmap, norm, near=True)
     full.set_title(f"full extent (+-{report.settings.bev_extent:g} m)")
     near.set_title(f"near view (+-{NEAR_HALF_SIZE:g} m)" + (", frustums 10 m" if rig is not None else ""))
+    rings = ", ".join(f"{d:g}" for d in report.settings.ring_distances)
     figure.suptitle(f"{report.rig} on {report.vehicle}: cameras seeing each {report.settings.bev_cell:g} m cell "
-                    f"at {report.bev.height_m:g} m height (rings at {', '.join(f'{d:g}' for d in report.settings.ring_distances)} m "
-                    "from the body; white = body)")
+                    f"at {report.bev.height_m:g} m height (rings at {rings} m from the body; white = body)")
     bar = figure.colorbar(image, ax=[full, near], ticks=np.arange(0, top + 1), shrink=0.8)
     bar.set_label("cameras seeing the cell")
     return figure
@@ -268,7 +274,8 @@ def rings_figure(report: CoverageReport, compare: CoverageReport | None = None) 
     title = f"{report.rig} on {report.vehicle}" + (f" vs {compare.rig} on {compare.vehicle} (dashed)"
                                                    if compare is not None else "")
     figure.suptitle(f"{title}: cameras seeing each azimuth of the rings\n(radius = camera count, each distance's "
-                    f"curve shifted by {RING_CURVE_OFFSET:g} so that equal counts stay apart; forward up, left on the left)")
+                    f"curve shifted by {RING_CURVE_OFFSET:g} so that equal counts stay apart; forward up, "
+                    "left on the left)")
     return figure
 
 
@@ -308,7 +315,7 @@ def blind_figure(report: CoverageReport) -> Figure:
     polar.plot(circle, np.full_like(circle, blind.radius_m), color="black", linestyle="--", linewidth=0.8,
                label=f"{blind.radius_m:g} m (area radius)")
     if missing.any():
-        polar.plot(blind.azimuths[missing], shown[missing], "x", color="darkred", markersize=4,
+        polar.plot(blind.azimuths[missing], shown[missing], "x", color="darkred", markersize=3,
                    label=f"not seen within {settings.blind_search:g} m")
     top = float(np.max(shown)) if shown.size else settings.blind_search
     polar.set_rlim(0, max(top, blind.radius_m) * 1.08)
@@ -320,7 +327,7 @@ def blind_figure(report: CoverageReport) -> Figure:
     ground.fill(*_top(closed), facecolor="tab:red", alpha=0.15, linewidth=0)
     ground.plot(*_top(closed), color="tab:red", linewidth=1.2)
     if missing.any():
-        ground.plot(*_top(outline[missing]), "x", color="darkred", markersize=4)
+        ground.plot(*_top(outline[missing]), "x", color="darkred", markersize=3)
     radius = report.footprint.ring_points(settings.azimuths(720), blind.radius_m, 0.0)
     ground.plot(*_top(np.vstack([radius, radius[:1]])), color="black", linestyle="--", linewidth=0.8)
     ground.fill(*_top(report.footprint.outline), facecolor="white", edgecolor="black", linewidth=1.0)
@@ -335,8 +342,10 @@ def blind_figure(report: CoverageReport) -> Figure:
     ground.set_ylabel("x (m), forward up")
     ground.set_title(f"top view: unseen ground area within {blind.radius_m:g} m = {blind.area_m2:.1f} m2")
     finite = blind.distance_m[~missing]
-    stats = (f"min {finite.min():.2f} m, median {np.median(blind.distance_m):.2f} m, max "
-             f"{'not found' if missing.any() else f'{finite.max():.2f} m'}" if finite.size else "no ground seen")
+    median = float(np.median(blind.distance_m))
+    stats = (f"min {finite.min():.2f} m, median {f'{median:.2f} m' if math.isfinite(median) else 'not found'}, "
+             f"max {'not found' if missing.any() else f'{finite.max():.2f} m'}" if finite.size else
+             f"no ground seen within {settings.blind_search:g} m")
     figure.suptitle(f"{report.rig} on {report.vehicle}: near-field blind zone on the ground ({stats}; "
                     "forward up, left on the left)")
     return figure

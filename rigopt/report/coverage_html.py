@@ -151,7 +151,8 @@ def render_html(report: CoverageReport, rig: Rig, comparison: CoverageComparison
     max_text = (f"not found within {_num(data['blind_search_m'], 0)} m on {_pct(data['blind_not_found_frac'])} "
                 "of azimuths" if data["blind_not_found_frac"] > 0 else _num(blind["max"], 2, " m"))
     parts.append(_table(["measure", "value"], [
-        [f"unseen ground within {_num(data['blind_radius_m'], 0)} m of the body", _num(data["blind_area_m2_within_5m"], 1, " m²")],
+        [f"unseen ground within {_num(data['blind_radius_m'], 0)} m of the body",
+         _num(data["blind_area_m2_within_5m"], 1, " m²")],
         ["blind distance on the ground: min", _num(blind["min"], 2, " m")],
         ["blind distance on the ground: median", _num(blind["median"], 2, " m")],
         ["blind distance on the ground: max", _e(max_text)],

@@ -10,10 +10,13 @@ from rigopt.rig.pccr_format import write_rig
 
 
 def summary_dict(summary: RigSummary) -> dict:
+    """A rig's worst predicted transfer over the references, its coverage, and each reference's prediction."""
     p = summary.prediction
     return {"name": summary.rig.name, "predicted_drop": p.predicted_drop, "rigcd": p.rigcd, "t": p.t, "r": p.r,
             "f": p.f, "count": p.count, "n_cameras": len(summary.rig), "coverage": summary.coverage,
-            "meets_coverage_requirements": summary.meets_requirements}
+            "meets_coverage_requirements": summary.meets_requirements,
+            "per_reference": [{"reference": q.reference, "predicted_drop": q.predicted_drop, "rigcd": q.rigcd}
+                              for q in summary.predictions]}
 
 
 def design_dict(result: DesignResult, rig_file: Path | None) -> dict:
@@ -23,10 +26,11 @@ def design_dict(result: DesignResult, rig_file: Path | None) -> dict:
     return {
         "rig_file": str(rig_file) if rig_file else None,
         "vehicle": design.rig.vehicle,
-        "reference": result.reference.name,
+        "reference": ",".join(r.name for r in result.references),
         "predicted_drop": design.prediction.predicted_drop,
         "rigcd": design.prediction.rigcd,
         "n_cameras": len(design.rig),
+        "per_reference": summary_dict(design)["per_reference"],
         "coverage": design.coverage,
         "reference_coverage": result.reference_coverage,
         "solver": {"milp_status": selection.status, "milp_gap": selection.gap, "milp_seconds": selection.seconds,

@@ -15,8 +15,8 @@ from rigopt.coverage.measures import camera_coverage, compare_coverage, coverage
 VHALF_DEG = math.degrees(math.atan(0.5625))  # half the vertical FOV of a 90 deg, 1280 x 720 pinhole
 
 
-def ring(report, distance, height):
-    (found,) = [r for r in report.rings if (r.distance_m, r.height_m) == (distance, height)]
+def ring(rings, distance, height):
+    (found,) = [r for r in rings if (r.distance_m, r.height_m) == (distance, height)]
     return found
 
 
@@ -26,7 +26,7 @@ def ring(report, distance, height):
 # from the centre, a ring point at azimuth a lies in the direction a from the cameras, so camera k (yaw y_k,
 # FOV f) sees the azimuths |a - y_k| <= f / 2 (the ring at 0.8 m is 2.2 m below, i.e. 2.5 deg down at 50 m,
 # well within the vertical FOV, and the rays pass 1.4 m or more over the roof). The two views overlap on
-# [yaw - f / 2, -yaw + f / 2] for yaws +-yaw: f - 2 yaw degrees, and together cover f + 2 yaw degrees.
+# [yaw - f / 2, -yaw + f / 2] for yaws +-yaw: f - 2 yaw degrees (or none), and together cover 2 f minus that.
 
 @pytest.mark.parametrize(("fov", "yaw"), [(90.0, 30.0), (90.0, 40.0), (100.0, 20.0), (60.0, 45.0)])
 def test_two_cameras_overlap(box_vehicle, box_footprint, small_settings, camera, rig, fov, yaw):
@@ -36,14 +36,14 @@ def test_two_cameras_overlap(box_vehicle, box_footprint, small_settings, camera,
     pair = rig(left, right)
     sample = 360.0 / settings.ring_samples
     overlap = max(fov - 2 * yaw, 0.0)
-    union = fov + 2 * yaw - overlap
+    union = 2 * fov - overlap
     per_camera = {c.id: c for c in camera_coverage(box_vehicle, pair, settings, box_footprint)}
     if overlap > 0:
         assert per_camera["LEFT"].overlap_deg["RIGHT"] == pytest.approx(overlap, abs=2 * sample)
         assert per_camera["RIGHT"].overlap_deg["LEFT"] == pytest.approx(overlap, abs=2 * sample)
     else:
         assert per_camera["LEFT"].overlap_deg == {} and per_camera["RIGHT"].overlap_deg == {}
-    far = ring(type("R", (), {"rings": ring_coverage(box_vehicle, pair, settings, box_footprint)}), 50.0, 0.8)
+    far = ring(ring_coverage(box_vehicle, pair, settings, box_footprint), 50.0, 0.8)
     assert far.overlap2_frac == pytest.approx(overlap / 360, abs=2 * sample / 360)
     assert far.covered_frac == pytest.approx(union / 360, abs=2 * sample / 360)
     assert far.counts.max() == (2 if overlap > 0 else 1)
@@ -57,7 +57,7 @@ def forward_report(box_vehicle, small_settings, camera, rig):
 
 
 def test_forward_camera_far_ring(forward_report, small_settings):
-    far = ring(forward_report, 50.0, 0.8)
+    far = ring(forward_report.rings, 50.0, 0.8)
     sample = 1 / small_settings.ring_samples
     # Roughly FOV / 360: the camera is 2.05 m ahead of the centre, which narrows the seen azimuths (seen from
     # the centre) by at most 2 asin(2.05 / 50) = 4.7 deg.

@@ -112,6 +112,15 @@ def test_camera_facing_the_box(box_vehicle, backend):
 
 
 @pytest.mark.parametrize("backend", ["auto", "triangle"])
+def test_points_a_centimetre_off_the_surface(box_vehicle, backend):
+    # 1 cm inside the front face: hidden by it; 1 cm in front of it: seen.
+    inside, outside = face_points(2.0 - 0.01), face_points(2.0 + 0.01)
+    seen = visible(box_vehicle.mesh, CAMERA[None], LOOK_BACK, [90.0], SIZE, np.concatenate([inside, outside]),
+                   backend=backend)[0]
+    assert seen.tolist() == [False] * len(inside) + [True] * len(outside)
+
+
+@pytest.mark.parametrize("backend", ["auto", "triangle"])
 def test_segments_clear(box_vehicle, backend):
     starts = np.array([CAMERA, CAMERA, CAMERA, [5.0, 1.5, 0.9], [-3.0, 0.0, 0.9], [0.0, 0.0, 2.0]])
     ends = np.array([
