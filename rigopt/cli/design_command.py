@@ -55,6 +55,8 @@ def design_command(
     min_coverage: int = typer.Option(0, help="Cameras every ring sector needs, beyond the reference's coverage."),
     min_overlap: int = typer.Option(0, help="Cameras needed where the reference sees a sector twice (e.g. 2)."),
     time_limit: float = typer.Option(60.0, help="MILP time limit (s); the best design found is returned."),
+    pareto: bool = typer.Option(False, "--pareto", help="Sweep camera counts (--cameras, default the reference's "
+                                                        "+-2) and coverage levels; write the frontier."),
     out: Optional[Path] = typer.Option(None, help="Output folder (default: design-<vehicle>-<ref>)."),
     as_json: bool = typer.Option(False, "--json", help="Print the JSON summary."),
 ):
@@ -77,6 +79,9 @@ def design_command(
     label = "+".join(r.name for r in references)
     out = out or Path(f"design-{target.name}-{label}")
     status = Console(stderr=True)
+    if pareto:
+        _pareto(target, references, calibration, settings, out, as_json, status)
+        return
     with status.status(f"designing a rig on {target.name} from {label}") as spinner:
         result = design_rig(target, references, calibration, settings,
                             progress=lambda message: spinner.update(message) or status.print(f"  {message}"))
@@ -101,4 +106,27 @@ def design_command(
     print(f"MILP {solver['milp_status']} (gap {solver['milp_gap']:.2e}) on {solver['offered_to_milp']} of "
           f"{solver['candidates']} candidates; refinement {solver['refine_status']}; {solver['seconds']:.1f} s",
           file=sys.stderr)
+    print(f"wrote {', '.join(str(f) for f in files)}")
+
+
+def _pareto(target, references, calibration, settings, out: Path, as_json: bool, status: Console) -> None:
+    from dataclasses import asdict
+
+    from rigopt.design.pareto import default_counts, pareto_designs, write_pareto
+
+    counts = settings.cameras or default_counts(references)
+    with status.status("sweeping camera counts and coverage levels") as spinner:
+        points = pareto_designs(target, references, calibration, settings, counts,
+                                progress=lambda message: spinner.update(message) or status.print(f"  {message}"))
+    try:
+        files = write_pareto(points, out)
+    except OSError as error:
+        raise RigoptError(f"{out}: cannot write the sweep there ({error.strerror})") from None
+    if as_json:
+        print_json([{k: v for k, v in asdict(p).items() if k != "rig"} for p in points])
+        return
+    print_table(f"designs for {target.name}: predicted drop against coverage and camera count",
+                ["cameras", "coverage level", "predicted drop", "rigcd", "coverage", "frontier"],
+                [[p.n_cameras, p.level, p.predicted_drop, p.rigcd, p.coverage, "yes" if p.frontier else "-"]
+                 if p.feasible else [p.n_cameras, p.level, "infeasible", "-", "-", "-"] for p in points])
     print(f"wrote {', '.join(str(f) for f in files)}")

@@ -167,6 +167,81 @@ def _explain_uncoverable(needed: np.ndarray, seen: np.ndarray, distance, height,
             "wider lenses, or lower --min-coverage / --min-overlap")
 
 
+@dataclass(frozen=True)
+class Prepared:
+    """What every MILP of one design problem shares: the candidates, their matching costs to each
+    reference (n, R_k), the sector points (q, 3) with their rings, the coverage pool (p,) int and what it
+    sees (p, q), and the mount spacing (m)."""
+
+    references: tuple[Rig, ...]
+    candidates: CandidateSet
+    costs: tuple[np.ndarray, ...]
+    points: np.ndarray
+    distance: np.ndarray
+    height: np.ndarray
+    azimuth: np.ndarray
+    pool: np.ndarray
+    sees_pool: np.ndarray
+    spacing: float
+
+
+def prepare(vehicle: Vehicle, references: Sequence[Rig], calibration: Calibration, settings: DesignSettings,
+            progress: Callable[[str], None] = _progress_none) -> Prepared:
+    """Candidates, costs and the coverage of the candidates worth considering."""
+    spacing = settings.spacing or default_spacing(vehicle, settings)
+    progress(f"sampling mount candidates on {vehicle.name} (spacing {spacing:.2f} m)")
+    yaws = np.arange(-180.0, 180.0, settings.yaw_step_deg)
+    candidates = build_candidates(vehicle, settings.lenses, spacing, yaws, settings.pitches_deg, settings.zones,
+                                  settings.rules)
+    costs = tuple(matching_costs(candidates, rig, calibration) for rig in references)
+    points, distance, height, _, azimuth = sector_points(Footprint.of_mesh(vehicle.mesh), settings.coverage)
+    no_sees, no_needs = np.zeros((len(candidates), 0), bool), np.zeros(0, int)
+    pool = reduce(np.union1d, [prune(c, no_sees, no_needs, settings.keep_per_reference, 0) for c in costs],
+                  _coverage_pool(candidates, list(references), settings))
+    progress(f"coverage of {len(pool)} of {len(candidates)} candidates")
+    sees_pool = visible(vehicle.mesh, candidates.positions[pool], candidates.rotations[pool], candidates.fovs[pool],
+                        np.tile([1280, 720], (len(pool), 1)), points, settings.coverage.max_range,
+                        settings.coverage.backend)
+    return Prepared(tuple(references), candidates, costs, points, distance, height, azimuth, pool, sees_pool, spacing)
+
+
+def fleet_requirements(references: Sequence[Rig], settings: DesignSettings) -> np.ndarray:
+    """(q,) int: the largest requirement of any reference at each sector point."""
+    return np.max([requirements(rig, load_vehicle(rig.vehicle), settings) for rig in references], axis=0)
+
+
+def select_valid(prepared: Prepared, vehicle: Vehicle, calibration: Calibration, needed: np.ndarray,
+                 counts: tuple[int, int], settings: DesignSettings, progress: Callable[[str], None] = _progress_none):
+    """The best selection meeting ``needed`` whose cameras all pass the mount checks.
+
+    Returns (rig, selection, check, repairs, offered count). Raises DesignInfeasible with the uncoverable
+    sectors, or when repairs run out.
+    """
+    seen = np.minimum(prepared.sees_pool.sum(axis=0), needed.max(initial=1))
+    if np.any(seen < needed):
+        raise DesignInfeasible(_explain_uncoverable(needed, seen, prepared.distance, prepared.height, prepared.azimuth))
+    pool, candidates = prepared.pool, prepared.candidates
+    offered = pool[reduce(np.union1d, [prune(c[pool], prepared.sees_pool, needed, settings.keep_per_reference,
+                                             settings.keep_per_sector) for c in prepared.costs])]
+    sees = prepared.sees_pool[np.searchsorted(pool, offered)]
+    excluded: set[int] = set()
+    for repairs in range(MAX_REPAIRS + 1):
+        keep = np.array([k for k, c in enumerate(offered) if c not in excluded], dtype=int)
+        best = _best_selection([c[offered[keep]] for c in prepared.costs], sees[keep], needed,
+                               candidates.mount[offered[keep]], candidates.mount_points, counts, calibration.alpha,
+                               settings, progress)
+        chosen = offered[keep][best.chosen]
+        rig = _rig_from(candidates.subset(chosen), best.matched, prepared.references[0], vehicle)
+        check = check_rig(rig, vehicle, settings.rules)
+        failed = [chosen[k] for k, c in enumerate(check.cameras) if not c.valid]
+        if not failed:
+            return rig, best, check, repairs, len(offered)
+        progress(f"{len(failed)} camera(s) failed the mount checks; solving again without them")
+        excluded.update(int(c) for c in failed)
+    problems = "; ".join(f"{c.id}: {', '.join(c.problems)}" for c in check.cameras if not c.valid)
+    raise DesignInfeasible(f"after {MAX_REPAIRS} repairs the design still fails the mount checks ({problems})")
+
+
 def design_rig(vehicle: Vehicle, reference: Rig | Sequence[Rig], calibration: Calibration,
                settings: DesignSettings = DesignSettings(), progress: Callable[[str], None] = _progress_none
                ) -> DesignResult:
@@ -175,68 +250,31 @@ def design_rig(vehicle: Vehicle, reference: Rig | Sequence[Rig], calibration: Ca
     start = time.perf_counter()
     references = [reference] if isinstance(reference, Rig) else list(reference)
     reference = references[0]
-    spacing = settings.spacing or default_spacing(vehicle, settings)
-    progress(f"sampling mount candidates on {vehicle.name} (spacing {spacing:.2f} m)")
-    yaws = np.arange(-180.0, 180.0, settings.yaw_step_deg)
-    candidates = build_candidates(vehicle, settings.lenses, spacing, yaws, settings.pitches_deg, settings.zones,
-                                  settings.rules)
-    costs = [matching_costs(candidates, rig, calibration) for rig in references]  # each (n, R_k)
-
+    prepared = prepare(vehicle, references, calibration, settings, progress)
     progress(f"coverage requirements from {', '.join(r.name for r in references)}")
-    needed = np.max([requirements(rig, load_vehicle(rig.vehicle), settings) for rig in references], axis=0)
-    points, distance, height, _, azimuth = sector_points(Footprint.of_mesh(vehicle.mesh), settings.coverage)
-    no_sees, no_needs = np.zeros((len(candidates), 0), bool), np.zeros(0, int)
-    pool = reduce(np.union1d, [prune(c, no_sees, no_needs, settings.keep_per_reference, 0) for c in costs],
-                  _coverage_pool(candidates, references, settings))
-    progress(f"coverage of {len(pool)} of {len(candidates)} candidates")
-    sees_pool = visible(vehicle.mesh, candidates.positions[pool], candidates.rotations[pool], candidates.fovs[pool],
-                        np.tile([1280, 720], (len(pool), 1)), points, settings.coverage.max_range,
-                        settings.coverage.backend)
-    seen = np.minimum(sees_pool.sum(axis=0), needed.max(initial=1))
-    if np.any(seen < needed):
-        raise DesignInfeasible(_explain_uncoverable(needed, seen, distance, height, azimuth))
-    offered = pool[reduce(np.union1d, [prune(c[pool], sees_pool, needed, settings.keep_per_reference,
-                                             settings.keep_per_sector) for c in costs])]
-    sees = sees_pool[np.searchsorted(pool, offered)]
-
+    needed = fleet_requirements(references, settings)
     counts = settings.cameras or (len(reference), len(reference))
-    excluded: set[int] = set()
-    repairs = 0
-    while True:
-        keep = np.array([k for k, c in enumerate(offered) if c not in excluded], dtype=int)
-        best = _best_selection([c[offered[keep]] for c in costs], sees[keep], needed, candidates.mount[offered[keep]],
-                               candidates.mount_points, counts, calibration.alpha, settings, progress)
-        chosen = offered[keep][best.chosen]
-        rig = _rig_from(candidates.subset(chosen), best.matched, reference, vehicle)
-        check = check_rig(rig, vehicle, settings.rules)
-        failed = [chosen[k] for k, c in enumerate(check.cameras) if not c.valid]
-        if not failed:
-            break
-        repairs += 1
-        if repairs > MAX_REPAIRS:
-            problems = "; ".join(f"{c.id}: {', '.join(c.problems)}" for c in check.cameras if not c.valid)
-            raise DesignInfeasible(f"after {MAX_REPAIRS} repairs the design still fails the mount checks ({problems})")
-        progress(f"{len(failed)} camera(s) failed the mount checks; solving again without them")
-        excluded.update(int(c) for c in failed)
+    rig, best, check, repairs, offered = select_valid(prepared, vehicle, calibration, needed, counts, settings,
+                                                      progress)
 
     progress("validating the design: mount checks, coverage, RigCD")
     design = summarise(rig, vehicle, references, calibration, needed, settings, check)
     refine_status = "off" if len(references) == 1 else "off (fleet design)"
     if settings.refine and design.meets_requirements and len(references) == 1:
         progress("continuous refinement (casadi + IPOPT)")
-        design, refine_status = _refined(design, vehicle, reference, calibration, needed, points, spacing, settings)
+        design, refine_status = _refined(design, vehicle, reference, calibration, needed, prepared.points,
+                                         prepared.spacing, settings)
     if not design.meets_requirements:
         raise DesignInfeasible("the selected rig does not meet the coverage requirements when recomputed; "
                                "this should not happen: please report it")
     reference_summary = rig_coverage_matrix(reference, load_vehicle(reference.vehicle),
                                             settings.coverage).sees.any(axis=0).mean()
-    naive = naive_transfer(vehicle, reference, candidates, settings)
+    naive = naive_transfer(vehicle, reference, prepared.candidates, settings)
     naive_summary = summarise(naive, vehicle, references, calibration, needed, settings) if naive else None
     benchmark = tuple(summarise(b, vehicle, references, calibration, needed, settings)
                       for b in benchmark_rigs(vehicle))
-    return DesignResult(design, tuple(references), float(reference_summary), best, len(candidates), len(offered),
-                        repairs,
-                        time.perf_counter() - start, naive_summary, benchmark, refine_status)
+    return DesignResult(design, tuple(references), float(reference_summary), best, len(prepared.candidates),
+                        offered, repairs, time.perf_counter() - start, naive_summary, benchmark, refine_status)
 
 
 def _refined(design: RigSummary, vehicle: Vehicle, reference: Rig, calibration: Calibration, needed: np.ndarray,

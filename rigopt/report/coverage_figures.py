@@ -267,9 +267,9 @@ def rings_figure(report: CoverageReport, compare: CoverageReport | None = None) 
         ax.set_rticks(np.arange(0, top + 1))
         ax.set_rlabel_position(202.5)
     handles = [Line2D([], [], color=colours[d], label=f"{d:g} m") for d in distances]
-    handles += [Line2D([], [], color="black", label=report.rig)]
     if compare is not None:
-        handles += [Line2D([], [], color="black", linestyle=(0, (3, 2)), label=compare.rig)]
+        handles += [Line2D([], [], color="black", label=report.rig),
+                    Line2D([], [], color="black", linestyle=(0, (3, 2)), label=compare.rig)]
     figure.legend(handles=handles, loc="outside right center", title="ring distance", fontsize=9)
     title = f"{report.rig} on {report.vehicle}" + (f" vs {compare.rig} on {compare.vehicle} (dashed)"
                                                    if compare is not None else "")

@@ -97,7 +97,8 @@ def _figures(report: CoverageReport, rig: Rig, compare_report: CoverageReport | 
 _CAPTIONS = {
     "bev": "Bird's-eye view: how many cameras see each cell at the map's height (grey: none; white: the body), "
            "with the rings and the cameras' horizontal frustums (10 m). Forward is up, the vehicle's left on the left.",
-    "rings": "Camera count per azimuth on each ring (forward up, left on the left); the compared rig dashed.",
+    "rings": "Camera count per azimuth on each ring (forward up, left on the left; the curves of successive ring "
+             "distances are shifted slightly apart); the compared rig dashed.",
     "blind": "Near-field blind zone: per azimuth, the distance from the body at which the ground becomes visible; "
              "azimuths with no ground seen within the search limit are drawn at the limit and marked x.",
 }

@@ -1,0 +1,123 @@
+"""The trade-off sweep of ``rigopt design --pareto``: camera counts x coverage levels.
+
+Every (count, level) pair is solved as its own MILP on one shared candidate set (no continuous
+refinement, so the sweep stays quick); a point is on the frontier when no other feasible point is at least
+as good in predicted drop (lower), coverage (higher) and camera count (lower) and better in one of them.
+"""
+
+from __future__ import annotations
+
+import csv
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Callable, Sequence
+
+import numpy as np
+
+from rigopt.design.designer import (DesignSettings, _progress_none, fleet_requirements, prepare, select_valid,
+                                    summarise)
+from rigopt.design.selection import DesignInfeasible
+from rigopt.metrics.calibration import Calibration
+from rigopt.rig.model import Rig
+from rigopt.vehicle.model import Vehicle
+
+#: Coverage levels: (min_coverage, min_overlap) on top of the references' own coverage.
+LEVELS = {"reference": (0, 0), "reference+overlap": (0, 2), "full": (1, 0)}
+
+
+@dataclass(frozen=True)
+class ParetoPoint:
+    """One (camera count, coverage level) design: its worst predicted drop and RigCD over the references,
+    coverage fraction, whether it is feasible (``reason`` when not) and on the frontier."""
+
+    n_cameras: int
+    level: str
+    feasible: bool
+    predicted_drop: float = float("nan")
+    rigcd: float = float("nan")
+    coverage: float = float("nan")
+    frontier: bool = False
+    reason: str = ""
+    rig: Rig | None = None
+
+
+def pareto_designs(vehicle: Vehicle, references: Sequence[Rig], calibration: Calibration, settings: DesignSettings,
+                   counts: tuple[int, int], levels: Sequence[str] = tuple(LEVELS),
+                   progress: Callable[[str], None] = _progress_none) -> list[ParetoPoint]:
+    """Solve every camera count in ``counts`` (inclusive range) at every coverage level."""
+    prepared = prepare(vehicle, list(references), calibration, settings, progress)
+    points = []
+    for level in levels:
+        min_coverage, min_overlap = LEVELS[level]
+        level_settings = replace(settings, min_coverage=min_coverage, min_overlap=min_overlap)
+        needed = fleet_requirements(references, level_settings)
+        for n in range(counts[0], counts[1] + 1):
+            progress(f"pareto: {n} cameras, coverage level {level}")
+            try:
+                rig, *_ = select_valid(prepared, vehicle, calibration, needed, (n, n), level_settings, progress)
+            except DesignInfeasible as error:
+                points.append(ParetoPoint(n, level, False, reason=str(error)))
+                continue
+            summary = summarise(rig, vehicle, references, calibration, needed, level_settings)
+            points.append(ParetoPoint(n, level, True, summary.prediction.predicted_drop, summary.prediction.rigcd,
+                                      summary.coverage, rig=rig))
+    return _mark_frontier(points)
+
+
+def _mark_frontier(points: list[ParetoPoint]) -> list[ParetoPoint]:
+    feasible = [p for p in points if p.feasible]
+
+    def dominated(p: ParetoPoint) -> bool:
+        return any(q.predicted_drop <= p.predicted_drop and q.coverage >= p.coverage and q.n_cameras <= p.n_cameras
+                   and (q.predicted_drop, -q.coverage, q.n_cameras) != (p.predicted_drop, -p.coverage, p.n_cameras)
+                   for q in feasible)
+
+    return [replace(p, frontier=p.feasible and not dominated(p)) for p in points]
+
+
+def write_pareto(points: list[ParetoPoint], out_dir) -> list[Path]:
+    """pareto.csv (every point) and pareto.png (predicted drop against coverage, frontier joined)."""
+    from matplotlib.figure import Figure
+
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    table = out_dir / "pareto.csv"
+    with table.open("w", newline="") as handle:
+        writer = csv.writer(handle)
+        writer.writerow(["n_cameras", "level", "feasible", "predicted_drop", "rigcd", "coverage", "frontier", "reason"])
+        for p in points:
+            writer.writerow([p.n_cameras, p.level, p.feasible, f"{p.predicted_drop:.6g}", f"{p.rigcd:.6g}",
+                             f"{p.coverage:.6g}", p.frontier, p.reason])
+    figure = Figure(figsize=(7, 5), dpi=120, layout="constrained")
+    ax = figure.subplots()
+    feasible = [p for p in points if p.feasible]
+    markers = dict(zip(LEVELS, "osD"))
+    scatter = None
+    for level in LEVELS:
+        mine = [p for p in feasible if p.level == level]
+        if mine:
+            scatter = ax.scatter([p.coverage for p in mine], [p.predicted_drop for p in mine],
+                                 c=[p.n_cameras for p in mine], marker=markers[level], cmap="viridis", s=60,
+                                 vmin=min(p.n_cameras for p in feasible), vmax=max(p.n_cameras for p in feasible),
+                                 label=f"coverage level: {level}")
+    frontier = sorted((p for p in feasible if p.frontier), key=lambda p: p.coverage)
+    if frontier:
+        ax.plot([p.coverage for p in frontier], [p.predicted_drop for p in frontier], "k--", linewidth=1,
+                label="frontier")
+    if scatter is not None:
+        figure.colorbar(scatter, ax=ax, label="cameras")
+    ax.set_xlabel("coverage (fraction of ring sectors seen)")
+    ax.set_ylabel("predicted relative mAP drop (worst reference)")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    picture = out_dir / "pareto.png"
+    figure.savefig(picture)
+    return [table, picture]
+
+
+def default_counts(references: Sequence[Rig]) -> tuple[int, int]:
+    """The reference's camera count +- 2 (at least 1)."""
+    n = len(references[0])
+    return max(1, n - 2), n + 2
+
+
