@@ -28,16 +28,16 @@ if not console.is_terminal:
 
 def print_json(data) -> None:
     """Print ``data`` as JSON on stdout; NaN and inf become null."""
-    print(json.dumps(_finite(data), indent=2))
+    print(json.dumps(json_ready(data), indent=2))
 
 
-def _finite(value):
+def json_ready(value):
     if isinstance(value, float) and not math.isfinite(value):
         return None
     if isinstance(value, dict):
-        return {k: _finite(v) for k, v in value.items()}
+        return {k: json_ready(v) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
-        return [_finite(v) for v in value]
+        return [json_ready(v) for v in value]
     return value
 
 

@@ -9,7 +9,7 @@ from typing import Optional
 
 import typer
 
-from rigopt.cli.app import _finite, app, console, print_json, print_table
+from rigopt.cli.app import app, console, json_ready, print_json, print_table
 from rigopt.errors import RigoptError
 from rigopt.rig.library import load_rig
 
@@ -87,7 +87,7 @@ def _write_out(out_dir: Path, data: dict, report, rig, other, comparison) -> lis
 
     try:
         json_path = out_dir / "coverage.json"
-        json_path.write_text(json.dumps(_finite(data), indent=2) + "\n")
+        json_path.write_text(json.dumps(json_ready(data), indent=2) + "\n")
         figures = {"bev": write_bev_figure(report, out_dir / "bev.png", rig),
                    "rings": write_rings_figure(report, out_dir / "rings.png", other),
                    "blind": write_blind_figure(report, out_dir / "blind.png")}

@@ -15,8 +15,8 @@ import numpy as np
 import shapely
 import trimesh
 
-#: Points sampled along an offset outline before interpolating its radius per azimuth.
-_OUTLINE_SAMPLES = 4096
+#: Precision (m) of ring radii.
+RADIUS_TOLERANCE = 1e-7
 
 
 @dataclass(frozen=True, eq=False)
@@ -39,16 +39,26 @@ class Footprint:
         return np.asarray(self.polygon.exterior.coords)
 
     def radius(self, azimuths, distance: float) -> np.ndarray:
-        """(a,) float: distance from the centre to the outline offset by ``distance`` m at ``azimuths`` (a,) rad."""
-        shape = self.polygon.buffer(distance, quad_segs=32) if distance > 0 else self.polygon
-        positions = np.linspace(0.0, 1.0, _OUTLINE_SAMPLES, endpoint=False)
-        samples = shapely.get_coordinates(shapely.line_interpolate_point(shape.exterior, positions, normalized=True))
-        samples = samples - self.centre
-        angle = np.arctan2(samples[:, 1], samples[:, 0])
-        order = np.argsort(angle)
-        angle, length = angle[order], np.hypot(samples[order, 0], samples[order, 1])
-        return np.interp(np.mod(np.asarray(azimuths, dtype=float) + np.pi, 2 * np.pi) - np.pi, angle, length,
-                         period=2 * np.pi)
+        """(a,) float: distance from the centre to the outline offset by ``distance`` m at ``azimuths`` (a,) rad.
+
+        Found by bisection on the (monotonic, since the footprint is convex and holds its centre) distance
+        from the footprint along each azimuth's ray, to ``RADIUS_TOLERANCE``.
+        """
+        azimuths = np.asarray(azimuths, dtype=float)
+        direction = np.stack([np.cos(azimuths), np.sin(azimuths)], axis=1)
+        low = np.zeros(len(azimuths))
+        high = np.full(len(azimuths), self._reach + distance + 1.0)
+        while np.max(high - low, initial=0.0) > RADIUS_TOLERANCE:
+            middle = (low + high) / 2
+            outside = self.distance_to(self.centre + middle[:, None] * direction) > distance
+            high = np.where(outside, middle, high)
+            low = np.where(outside, low, middle)
+        return (low + high) / 2
+
+    @cached_property
+    def _reach(self) -> float:
+        """Largest distance (m) from the centre to the footprint's outline."""
+        return float(np.max(np.linalg.norm(self.outline - self.centre, axis=1)))
 
     def ring_points(self, azimuths, distance: float, height: float) -> np.ndarray:
         """(a, 3) float: ring points at ``azimuths`` (a,) rad, ``distance`` m from the outline, at ``height`` m."""

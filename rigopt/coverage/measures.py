@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from rigopt.coverage.footprint import Footprint
+from rigopt.errors import RigoptError
 from rigopt.coverage.visibility import DEFAULT_MAX_RANGE, first_hit_distance, image_rays, visible
 from rigopt.rig.model import Rig
 from rigopt.vehicle.model import Vehicle
@@ -47,7 +48,9 @@ class CoverageSettings:
 
     def azimuths(self, count: int | None = None) -> np.ndarray:
         """(count,) float rad: centres of ``count`` (default ``ring_samples``) equal azimuth bins from -pi."""
-        count = count or self.ring_samples
+        count = self.ring_samples if count is None else int(count)
+        if count < 1:
+            raise RigoptError(f"azimuth sample counts must be positive, got {count}")
         return -np.pi + (np.arange(count) + 0.5) * (2 * np.pi / count)
 
 
@@ -214,7 +217,9 @@ class CoverageComparison:
 
 
 def compare_coverage(a: CoverageReport, b: CoverageReport) -> CoverageComparison:
-    """Differences b - a of two reports computed with the same ring distances and heights."""
+    """Differences b - a of two reports, which must have been computed with the same settings."""
+    if a.settings != b.settings:
+        raise RigoptError(f"cannot compare coverage of {a.rig} and {b.rig} computed with different settings")
     sectors = a.settings.sectors
     pairs = {(r.distance_m, r.height_m): r for r in a.rings}
     rings = tuple(

@@ -52,21 +52,14 @@ def test_radius_on_a_corner_arc(box_footprint):
     assert box_footprint.radius([azimuth], d)[0] == pytest.approx(r, abs=1e-3)
 
 
-@pytest.mark.parametrize("distance", [
-    0.5, 2.0,
-    # The offset outline is shapely's buffer with 32 segments per quarter circle: round corners are chords
-    # that sit up to d (1 - cos(pi / 128)) = 3.0e-4 d inside the true circle, so from about d = 3.3 m the
-    # ring points near the corners are more than 1 mm closer than d (1.5 cm at 50 m).
-    pytest.param(10.0, marks=pytest.mark.xfail(strict=True, reason="corner arcs are chords: 3e-4 * d short")),
-    pytest.param(50.0, marks=pytest.mark.xfail(strict=True, reason="corner arcs are chords: 3e-4 * d short")),
-])
+@pytest.mark.parametrize("distance", [0.5, 2.0, 10.0, 50.0])
 @pytest.mark.parametrize("which", ["box", "etron"])
 def test_ring_points_are_distance_from_the_footprint(which, distance, box_vehicle):
     vehicle = box_vehicle if which == "box" else load_vehicle("etron")
     footprint = Footprint.of_mesh(vehicle.mesh)
     points = footprint.ring_points(AZIMUTHS, distance, 0.8)
     measured = shapely.distance(footprint.polygon, shapely.points(points[:, :2]))
-    np.testing.assert_allclose(measured, distance, rtol=0, atol=1e-3)
+    np.testing.assert_allclose(measured, distance, rtol=0, atol=1e-6)
     np.testing.assert_array_equal(points[:, 2], 0.8)
 
 

@@ -1,0 +1,155 @@
+"""``rigopt design``: the JSON summary and the rig file of one real run (firetruck from R1, module-scoped),
+and bad input, which exits 2 with one ``rigopt: error:`` line and no traceback (real processes running
+``rigopt.cli.main``, the console script's entry point, started together to keep the run short).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+
+import pytest
+from typer.testing import CliRunner
+
+from rigopt.cli.app import app
+from rigopt.metrics.calibration import load_weights
+from rigopt.metrics.rigcd import rigcd
+from rigopt.rig.library import load_rig
+
+BAD_INPUT = {
+    "unknown vehicle": (["--vehicle", "nosuchcar", "--ref", "R1"], ["nosuchcar", "firetruck"]),
+    "unknown ref": (["--vehicle", "firetruck", "--ref", "R99"], ["R99", "R6"]),
+    "unknown weights": (["--vehicle", "firetruck", "--ref", "R1", "--weights", "nosuchweights"],
+                        ["nosuchweights", "joint"]),
+    "zero cameras": (["--vehicle", "firetruck", "--ref", "R1", "--cameras", "0"], ["--cameras", "'0'"]),
+    "reversed camera range": (["--vehicle", "firetruck", "--ref", "R1", "--cameras", "9-3"], ["--cameras", "9-3"]),
+    "lens outside (0, 180)": (["--vehicle", "firetruck", "--ref", "R1", "--fov", "0,200"], ["(0, 180)"]),
+    "pitch not a number": (["--vehicle", "firetruck", "--ref", "R1", "--pitch", "abc"], ["--pitch", "abc"]),
+}
+
+
+@pytest.fixture(scope="module")
+def bad_processes(tmp_path_factory):
+    """Every BAD_INPUT case started as its own process (they run while the real design runs)."""
+    cwd = tmp_path_factory.mktemp("design_cli_errors")
+    processes = {
+        case: subprocess.Popen([sys.executable, "-c", "from rigopt.cli import main; main()", "design", *args],
+                               cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        for case, (args, _) in BAD_INPUT.items()
+    }
+    yield processes, cwd
+    for process in processes.values():
+        if process.poll() is None:
+            process.kill()
+            process.communicate()
+
+
+@pytest.fixture(scope="module")
+def design_run(tmp_path_factory, bad_processes):
+    """``rigopt design --vehicle firetruck --ref R1 --json --out OUT`` in a tmp working directory."""
+    cwd = tmp_path_factory.mktemp("design_cli")
+    out = cwd / "OUT"
+    previous = os.getcwd()
+    os.chdir(cwd)
+    try:
+        result = CliRunner().invoke(app, ["design", "--vehicle", "firetruck", "--ref", "R1", "--json", "--out", str(out)])
+    finally:
+        os.chdir(previous)
+    assert result.exit_code == 0, (result.output, result.exception)
+    return json.loads(result.stdout), out, cwd
+
+
+@pytest.fixture(scope="module")
+def bad_runs(bad_processes):
+    """{case: (exit code, stdout, stderr)} of the BAD_INPUT processes, and "cwd": their working directory."""
+    processes, cwd = bad_processes
+    runs = {}
+    for case, process in processes.items():
+        stdout, stderr = process.communicate(timeout=180)
+        runs[case] = (process.returncode, stdout, stderr)
+    runs["cwd"] = cwd
+    return runs
+
+
+# --- the JSON summary ---------------------------------------------------------------------------------
+
+
+def test_json_has_the_documented_keys(design_run):
+    summary, _, _ = design_run
+    assert {"rig_file", "predicted_drop", "rigcd", "n_cameras", "coverage", "reference_coverage", "solver",
+            "comparisons"} <= summary.keys()
+    assert {"milp_status", "milp_gap", "refine_status", "seconds"} <= summary["solver"].keys()
+    assert {"naive_transfer", "benchmark_rig"} <= summary["comparisons"].keys()
+    assert {"predicted_drop", "coverage"} <= summary["comparisons"]["naive_transfer"].keys()
+    assert {"name", "predicted_drop", "coverage"} <= summary["comparisons"]["benchmark_rig"].keys()
+
+
+def test_json_values_are_plausible(design_run):
+    summary, _, _ = design_run
+    assert summary["n_cameras"] == 8
+    assert 0.0 < summary["coverage"] <= 1.0 and 0.0 < summary["reference_coverage"] <= 1.0
+    assert summary["rigcd"] > 0 and summary["predicted_drop"] > 0
+    assert summary["solver"]["milp_status"] == "optimal"
+    assert 0.0 <= summary["solver"]["milp_gap"] <= 1e-4
+    assert summary["solver"]["seconds"] > 0
+    assert isinstance(summary["solver"]["refine_status"], str) and summary["solver"]["refine_status"]
+
+
+def test_benchmark_comparison_is_r6_and_the_design_predicts_less_drop(design_run):
+    summary, _, _ = design_run
+    benchmark = summary["comparisons"]["benchmark_rig"]
+    assert benchmark["name"] == "R6"
+    assert summary["predicted_drop"] < benchmark["predicted_drop"]
+
+
+def test_rig_file_is_in_the_out_folder(design_run):
+    summary, out, _ = design_run
+    assert os.path.samefile(summary["rig_file"], out / "rig.json")
+
+
+def test_rig_file_loads_for_the_firetruck(design_run):
+    summary, out, _ = design_run
+    rig = load_rig(out / "rig.json")
+    assert len(rig) == summary["n_cameras"]
+    assert rig.vehicle == "vehicle.carlamotors.firetruck"
+    assert json.loads((out / "rig.json").read_text())["vehicle_type"] == "vehicle.carlamotors.firetruck"
+
+
+def test_rig_file_has_the_reported_rigcd(design_run):
+    summary, out, _ = design_run
+    joint = load_weights("joint")
+    value = rigcd(load_rig("R1"), load_rig(out / "rig.json"), joint.alpha, joint.lambdas).rigcd
+    assert value == pytest.approx(summary["rigcd"], abs=1e-5)
+
+
+def test_report_json_repeats_the_summary(design_run):
+    summary, out, _ = design_run
+    report = json.loads((out / "report.json").read_text())
+    assert report["rigcd"] == pytest.approx(summary["rigcd"], abs=1e-12)
+    assert report["n_cameras"] == summary["n_cameras"]
+
+
+def test_nothing_is_written_outside_the_out_folder(design_run):
+    _, out, cwd = design_run
+    assert [p.name for p in cwd.iterdir()] == [out.name]
+
+
+# --- bad input ----------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("case", list(BAD_INPUT))
+def test_bad_input_exits_2_with_one_error_line(bad_runs, case):
+    code, _, stderr = bad_runs[case]
+    assert code == 2, stderr
+    assert "Traceback" not in stderr
+    errors = [line for line in stderr.splitlines() if line.startswith("rigopt: error: ")]
+    assert len(errors) == 1, stderr
+    assert stderr.strip().splitlines()[-1] == errors[0]  # the error is the last word
+    for fragment in BAD_INPUT[case][1]:
+        assert fragment in errors[0], (fragment, errors[0])
+
+
+def test_bad_input_writes_no_design_folder(bad_runs):
+    assert list(bad_runs["cwd"].iterdir()) == []

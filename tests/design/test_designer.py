@@ -1,0 +1,224 @@
+"""The design pipeline (``design_rig``) end to end: the firetruck from R1 with the joint weights (one run,
+module-scoped), and infeasible requirements on a box car written as a spec in tmp_path.
+
+The firetruck run records every rig the pipeline summarises (a spy around ``summarise``); the first one
+named ``design_*`` is the MILP's rig, before the continuous refinement, so the MILP objective can be
+checked against the RigCD of the rig it chose.
+"""
+
+from __future__ import annotations
+
+import re
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from rigopt.collision import check_rig
+from rigopt.coverage.matrix import rig_coverage_matrix
+from rigopt.design import designer
+from rigopt.design.designer import DesignSettings, design_rig, requirements
+from rigopt.design.selection import DesignInfeasible
+from rigopt.errors import RigoptError
+from rigopt.metrics.calibration import load_weights
+from rigopt.metrics.rigcd import rigcd
+from rigopt.rig.library import load_rig
+from rigopt.vehicle.library import load_vehicle
+from rigopt.vehicle.model import Vehicle
+from rigopt.vehicle.spec import read_spec
+
+BOX_CAR = """
+name = "designbox"
+blueprint = "vehicle.test.designbox"
+
+[[solids]]
+name = "body"
+type = "prism"
+side = [[-2, 0.3], [2, 0.3], [2, 1.5], [-2, 1.5]]
+plan = [[2, 0], [2, 0.9], [-2, 0.9], [-2, 0]]
+
+[[zones]]
+name = "front"
+min = [1.9, -1.0, 0.2]
+max = [2.2, 1.0, 1.6]
+normal = [1, 0, 0]
+cone_deg = 45
+
+[[zones]]
+name = "side"
+min = [-2.1, 0.8, 0.2]
+max = [2.1, 1.0, 1.6]
+normal = [0, 1, 0]
+cone_deg = 45
+mirrored = true
+
+[[zones]]
+name = "roof"
+min = [-0.3, -0.3, 1.4]
+max = [0.3, 0.3, 1.6]
+normal = [0, 0, 1]
+cone_deg = 30
+"""
+
+UNCOVERED = re.compile(r"ring (?P<distance>[\d.]+) m at height (?P<height>[\d.]+) m, azimuth (?P<azimuth>[+-]\d+) deg")
+
+
+@pytest.fixture(scope="module")
+def firetruck():
+    vehicle, reference, calibration = load_vehicle("firetruck"), load_rig("R1"), load_weights("joint")
+    summarised = []
+    original = designer.summarise
+
+    def spy(rig, *args, **kwargs):
+        summary = original(rig, *args, **kwargs)
+        summarised.append(summary)
+        return summary
+
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(designer, "summarise", spy)
+        result = design_rig(vehicle, reference, calibration)
+    milp = next(s for s in summarised if s.rig.name.startswith("design_"))
+    return SimpleNamespace(vehicle=vehicle, reference=reference, calibration=calibration, result=result,
+                           design=result.design, milp_rig=milp.rig, settings=DesignSettings())
+
+
+@pytest.fixture(scope="module")
+def box_car(tmp_path_factory) -> Vehicle:
+    path = tmp_path_factory.mktemp("designbox") / "vehicle.toml"
+    path.write_text(BOX_CAR)
+    return Vehicle.from_spec(read_spec(path))
+
+
+def weighted_rigcd(run, rig) -> float:
+    return rigcd(run.reference, rig, run.calibration.alpha, run.calibration.lambdas).rigcd
+
+
+# --- the firetruck design from R1 ---------------------------------------------------------------------
+
+
+def test_every_design_camera_passes_the_mount_checks(firetruck):
+    check = check_rig(firetruck.design.rig, firetruck.vehicle)
+    assert check.valid, [(c.id, c.problems) for c in check.cameras if not c.valid]
+
+
+def test_design_is_for_the_target_vehicle(firetruck):
+    assert firetruck.design.rig.vehicle == "vehicle.carlamotors.firetruck"
+
+
+def test_design_meets_the_coverage_requirements(firetruck):
+    assert firetruck.design.meets_requirements
+
+
+def test_recomputed_coverage_meets_the_requirements_at_every_sector_point(firetruck):
+    needed = requirements(firetruck.reference, load_vehicle(firetruck.reference.vehicle), firetruck.settings)
+    assert needed.sum() > 0  # R1 sees most of the rings: the requirement is not empty
+    counts = rig_coverage_matrix(firetruck.design.rig, firetruck.vehicle, firetruck.settings.coverage).sees.sum(axis=0)
+    assert counts.shape == needed.shape
+    assert np.all(counts >= needed), np.flatnonzero(counts < needed)
+
+
+def test_design_predicts_a_smaller_drop_than_the_benchmark_rig_r6(firetruck):
+    r6 = [s for s in firetruck.result.benchmark_rigs if s.rig.name == "R6"]
+    assert len(r6) == 1
+    assert firetruck.design.prediction.predicted_drop < r6[0].prediction.predicted_drop
+
+
+def test_design_rigcd_is_the_calibrated_rigcd_to_the_reference(firetruck):
+    assert abs(firetruck.design.prediction.rigcd - weighted_rigcd(firetruck, firetruck.design.rig)) <= 1e-9
+
+
+def test_milp_objective_is_the_rigcd_of_the_rig_it_chose(firetruck):
+    """The MILP's matching is an optimal one: its objective equals RigCD (optimal assignment) of its rig."""
+    assert abs(firetruck.result.selection.objective - weighted_rigcd(firetruck, firetruck.milp_rig)) <= 1e-6
+
+
+def test_design_rigcd_equals_the_milp_objective_unless_refined(firetruck):
+    objective, value = firetruck.result.selection.objective, firetruck.design.prediction.rigcd
+    if firetruck.result.refine_status.startswith("accepted"):
+        assert value < objective  # the refinement is kept only when it lowers the RigCD
+    else:
+        assert abs(value - objective) <= 1e-6
+
+
+def test_milp_solved_to_optimality(firetruck):
+    selection = firetruck.result.selection
+    assert selection.status == "optimal"
+    assert 0.0 <= selection.gap <= DesignSettings().mip_gap
+    assert firetruck.result.n_offered <= firetruck.result.n_candidates
+
+
+def test_design_has_the_references_camera_count_by_default(firetruck):
+    assert len(firetruck.design.rig) == len(firetruck.reference) == 8
+    assert len(firetruck.milp_rig) == 8
+
+
+def test_design_cameras_are_named_after_the_reference_cameras_they_match(firetruck):
+    ids = [c.id for c in firetruck.design.rig.cameras]
+    assert sorted(ids) == sorted(c.id for c in firetruck.reference.cameras)
+
+
+def test_naive_transfer_has_one_camera_per_reference_camera(firetruck):
+    naive = firetruck.result.naive_transfer
+    assert naive is not None
+    assert len(naive.rig) == len(firetruck.reference)
+    assert [c.id for c in naive.rig.cameras] == [c.id for c in firetruck.reference.cameras]
+
+
+def test_naive_transfer_keeps_each_reference_lens_on_the_catalogue(firetruck):
+    lenses = np.asarray(firetruck.settings.lenses)
+    for moved, original in zip(firetruck.result.naive_transfer.rig.cameras, firetruck.reference.cameras):
+        assert moved.fov == lenses[np.argmin(np.abs(lenses - original.fov))]
+
+
+def test_benchmark_rigs_are_the_library_rigs_of_the_target_vehicle(firetruck):
+    names = [s.rig.name for s in firetruck.result.benchmark_rigs]
+    assert "R6" in names
+    assert all(s.rig.vehicle == "vehicle.carlamotors.firetruck" for s in firetruck.result.benchmark_rigs)
+
+
+# --- infeasible requirements --------------------------------------------------------------------------
+
+
+def uncovered_sectors(message: str) -> list[tuple[float, float, int]]:
+    return [(float(m["distance"]), float(m["height"]), int(m["azimuth"])) for m in UNCOVERED.finditer(message)]
+
+
+def test_roof_patch_only_cannot_see_the_rings(box_car):
+    """From the middle of the roof (1.53 m, 0.6 m from its edges) the roof hides every ring point at
+    heights 0 and 0.8 m that R1 requires: the designer says which ring sectors and what to change."""
+    settings = DesignSettings(zones=("roof",), lenses=(60.0,), pitches_deg=(0.0, 10.0, 20.0), yaw_step_deg=30.0)
+    with pytest.raises(DesignInfeasible) as error:
+        design_rig(box_car, load_rig("R1"), load_weights("joint"), settings)
+    message = str(error.value)
+    assert "ring" in message and "azimuth" in message
+    sectors = uncovered_sectors(message)
+    assert sectors
+    centres = {int(round(a)) for a in np.rad2deg(settings.coverage.azimuths(settings.coverage.sectors))}
+    for distance, height, azimuth in sectors:
+        assert distance in settings.coverage.ring_distances
+        assert height in settings.coverage.ring_heights
+        assert azimuth in centres
+    assert "zones" in message  # what to change
+
+
+def test_front_zone_only_leaves_the_rear_unseen(box_car):
+    """Cameras on the front face cannot see through the body: the uncovered sectors are behind the car."""
+    settings = DesignSettings(zones=("front",), lenses=(60.0,), yaw_step_deg=30.0)
+    with pytest.raises(DesignInfeasible) as error:
+        design_rig(box_car, load_rig("R1"), load_weights("joint"), settings)
+    sectors = uncovered_sectors(str(error.value))
+    assert sectors
+    assert all(abs(azimuth) > 90 for _, _, azimuth in sectors), sectors
+
+
+def test_triple_coverage_with_narrow_lenses_is_infeasible(box_car):
+    """8 cameras of 30 deg cannot see every ring sector three times."""
+    settings = DesignSettings(min_coverage=3, lenses=(30.0,), yaw_step_deg=30.0, time_limit=30.0)
+    with pytest.raises(DesignInfeasible) as error:
+        design_rig(box_car, load_rig("R1"), load_weights("joint"), settings)
+    message = str(error.value)
+    assert "--cameras" in message or "--min-coverage" in message  # what to change
+
+
+def test_design_infeasible_is_an_input_error_for_the_cli():
+    assert issubclass(DesignInfeasible, RigoptError)
