@@ -32,6 +32,7 @@ def print_json(data) -> None:
 
 
 def json_ready(value):
+    """``value`` with NaN and inf floats replaced by None, so that it dumps as strict JSON."""
     if isinstance(value, float) and not math.isfinite(value):
         return None
     if isinstance(value, dict):

@@ -121,15 +121,9 @@ def _progress_none(message: str) -> None:
 
 def default_spacing(vehicle: Vehicle, settings: DesignSettings) -> float:
     """A spacing (m) that puts about ``target_mounts`` mount points on the allowed zones (at least 0.1 m)."""
-    fine = vehicle.fine_mesh
-    area = 0.0
-    taken = np.zeros(len(fine.faces), dtype=bool)
-    for zone in vehicle.zones:
-        if settings.zones and zone.name not in settings.zones:
-            continue
-        inside = zone.contains(fine.triangles_center, fine.face_normals) & ~taken
-        taken |= inside
-        area += float(fine.area_faces[inside].sum())
+    zones = vehicle.fine_face_zones
+    allowed = np.array([z is not None and (not settings.zones or z in settings.zones) for z in zones])
+    area = float(vehicle.fine_mesh.area_faces[allowed].sum())
     return max(0.1, float(np.sqrt(area / settings.target_mounts)))
 
 
@@ -233,11 +227,16 @@ def select_valid(prepared: Prepared, vehicle: Vehicle, calibration: Calibration,
         chosen = offered[keep][best.chosen]
         rig = _rig_from(candidates.subset(chosen), best.matched, prepared.references[0], vehicle)
         check = check_rig(rig, vehicle, settings.rules)
-        failed = [chosen[k] for k, c in enumerate(check.cameras) if not c.valid]
+        failed = [(chosen[k], c) for k, c in enumerate(check.cameras) if not c.valid]
         if not failed:
             return rig, best, check, repairs, len(offered)
         progress(f"{len(failed)} camera(s) failed the mount checks; solving again without them")
-        excluded.update(int(c) for c in failed)
+        for index, camera_check in failed:
+            # A view problem belongs to the orientation; any other to the mount point and all its candidates.
+            if all("view" in problem for problem in camera_check.problems):
+                excluded.add(int(index))
+            else:
+                excluded.update(int(c) for c in offered[candidates.mount[offered] == candidates.mount[index]])
     problems = "; ".join(f"{c.id}: {', '.join(c.problems)}" for c in check.cameras if not c.valid)
     raise DesignInfeasible(f"after {MAX_REPAIRS} repairs the design still fails the mount checks ({problems})")
 

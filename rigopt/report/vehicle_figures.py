@@ -26,8 +26,7 @@ def _face_colours(vehicle: Vehicle) -> tuple[np.ndarray, dict[str, tuple]]:
     palette = colormaps["tab20"]
     legend = {name: palette(k % 20) for k, name in enumerate(names)}
     colours = np.tile((*_BODY_GREY, 1.0), (len(mesh.faces), 1))
-    zone_of = vehicle.zone_names(mesh.triangles_center, mesh.face_normals)
-    for k, name in enumerate(zone_of):
+    for k, name in enumerate(vehicle.fine_face_zones):
         if name is not None:
             colours[k] = legend[name]
     return colours, legend

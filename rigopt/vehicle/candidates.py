@@ -51,7 +51,8 @@ def sample_zone_points(vehicle: Vehicle, spacing: float = DEFAULT_SPACING, zones
                        rules: MountRules = MountRules()):
     """Evenly spread surface samples of the zones (about ``spacing`` m apart).
 
-    Returns points (n, 3) lens positions, normals (n, 3), zone names (n,) str.
+    Returns points (n, 3) lens positions, normals (n, 3), zone names (n,) str; samples whose lens would
+    sit nearest to another zone's surface (at edges) are dropped.
     """
     if not spacing > 0:
         raise RigoptError(f"the candidate spacing must be positive (metres), got {spacing}")
@@ -61,12 +62,10 @@ def sample_zone_points(vehicle: Vehicle, spacing: float = DEFAULT_SPACING, zones
     if wanted and not wanted <= known:
         raise RigoptError(f"unknown zones {sorted(wanted - known)} on {vehicle.name}; its zones: {', '.join(sorted(known))}")
     points, normals, names = [], [], []
-    taken = np.zeros(len(mesh.faces), dtype=bool)
-    for zone in vehicle.zones:
-        if wanted and zone.name not in wanted:
+    for zone_name in dict.fromkeys(z.name for z in vehicle.zones):
+        if wanted and zone_name not in wanted:
             continue
-        faces = np.flatnonzero(zone.contains(mesh.triangles_center, mesh.face_normals) & ~taken)
-        taken[faces] = True
+        faces = np.flatnonzero(vehicle.fine_face_zones == zone_name)
         if len(faces) == 0:
             continue
         part = mesh.submesh([faces], append=True)
@@ -76,10 +75,19 @@ def sample_zone_points(vehicle: Vehicle, spacing: float = DEFAULT_SPACING, zones
         normal = part.face_normals[index]
         points.append(samples + normal * rules.housing[2] / 2.0)
         normals.append(normal)
-        names += [zone.name] * len(samples)
+        names += [zone_name] * len(samples)
     if not names:
         raise RigoptError(f"the zones {sorted(wanted) if wanted else sorted(known)} of {vehicle.name} hold no surface")
-    return np.concatenate(points), np.concatenate(normals), np.array(names)
+    points, normals, names = np.concatenate(points), np.concatenate(normals), np.array(names)
+    # Keep the samples that the mount checks will place in the same zone (near edges the nearest surface of
+    # the lens can be a neighbouring face with another normal) and at the intended distance.
+    surface = vehicle.surface(points)
+    agrees = np.array(vehicle.zone_names(surface.foot, surface.normal)) == names
+    agrees &= np.abs(surface.distance - rules.housing[2] / 2.0) < 1e-3
+    if not agrees.any():
+        raise RigoptError(f"the zones {sorted(wanted) if wanted else sorted(known)} of {vehicle.name} hold no surface "
+                          "a camera can be mounted on")
+    return points[agrees], normals[agrees], names[agrees]
 
 
 @contextmanager

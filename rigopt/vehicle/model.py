@@ -87,6 +87,12 @@ class Vehicle:
         return trimesh.Trimesh(vertices, faces, process=False)
 
     @cached_property
+    def fine_face_zones(self) -> np.ndarray:
+        """(F,) object: the zone name of each face of ``fine_mesh`` (first matching zone), None outside all."""
+        fine = self.fine_mesh
+        return np.array(self.zone_names(fine.triangles_center, fine.face_normals), dtype=object)
+
+    @cached_property
     def size(self) -> np.ndarray:
         """(3,) float: the mesh's extent (length, width, height) in metres."""
         return np.ptp(self.mesh.bounds, axis=0)
