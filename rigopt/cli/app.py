@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 import json
-import math
 
 import typer
 from rich.console import Console
 from rich.table import Table
+
+from rigopt.report.json_values import json_ready
 
 app = typer.Typer(
     name="rigopt",
@@ -29,17 +30,6 @@ if not console.is_terminal:
 def print_json(data) -> None:
     """Print ``data`` as JSON on stdout; NaN and inf become null."""
     print(json.dumps(json_ready(data), indent=2))
-
-
-def json_ready(value):
-    """``value`` with NaN and inf floats replaced by None, so that it dumps as strict JSON."""
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    if isinstance(value, dict):
-        return {k: json_ready(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [json_ready(v) for v in value]
-    return value
 
 
 def print_table(title: str, columns: list[str], rows: list[list]) -> None:

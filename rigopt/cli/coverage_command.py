@@ -9,7 +9,8 @@ from typing import Optional
 
 import typer
 
-from rigopt.cli.app import app, console, json_ready, print_json, print_table
+from rigopt.cli.app import app, console, print_json, print_table
+from rigopt.report.json_values import json_ready
 from rigopt.errors import RigoptError
 from rigopt.rig.library import load_rig
 

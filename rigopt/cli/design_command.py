@@ -67,8 +67,11 @@ def design_command(
     from rigopt.rig.library import load_rig
     from rigopt.vehicle.library import load_vehicle
 
+    lenses = parse_numbers(fov, "--fov")
+    if not all(0 < f < 180 for f in lenses):
+        raise RigoptError(f"--fov lenses must be in (0, 180) degrees, got {fov!r}")
     settings = DesignSettings(
-        cameras=parse_camera_count(cameras), lenses=parse_numbers(fov, "--fov"),
+        cameras=parse_camera_count(cameras), lenses=lenses,
         zones=tuple(z.strip() for z in zones.split(",")) if zones else None,
         pitches_deg=parse_numbers(pitch, "--pitch"), yaw_step_deg=yaw_step, spacing=spacing,
         min_coverage=min_coverage, min_overlap=min_overlap, time_limit=time_limit)

@@ -6,6 +6,7 @@ import json
 from pathlib import Path
 
 from rigopt.design.designer import DesignResult, RigSummary
+from rigopt.report.json_values import json_ready
 from rigopt.rig.pccr_format import write_rig
 
 
@@ -47,19 +48,27 @@ def design_dict(result: DesignResult, rig_file: Path | None) -> dict:
 
 
 def write_design_outputs(result: DesignResult, out_dir) -> list[Path]:
-    """Write rig.json (benchmark format), report.json and the pictures into ``out_dir``."""
+    """Write rig.json (benchmark format), report.json, the pictures and report.html into ``out_dir``."""
+    from rigopt.coverage.measures import coverage_report
+    from rigopt.report.coverage_figures import write_rings_figure
+    from rigopt.report.design_html import write_design_html
     from rigopt.report.vehicle_figures import write_vehicle_figure
     from rigopt.vehicle.library import load_vehicle
 
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     rig_file = write_rig(result.design.rig, out_dir / "rig.json")
+    summary = design_dict(result, rig_file)
     report = out_dir / "report.json"
-    report.write_text(json.dumps(design_dict(result, rig_file), indent=2) + "\n")
-    vehicle = load_vehicle(result.design.rig.vehicle)
-    pictures = [write_vehicle_figure(vehicle, out_dir / "design.png", result.design.rig),
-                write_vehicle_figure(load_vehicle(result.reference.vehicle), out_dir / "reference.png",
-                                     result.reference)]
+    report.write_text(json.dumps(json_ready(summary), indent=2) + "\n")
+    vehicle, reference_vehicle = load_vehicle(result.design.rig.vehicle), load_vehicle(result.reference.vehicle)
+    pictures = {"design": write_vehicle_figure(vehicle, out_dir / "design.png", result.design.rig),
+                "reference": write_vehicle_figure(reference_vehicle, out_dir / "reference.png", result.reference)}
     if result.naive_transfer is not None:
-        pictures.append(write_vehicle_figure(vehicle, out_dir / "naive_transfer.png", result.naive_transfer.rig))
-    return [rig_file, report, *pictures]
+        pictures["naive_transfer"] = write_vehicle_figure(vehicle, out_dir / "naive_transfer.png",
+                                                          result.naive_transfer.rig)
+    design_coverage = coverage_report(result.design.rig, vehicle)
+    reference_coverage = coverage_report(result.reference, reference_vehicle)
+    pictures["coverage"] = write_rings_figure(design_coverage, out_dir / "coverage.png", compare=reference_coverage)
+    page = write_design_html(summary, out_dir, pictures)
+    return [rig_file, report, *pictures.values(), page]
