@@ -129,6 +129,16 @@ def _collides(a, b) -> bool:
     return fcl.collide(a, b, fcl.CollisionRequest(), fcl.CollisionResult()) > 0
 
 
+def housing_fits(vehicle: Vehicle, feet, normals, rules: MountRules = MountRules()) -> np.ndarray:
+    """(n,) bool: a housing with its back face at each foot point (n, 3) on a surface of normal (n, 3) sinks
+    no deeper than ``rules.penetration_tolerance`` into the body (the housing rule, for mount points)."""
+    body = _body(vehicle)
+    feet, normals = np.atleast_2d(feet), np.atleast_2d(normals)
+    forward = np.array([1.0, 0.0, 0.0])
+    return np.array([not _collides(housing_object(foot, normal, forward, rules.housing, rules.penetration_tolerance),
+                                   body) for foot, normal in zip(feet, normals)], dtype=bool)
+
+
 def check_rig(rig: Rig, vehicle: Vehicle, rules: MountRules = MountRules()) -> RigCheck:
     """Apply every mount rule to every camera of ``rig`` on ``vehicle``."""
     body = _body(vehicle)

@@ -38,7 +38,7 @@ DEFAULT_LENSES = (60.0, 65.0, 70.0, 75.0, 80.0, 90.0, 100.0, 110.0, 120.0)
 #: Mount points closer than this (m) may not both hold a camera (8 cm housings plus a margin).
 CLASH_DISTANCE = 0.10
 #: How many validation rounds (re-solves after removing cameras that fail the fcl checks) at most.
-MAX_REPAIRS = 5
+MAX_REPAIRS = 10
 
 
 @dataclass(frozen=True)
@@ -293,14 +293,21 @@ def _refined(design: RigSummary, vehicle: Vehicle, reference: Rig, calibration: 
         return design, f"rejected: IPOPT {outcome.status}"
     refined_rig = project_to_surface(Rig(rig.name, rig.vehicle, outcome.rig.cameras), vehicle, settings.rules)
     check = check_rig(refined_rig, vehicle, settings.rules)
-    if not check.valid:
+    moved = len(rig)
+    if not check.valid:  # keep the MILP pose of the cameras whose refined pose fails, once
+        cameras = tuple(new if c.valid else old for new, old, c in zip(refined_rig.cameras, rig.cameras, check.cameras))
+        moved = sum(c.valid for c in check.cameras)
+        refined_rig = Rig(rig.name, rig.vehicle, cameras)
+        check = check_rig(refined_rig, vehicle, settings.rules)
+    if not check.valid or moved == 0:
         return design, f"rejected: IPOPT {outcome.status}, refined cameras fail the mount checks"
     refined = summarise(refined_rig, vehicle, [reference], calibration, needed, settings, check)
     if not refined.meets_requirements:
         return design, f"rejected: IPOPT {outcome.status}, refined rig loses required coverage"
     if refined.prediction.rigcd >= design.prediction.rigcd:
         return design, f"rejected: IPOPT {outcome.status}, no improvement"
-    return refined, f"accepted: IPOPT {outcome.status}, RigCD {design.prediction.rigcd:.4f} -> {refined.prediction.rigcd:.4f}"
+    return refined, (f"accepted: IPOPT {outcome.status}, {moved} of {len(rig)} cameras moved, RigCD "
+                     f"{design.prediction.rigcd:.4f} -> {refined.prediction.rigcd:.4f}")
 
 
 def _best_selection(costs, sees, needed, mount, mount_points, counts, alpha, settings, progress) -> Selection:

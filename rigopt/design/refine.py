@@ -54,7 +54,8 @@ class RefineProblem:
 
 @dataclass(frozen=True)
 class RefineOutcome:
-    """IPOPT's ``status`` and, when it converged, the refined (not yet validated) ``rig``."""
+    """IPOPT's ``status`` and the refined (not yet validated) ``rig``: the solution, or the last iterate when
+    IPOPT stopped early; None when it produced no finite values."""
 
     status: str
     rig: Rig | None
@@ -123,13 +124,15 @@ def refine(problem: RefineProblem, max_iter: int = 200) -> RefineOutcome:
     opti.solver("ipopt", {"print_time": False}, {"print_level": 0, "sb": "yes", "max_iter": max_iter})
     try:
         solution = opti.solve()
-    except RuntimeError:
-        return RefineOutcome(str(opti.stats().get("return_status", "failed")), None)
-    status = str(solution.stats().get("return_status", "unknown"))
+    except RuntimeError:  # not converged: the last iterate may still be a better, valid rig (validated later)
+        solution = opti.debug
+    status = str(opti.stats().get("return_status", "unknown"))
 
     # Extract.
     values = [np.atleast_1d(solution.value(x)) for x in (u, v, yaw, pitch)]
     lenses = np.atleast_1d(solution.value(fov)) if fov is not None else design.fovs
+    if not all(np.all(np.isfinite(x)) for x in (*values, lenses)):
+        return RefineOutcome(status, None)
     cameras = []
     for k, camera in enumerate(design.cameras):
         frame = surface_frame(problem.normals[k], camera.forward)

@@ -18,7 +18,7 @@ import numpy as np
 import trimesh
 
 from rigopt.camera import vertical_fov
-from rigopt.collision import MountRules
+from rigopt.collision import MountRules, housing_fits
 from rigopt.errors import RigoptError
 from rigopt.geometry import rotation_from_yaw_pitch_roll
 from rigopt.rig.model import DEFAULT_IMAGE_SIZE
@@ -52,7 +52,8 @@ def sample_zone_points(vehicle: Vehicle, spacing: float = DEFAULT_SPACING, zones
     """Evenly spread surface samples of the zones (about ``spacing`` m apart).
 
     Returns points (n, 3) lens positions, normals (n, 3), zone names (n,) str; samples whose lens would
-    sit nearest to another zone's surface (at edges) are dropped.
+    sit nearest to another zone's surface (at edges), or whose housing would sink into the body (in
+    hollows), are dropped.
     """
     if not spacing > 0:
         raise RigoptError(f"the candidate spacing must be positive (metres), got {spacing}")
@@ -84,6 +85,7 @@ def sample_zone_points(vehicle: Vehicle, spacing: float = DEFAULT_SPACING, zones
     surface = vehicle.surface(points)
     agrees = np.array(vehicle.zone_names(surface.foot, surface.normal)) == names
     agrees &= np.abs(surface.distance - rules.housing[2] / 2.0) < 1e-3
+    agrees &= housing_fits(vehicle, surface.foot, surface.normal, rules)
     if not agrees.any():
         raise RigoptError(f"the zones {sorted(wanted) if wanted else sorted(known)} of {vehicle.name} hold no surface "
                           "a camera can be mounted on")
