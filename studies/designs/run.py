@@ -1,7 +1,8 @@
 """Designs for the firetruck, the hgv and the tt from R1 and from R3, against the benchmark's own rigs.
 
 For each (vehicle, reference) it runs the designer with default settings and writes into
-studies/designs/results/<vehicle>_from_<ref>/ the design's files (rig.json, report.json, pictures), then
+studies/designs/results/<vehicle>_from_<ref>/ the design's rig.json, report.json and design.png (the
+command `rigopt design` also writes the reference and naive-transfer pictures and report.html), then
 results.md and results.csv: predicted drop, RigCD, coverage and requirement check of the design, the naive
 transfer and every benchmark rig of that vehicle, with the solver figures.
 Usage: python studies/designs/run.py
@@ -10,11 +11,15 @@ Usage: python studies/designs/run.py
 from __future__ import annotations
 
 import csv
+import json
 from pathlib import Path
 
 from rigopt.design.designer import design_rig
 from rigopt.metrics.calibration import load_weights
-from rigopt.report.design_report import write_design_outputs
+from rigopt.report.design_report import design_dict
+from rigopt.report.json_values import json_ready
+from rigopt.report.vehicle_figures import write_vehicle_figure
+from rigopt.rig.pccr_format import write_rig
 from rigopt.rig.library import load_rig
 from rigopt.vehicle.library import load_vehicle
 
@@ -30,7 +35,11 @@ def main() -> None:
     for vehicle_name, ref in CASES:
         vehicle, reference = load_vehicle(vehicle_name), load_rig(ref)
         result = design_rig(vehicle, reference, weights)
-        write_design_outputs(result, out / f"{vehicle_name}_from_{ref}")
+        folder = out / f"{vehicle_name}_from_{ref}"
+        folder.mkdir(exist_ok=True)
+        rig_file = write_rig(result.design.rig, folder / "rig.json")
+        (folder / "report.json").write_text(json.dumps(json_ready(design_dict(result, rig_file)), indent=2) + "\n")
+        write_vehicle_figure(vehicle, folder / "design.png", result.design.rig)
         s = result.selection
         entries = [("design", result.design)]
         if result.naive_transfer:
@@ -55,7 +64,8 @@ def main() -> None:
              "seen; a rig meets the requirements when it sees every sector its reference sees on its own vehicle.",
              "", "| " + " | ".join(header[k] for k in short) + " |", "|" + "---|" * len(short)]
     lines += ["| " + " | ".join(str(row[k]) for k in short) + " |" for row in rows]
-    lines += ["", "Solver figures per design (MILP status and gap, candidates, refinement, seconds): `results.csv`."]
+    lines += ["", "Solver figures per design (MILP status and gap, candidates, refinement, seconds): `results.csv`;",
+              "pictures: `<vehicle>_from_<ref>/design.png`."]
     (out / "results.md").write_text("\n".join(lines) + "\n")
 
 
