@@ -6,6 +6,7 @@ import sys
 from pathlib import Path
 from typing import Optional
 
+import numpy as np
 import typer
 from rich.console import Console
 
@@ -40,6 +41,25 @@ def parse_camera_count(text: Optional[str]) -> tuple[int, int] | None:
     return counts
 
 
+#: Step (deg) of the discrete lenses that seed a continuous FOV range.
+RANGE_STEP = 10.0
+
+
+def parse_lenses(text: str) -> tuple[tuple[float, ...], tuple[float, float] | None]:
+    """A lens catalogue ``"60,65,70"``, or a continuous range ``"60-120"`` (then the MILP picks among lenses
+    every RANGE_STEP degrees and the refinement adjusts the FOV within the range). Returns (lenses, range)."""
+    if "-" in text.strip()[1:] and "," not in text:
+        low_text, _, high_text = text.partition("-")
+        low, high = parse_numbers(low_text, "--fov"), parse_numbers(high_text, "--fov")
+        fov_range = (low[0], high[0])
+        lenses = tuple(float(f) for f in np.arange(fov_range[0], fov_range[1] + 1e-9, RANGE_STEP))
+    else:
+        lenses, fov_range = parse_numbers(text, "--fov"), None
+    if not all(0 < f < 180 for f in (*lenses, *(fov_range or ()))) or (fov_range and fov_range[0] > fov_range[1]):
+        raise RigoptError(f"--fov must be lenses or a range (low-high) within (0, 180) degrees, got {text!r}")
+    return lenses, fov_range
+
+
 @app.command("design")
 def design_command(
     vehicle: str = typer.Option(..., help="Vehicle to design for: name, alias or CARLA blueprint."),
@@ -47,7 +67,8 @@ def design_command(
                                       "several, comma-separated, for a fleet (minimise the worst predicted drop)."),
     weights: str = typer.Option("joint", help="Calibrated weights: BEVDet, BEVFusion, Fast-BEV, PETR, joint, or a file."),
     cameras: Optional[str] = typer.Option(None, help="Camera count or range (e.g. 6-10); default: the reference's."),
-    fov: str = typer.Option(DEFAULT_FOVS, help="Lens catalogue: horizontal FOVs in degrees."),
+    fov: str = typer.Option(DEFAULT_FOVS, help="Lens catalogue: horizontal FOVs in degrees, or a continuous "
+                                                "range such as 60-120."),
     zones: Optional[str] = typer.Option(None, help="Allowed zones, comma-separated (default: all of the vehicle's)."),
     pitch: str = typer.Option("-20,-10,0,10", help="Pitch angles to consider, degrees (> 0 up)."),
     yaw_step: float = typer.Option(10.0, help="Yaw grid step, degrees."),
@@ -67,11 +88,9 @@ def design_command(
     from rigopt.rig.library import load_rig
     from rigopt.vehicle.library import load_vehicle
 
-    lenses = parse_numbers(fov, "--fov")
-    if not all(0 < f < 180 for f in lenses):
-        raise RigoptError(f"--fov lenses must be in (0, 180) degrees, got {fov!r}")
+    lenses, fov_range = parse_lenses(fov)
     settings = DesignSettings(
-        cameras=parse_camera_count(cameras), lenses=lenses,
+        cameras=parse_camera_count(cameras), lenses=lenses, fov_range=fov_range,
         zones=tuple(z.strip() for z in zones.split(",")) if zones else None,
         pitches_deg=parse_numbers(pitch, "--pitch"), yaw_step_deg=yaw_step, spacing=spacing,
         min_coverage=min_coverage, min_overlap=min_overlap, time_limit=time_limit)

@@ -18,6 +18,7 @@ when the matching is optimal, which the MILP guarantees on the candidate set.
 from __future__ import annotations
 
 import time
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -119,7 +120,9 @@ def select_cameras(cost, sees: np.ndarray, required: np.ndarray, mount: np.ndarr
     problem = cp.Problem(cp.Minimize(objective), constraints)
     start = time.perf_counter()
     try:
-        problem.solve(solver=cp.HIGHS, time_limit=float(time_limit), mip_rel_gap=float(mip_gap))
+        with warnings.catch_warnings():  # a time-limited solve warns "may be inaccurate": its status says so
+            warnings.simplefilter("ignore", UserWarning)
+            problem.solve(solver=cp.HIGHS, time_limit=float(time_limit), mip_rel_gap=float(mip_gap))
     except cp.error.SolverError as error:
         raise RigoptError(f"the MIP solver failed ({error}); is highspy installed? pip install highspy") from None
     seconds = time.perf_counter() - start
@@ -127,9 +130,10 @@ def select_cameras(cost, sees: np.ndarray, required: np.ndarray, mount: np.ndarr
         raise DesignInfeasible(f"no choice of {n_cameras} candidate cameras meets the coverage and housing "
                                "requirements; allow more cameras (--cameras), more zones, wider lenses or lower "
                                "the coverage requirement")
-    if x.value is None:
-        raise RigoptError(f"the MIP solver stopped without a solution (status {problem.status}); raise --time-limit")
-    chosen = np.flatnonzero(x.value > 0.5)
+    chosen = np.flatnonzero(x.value > 0.5) if x.value is not None else np.zeros(0, dtype=int)
+    if len(chosen) != n_cameras:  # stopped (time limit) before finding any feasible selection
+        raise RigoptError(f"the MIP solver found no feasible design within the time limit of {time_limit:g} s "
+                          f"(status {problem.status}); raise --time-limit")
     matched = []
     for (y, _, _), c in zip(matchings, costs):
         pairs = y.value.reshape(n, c.shape[1]) > 0.5
