@@ -17,31 +17,9 @@ from rigopt.rig.model import Camera, Rig
 from rigopt.vehicle.model import Vehicle
 from rigopt.vehicle.spec import read_spec
 
-BOX_CAR = """
-name = "boxcar"
-blueprint = "vehicle.test.boxcar"
+from box_car import spec_text
 
-[[solids]]
-name = "body"
-type = "prism"
-side = [[-2, 0.3], [2, 0.3], [2, 1.5], [-2, 1.5]]
-plan = [[2, 0], [2, 0.9], [-2, 0.9], [-2, 0]]
-
-[[zones]]
-name = "front"
-min = [1.9, -1.0, 0.2]
-max = [2.2, 1.0, 1.6]
-normal = [1, 0, 0]
-cone_deg = 45
-
-[[zones]]
-name = "side"
-min = [-2.1, 0.8, 0.2]
-max = [2.1, 1.0, 1.6]
-normal = [0, 1, 0]
-cone_deg = 45
-mirrored = true
-"""
+BOX_CAR = spec_text("boxcar")
 
 STEP = """
 [[solids]]

@@ -17,41 +17,12 @@ from rigopt.errors import RigoptError
 from rigopt.vehicle.model import Vehicle
 from rigopt.vehicle.spec import read_spec
 
+from box_car import BOX_ZONES, ROOF_ZONE, spec_text
+
 BOX_LOW = np.array([-2.0, -0.9, 0.3])
 BOX_HIGH = np.array([2.0, 0.9, 1.5])
 
-BOX_CAR = """
-name = "designbox"
-blueprint = "vehicle.test.designbox"
-
-[[solids]]
-name = "body"
-type = "prism"
-side = [[-2, 0.3], [2, 0.3], [2, 1.5], [-2, 1.5]]
-plan = [[2, 0], [2, 0.9], [-2, 0.9], [-2, 0]]
-
-[[zones]]
-name = "front"
-min = [1.9, -1.0, 0.2]
-max = [2.2, 1.0, 1.6]
-normal = [1, 0, 0]
-cone_deg = 45
-
-[[zones]]
-name = "side"
-min = [-2.1, 0.8, 0.2]
-max = [2.1, 1.0, 1.6]
-normal = [0, 1, 0]
-cone_deg = 45
-mirrored = true
-
-[[zones]]
-name = "roof"
-min = [-0.3, -0.3, 1.4]
-max = [0.3, 0.3, 1.6]
-normal = [0, 0, 1]
-cone_deg = 30
-"""
+BOX_CAR = spec_text("designbox", zones=BOX_ZONES + ROOF_ZONE)
 
 LENSES = (90.0, 60.0, 90.0)  # a duplicate: the catalogue is {60, 90}
 SPACING = 0.3

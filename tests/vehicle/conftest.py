@@ -7,37 +7,13 @@ The box car is one prism: the box [-2, 2] x [-0.9, 0.9] x [0.3, 1.5] m (ISO fram
 
 from __future__ import annotations
 
-import textwrap
 
 import pytest
 
 from rigopt.vehicle.model import Vehicle
 from rigopt.vehicle.spec import read_spec
 
-BOX_BODY = """
-[[solids]]
-name = "body"
-type = "prism"
-side = [[-2, 0.3], [2, 0.3], [2, 1.5], [-2, 1.5]]
-plan = [[2, 0], [2, 0.9], [-2, 0.9], [-2, 0]]
-"""
-
-BOX_ZONES = """
-[[zones]]
-name = "front"
-min = [1.9, -1.0, 0.2]
-max = [2.2, 1.0, 1.6]
-normal = [1, 0, 0]
-cone_deg = 45
-
-[[zones]]
-name = "side"
-min = [-2.1, 0.8, 0.2]
-max = [2.1, 1.0, 1.6]
-normal = [0, 1, 0]
-cone_deg = 45
-mirrored = true
-"""
+from box_car import BOX_BODY, BOX_ZONES, spec_text
 
 #: A mirror housing on the left only: makes the body asymmetric in y (for frame reflections).
 LEFT_MIRROR = """
@@ -47,10 +23,6 @@ type = "box"
 center = [0.5, 1.0, 1.2]
 size = [0.2, 0.3, 0.1]
 """
-
-
-def spec_text(name: str = "boxcar", solids: str = BOX_BODY, zones: str = BOX_ZONES) -> str:
-    return f'name = "{name}"\nblueprint = "vehicle.test.{name}"\n' + textwrap.dedent(solids) + textwrap.dedent(zones)
 
 
 @pytest.fixture
