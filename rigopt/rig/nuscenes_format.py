@@ -199,10 +199,10 @@ def write_nuscenes_calibration(rig: Rig, directory, image_size=None) -> Path:
     sensors, records = [], []
     for camera in rig.cameras:
         width, height = override or camera.image_size
-        sensor_token = _token("sensor", camera.id)
+        sensor_token = nuscenes_token("sensor", camera.id)
         sensors.append({"token": sensor_token, "channel": camera.id, "modality": "camera"})
         records.append({
-            "token": _token("calibrated_sensor", camera.id),
+            "token": nuscenes_token("calibrated_sensor", camera.id),
             "sensor_token": sensor_token,
             "translation": [float(v) + 0.0 for v in camera.position],  # + 0.0 drops -0.0
             "rotation": [float(v) for v in matrix_to_quaternion(camera.rotation @ R_CAM_OPTICAL)],
@@ -213,6 +213,6 @@ def write_nuscenes_calibration(rig: Rig, directory, image_size=None) -> Path:
     return directory
 
 
-def _token(table: str, channel: str) -> str:
+def nuscenes_token(table: str, channel: str) -> str:
     """A 32-hex-digit nuScenes-style token, fixed by the table and channel names."""
     return hashlib.sha256(f"rigopt/{table}/{channel}".encode()).hexdigest()[:32]

@@ -1,0 +1,161 @@
+"""Generating the synthetic benchmark: render every scene under every rig and write the nuScenes layout.
+
+Each (rig, scene) pair is rendered and annotated on its own and leaves ``<root>/.parts/<scene>.json`` (its
+table records) beside its images, so an interrupted run resumes by skipping finished pairs; the tables are
+assembled from all parts at the end of every run. Scene, sample and instance tokens depend only on the
+scene, so the same scene has the same tokens under every rig.
+
+Annotations: every box within ``ANNOTATION_RANGE`` of the ego (class >= 0) that the rig sees. Its visible
+fraction is measured on 26 surface points (corners, edge midpoints and face centres, pulled 5 % inwards):
+of the points on faces turned towards some camera, the fraction that some camera sees unoccluded (the
+rendered pixel shows this box at the point's depth). Boxes no camera sees are dropped for that rig.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Callable, Sequence
+
+import numpy as np
+
+from rigopt.bench.dataset import pose_record, box_rotation, save_tables, static_tables, visibility_token
+from rigopt.bench.scene_model import CLASSES, Boxes, Scene
+from rigopt.errors import RigoptError
+from rigopt.rig.model import Rig
+from rigopt.rig.nuscenes_format import nuscenes_token, write_nuscenes_calibration
+
+ANNOTATION_RANGE = 80.0
+#: Relative depth agreement for a surface point to count as the rendered pixel's surface.
+DEPTH_TOLERANCE = 0.05
+
+
+def _surface_points(boxes: Boxes) -> tuple[np.ndarray, np.ndarray]:
+    """(n, 26, 3) world points on each box's surface and (n, 26, 3) their outward directions."""
+    grid = np.array([[a, b, c] for a in (-1, 0, 1) for b in (-1, 0, 1) for c in (-1, 0, 1) if (a, b, c) != (0, 0, 0)],
+                    dtype=float)
+    local = grid[None] * boxes.sizes[:, None] / 2.0 * 0.95
+    c, s = np.cos(boxes.yaws)[:, None], np.sin(boxes.yaws)[:, None]
+
+    def turn(v):
+        return np.stack([v[..., 0] * c - v[..., 1] * s, v[..., 0] * s + v[..., 1] * c, v[..., 2]], axis=-1)
+
+    outward = grid / np.linalg.norm(grid, axis=1, keepdims=True)
+    return turn(local) + boxes.centers[:, None], turn(np.broadcast_to(outward, local.shape))
+
+
+def visible_fractions(boxes: Boxes, rig: Rig, T_world_ego: np.ndarray, rendered: dict) -> np.ndarray:
+    """(n,) float: the visible fraction of each box (see the module docstring); 0 when unseen."""
+    points, outward = _surface_points(boxes)
+    seeable = np.zeros(points.shape[:2], dtype=bool)
+    seen = np.zeros(points.shape[:2], dtype=bool)
+    for camera in rig.cameras:
+        image = rendered[camera.id]
+        T_world_cam = T_world_ego[:3, :3] @ camera.rotation, T_world_ego[:3, :3] @ camera.position + T_world_ego[:3, 3]
+        rotation, origin = T_world_cam
+        local = np.einsum("ji,npj->npi", rotation, points - origin)  # camera body frame
+        facing = np.einsum("npk,npk->np", outward, origin - points) > 0
+        seeable |= facing & (local[..., 0] > 0)
+        depth = local[..., 0]
+        k = image.intrinsics
+        h, w = image.object_id.shape
+        u = k[0, 0] * (-local[..., 1]) / np.maximum(depth, 1e-9) + k[0, 2]
+        v = k[1, 1] * (-local[..., 2]) / np.maximum(depth, 1e-9) + k[1, 2]
+        inside = facing & (depth > 0) & (u >= 0) & (u < w) & (v >= 0) & (v < h)
+        col, row = np.clip(u.astype(int), 0, w - 1), np.clip(v.astype(int), 0, h - 1)
+        shows_box = image.object_id[row, col] == boxes.instance[:, None]
+        near = np.abs(image.depth[row, col] - depth) <= DEPTH_TOLERANCE * depth + 0.1
+        seen |= inside & shows_box & near
+    return np.where(seeable.sum(axis=1) > 0, seen.sum(axis=1) / np.maximum(seeable.sum(axis=1), 1), 0.0)
+
+
+def scene_records(scene: Scene, rig: Rig, root: Path, size: tuple[int, int], ego_mesh,
+                  render_rig: Callable) -> dict[str, list[dict]]:
+    """Render ``scene`` under ``rig``: write the images under ``root/samples`` and return the scene's records."""
+    from PIL import Image
+
+    tables: dict[str, list[dict]] = {name: [] for name in ("log", "scene", "sample", "sample_data", "ego_pose",
+                                                           "sample_annotation", "instance")}
+    scene_token = nuscenes_token("scene", scene.name)
+    log_token = nuscenes_token("log", scene.name)
+    tables["log"].append({"token": log_token, "logfile": scene.name, "vehicle": rig.vehicle, "location": "rigopt"})
+    sample_tokens = [nuscenes_token("sample", f"{scene.name}/{k}") for k in range(len(scene.frames))]
+    instances: dict[int, dict] = {}
+    for k, frame in enumerate(scene.frames):
+        rendered = render_rig(scene, k, rig, ego_mesh, size)
+        ego_token = nuscenes_token("ego_pose", f"{scene.name}/{k}")
+        tables["ego_pose"].append(pose_record(ego_token, frame.T_world_ego, timestamp=frame.timestamp_us))
+        tables["sample"].append({"token": sample_tokens[k], "timestamp": frame.timestamp_us, "scene_token": scene_token,
+                                 "prev": sample_tokens[k - 1] if k else "",
+                                 "next": sample_tokens[k + 1] if k + 1 < len(scene.frames) else ""})
+        for camera in rig.cameras:
+            data_token = nuscenes_token("sample_data", f"{scene.name}/{k}/{camera.id}")
+            filename = f"samples/{camera.id}/{data_token}.png"
+            (root / filename).parent.mkdir(parents=True, exist_ok=True)
+            Image.fromarray(rendered[camera.id].rgb).save(root / filename)
+            tables["sample_data"].append({
+                "token": data_token, "sample_token": sample_tokens[k], "ego_pose_token": ego_token,
+                "calibrated_sensor_token": nuscenes_token("calibrated_sensor", camera.id), "filename": filename,
+                "fileformat": "png", "width": size[0], "height": size[1], "timestamp": frame.timestamp_us,
+                "is_key_frame": True, "prev": "", "next": ""})
+        boxes = scene.boxes_at(k)
+        ego = frame.T_world_ego[:2, 3]
+        keep = (boxes.classes >= 0) & (np.linalg.norm(boxes.centers[:, :2] - ego, axis=1) <= ANNOTATION_RANGE)
+        boxes = Boxes(*(getattr(boxes, f)[keep] for f in ("centers", "sizes", "yaws", "classes", "instance")))
+        fractions = visible_fractions(boxes, rig, frame.T_world_ego, rendered)
+        for j in np.flatnonzero(fractions > 0):
+            instance = int(boxes.instance[j])
+            instance_token = nuscenes_token("instance", f"{scene.name}/{instance}")
+            instances.setdefault(instance, {"token": instance_token, "category_token":
+                                            nuscenes_token("category", CLASSES[boxes.classes[j]]), "nbr_annotations": 0})
+            instances[instance]["nbr_annotations"] += 1
+            length, width, height = boxes.sizes[j]
+            tables["sample_annotation"].append({
+                "token": nuscenes_token("sample_annotation", f"{scene.name}/{k}/{instance}"),
+                "sample_token": sample_tokens[k], "instance_token": instance_token,
+                "visibility_token": visibility_token(float(fractions[j])), "attribute_tokens": [],
+                "translation": boxes.centers[j].tolist(), "size": [float(width), float(length), float(height)],
+                "rotation": box_rotation(float(boxes.yaws[j])), "num_lidar_pts": 0, "num_radar_pts": 0})
+    tables["instance"] = list(instances.values())
+    tables["scene"].append({"token": scene_token, "name": scene.name, "log_token": log_token,
+                            "nbr_samples": len(scene.frames), "first_sample_token": sample_tokens[0],
+                            "last_sample_token": sample_tokens[-1], "description": scene.road.kind})
+    return tables
+
+
+def generate_split(rigs: Sequence[Rig], scenes: Sequence[Scene], out, size: tuple[int, int], render_rig: Callable,
+                   ego_mesh_of: Callable, progress: Callable[[str], None] = lambda message: None) -> list[Path]:
+    """Render every (rig, scene) pair not done yet and (re)assemble each rig's tables; returns the roots
+    ``<out>/<rig>/<split>``."""
+    if not (len(size) == 2 and all(isinstance(v, int) and v > 0 for v in size)):
+        raise RigoptError(f"image size must be two positive integers (width, height), got {size}")
+    roots = []
+    for rig in rigs:
+        for scene in scenes:
+            root = Path(out) / rig.name / scene.split
+            part = root / ".parts" / f"{scene.name}.json"
+            if part.is_file():
+                progress(f"{rig.name} / {scene.name}: done before, skipped")
+                continue
+            progress(f"{rig.name} / {scene.name}: rendering {len(scene.frames)} samples x {len(rig)} cameras")
+            records = scene_records(scene, rig, root, size, ego_mesh_of(rig), render_rig)
+            part.parent.mkdir(parents=True, exist_ok=True)
+            temporary = part.with_suffix(".tmp")
+            temporary.write_text(json.dumps(records))
+            temporary.replace(part)  # a part exists only once its scene is complete
+        for split in sorted({scene.split for scene in scenes}):
+            root = Path(out) / rig.name / split
+            roots.append(assemble(root, rig, split, size))
+    return roots
+
+
+def assemble(root: Path, rig: Rig, split: str, size: tuple[int, int]) -> Path:
+    """Write the tables of ``root`` from all its scene parts, the rig's calibration and the fixed tables."""
+    version = f"v1.0-{split}"
+    tables = static_tables()
+    for part in sorted((root / ".parts").glob("*.json")):
+        for name, records in json.loads(part.read_text()).items():
+            tables.setdefault(name, []).extend(records)
+    folder = save_tables(root, version, tables)
+    write_nuscenes_calibration(rig, folder, image_size=size)
+    return root
