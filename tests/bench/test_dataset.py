@@ -1,0 +1,123 @@
+"""The benchmark's nuScenes layout: written by generate_split, read back by read_dataset."""
+
+from dataclasses import dataclass
+
+import numpy as np
+import pytest
+
+from rigopt.bench import generate as generate_module
+from rigopt.bench.dataset import read_dataset, visibility_token
+from rigopt.bench.generate import generate_split
+from rigopt.bench.scene_model import SAMPLE_INTERVAL_US, Boxes, Frame, Road, Scene
+from rigopt.errors import DataError, RigoptError
+from rigopt.geometry import R_CAM_OPTICAL, rot_z
+from rigopt.rig.library import load_rig
+
+
+@dataclass(frozen=True)
+class FakeRendered:
+    rgb: np.ndarray
+    depth: np.ndarray
+    intrinsics: np.ndarray
+    object_id: np.ndarray
+
+
+def fake_render_rig(scene, k, rig, ego_mesh, size):
+    w, h = size
+    k_matrix = np.array([[w / 2, 0, w / 2], [0, w / 2, h / 2], [0, 0, 1.0]])
+    return {c.id: FakeRendered(np.full((h, w, 3), 10 * k, np.uint8), np.full((h, w), np.inf, np.float32), k_matrix,
+                               np.full((h, w), -1, np.int32)) for c in rig.cameras}
+
+
+def pose(x, y, yaw):
+    T = np.eye(4)
+    T[:3, :3] = rot_z(yaw)
+    T[:3, 3] = [x, y, 0.0]
+    return T
+
+
+@pytest.fixture
+def scene():
+    road = Road("straight", (np.array([[-100, -7.0], [100, -7.0], [100, 7.0], [-100, 7.0]]),), np.zeros((0, 2, 2)),
+                0.15, np.zeros((0, 2, 2)))
+    static = Boxes(np.array([[30.0, 10.0, 5.0], [5.0, -6.0, 3.0]]), np.array([[10.0, 8.0, 10.0], [0.3, 0.3, 6.0]]),
+                   np.array([0.0, 0.0]), np.array([-1, -1]), np.array([100, 101]))
+    frames = []
+    for k in range(3):
+        agents = Boxes(np.array([[12.0 + k, 1.5, 0.85], [200.0, 0.0, 0.85]]), np.array([[4.5, 1.9, 1.7]] * 2),
+                       np.array([0.3, 0.0]), np.array([0, 1]), np.array([1, 2]))
+        frames.append(Frame(1_000_000 + k * SAMPLE_INTERVAL_US, pose(k * 1.0, 0.5, 0.1), agents))
+    return Scene("scene-test-0000", 7, "mini", road, static, tuple(frames))
+
+
+@pytest.fixture
+def all_visible(monkeypatch):
+    monkeypatch.setattr(generate_module, "visible_fractions", lambda boxes, *a: np.full(len(boxes), 0.7))
+
+
+def test_round_trip_gives_the_scene_boxes_in_the_ego_frame(tmp_path, scene, all_visible):
+    rig = load_rig("R1")
+    (root,) = generate_split([rig], [scene], tmp_path, (32, 18), fake_render_rig, lambda r: None)
+    samples = read_dataset(root)
+    assert [s.timestamp_us for s in samples] == [f.timestamp_us for f in scene.frames]
+    for sample, frame in zip(samples, scene.frames):
+        # Only the annotated agent within 80 m: instance 1 (the other is 200 m away; static ones are class -1).
+        assert sample.classes.tolist() == [0]
+        T_ego_world = np.linalg.inv(frame.T_world_ego)
+        expected = T_ego_world[:3, :3] @ frame.agents.centers[0] + T_ego_world[:3, 3]
+        np.testing.assert_allclose(sample.centers[0], expected, atol=1e-6)
+        np.testing.assert_allclose(sample.sizes[0], frame.agents.sizes[0], atol=1e-9)
+        assert sample.yaws[0] == pytest.approx(0.3 - 0.1, abs=1e-9)
+        assert sample.visibility.tolist() == ["3"]
+        np.testing.assert_allclose(sample.T_world_ego, frame.T_world_ego, atol=1e-9)
+
+
+def test_cameras_round_trip_their_pose_and_intrinsics(tmp_path, scene, all_visible):
+    rig = load_rig("R1")
+    (root,) = generate_split([rig], [scene], tmp_path, (32, 18), fake_render_rig, lambda r: None)
+    sample = read_dataset(root)[0]
+    assert sorted(sample.images) == sorted(c.id for c in rig.cameras)
+    for camera in rig.cameras:
+        T = sample.T_ego_cam[camera.id]
+        np.testing.assert_allclose(T[:3, :3], camera.rotation @ R_CAM_OPTICAL, atol=1e-9)
+        np.testing.assert_allclose(T[:3, 3], camera.position, atol=1e-9)
+        assert sample.intrinsics[camera.id][0, 2] == pytest.approx(16.0)
+        assert sample.images[camera.id].is_file()
+
+
+def test_generation_resumes_by_skipping_finished_scenes(tmp_path, scene, all_visible):
+    rig = load_rig("R1-c6")
+    messages = []
+    generate_split([rig], [scene], tmp_path, (16, 9), fake_render_rig, lambda r: None, messages.append)
+    generate_split([rig], [scene], tmp_path, (16, 9), fake_render_rig, lambda r: None, messages.append)
+    assert any("rendering" in m for m in messages[:1]) and any("skipped" in m for m in messages[1:])
+    assert len(read_dataset(tmp_path / "R1-c6" / "mini")) == 3
+
+
+def test_same_scene_gets_the_same_sample_tokens_under_two_rigs(tmp_path, scene, all_visible):
+    roots = generate_split([load_rig("R1"), load_rig("R6")], [scene], tmp_path, (16, 9), fake_render_rig,
+                           lambda r: None)
+    tokens = [[s.token for s in read_dataset(root)] for root in roots]
+    assert tokens[0] == tokens[1]
+
+
+def test_unseen_boxes_are_dropped(tmp_path, scene, monkeypatch):
+    monkeypatch.setattr(generate_module, "visible_fractions", lambda boxes, *a: np.zeros(len(boxes)))
+    (root,) = generate_split([load_rig("R1")], [scene], tmp_path, (16, 9), fake_render_rig, lambda r: None)
+    assert all(len(s.classes) == 0 for s in read_dataset(root))
+
+
+@pytest.mark.parametrize("fraction, token", [(0.0, "1"), (0.39, "1"), (0.4, "2"), (0.79, "3"), (1.0, "4")])
+def test_visibility_levels(fraction, token):
+    assert visibility_token(fraction) == token
+
+
+def test_bad_sizes_are_refused(tmp_path, scene):
+    with pytest.raises(RigoptError, match="image size"):
+        generate_split([load_rig("R1")], [scene], tmp_path, (0, 9), fake_render_rig, lambda r: None)
+
+
+def test_reading_a_folder_without_tables_is_a_clear_error(tmp_path):
+    (tmp_path / "v1.0-mini").mkdir()
+    with pytest.raises(DataError, match="missing table"):
+        read_dataset(tmp_path)
