@@ -70,3 +70,25 @@ def generate_command(
 
         roots = generate_split(loaded, scene_list, out, width_height, render_rig, ego_mesh_of, step)
     console.print("wrote " + ", ".join(str(r) for r in roots))
+
+
+@bench_app.command("show")
+def show_command(
+    data: Path = typer.Argument(..., help="A generated benchmark folder (<out>) or one rig's split root."),
+    rig: str = typer.Option(..., "--rig", help="Rig name (the folder under <out>)."),
+    sample: int = typer.Option(0, "--sample", help="Sample index, in scene and time order."),
+    split: str = typer.Option("mini", help="Split folder under the rig."),
+    out: Path = typer.Option(..., "--out", help="PNG file to write."),
+):
+    """Tile a sample's camera images with its projected boxes, and a bird's-eye view of the boxes."""
+    from rigopt.bench.dataset import read_dataset
+    from rigopt.report.bench_figures import write_sample_figure
+
+    root = data / rig / split
+    if not root.is_dir():
+        raise RigoptError(f"{root}: no such rig/split folder; generate it with rigopt bench generate")
+    samples = read_dataset(root)
+    if not 0 <= sample < len(samples):
+        raise RigoptError(f"--sample must be in 0..{len(samples) - 1} for {root}, got {sample}")
+    path = write_sample_figure(samples[sample], out, f"{rig}: {samples[sample].scene}, sample {sample}")
+    console.print(f"wrote {path}")
