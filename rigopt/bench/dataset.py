@@ -68,7 +68,8 @@ class TrainingSample:
 
     images : {channel: path}; intrinsics : {channel: (3, 3)}; T_ego_cam : {channel: (4, 4)} optical frame
     -> ego; T_world_ego (4, 4); boxes in the ego frame: centers (n, 3) m, sizes (n, 3) (length, width,
-    height) m, yaws (n,) rad, classes (n,) int into CLASSES, visibility (n,) str tokens.
+    height) m, yaws (n,) rad, classes (n,) int into CLASSES, visibility (n,) str tokens, instances (n,) str
+    instance tokens (the same object across samples and, for rigopt's data, across rigs).
     """
 
     token: str
@@ -83,6 +84,7 @@ class TrainingSample:
     yaws: np.ndarray
     classes: np.ndarray
     visibility: np.ndarray
+    instances: np.ndarray
 
 
 def _transform(record: dict) -> np.ndarray:
@@ -150,7 +152,7 @@ def read_dataset(root, version: str | None = None) -> list[TrainingSample]:
         samples.append(TrainingSample(
             sample["token"], scene_name.get(sample["scene_token"], ""), int(sample["timestamp"]), images, intrinsics,
             extrinsics, T_world_ego, centers, sizes, np.angle(np.exp(1j * (world_yaw - ego_yaw))), classes,
-            np.array([b.get("visibility_token", "") for b in boxes])))
+            np.array([b.get("visibility_token", "") for b in boxes]), np.array([b["instance_token"] for b in boxes])))
     return samples
 
 

@@ -121,3 +121,22 @@ def test_reading_a_folder_without_tables_is_a_clear_error(tmp_path):
     (tmp_path / "v1.0-mini").mkdir()
     with pytest.raises(DataError, match="missing table"):
         read_dataset(tmp_path)
+
+
+def test_a_real_scene_under_two_rigs_has_identical_boxes_in_the_ego_frame(tmp_path):
+    from rigopt.bench.render import render_rig
+    from rigopt.bench.scenes import generate_scene
+    from rigopt.vehicle.library import load_vehicle
+
+    scene = generate_scene(11, "mini", n_frames=2)
+    rigs = [load_rig("R1"), load_rig("R6")]
+    roots = generate_split(rigs, [scene], tmp_path, (64, 36), render_rig, lambda r: load_vehicle(r.vehicle).mesh)
+    first, second = (read_dataset(root) for root in roots)
+    for a, b in zip(first, second):
+        common = sorted(set(a.instances) & set(b.instances))
+        assert len(common) >= 3  # both rigs see several of the same objects
+        ia = [list(a.instances).index(t) for t in common]
+        ib = [list(b.instances).index(t) for t in common]
+        np.testing.assert_allclose(a.centers[ia], b.centers[ib], atol=1e-9)
+        np.testing.assert_allclose(a.sizes[ia], b.sizes[ib], atol=1e-9)
+        np.testing.assert_allclose(a.yaws[ia], b.yaws[ib], atol=1e-9)
