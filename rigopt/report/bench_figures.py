@@ -8,7 +8,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from rigopt.bench.dataset import TrainingSample
-from rigopt.bench.scene_model import CLASSES
+from rigopt.bench.scene_model import CLASSES, Boxes
 
 #: Edges of a box over the corner order of ``ego_corners`` (bottom four, then top four).
 _EDGES = [(0, 1), (1, 2), (2, 3), (3, 0), (4, 5), (5, 6), (6, 7), (7, 4), (0, 4), (1, 5), (2, 6), (3, 7)]
@@ -16,11 +16,8 @@ _EDGES = [(0, 1), (1, 2), (2, 3), (3, 0), (4, 5), (5, 6), (6, 7), (7, 4), (0, 4)
 
 def ego_corners(sample: TrainingSample) -> np.ndarray:
     """(n, 8, 3) float: the sample's box corners in the ego frame (bottom four, then top four), metres."""
-    signs = np.array([[sx, sy, sz] for sz in (-1, 1) for sx, sy in ((1, 1), (1, -1), (-1, -1), (-1, 1))])
-    local = signs[None] * sample.sizes[:, None] / 2.0
-    c, s = np.cos(sample.yaws)[:, None], np.sin(sample.yaws)[:, None]
-    return np.stack([local[..., 0] * c - local[..., 1] * s, local[..., 0] * s + local[..., 1] * c, local[..., 2]],
-                    axis=-1) + sample.centers[:, None]
+    n = len(sample.classes)
+    return Boxes(sample.centers, sample.sizes, sample.yaws, sample.classes, np.arange(n)).corners()
 
 
 def project(points_ego: np.ndarray, T_ego_cam: np.ndarray, intrinsics: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
