@@ -115,7 +115,8 @@ class DesignResult:
         return self.references[0]
 
 
-def _progress_none(message: str) -> None:
+def no_progress(message: str) -> None:
+    """A progress callback that shows nothing."""
     return None
 
 
@@ -180,7 +181,7 @@ class Prepared:
 
 
 def prepare(vehicle: Vehicle, references: Sequence[Rig], calibration: Calibration, settings: DesignSettings,
-            progress: Callable[[str], None] = _progress_none) -> Prepared:
+            progress: Callable[[str], None] = no_progress) -> Prepared:
     """Candidates, costs and the coverage of the candidates worth considering."""
     spacing = settings.spacing or default_spacing(vehicle, settings)
     progress(f"sampling mount candidates on {vehicle.name} (spacing {spacing:.2f} m)")
@@ -205,7 +206,7 @@ def fleet_requirements(references: Sequence[Rig], settings: DesignSettings) -> n
 
 
 def select_valid(prepared: Prepared, vehicle: Vehicle, calibration: Calibration, needed: np.ndarray,
-                 counts: tuple[int, int], settings: DesignSettings, progress: Callable[[str], None] = _progress_none):
+                 counts: tuple[int, int], settings: DesignSettings, progress: Callable[[str], None] = no_progress):
     """The best selection meeting ``needed`` whose cameras all pass the mount checks.
 
     Returns (rig, selection, check, repairs, offered count). Raises DesignInfeasible with the uncoverable
@@ -242,7 +243,7 @@ def select_valid(prepared: Prepared, vehicle: Vehicle, calibration: Calibration,
 
 
 def design_rig(vehicle: Vehicle, reference: Rig | Sequence[Rig], calibration: Calibration,
-               settings: DesignSettings = DesignSettings(), progress: Callable[[str], None] = _progress_none
+               settings: DesignSettings = DesignSettings(), progress: Callable[[str], None] = no_progress
                ) -> DesignResult:
     """Design a rig on ``vehicle`` for a detector trained on ``reference`` (one rig, or a fleet of rigs;
     see the module docstring)."""

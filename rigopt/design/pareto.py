@@ -12,9 +12,8 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Callable, Sequence
 
-import numpy as np
 
-from rigopt.design.designer import (DesignSettings, _progress_none, fleet_requirements, prepare, select_valid,
+from rigopt.design.designer import (DesignSettings, no_progress, fleet_requirements, prepare, select_valid,
                                     summarise)
 from rigopt.design.selection import DesignInfeasible
 from rigopt.metrics.calibration import Calibration
@@ -43,7 +42,7 @@ class ParetoPoint:
 
 def pareto_designs(vehicle: Vehicle, references: Sequence[Rig], calibration: Calibration, settings: DesignSettings,
                    counts: tuple[int, int], levels: Sequence[str] = tuple(LEVELS),
-                   progress: Callable[[str], None] = _progress_none) -> list[ParetoPoint]:
+                   progress: Callable[[str], None] = no_progress) -> list[ParetoPoint]:
     """Solve every camera count in ``counts`` (inclusive range) at every coverage level."""
     prepared = prepare(vehicle, list(references), calibration, settings, progress)
     points = []

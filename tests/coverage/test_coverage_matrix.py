@@ -5,7 +5,6 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rigopt.coverage.footprint import Footprint
 from rigopt.coverage.matrix import coverage_matrix, rig_coverage_matrix, sector_points
 from rigopt.coverage.visibility import visible
 from rigopt.geometry import rotation_from_yaw_pitch_roll

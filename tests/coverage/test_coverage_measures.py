@@ -9,7 +9,6 @@ import math
 import numpy as np
 import pytest
 
-from rigopt.coverage.footprint import Footprint
 from rigopt.coverage.measures import camera_coverage, compare_coverage, coverage_report, ring_coverage
 
 VHALF_DEG = math.degrees(math.atan(0.5625))  # half the vertical FOV of a 90 deg, 1280 x 720 pinhole

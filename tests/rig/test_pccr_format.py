@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 
 from rigopt.errors import RigFileError
 from rigopt.geometry import quaternion_to_matrix
-from rigopt.rig.library import library_rig, rig_names
+from rigopt.rig.library import library_rig
 from rigopt.rig.model import Camera, Rig
 from rigopt.rig.pccr_format import read_rig, rig_from_dict, rig_to_dict, write_rig
 
