@@ -120,13 +120,20 @@ def geodesic_distance(rotation_a, rotation_b):
     """Angle of ``M = Ra^T Rb`` in radians, in [0, pi]: the metric's ``arccos((trace(M) - 1) / 2)``.
 
     rotation_a, rotation_b : (..., 3, 3) float, broadcastable. Returns (...,) float radians.
+    """
+    a, b = np.asarray(rotation_a, dtype=float), np.asarray(rotation_b, dtype=float)
+    return rotation_angle(np.swapaxes(a, -1, -2) @ b)
+
+
+def rotation_angle(relative):
+    """Angle in radians, in [0, pi], of relative rotations ``M`` (..., 3, 3) (e.g. ``Ra^T Rb``).
+
     Computed as ``atan2(||M - M^T||_F / (2 sqrt 2), (trace(M) - 1) / 2)``: the sine and cosine of the same
     angle for a rotation, but well conditioned everywhere, where the arccos of a rounded trace is off by up
     to sqrt(machine epsilon) ~ 1e-8 rad near 0 and pi. ``M`` of a rotation with itself is exactly
     symmetric, so the distance of a rotation to itself is exactly 0.
     """
-    a, b = np.asarray(rotation_a, dtype=float), np.asarray(rotation_b, dtype=float)
-    m = np.swapaxes(a, -1, -2) @ b
+    m = np.asarray(relative, dtype=float)
     skew = m - np.swapaxes(m, -1, -2)
     sine = np.sqrt(np.einsum("...ij,...ij->...", skew, skew) / 8.0)
     cosine = (np.trace(m, axis1=-2, axis2=-1) - 1.0) / 2.0

@@ -21,7 +21,7 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from rigopt.errors import RigoptError
-from rigopt.geometry import geodesic_distance
+from rigopt.geometry import rotation_angle
 from rigopt.rig.model import Rig
 
 DEFAULT_ALPHA = 0.9
@@ -38,10 +38,22 @@ def camera_costs(positions_a, rotations_a, fovs_a, positions_b, rotations_b, fov
     pa, pb = np.asarray(positions_a, dtype=float), np.asarray(positions_b, dtype=float)
     d = pa[..., :, None, :] - pb[..., None, :, :]
     t = np.sqrt(np.einsum("...k,...k->...", d, d))
-    r = geodesic_distance(np.asarray(rotations_a, dtype=float)[..., :, None, :, :],
-                          np.asarray(rotations_b, dtype=float)[..., None, :, :, :])
+    ra, rb = np.asarray(rotations_a, dtype=float), np.asarray(rotations_b, dtype=float)
+    r = rotation_angle(_relative_rotations(ra, rb))
     f = np.abs(np.asarray(fovs_a, dtype=float)[..., :, None] - np.asarray(fovs_b, dtype=float)[..., None, :])
     return t, r, f
+
+
+def _relative_rotations(ra: np.ndarray, rb: np.ndarray) -> np.ndarray:
+    """``Ra_i^T Rb_j`` for every pair: ra (..., Na, 3, 3), rb (..., Nb, 3, 3) -> (..., Na, Nb, 3, 3), as one
+    batched matrix product (many tiny 3 x 3 products are slow in numpy)."""
+    na, nb = ra.shape[-3], rb.shape[-3]
+    lead = np.broadcast_shapes(ra.shape[:-3], rb.shape[:-3])
+    ra, rb = np.broadcast_to(ra, (*lead, na, 3, 3)), np.broadcast_to(rb, (*lead, nb, 3, 3))
+    left = np.swapaxes(ra, -1, -2).reshape(*lead, na * 3, 3)  # rows (i, column of Ra), summing over k
+    right = np.moveaxis(rb, -3, -2).reshape(*lead, 3, nb * 3)  # (k, (j, column of Rb))
+    product = (left @ right).reshape(*lead, na, 3, nb, 3)
+    return np.moveaxis(product, -2, -3)
 
 
 def check_weights(alpha: float, lambdas: Sequence[float]) -> tuple[float, tuple[float, float, float]]:
