@@ -159,3 +159,47 @@ def assemble(root: Path, rig: Rig, split: str, size: tuple[int, int]) -> Path:
     folder = save_tables(root, version, tables)
     write_nuscenes_calibration(rig, folder, image_size=size)
     return root
+
+
+def ego_mesh_lookup(warn: Callable[[str], None] = lambda message: None) -> Callable[[Rig], object]:
+    """``ego_mesh_of(rig)``: the mesh of the rig's vehicle, loaded once per vehicle; None (after ``warn``)
+    for a vehicle rigopt has no mesh of, which is then rendered without its body."""
+    from rigopt.vehicle.library import load_vehicle
+
+    meshes: dict[str, object] = {}
+
+    def ego_mesh_of(rig: Rig):
+        if rig.vehicle not in meshes:
+            try:
+                meshes[rig.vehicle] = load_vehicle(rig.vehicle).mesh
+            except RigoptError:
+                warn(f"no mesh for vehicle {rig.vehicle!r}: rendering {rig.name} without the ego body "
+                     "(no self-occlusion)")
+                meshes[rig.vehicle] = None
+        return meshes[rig.vehicle]
+
+    return ego_mesh_of
+
+
+def split_layout(root) -> tuple[list[Scene], tuple[int, int]]:
+    """The scenes of a generated split ``root`` (regenerated from the seeds in their names, with their
+    sample counts) and its image size (width, height): what renders the same split under another rig."""
+    import re
+
+    from rigopt.bench.scenes import generate_scene
+
+    root = Path(root)
+    tables = sorted(root.glob("v1.0-*/scene.json"))
+    if not tables:
+        raise RigoptError(f"{root}: no v1.0-*/scene.json; is it a split made by rigopt bench generate?")
+    split = tables[0].parent.name.removeprefix("v1.0-")
+    scenes = []
+    for record in json.loads(tables[0].read_text()):
+        seed = re.search(r"-s(\d+)$", record["name"])
+        if seed is None:
+            raise RigoptError(f"{root}: scene {record['name']!r} was not made by rigopt bench generate (no seed)")
+        scenes.append(generate_scene(int(seed.group(1)), split, int(record["nbr_samples"]), name=record["name"]))
+    sample_data = json.loads((tables[0].parent / "sample_data.json").read_text())
+    if not scenes or not sample_data:
+        raise RigoptError(f"{root}: the split has no scenes or images")
+    return scenes, (int(sample_data[0]["width"]), int(sample_data[0]["height"]))

@@ -29,12 +29,11 @@ def generate_command(
     """Render the same scenes under every rig and write images and nuScenes tables (resumable)."""
     from rich.progress import Progress
 
-    from rigopt.bench.generate import generate_split
+    from rigopt.bench.generate import ego_mesh_lookup, generate_split
     from rigopt.bench.render import render_rig
     from rigopt.bench.scenes import generate_scene, split_seeds
     from rigopt.cli.rig_commands import parse_image_size
     from rigopt.rig.library import load_rig
-    from rigopt.vehicle.library import load_vehicle
 
     if scenes < 1 or frames < 1:
         raise RigoptError(f"--scenes and --frames must be at least 1, got {scenes} and {frames}")
@@ -46,17 +45,7 @@ def generate_command(
     except OSError as error:
         raise RigoptError(f"{out}: cannot create the output folder ({error.strerror})") from None
 
-    meshes = {}
-
-    def ego_mesh_of(rig):
-        if rig.vehicle not in meshes:
-            try:
-                meshes[rig.vehicle] = load_vehicle(rig.vehicle).mesh
-            except RigoptError:
-                console.print(f"[yellow]warning:[/] no mesh for vehicle {rig.vehicle!r}: rendering {rig.name} "
-                              "without the ego body (no self-occlusion)")
-                meshes[rig.vehicle] = None
-        return meshes[rig.vehicle]
+    ego_mesh_of = ego_mesh_lookup(lambda message: console.print(f"[yellow]warning:[/] {message}"))
 
     seeds = [s + seed * 10_000_000 for s in split_seeds(split, scenes)]
     scene_list = [generate_scene(s, split, frames, name=f"scene-{split}-{k:04d}-s{s}") for k, s in enumerate(seeds)]

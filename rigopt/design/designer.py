@@ -185,9 +185,7 @@ def prepare(vehicle: Vehicle, references: Sequence[Rig], calibration: Calibratio
     """Candidates, costs and the coverage of the candidates worth considering."""
     spacing = settings.spacing or default_spacing(vehicle, settings)
     progress(f"sampling mount candidates on {vehicle.name} (spacing {spacing:.2f} m)")
-    yaws = np.arange(-180.0, 180.0, settings.yaw_step_deg)
-    candidates = build_candidates(vehicle, settings.lenses, spacing, yaws, settings.pitches_deg, settings.zones,
-                                  settings.rules)
+    candidates = mount_candidates(vehicle, settings, spacing)
     costs = tuple(matching_costs(candidates, rig, calibration) for rig in references)
     points, distance, height, _, azimuth = sector_points(Footprint.of_mesh(vehicle.mesh), settings.coverage)
     no_sees, no_needs = np.zeros((len(candidates), 0), bool), np.zeros(0, int)
@@ -198,6 +196,15 @@ def prepare(vehicle: Vehicle, references: Sequence[Rig], calibration: Calibratio
                         np.tile([1280, 720], (len(pool), 1)), points, settings.coverage.max_range,
                         settings.coverage.backend)
     return Prepared(tuple(references), candidates, costs, points, distance, height, azimuth, pool, sees_pool, spacing)
+
+
+def mount_candidates(vehicle: Vehicle, settings: DesignSettings, spacing: float | None = None) -> CandidateSet:
+    """Every valid (mount point, orientation, lens) of ``vehicle`` on the settings' grid; ``spacing`` (m)
+    defaults to the settings' or one sized from the vehicle."""
+    spacing = spacing or settings.spacing or default_spacing(vehicle, settings)
+    yaws = np.arange(-180.0, 180.0, settings.yaw_step_deg)
+    return build_candidates(vehicle, settings.lenses, spacing, yaws, settings.pitches_deg, settings.zones,
+                            settings.rules)
 
 
 def fleet_requirements(references: Sequence[Rig], settings: DesignSettings) -> np.ndarray:

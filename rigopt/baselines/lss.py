@@ -1,0 +1,79 @@
+"""An LSS-style detector (the family of BEVDet and BEVFusion's camera branch): lift, splat, detect.
+
+1. Encode each camera image to (C, h, w) features at 1/8 resolution.
+2. Lift: per feature cell predict a distribution over D depth bins and a context vector; the outer
+   product places the context along the cell's ray at every bin's depth, weighted by its probability.
+3. Splat: every lifted point goes, through the camera calibration, to the ego-frame bird's-eye cell
+   below it (points more than 2 m below the ground or 6 m above it are dropped); cells sum their points.
+4. A bird's-eye CNN and a centre-heatmap head (``center_head.py``) detect the boxes.
+
+Any camera count works: the calibration of the rig at hand decides where each camera's features land.
+"""
+
+from __future__ import annotations
+
+import torch
+from torch import nn
+from torch.nn import functional as F
+
+from rigopt.baselines.center_head import CenterHead
+from rigopt.baselines.config import ModelConfig
+from rigopt.baselines.data import Batch
+from rigopt.baselines.layers import ImageEncoder, conv_block, pixel_rays
+
+HEIGHT_LIMITS = (-2.0, 6.0)  # m, ego z of the lifted points kept
+
+
+class LSSDetector(nn.Module):
+    family = "lss"
+
+    def __init__(self, config: ModelConfig):
+        super().__init__()
+        self.config = config
+        self.encoder = ImageEncoder(config.width)
+        channels = self.encoder.out_channels
+        self.context_channels = config.bev_channels
+        self.depth_net = nn.Conv2d(channels, config.depth_bins + config.bev_channels, 1)
+        step = (config.depth_max - config.depth_min) / config.depth_bins
+        self.register_buffer("depths", config.depth_min + step * (torch.arange(config.depth_bins) + 0.5),
+                             persistent=False)
+        self.head = CenterHead(config.bev_channels, config.bev_range, config.bev_cell)
+        c = config.bev_channels
+        self.bev_near = nn.Sequential(conv_block(c, c), conv_block(c, c))
+        self.bev_far = nn.Sequential(conv_block(c, 2 * c, 2), conv_block(2 * c, 2 * c))
+        self.bev_merge = conv_block(3 * c, c)
+
+    def forward(self, batch: Batch) -> dict:
+        b, n = batch.images.shape[:2]
+        features = self.encoder(batch.images.flatten(0, 1))  # (B*N, C, h, w)
+        h, w = features.shape[-2:]
+        lifted = self.depth_net(features)
+        depth = lifted[:, :self.config.depth_bins].softmax(dim=1)  # (B*N, D, h, w)
+        context = lifted[:, self.config.depth_bins:]  # (B*N, Cc, h, w)
+        volume = depth[:, :, None] * context[:, None]  # (B*N, D, Cc, h, w)
+        bev = self.splat(volume.view(b, n, *volume.shape[1:]), batch, (h, w))
+        near = self.bev_near(bev)
+        far = F.interpolate(self.bev_far(near), size=near.shape[-2:], mode="bilinear", align_corners=False)
+        return self.head(self.bev_merge(torch.cat([near, far], dim=1)))
+
+    def splat(self, volume: torch.Tensor, batch: Batch, feature_hw) -> torch.Tensor:
+        """(B, N, D, Cc, h, w) lifted features -> (B, Cc, G, G) bird's-eye features (sum per cell)."""
+        b, n, d, c, h, w = volume.shape
+        g, cell, half = self.head.grid, self.config.bev_cell, self.config.bev_range
+        origins, directions = pixel_rays(batch.intrinsics, batch.cam_to_ego, feature_hw, self.encoder.stride)
+        points = origins[:, :, None] + self.depths[None, None, :, None, None, None] * directions[:, :, None]
+        ix = torch.floor((points[..., 0] + half) / cell).long()  # (B, N, D, h, w)
+        iy = torch.floor((points[..., 1] + half) / cell).long()
+        kept = (ix >= 0) & (ix < g) & (iy >= 0) & (iy < g) & (points[..., 2] >= HEIGHT_LIMITS[0]) & (
+            points[..., 2] <= HEIGHT_LIMITS[1])
+        sample = torch.arange(b, device=volume.device)[:, None, None, None, None].expand_as(ix)
+        flat = (sample * g * g + ix * g + iy)[kept]
+        values = volume.permute(0, 1, 2, 4, 5, 3)[kept]  # (P, Cc)
+        bev = volume.new_zeros(b * g * g, c).index_add_(0, flat, values)
+        return bev.view(b, g, g, c).permute(0, 3, 1, 2).contiguous()
+
+    def loss(self, outputs: dict, batch: Batch) -> tuple[torch.Tensor, dict]:
+        return self.head.loss(outputs, batch.boxes)
+
+    def detections(self, outputs: dict, top_k: int = 100) -> list[dict]:
+        return self.head.decode(outputs, top_k)

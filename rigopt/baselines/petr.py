@@ -1,0 +1,162 @@
+"""A PETR-style detector: image features that know their 3D rays, decoded by object queries.
+
+1. Encode each camera image to (C, h, w) features at 1/8 resolution.
+2. 3D position embedding: each feature cell's ray, through the camera calibration, sampled at P depths
+   (m, along the optical axis, spaced closer near the camera) in the ego frame, normalised by the
+   bird's-eye range, becomes a (3 P)-vector; an MLP maps it to C and it is added to the features. The
+   tokens of all N cameras form one memory of N h w tokens.
+3. Q object queries, each anchored at a learned bird's-eye reference point, attend to the memory through
+   a transformer decoder; after every layer a class head (sigmoid per class) and a box head predict the
+   box: the centre as a refinement of the reference point, z, log sizes, sin and cos of the yaw.
+4. Training matches queries to boxes one to one (Hungarian, on class and centre costs) and applies a
+   focal class loss to all queries and L1 box losses to the matched ones, after every layer.
+
+Any camera count works: the memory is as long as the rig's cameras make it.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import torch
+from scipy.optimize import linear_sum_assignment
+from torch import nn
+from torch.nn import functional as F
+
+from rigopt.baselines.config import ModelConfig
+from rigopt.baselines.data import Batch
+from rigopt.baselines.layers import ImageEncoder, pixel_rays
+from rigopt.bench.scene_model import CLASSES
+
+Z_SCALE = 4.0  # m: z of centres and position-embedding points is divided by this
+#: Loss weights: focal class loss, L1 of the normalised centre, L1 of the other box terms.
+CLASS_WEIGHT, CENTER_WEIGHT, BOX_WEIGHT = 2.0, 10.0, 1.0
+
+
+def _mlp(c_in: int, c_hidden: int, c_out: int) -> nn.Sequential:
+    return nn.Sequential(nn.Linear(c_in, c_hidden), nn.ReLU(inplace=True), nn.Linear(c_hidden, c_out))
+
+
+class PETRDetector(nn.Module):
+    family = "petr"
+
+    def __init__(self, config: ModelConfig, n_classes: int = len(CLASSES)):
+        super().__init__()
+        self.config, self.n_classes = config, n_classes
+        self.encoder = ImageEncoder(config.width)
+        c = self.encoder.out_channels
+        fraction = (torch.arange(config.position_depths) + 0.5) / config.position_depths
+        self.register_buffer("depths", config.depth_min + (config.depth_max - config.depth_min) * fraction ** 1.5,
+                             persistent=False)
+        self.position = _mlp(3 * config.position_depths, c, c)
+        self.input_projection = nn.Conv2d(c, c, 1)
+        side = math.ceil(math.sqrt(config.queries))
+        grid = (torch.stack(torch.meshgrid(torch.arange(side), torch.arange(side), indexing="ij"), -1)
+                .reshape(-1, 2)[:config.queries].float() + 0.5) / side
+        self.reference = nn.Parameter(torch.logit(grid.clamp(0.02, 0.98)))  # (Q, 2) in logit space
+        self.query_content = nn.Parameter(torch.zeros(config.queries, c))
+        self.query_position = _mlp(2, c, c)
+        self.layers = nn.ModuleList([nn.TransformerDecoderLayer(c, config.heads, 2 * c, dropout=0.0, batch_first=True)
+                                     for _ in range(config.decoder_layers)])
+        self.class_head = nn.Linear(c, n_classes)
+        self.box_head = _mlp(c, c, 8)
+        nn.init.constant_(self.class_head.bias, -math.log((1 - 0.01) / 0.01))
+
+    def forward(self, batch: Batch) -> dict:
+        b, n = batch.images.shape[:2]
+        features = self.input_projection(self.encoder(batch.images.flatten(0, 1)))  # (B*N, C, h, w)
+        h, w = features.shape[-2:]
+        origins, directions = pixel_rays(batch.intrinsics, batch.cam_to_ego, (h, w), self.encoder.stride)
+        points = origins[..., None, :] + self.depths[:, None] * directions[..., None, :]  # (B, N, h, w, P, 3)
+        scale = points.new_tensor([self.config.bev_range, self.config.bev_range, Z_SCALE])
+        embedding = self.position((points / scale).flatten(-2))  # (B, N, h, w, C)
+        memory = features.view(b, n, -1, h, w).permute(0, 1, 3, 4, 2) + embedding
+        memory = memory.reshape(b, n * h * w, -1)
+
+        reference = torch.sigmoid(self.reference)  # (Q, 2) in [0, 1] over the bird's-eye square
+        x = (self.query_content + self.query_position(reference * 2 - 1))[None].expand(b, -1, -1)
+        logits, boxes = [], []
+        for layer in self.layers:
+            x = layer(x, memory)
+            raw = self.box_head(x)  # (B, Q, 8)
+            center = torch.sigmoid(self.reference[None] + raw[..., :2])
+            boxes.append(torch.cat([center, raw[..., 2:]], dim=-1))
+            logits.append(self.class_head(x))
+        return {"logits": logits, "boxes": boxes}
+
+    def box_targets(self, centers, sizes, yaws) -> torch.Tensor:
+        """(n, 8) regression targets in the box head's units: centre x, y in [0, 1] over the square,
+        z / Z_SCALE, log sizes, sin and cos of the yaw."""
+        r = self.config.bev_range
+        return torch.cat([(centers[:, :2] + r) / (2 * r), centers[:, 2:3] / Z_SCALE, torch.log(sizes.clamp(min=0.05)),
+                          torch.sin(yaws)[:, None], torch.cos(yaws)[:, None]], dim=1)
+
+    def loss(self, outputs: dict, batch: Batch) -> tuple[torch.Tensor, dict]:
+        total, parts = 0.0, {"class": 0.0, "center": 0.0, "box": 0.0}
+        targets = []
+        r = self.config.bev_range
+        for boxes in batch.boxes:
+            inside = (boxes.centers[:, :2].abs() < r).all(dim=1)
+            targets.append((boxes.classes[inside], self.box_targets(boxes.centers[inside], boxes.sizes[inside],
+                                                                    boxes.yaws[inside])))
+        n_boxes = max(sum(len(t[0]) for t in targets), 1)
+        for logits, boxes in zip(outputs["logits"], outputs["boxes"]):
+            class_target = torch.zeros_like(logits)
+            center_loss = box_loss = logits.new_zeros(())
+            for i, (classes, target) in enumerate(targets):
+                if not len(classes):
+                    continue
+                queries, matched = hungarian_match(logits[i], boxes[i], classes, target)
+                class_target[i, queries, classes[matched]] = 1.0
+                center_loss = center_loss + F.l1_loss(boxes[i, queries, :2], target[matched, :2], reduction="sum")
+                box_loss = box_loss + F.l1_loss(boxes[i, queries, 2:], target[matched, 2:], reduction="sum")
+            class_loss = sigmoid_focal_loss(logits, class_target) / n_boxes
+            layer_loss = (CLASS_WEIGHT * class_loss + CENTER_WEIGHT * center_loss / n_boxes
+                          + BOX_WEIGHT * box_loss / n_boxes)
+            total = total + layer_loss
+            parts = {"class": float(class_loss.detach()), "center": float(center_loss.detach()) / n_boxes,
+                     "box": float(box_loss.detach()) / n_boxes}  # the last layer's terms
+        return total, parts
+
+    @torch.no_grad()
+    def detections(self, outputs: dict, top_k: int = 100) -> list[dict]:
+        """Per sample the ``top_k`` best (query, class) pairs of the last layer: centers (k, 3) m, sizes (k, 3),
+        yaws (k,), classes (k,), scores (k,), tensors on the CPU."""
+        logits, boxes = outputs["logits"][-1], outputs["boxes"][-1]
+        b, q, k = logits.shape
+        scores, flat = torch.sigmoid(logits).reshape(b, -1).topk(min(top_k, q * k), dim=1)
+        query, classes = flat // k, flat % k
+        r = self.config.bev_range
+        results = []
+        for i in range(b):
+            box = boxes[i, query[i]]
+            results.append({"centers": torch.cat([box[:, :2] * 2 * r - r, box[:, 2:3] * Z_SCALE], dim=1).cpu(),
+                            "sizes": torch.exp(box[:, 3:6].clamp(max=4)).cpu(),
+                            "yaws": torch.atan2(box[:, 6], box[:, 7]).cpu(),
+                            "classes": classes[i].cpu(), "scores": scores[i].cpu()})
+        return results
+
+
+@torch.no_grad()
+def hungarian_match(logits: torch.Tensor, boxes: torch.Tensor, classes: torch.Tensor,
+                    target: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+    """One-to-one matching of Q queries to n boxes minimising CLASS_WEIGHT x focal class cost + CENTER_WEIGHT
+    x L1 centre distance; logits (Q, K), boxes (Q, 8), classes (n,), target (n, 8). Returns matched query
+    indices and box indices, (m,) each, m = min(Q, n)."""
+    p = torch.sigmoid(logits[:, classes])  # (Q, n)
+    class_cost = 0.25 * (1 - p) ** 2 * -torch.log(p + 1e-8) - 0.75 * p ** 2 * -torch.log(1 - p + 1e-8)
+    center_cost = torch.cdist(boxes[:, :2], target[:, :2], p=1)
+    cost = (CLASS_WEIGHT * class_cost + CENTER_WEIGHT * center_cost).cpu().numpy()
+    rows, cols = linear_sum_assignment(np.nan_to_num(cost, nan=1e6))
+    device = logits.device
+    return torch.as_tensor(rows, device=device, dtype=torch.long), torch.as_tensor(cols, device=device, dtype=torch.long)
+
+
+def sigmoid_focal_loss(logits: torch.Tensor, target: torch.Tensor, alpha: float = 0.25, gamma: float = 2.0):
+    """Summed sigmoid focal loss of logits and 0/1 targets of the same shape."""
+    p = torch.sigmoid(logits)
+    ce = F.binary_cross_entropy_with_logits(logits, target, reduction="none")
+    p_t = p * target + (1 - p) * (1 - target)
+    weight = alpha * target + (1 - alpha) * (1 - target)
+    return (weight * ce * (1 - p_t) ** gamma).sum()

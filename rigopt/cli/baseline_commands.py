@@ -1,0 +1,190 @@
+"""``rigopt bench train | evaluate | matrix`` and ``rigopt validate``: the torch baselines and the protocol.
+
+torch is imported only inside these commands, so the rest of rigopt runs without it.
+"""
+
+from __future__ import annotations
+
+import contextlib
+from pathlib import Path
+from typing import List, Optional
+
+import typer
+
+from rigopt.cli.app import app, console, print_json, print_table
+from rigopt.cli.bench_commands import bench_app
+from rigopt.errors import RigoptError
+
+MODEL_HELP = "Detector family: lss (lift-splat, BEVDet-like) or petr (3D position embeddings, PETR-like)."
+SIZE_HELP = "Model size preset: tiny (tests), small (CPU), base (GPU)."
+DEVICE_HELP = "cpu, cuda or cuda:K."
+RUNS_HELP = "Training runs folder (<runs>/<model>/<rig>/checkpoint.pt); default <data>/runs."
+
+
+def require_torch() -> None:
+    try:
+        import torch  # noqa: F401
+    except ImportError:
+        raise RigoptError("the baselines need torch: pip install torch==2.13.0 (or pip install -e '.[bench]')") from None
+
+
+@contextlib.contextmanager
+def training_bar(label: str):
+    """A progress bar; yields ``step(epoch, step, total_steps, loss)`` to advance it."""
+    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+
+    columns = (TextColumn("{task.description}"), BarColumn(), TextColumn("{task.completed}/{task.total} steps"),
+               TimeElapsedColumn(), TimeRemainingColumn())
+    with Progress(*columns, console=console, transient=True) as progress:
+        task = progress.add_task(label, total=None)
+
+        def step(epoch: int, done: int, total: int, loss: float) -> None:
+            progress.update(task, completed=done, total=total,
+                            description=f"{label} | epoch {epoch + 1} | loss {loss:.3f}")
+
+        yield step
+
+
+@bench_app.command("train")
+def train_command(
+    data: Path = typer.Option(..., "--data", help="Benchmark folder made by rigopt bench generate (<data>/<rig>/train)."),
+    rig: str = typer.Option(..., "--rig", help="Rig to train on (a folder under --data)."),
+    model: str = typer.Option(..., "--model", help=MODEL_HELP),
+    size: str = typer.Option("small", "--size", help=SIZE_HELP),
+    epochs: Optional[int] = typer.Option(None, "--epochs", help="Epochs in total (default: the size preset's)."),
+    device: str = typer.Option("cpu", "--device", help=DEVICE_HELP),
+    seed: int = typer.Option(0, "--seed", help="Seed of the weights and the sample order."),
+    runs: Optional[Path] = typer.Option(None, "--runs", help=RUNS_HELP),
+):
+    """Train a detector on one rig's train split; rerun to resume from the last finished epoch."""
+    require_torch()
+    from rigopt.baselines.config import model_config
+    from rigopt.baselines.models import resolve_device
+    from rigopt.baselines.protocol import configured, train_on
+
+    config = configured(model_config(model, size), epochs)
+    resolve_device(device)
+    runs = runs if runs is not None else data / "runs"
+    with training_bar(f"{config.family} on {rig}") as step:
+        run = train_on(data, rig, config, runs, device, seed, step)
+    if run.steps_now == 0:
+        console.print(f"{config.family} on {rig}: already trained for {run.epochs} epochs; checkpoint {run.checkpoint} "
+                      "(ask for more with --epochs)")
+        return
+    console.print(f"{config.family} on {rig}: {run.epochs}/{config.epochs} epochs, final epoch loss "
+                  f"{run.final_loss:.4f}, {run.samples_per_second:.1f} samples/s; checkpoint {run.checkpoint}, "
+                  f"log {run.folder / 'train_log.csv'}")
+
+
+@bench_app.command("evaluate")
+def evaluate_command(
+    data: Path = typer.Option(..., "--data", help="Benchmark folder (<data>/<rig>/<split>)."),
+    rig: str = typer.Option(..., "--rig", help="Rig whose split to test on."),
+    model: str = typer.Option(..., "--model", help=MODEL_HELP),
+    trained_on: Optional[str] = typer.Option(None, "--trained-on", help="Rig the model was trained on (its run "
+                                                                        "under --runs); default: --rig."),
+    checkpoint: Optional[Path] = typer.Option(None, "--checkpoint", help="A checkpoint file instead of --trained-on."),
+    split: str = typer.Option("test", "--split", help="Split to test on."),
+    device: str = typer.Option("cpu", "--device", help=DEVICE_HELP),
+    runs: Optional[Path] = typer.Option(None, "--runs", help=RUNS_HELP),
+    as_json: bool = typer.Option(False, "--json", help="Print the benchmark's metrics JSON."),
+):
+    """Evaluate a trained detector on any rig's split: centre-distance AP per class and mAP."""
+    require_torch()
+    from rigopt.baselines.config import model_config
+    from rigopt.baselines.protocol import evaluate_on, run_folder
+
+    family = model_config(model).family
+    if checkpoint is None:
+        checkpoint = run_folder(runs if runs is not None else data / "runs", family, trained_on or rig) / "checkpoint.pt"
+    with console.status(f"evaluating {checkpoint} on {rig}/{split}"):
+        metrics = evaluate_on(checkpoint, data, rig, device, family, split)
+    if as_json:
+        print_json(metrics)
+        return
+    raw = metrics["raw"]
+    classes = sorted({key.split("_AP_dist_")[0] for key in raw}, key=list(raw).index)
+    thresholds = sorted({key.split("_AP_dist_")[1] for key in raw}, key=float)
+    rows = [[name, *(raw[f"{name}_AP_dist_{d}"] if raw[f"{name}_AP_dist_{d}"] is not None else "-" for d in thresholds)]
+            for name in classes]
+    print_table(f"{family} ({checkpoint.parent.name}) on {rig}/{split}: mAP {_number(metrics['mAP'])}",
+                ["class", *(f"AP@{d} m" for d in thresholds)], rows)
+
+
+@bench_app.command("matrix")
+def matrix_command(
+    data: Path = typer.Option(..., "--data", help="Benchmark folder with train and test splits of every rig."),
+    rigs: List[str] = typer.Option(..., "--rigs", help="Rigs: each is trained on and tested on; more may follow as "
+                                                       "arguments (--rigs R1 R1-c6 R2) or commas."),
+    more: List[str] = typer.Argument(None, hidden=True),
+    model: str = typer.Option(..., "--model", help=MODEL_HELP),
+    out: Path = typer.Option(..., "--out", help="Results folder: <out>/<model>/trained_on_<rig>.json."),
+    size: str = typer.Option("small", "--size", help=SIZE_HELP),
+    epochs: Optional[int] = typer.Option(None, "--epochs", help="Epochs per training run (default: the preset's)."),
+    device: str = typer.Option("cpu", "--device", help=DEVICE_HELP),
+    seed: int = typer.Option(0, "--seed", help="Seed of every training run."),
+    runs: Optional[Path] = typer.Option(None, "--runs", help=RUNS_HELP),
+    ray: Optional[str] = typer.Option(None, "--ray", help="Run each training as a task on the Ray cluster at this "
+                                                          "address ('local' starts one here)."),
+):
+    """Train on every rig, test on every rig, write the benchmark's results layout (resumable)."""
+    require_torch()
+    from rigopt.baselines.config import model_config
+    from rigopt.baselines.models import resolve_device
+    from rigopt.baselines.protocol import configured, transfer_matrix
+    from rigopt.metrics.transfer import read_transfer
+
+    config = configured(model_config(model, size), epochs)
+    resolve_device(device)
+    names = [n.strip() for text in [*rigs, *(more or [])] for n in text.split(",") if n.strip()]
+    with training_bar(f"{config.family} matrix") as step:
+        transfer_matrix(data, names, config, out, runs, device, seed, ray,
+                        lambda message: console.print(message), step)
+    table = read_transfer(out)
+    value = {(m, a, b): v for m, a, b, v in zip(table.model, table.train, table.test, table.map)}
+    rows = [[a, *(_number(value.get((config.family, a, b))) for b in names)] for a in names]
+    print_table(f"{config.family}: mAP, trained on (rows) x tested on (columns); results in {out}",
+                ["trained on", *names], rows)
+
+
+@app.command("validate")
+def validate_command(
+    design: Path = typer.Argument(..., help="A designed rig: its rig file or the report.json of rigopt design."),
+    ref: str = typer.Option(..., "--ref", help="Reference rig the detector was trained on."),
+    model: str = typer.Option(..., "--model", help=MODEL_HELP),
+    data: Path = typer.Option(..., "--data", help="Benchmark folder with the reference's test split and trained run."),
+    weights: str = typer.Option("joint", "--weights", help="Calibrated weights for the predicted drops."),
+    device: str = typer.Option("cpu", "--device", help=DEVICE_HELP),
+    runs: Optional[Path] = typer.Option(None, "--runs", help=RUNS_HELP),
+    out: Optional[Path] = typer.Option(None, "--out", help="Also write the result as JSON here."),
+    as_json: bool = typer.Option(False, "--json", help="Print JSON instead of a table."),
+):
+    """Measure a design's transfer drop with a reference-trained detector, beside the predicted drop."""
+    require_torch()
+    import json
+
+    from rigopt.baselines.config import model_config
+    from rigopt.baselines.models import resolve_device
+    from rigopt.baselines.validation import load_design, validate_design
+    from rigopt.metrics.calibration import load_weights
+    from rigopt.report.json_values import json_ready
+
+    family, calibration, rig = model_config(model).family, load_weights(weights), load_design(design)
+    resolve_device(device)
+    with console.status("validating") as status:
+        result = validate_design(rig, ref, family, data, calibration, runs, device, status.update)
+    if out is not None:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        out.write_text(json.dumps(json_ready(result), indent=1) + "\n")
+    if as_json:
+        print_json(result)
+        return
+    rows = [[e["role"], e["rig"], e["n_cameras"], _number(e["mAP"]), _number(e["measured_drop"]),
+             _number(e["predicted_drop"]), e["rigcd"]] for e in result["rigs"]]
+    print_table(f"{family} trained on {result['reference']} (own mAP {_number(result['reference_mAP'])}), "
+                f"{result['test_scenes']} test scenes; predicted with {weights} weights",
+                ["role", "rig", "cameras", "mAP", "measured drop", "predicted drop", "RigCD"], rows)
+
+
+def _number(value) -> str:
+    return "-" if value is None else f"{value:.3f}"

@@ -1,0 +1,297 @@
+"""The two detector families on rigs of different camera counts, and the geometry they rest on.
+
+Oracles:
+* pixel rays: the ray through the principal point is the camera's optical axis (the third column of
+  cam_to_ego's rotation); any other pixel (u, v) goes along forward + (u - cx)/fx * right + (v - cy)/fy * down,
+  with forward, right, down the camera's axes in the ego frame (hand-written for a camera yawed by psi:
+  forward (cos psi, sin psi, 0), right (sin psi, -cos psi, 0), down (0, 0, -1)).
+* splat: a volume that is zero except at chosen (sample, depth bin, pixel, channel) entries gives a bird's-eye
+  map that is zero except at the cells below the hand-computed 3D points, floor((x + range) / cell) and
+  floor((y + range) / cell); points outside the square or the height limits leave no trace.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+torch = pytest.importorskip("torch")
+
+from rigopt.baselines.config import FAMILIES, model_config  # noqa: E402
+from rigopt.baselines.data import Batch, BoxTargets, RigSplit  # noqa: E402
+from rigopt.baselines.layers import pixel_rays  # noqa: E402
+from rigopt.baselines.lss import HEIGHT_LIMITS, LSSDetector  # noqa: E402
+from rigopt.baselines.models import build_model, resolve_device  # noqa: E402
+from rigopt.bench.scene_model import CLASSES  # noqa: E402
+from rigopt.errors import DataError, RigoptError, UnknownNameError  # noqa: E402
+from rigopt.geometry import R_CAM_OPTICAL, rot_z  # noqa: E402
+
+RIG_CAMERAS = {"R1": 8, "R5": 4}
+HEIGHT, WIDTH = 36, 64
+
+
+def camera_to_ego(yaw: float, position) -> torch.Tensor:
+    """cam_to_ego (4, 4) of a level camera yawed by ``yaw`` about ego z, at ``position``."""
+    T = np.eye(4)
+    T[:3, :3] = rot_z(yaw) @ R_CAM_OPTICAL
+    T[:3, 3] = position
+    return torch.tensor(T, dtype=torch.float32)
+
+
+def intrinsics(fx: float, fy: float, cx: float, cy: float) -> torch.Tensor:
+    return torch.tensor([[fx, 0.0, cx], [0.0, fy, cy], [0.0, 0.0, 1.0]], dtype=torch.float32)
+
+
+def hand_point(yaw, position, fx, fy, cx, cy, u, v, depth):
+    """The ego point at ``depth`` (along the optical axis) on the ray of pixel (u, v), by hand."""
+    forward = np.array([math.cos(yaw), math.sin(yaw), 0.0])
+    right = np.array([math.sin(yaw), -math.cos(yaw), 0.0])
+    down = np.array([0.0, 0.0, -1.0])
+    return np.asarray(position, float) + depth * (forward + (u - cx) / fx * right + (v - cy) / fy * down)
+
+
+# ---------------------------------------------------------------- data
+
+
+@pytest.mark.parametrize("rig", sorted(RIG_CAMERAS))
+def test_rig_split_batch_has_the_documented_shapes(tiny_data, rig):
+    split = RigSplit(tiny_data, rig, "train")
+    n = RIG_CAMERAS[rig]
+    assert len(split) == 4 and split.n_cameras == n and list(split.channels) == sorted(split.channels)
+    batch = split.batch([2, 0])
+    assert batch.images.shape == (2, n, 3, HEIGHT, WIDTH) and batch.images.dtype == torch.float32
+    assert 0.0 <= float(batch.images.min()) and float(batch.images.max()) <= 1.0
+    assert float(batch.images.std()) > 0.01  # rendered pictures, not blank
+    assert batch.intrinsics.shape == (2, n, 3, 3) and batch.cam_to_ego.shape == (2, n, 4, 4)
+    assert batch.tokens == [split.samples[2].token, split.samples[0].token]
+    assert len(batch.boxes) == 2 and all(len(b.classes) > 0 for b in batch.boxes)
+    for boxes in batch.boxes:
+        m = len(boxes.classes)
+        assert boxes.centers.shape == (m, 3) and boxes.sizes.shape == (m, 3) and boxes.yaws.shape == (m,)
+        assert boxes.classes.dtype == torch.int64 and int(boxes.classes.min()) >= 0
+        assert int(boxes.classes.max()) < len(CLASSES)
+
+
+def test_rig_split_resize_scales_the_intrinsics_and_range_filters_boxes(tiny_data):
+    native = RigSplit(tiny_data, "R5", "train")
+    half = RigSplit(tiny_data, "R5", "train", image_size=(32, 18), max_range=20.0)
+    assert half.batch([0]).images.shape == (1, 4, 3, 18, 32)
+    expected = native.intrinsics.clone()
+    expected[:, :2] *= 0.5
+    torch.testing.assert_close(half.intrinsics, expected)
+    near = half.targets(0)
+    assert len(near.classes) < len(native.targets(0).classes)
+    assert float(torch.hypot(near.centers[:, 0], near.centers[:, 1]).max()) <= 20.0
+
+
+def test_rig_split_on_a_folder_lacking_the_rig_names_the_rigs_there(tiny_data):
+    with pytest.raises(DataError) as caught:
+        RigSplit(tiny_data, "R9", "train")
+    message = str(caught.value)
+    assert "R9" in message and "R1" in message and "R5" in message
+
+
+def test_rig_split_on_a_missing_data_folder_is_a_data_error(tmp_path):
+    with pytest.raises(DataError, match="no such data folder"):
+        RigSplit(tmp_path / "nowhere", "R1", "train")
+
+
+# ---------------------------------------------------------------- settings and devices
+
+
+def test_unknown_family_and_size_are_unknown_names():
+    with pytest.raises(UnknownNameError) as caught:
+        model_config("yolo", "tiny")
+    assert "yolo" in str(caught.value) and all(f in str(caught.value) for f in FAMILIES)
+    with pytest.raises(UnknownNameError, match="huge"):
+        model_config("lss", "huge")
+    assert isinstance(caught.value, RigoptError)
+
+
+def test_bad_model_settings_are_refused():
+    with pytest.raises(RigoptError, match="depth_bins"):
+        model_config("lss", "tiny", depth_bins=0)
+    with pytest.raises(RigoptError, match="heads"):
+        model_config("petr", "tiny", width=8, heads=3)
+    assert model_config("LSS", "Tiny", width=None).width == model_config("lss", "tiny").width  # None ignored
+
+
+def test_cuda_device_without_cuda_is_refused():
+    if torch.cuda.is_available():
+        pytest.skip("this machine has CUDA")
+    with pytest.raises(RigoptError, match="cpu"):
+        resolve_device("cuda")
+    with pytest.raises(RigoptError):
+        resolve_device("cuda:0")
+
+
+def test_device_names():
+    assert resolve_device("CPU") == torch.device("cpu")
+    with pytest.raises(RigoptError, match="use cpu, cuda"):
+        resolve_device("tpu")
+
+
+# ---------------------------------------------------------------- forward and backward
+
+
+@pytest.mark.parametrize("rig", sorted(RIG_CAMERAS))
+@pytest.mark.parametrize("family", FAMILIES)
+def test_forward_backward_on_rigs_of_different_camera_counts(tiny_data, family, rig):
+    torch.manual_seed(0)
+    config = model_config(family, "tiny")
+    model = build_model(config)
+    assert model.family == family
+    batch = RigSplit(tiny_data, rig, "train").batch([0, 1])
+    assert batch.n_cameras == RIG_CAMERAS[rig]
+
+    outputs = model(batch)
+    loss, parts = model.loss(outputs, batch)
+    assert loss.dim() == 0 and torch.isfinite(loss) and loss.item() > 0
+    assert parts and all(math.isfinite(v) for v in parts.values())
+    loss.backward()
+    for name, parameter in model.named_parameters():
+        assert parameter.grad is None or torch.isfinite(parameter.grad).all(), name
+    encoder = dict(model.encoder.named_parameters())
+    assert all(p.grad is not None for p in encoder.values())
+    first_conv = model.encoder.stage1[0][0].weight
+    assert float(first_conv.grad.abs().sum()) > 0, "no gradient reached the image encoder's first layer"
+
+    top_k = 7
+    found = model.detections(outputs, top_k)
+    assert len(found) == 2
+    for d in found:
+        assert d["centers"].shape == (top_k, 3) and d["sizes"].shape == (top_k, 3)
+        assert d["yaws"].shape == d["classes"].shape == d["scores"].shape == (top_k,)
+        assert d["classes"].dtype == torch.int64
+        assert int(d["classes"].min()) >= 0 and int(d["classes"].max()) < len(CLASSES)
+        scores = d["scores"]
+        assert float(scores.min()) >= 0 and float(scores.max()) <= 1
+        assert torch.all(scores[:-1] >= scores[1:])  # best first
+        assert torch.isfinite(d["centers"]).all() and (d["sizes"] > 0).all()
+        assert float(d["centers"][:, :2].abs().max()) <= config.bev_range + 1e-4  # inside the square
+
+
+@pytest.mark.parametrize("family", FAMILIES)
+def test_outputs_follow_the_calibration(tiny_data, family):
+    """Same images, one camera moved: the detector's outputs change (it uses the rig's calibration)."""
+    torch.manual_seed(0)
+    model = build_model(model_config(family, "tiny")).eval()
+    batch = RigSplit(tiny_data, "R5", "train").batch([0])
+    moved = batch.cam_to_ego.clone()
+    moved[:, 0, :3, 3] += torch.tensor([7.0, -5.0, 0.0])
+    other = Batch(batch.images, batch.intrinsics, moved, batch.boxes, batch.tokens)
+    with torch.no_grad():
+        a, b = model(batch), model(other)
+    key = "heatmap" if family == "lss" else "logits"
+    first, second = (a[key], b[key]) if family == "lss" else (a[key][-1], b[key][-1])
+    assert not torch.allclose(first, second)
+
+
+# ---------------------------------------------------------------- geometry
+
+
+def test_principal_point_ray_is_the_optical_axis():
+    yaw = math.radians(30.0)
+    K = intrinsics(40.0, 50.0, 8.5, 16.5)
+    T = camera_to_ego(yaw, [1.0, -0.5, 1.6])
+    origins, directions = pixel_rays(K[None, None], T[None, None], (3, 2), 8)  # cell (2, 1) centred on (8.5, 16.5)
+    origins, directions = origins, directions[:, :, 2:, 1:]
+    assert origins.shape == (1, 1, 1, 1, 3) and directions.shape == (1, 1, 1, 1, 3)
+    torch.testing.assert_close(origins[0, 0, 0, 0], torch.tensor([1.0, -0.5, 1.6]))
+    forward = torch.tensor([math.cos(yaw), math.sin(yaw), 0.0])
+    torch.testing.assert_close(directions[0, 0, 0, 0], forward)
+    torch.testing.assert_close(directions[0, 0, 0, 0], T[:3, 2])
+
+
+def test_pixel_rays_match_a_hand_computation():
+    yaw = math.radians(-60.0)
+    fx, fy, cx, cy = 40.0, 50.0, 30.0, 20.0
+    T = camera_to_ego(yaw, [0.3, 0.2, 1.2])
+    _, directions = pixel_rays(intrinsics(fx, fy, cx, cy)[None, None], T[None, None], (2, 4), 8)
+    assert directions.shape == (1, 1, 2, 4, 3)
+    for i in range(2):
+        for j in range(4):
+            u, v = 8 * j + 0.5, 8 * i + 0.5  # the cell centre in image pixels: stride 8
+            expected = hand_point(yaw, [0, 0, 0], fx, fy, cx, cy, u, v, 1.0)
+            np.testing.assert_allclose(directions[0, 0, i, j].numpy(), expected, atol=1e-6)
+    # depth is along the optical axis: every direction has optical-z component 1
+    optical = torch.einsum("ij,hwi->hwj", T[:3, :3], directions[0, 0])
+    torch.testing.assert_close(optical[..., 2], torch.ones(2, 4))
+
+
+@pytest.mark.parametrize("rig", sorted(RIG_CAMERAS))
+def test_rig_cameras_principal_rays_are_their_optical_axes(tiny_data, rig):
+    split = RigSplit(tiny_data, rig, "test")
+    batch = split.batch([0])
+    K = batch.intrinsics.clone()
+    # put the principal point on the centre of the single feature cell, pixel (0.5, 0.5)
+    K[..., 0, 2], K[..., 1, 2] = 0.5, 0.5
+    _, directions = pixel_rays(K, batch.cam_to_ego, (1, 1), 8)
+    torch.testing.assert_close(directions[0, :, 0, 0], batch.cam_to_ego[0, :, :3, 2])
+    if "CAM_BUMPER_FRONT" in split.channels:  # R1's front camera looks along ego +x
+        front = directions[0, split.channels.index("CAM_BUMPER_FRONT"), 0, 0]
+        assert float(front[0]) > 0.9
+
+
+def test_splat_puts_each_lifted_feature_in_the_cell_below_it():
+    config = model_config("lss", "tiny", bev_cell=0.8)  # 128 x 128 cells of 0.8 m over +-51.2 m
+    model = LSSDetector(config)
+    depths = model.depths.tolist()
+    assert depths == pytest.approx([6.0, 16.0, 26.0, 36.0, 46.0, 56.0])
+    h, w, channels = 4, 8, 6
+    fx = fy = 40.0
+    cx, cy = 32.0, 16.5  # feature row 2 (v = 16.5) is level
+    cameras = [(0.0, [1.0, 0.5, 1.5]), (math.pi / 2, [-2.0, 0.0, 5.0])]  # sample 0: looks +x, sample 1: +y
+    K = intrinsics(fx, fy, cx, cy).expand(2, 1, 3, 3).clone()
+    T = torch.stack([camera_to_ego(yaw, p) for yaw, p in cameras])[:, None]
+    empty = BoxTargets(torch.zeros(0, 3), torch.zeros(0, 3), torch.zeros(0), torch.zeros(0, dtype=torch.int64))
+    batch = Batch(torch.zeros(2, 1, 3, HEIGHT, WIDTH), K, T, [empty, empty], ["a", "b"])
+
+    # (sample, depth bin, feature row, feature column, channel, value)
+    entries = [(0, 1, 1, 6, 2, 1.0),   # (17, -6.1, 4.7): kept
+               (1, 2, 2, 1, 5, 2.0),   # (-17.3, 26, 5.0): kept
+               (0, 2, 3, 3, 0, 4.0),   # (27, 5.4, -3.7): inside the square but below the ground, dropped
+               (0, 2, 0, 3, 3, 16.0),  # (27, 5.4, 11.9): inside the square but too high, dropped
+               (1, 5, 2, 4, 1, 8.0)]   # (-1.3, 56, 5.0): within the height limits but beyond the square
+    volume = torch.zeros(2, 1, len(depths), channels, h, w)
+    expected = torch.zeros(2, channels, model.head.grid, model.head.grid)
+    kept_cells = []
+    for b, k, i, j, c, value in entries:
+        volume[b, 0, k, c, i, j] = value
+        u, v = 8 * j + 0.5, 8 * i + 0.5
+        x, y, z = hand_point(*cameras[b], fx, fy, cx, cy, u, v, depths[k])
+        ix, iy = math.floor((x + 51.2) / 0.8), math.floor((y + 51.2) / 0.8)
+        if 0 <= ix < 128 and 0 <= iy < 128 and HEIGHT_LIMITS[0] <= z <= HEIGHT_LIMITS[1]:
+            expected[b, c, ix, iy] += value
+            kept_cells.append((b, c, ix, iy))
+    assert kept_cells == [(0, 2, 85, 56), (1, 5, 42, 96)]  # the hand geometry itself, spelled out
+
+    bev = model.splat(volume, batch, (h, w))
+    assert bev.shape == (2, channels, 128, 128)
+    assert torch.count_nonzero(bev) == 2
+    torch.testing.assert_close(bev, expected)
+
+
+def test_splat_keeps_the_in_range_points_of_a_level_ray_and_sums_shared_cells():
+    """All depth bins of the pixel on the optical axis of a level forward camera at 1.5 m: points at x = 6,
+    16, ..., 56 m; those within the 51.2 m square land in their x cells of row iy = 7 (y just below 0). A
+    second pixel's nearest point shares a cell with the first point, and the cell holds their sum."""
+    config = model_config("lss", "tiny")  # 16 x 16 cells of 6.4 m
+    model = LSSDetector(config)
+    K = intrinsics(40.0, 40.0, 28.5, 16.5)[None, None]  # on feature row 2; column 4 (u = 32.5) is 4 px right
+    T = camera_to_ego(0.0, [0.0, 0.0, 1.5])[None, None]
+    batch = Batch(torch.zeros(1, 1, 3, HEIGHT, WIDTH), K, T, [], ["a"])
+    volume = torch.zeros(1, 1, 6, 3, 4, 8)
+    volume[0, 0, :, 1, 2, 4] = torch.arange(1.0, 7.0)  # bins 0..5 carry 1..6; cell (2, 4) has u = 32.5
+    volume[0, 0, 0, 1, 2, 5] = 10.0  # u = 40.5: (6, -1.8, 1.5), the cell (8, 7) of bin 0 above
+    bev = model.splat(volume, batch, (4, 8))
+    # u = 32.5 is 4 px right of cx: y = -d * 0.1, so y in [-5.6, -0.6] -> iy = floor((y + 51.2) / 6.4) = 7
+    expected = torch.zeros(3, 16, 16)
+    for value, depth in zip(range(1, 7), (6.0, 16.0, 26.0, 36.0, 46.0, 56.0)):
+        if depth + 51.2 < 102.4:
+            expected[1, math.floor((depth + 51.2) / 6.4), 7] += value
+    assert float(expected.sum()) == 15.0  # 56 m is outside; 6 -> ix 8, 16 -> 10, 26 -> 12, 36 -> 13, 46 -> 15
+    expected[1, 8, 7] += 10.0
+    torch.testing.assert_close(bev[0], expected)
