@@ -92,7 +92,9 @@ def evaluate_command(
     """Evaluate a trained detector on any rig's split: centre-distance AP per class and mAP."""
     require_torch()
     from rigopt.baselines.config import model_config
+    from rigopt.baselines.evaluation import DEFAULT_THRESHOLDS
     from rigopt.baselines.protocol import evaluate_on, run_folder
+    from rigopt.bench.scene_model import CLASSES
 
     family = model_config(model).family
     if checkpoint is None:
@@ -103,12 +105,9 @@ def evaluate_command(
         print_json(metrics)
         return
     raw = metrics["raw"]
-    classes = sorted({key.split("_AP_dist_")[0] for key in raw}, key=list(raw).index)
-    thresholds = sorted({key.split("_AP_dist_")[1] for key in raw}, key=float)
-    rows = [[name, *(raw[f"{name}_AP_dist_{d}"] if raw[f"{name}_AP_dist_{d}"] is not None else "-" for d in thresholds)]
-            for name in classes]
+    rows = [[name, *(_number(raw[f"{name}_AP_dist_{d}"]) for d in DEFAULT_THRESHOLDS)] for name in CLASSES]
     print_table(f"{family} ({checkpoint.parent.name}) on {rig}/{split}: mAP {_number(metrics['mAP'])}",
-                ["class", *(f"AP@{d} m" for d in thresholds)], rows)
+                ["class", *(f"AP@{d:g} m" for d in DEFAULT_THRESHOLDS)], rows)
 
 
 @bench_app.command("matrix")
