@@ -6,7 +6,8 @@ Steps (each resumable; rerun the script to continue):
   2. matrix:      per family, train on every matrix rig and test on every one (rigopt bench matrix);
   3. calibration: RigCD calibrated on the measured synthetic transfer (rigopt calibrate), held-out rho;
   4. agreement:   Spearman rho of synthetic against real relative drops on the same pairs;
-  5. validation:  the firetruck and hgv designs from R1 (rigopt validate).
+  5. validation:  the firetruck and hgv designs from R1 (rigopt validate);
+  6. report:      results/results.md from all of the above.
 Writes results/ (matrices, loss logs, calibration, figures, tables, results.md); checkpoints stay under
 --data. Usage: python studies/baselines/run.py --data DIR [--families lss petr] [--epochs 8]
               [--steps data matrix calibration agreement validation] [--device cpu]
@@ -21,6 +22,8 @@ import shutil
 import subprocess
 from pathlib import Path
 
+from rigopt.report.tables import markdown, write_csv
+
 HERE = Path(__file__).resolve().parent
 RESULTS = HERE / "results"
 CONTROL = ["R1", "R1-r", "R1-t", "R1-f", "R1-c6", "R1-c10"]
@@ -28,7 +31,7 @@ DIVERSE = ["R2", "R5", "R9"]
 DESIGNS = [HERE / "rigs" / "firetruck_from_R1.json", HERE / "rigs" / "hgv_from_R1.json"]
 #: Each synthetic family against its real counterparts in the benchmark.
 COUNTERPARTS = {"lss": ["BEVDet", "BEVFusion"], "petr": ["PETR"]}
-STEPS = ("data", "matrix", "calibration", "agreement", "validation")
+STEPS = ("data", "matrix", "calibration", "agreement", "validation", "report")
 
 
 def rigopt(*args: str) -> None:
@@ -71,17 +74,79 @@ def agreement_step() -> list[list]:
             agreement = drop_agreement(synthetic, family, real, detector)
             rows.append([family, detector, agreement.n, agreement.rho, agreement.ci[0], agreement.ci[1], agreement.p,
                          agreement.mae])
-    with (RESULTS / "agreement.csv").open("w", newline="") as handle:
-        writer = csv.writer(handle)
-        writer.writerow(["family", "real_detector", "pairs", "rho", "ci_low", "ci_high", "p", "mae"])
-        writer.writerows([[f"{v:.6g}" if isinstance(v, float) else v for v in row] for row in rows])
-    return rows
+    return write_csv(RESULTS / "agreement.csv",
+                     ["family", "real detector", "pairs", "rho", "ci_low", "ci_high", "p_value", "mae"], rows)
 
 
 def validation_step(data: Path, family: str, device: str) -> None:
     for design in DESIGNS:
         rigopt("validate", design, "--ref", "R1", "--model", family, "--data", data, "--device", device,
                "--out", RESULTS / "validation" / f"{family}_{design.stem}.json")
+
+
+def matrix_tables(family: str) -> tuple[list[list], list[list]]:
+    """[header, *rows] of the mAP matrix and of the relative drops (trained on rows, tested on columns)."""
+    rigs = CONTROL + DIVERSE
+    rows_map, rows_drop = [], []
+    for train in rigs:
+        path = RESULTS / "transfer" / family / f"trained_on_{train}.json"
+        if not path.is_file():
+            continue
+        results = json.loads(path.read_text())["results"]
+        maps = [results.get(test, {}).get("metrics", {}).get("mAP") for test in rigs]
+        own = results[train]["metrics"]["mAP"]
+        rows_map.append([train, *maps])
+        rows_drop.append([train, *((own - m) / own if own and m is not None else None for m in maps)])
+    header = ["trained on", *rigs]
+    return [header, *rows_map], [header, *rows_drop]
+
+
+def training_table(family: str) -> list[list]:
+    rows = []
+    for rig in CONTROL + DIVERSE:
+        log = RESULTS / "logs" / family / f"{rig}.csv"
+        if not log.is_file():
+            continue
+        steps = list(csv.DictReader(log.open()))
+        last = [float(r["loss"]) for r in steps if r["epoch"] == steps[-1]["epoch"]]
+        first = [float(r["loss"]) for r in steps if r["epoch"] == "0"]
+        rows.append([rig, int(steps[-1]["epoch"]) + 1, len(steps), sum(first) / len(first), sum(last) / len(last),
+                     float(steps[-1]["seconds"]) / 60])
+    return [["rig", "epochs", "steps", "loss epoch 1", "loss last epoch", "minutes"], *rows]
+
+
+def report_step(families) -> None:
+    parts = ["# Synthetic cross-rig study: results", "",
+             "Produced by `python studies/baselines/run.py`; read [the README](../README.md) for the protocol "
+             "and the reading of these numbers.", ""]
+    for family in families:
+        maps, drops = matrix_tables(family)
+        if len(maps) == 1:
+            continue
+        parts += [f"## {family}: mAP (trained on rows, tested on columns)", "", markdown(maps), "",
+                  f"## {family}: relative drop", "", markdown(drops), "",
+                  f"## {family}: training", "", markdown(training_table(family)), ""]
+    calibration = RESULTS / "calibration" / "calibration.json"
+    if calibration.is_file():
+        report = json.loads(calibration.read_text())
+        rows = [[model, entry["control"]["rho"], entry["heldout"]["rho"], *entry["heldout"]["ci"], entry["heldout"]["n"],
+                 entry["weights"]["K"], entry["weights"]["alpha"], entry["weights"]["fallback"]]
+                for model, entry in report["models"].items()]
+        parts += ["## RigCD calibrated on the synthetic transfer", "",
+                  markdown([["family", "rho control", "rho held-out", "ci_low", "ci_high", "held-out pairs", "K",
+                             "alpha", "fallback"], *rows]), ""]
+    if (RESULTS / "agreement.csv").is_file():
+        table = list(csv.reader((RESULTS / "agreement.csv").open()))
+        parts += ["## Agreement with the benchmark's real transfer (Spearman rho of relative drops)", "",
+                  markdown(table), ""]
+    for path in sorted((RESULTS / "validation").glob("*.json")):
+        result = json.loads(path.read_text())
+        rows = [[e["role"], e["rig"], e["n_cameras"], e["mAP"], e["measured_drop"], e["predicted_drop"], e["rigcd"]]
+                for e in result["rigs"]]
+        parts += [f"## Validation: {path.stem} ({result['model']} trained on {result['reference']}, own mAP "
+                  f"{result['reference_mAP']:.3f})", "",
+                  markdown([["role", "rig", "cameras", "mAP", "measured drop", "predicted drop", "RigCD"], *rows]), ""]
+    (RESULTS / "results.md").write_text("\n".join(parts))
 
 
 def main() -> None:
@@ -103,8 +168,9 @@ def main() -> None:
     if "calibration" in args.steps:
         calibration_step()
     if "agreement" in args.steps:
-        for row in agreement_step():
-            print(json.dumps(dict(zip(["family", "real", "pairs", "rho", "low", "high", "p", "mae"], row))))
+        print(markdown(agreement_step()))
+    if "report" in args.steps:
+        report_step(args.families)
 
 
 if __name__ == "__main__":

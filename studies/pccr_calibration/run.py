@@ -8,7 +8,6 @@ Usage: python studies/pccr_calibration/run.py [--bootstrap 1000] [--seed 0]
 from __future__ import annotations
 
 import argparse
-import csv
 import json
 from pathlib import Path
 
@@ -18,32 +17,11 @@ from rigopt.metrics.rigv import rigv
 from rigopt.metrics.transfer import read_transfer
 from rigopt.report.calibration_figures import write_calibration_figures
 from rigopt.report.calibration_tables import study_dict, write_study_tables
+from rigopt.report.tables import markdown, write_csv
 from rigopt.resources import data_dir
 from rigopt.rig.library import library_rig, rig_names
 
 HERE = Path(__file__).resolve().parent
-
-
-def write_csv(path: Path, header: list[str], rows: list[list]) -> list[list]:
-    with path.open("w", newline="") as handle:
-        writer = csv.writer(handle)
-        writer.writerow(header)
-        writer.writerows([[f"{v:.6g}" if isinstance(v, float) else v for v in row] for row in rows])
-    return [header, *rows]
-
-
-def markdown(table: list[list]) -> str:
-    """A markdown table; numbers with 3 decimals, p-values in scientific notation."""
-    def cell(column: str, value) -> str:
-        if value is None:
-            return "-"
-        if isinstance(value, float):
-            return f"{value:.2e}" if column.startswith("p_") else f"{value:.3f}"
-        return str(value)
-
-    header = table[0]
-    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
-    return "\n".join(lines + ["| " + " | ".join(cell(c, v) for c, v in zip(header, row)) + " |" for row in table[1:]])
 
 
 def main() -> None:
