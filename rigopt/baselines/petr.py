@@ -6,8 +6,10 @@
    bird's-eye range, becomes a (3 P)-vector; an MLP maps it to C and it is added to the features. The
    tokens of all N cameras form one memory of N h w tokens.
 3. Q object queries, each anchored at a learned bird's-eye reference point, attend to the memory through
-   a transformer decoder; after every layer a class head (sigmoid per class) and a box head predict the
-   box: the centre as a refinement of the reference point, z, log sizes, sin and cos of the yaw.
+   a transformer decoder whose attention sees each query's position embedding (of its current reference
+   point); after every layer a class head (sigmoid per class) and a box head predict the box: the centre
+   as a refinement of the reference point, which becomes the next layer's reference, z, log sizes, sin
+   and cos of the yaw.
 4. Training matches queries to boxes one to one (Hungarian, on class and centre costs) and applies a
    focal class loss to all queries and L1 box losses to the matched ones, after every layer.
 
@@ -38,6 +40,25 @@ def _mlp(c_in: int, c_hidden: int, c_out: int) -> nn.Sequential:
     return nn.Sequential(nn.Linear(c_in, c_hidden), nn.ReLU(inplace=True), nn.Linear(c_hidden, c_out))
 
 
+class DecoderLayer(nn.Module):
+    """A DETR decoder layer (post-norm): self-attention among the queries and cross-attention to the
+    memory, both with the queries' position embedding added to their queries (and keys), then an MLP.
+    x (B, Q, C), position (B, Q, C), memory (B, M, C) -> (B, Q, C)."""
+
+    def __init__(self, channels: int, heads: int):
+        super().__init__()
+        self.self_attention = nn.MultiheadAttention(channels, heads, batch_first=True)
+        self.cross_attention = nn.MultiheadAttention(channels, heads, batch_first=True)
+        self.feed_forward = _mlp(channels, 2 * channels, channels)
+        self.norms = nn.ModuleList([nn.LayerNorm(channels) for _ in range(3)])
+
+    def forward(self, x: torch.Tensor, position: torch.Tensor, memory: torch.Tensor) -> torch.Tensor:
+        q = x + position
+        x = self.norms[0](x + self.self_attention(q, q, x, need_weights=False)[0])
+        x = self.norms[1](x + self.cross_attention(x + position, memory, memory, need_weights=False)[0])
+        return self.norms[2](x + self.feed_forward(x))
+
+
 class PETRDetector(nn.Module):
     family = "petr"
 
@@ -57,8 +78,7 @@ class PETRDetector(nn.Module):
         self.reference = nn.Parameter(torch.logit(grid.clamp(0.02, 0.98)))  # (Q, 2) in logit space
         self.query_content = nn.Parameter(torch.zeros(config.queries, c))
         self.query_position = _mlp(2, c, c)
-        self.layers = nn.ModuleList([nn.TransformerDecoderLayer(c, config.heads, 2 * c, dropout=0.0, batch_first=True)
-                                     for _ in range(config.decoder_layers)])
+        self.layers = nn.ModuleList([DecoderLayer(c, config.heads) for _ in range(config.decoder_layers)])
         self.class_head = nn.Linear(c, n_classes)
         self.box_head = _mlp(c, c, 8)
         nn.init.constant_(self.class_head.bias, -math.log((1 - 0.01) / 0.01))
@@ -74,15 +94,16 @@ class PETRDetector(nn.Module):
         memory = features.view(b, n, -1, h, w).permute(0, 1, 3, 4, 2) + embedding
         memory = memory.reshape(b, n * h * w, -1)
 
-        reference = torch.sigmoid(self.reference)  # (Q, 2) in [0, 1] over the bird's-eye square
-        x = (self.query_content + self.query_position(reference * 2 - 1))[None].expand(b, -1, -1)
+        reference = self.reference[None].expand(b, -1, -1)  # (B, Q, 2) logits of [0, 1] over the square
+        x = self.query_content[None].expand(b, -1, -1)
         logits, boxes = [], []
         for layer in self.layers:
-            x = layer(x, memory)
+            x = layer(x, self.query_position(torch.sigmoid(reference) * 2 - 1), memory)
             raw = self.box_head(x)  # (B, Q, 8)
-            center = torch.sigmoid(self.reference[None] + raw[..., :2])
-            boxes.append(torch.cat([center, raw[..., 2:]], dim=-1))
+            center_logit = reference + raw[..., :2]
+            boxes.append(torch.cat([torch.sigmoid(center_logit), raw[..., 2:]], dim=-1))
             logits.append(self.class_head(x))
+            reference = center_logit.detach()  # the next layer refines this layer's centres
         return {"logits": logits, "boxes": boxes}
 
     def box_targets(self, centers, sizes, yaws) -> torch.Tensor:
