@@ -133,14 +133,16 @@ def _objective(beta, features, delta) -> float:
 
 
 def fit_lbfgsb(features: np.ndarray, delta: np.ndarray) -> np.ndarray:
-    """beta >= 0 minimising sum (beta . x - delta)^2 by L-BFGS-B from BETA0; features (P, 4), delta (P,)."""
+    """beta >= 0 minimising sum (beta . x - delta)^2 by L-BFGS-B from BETA0 (0.5 for every feature);
+    features (P, k) (k = 4 for RigCD), delta (P,)."""
     from scipy.optimize import minimize
 
     def value_and_gradient(beta):
         residual = features @ beta - delta
         return float(residual @ residual), 2.0 * features.T @ residual
 
-    result = minimize(value_and_gradient, np.array(BETA0), jac=True, method="L-BFGS-B",
+    start = np.array(BETA0) if features.shape[1] == len(BETA0) else np.full(features.shape[1], BETA0[0])
+    result = minimize(value_and_gradient, start, jac=True, method="L-BFGS-B",
                       bounds=[(0.0, None)] * features.shape[1])
     return result.x
 
