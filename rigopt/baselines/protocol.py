@@ -49,20 +49,27 @@ def train_on(data, rig: str, config: ModelConfig, runs, device: str = "cpu", see
 def evaluate_on(checkpoint, data, rig: str, device: str = "cpu", family: str | None = None,
                 split_name: str = TEST_SPLIT) -> dict:
     """The benchmark's metrics dict ({"mAP", "raw"}) of a checkpoint on ``<data>/<rig>/<split_name>``."""
+    return evaluate_on_rigs(checkpoint, data, [rig], device, family, split_name)[rig]
+
+
+def evaluate_on_rigs(checkpoint, data, rigs: Sequence[str], device: str = "cpu", family: str | None = None,
+                     split_name: str = TEST_SPLIT) -> dict:
+    """{rig: metrics dict} of a checkpoint, loaded once, on ``<data>/<rig>/<split_name>`` of every rig."""
     from rigopt.baselines.data import RigSplit
     from rigopt.baselines.inference import evaluate_split
     from rigopt.baselines.models import load_checkpoint, model_from_checkpoint
 
     model, config = model_from_checkpoint(load_checkpoint(checkpoint, family))
-    split = RigSplit(data, rig, split_name, config.image_size)
-    return evaluate_split(model, split, device).to_dict()
+    return {rig: evaluate_split(model, RigSplit(data, rig, split_name, config.image_size), device).to_dict()
+            for rig in rigs}
 
 
 def train_and_test(data, trained_on: str, tests: Sequence[str], config: ModelConfig, runs, device: str = "cpu",
                    seed: int = 0, progress: Callable = lambda epoch, step, steps, loss: None) -> dict:
     """One row of the matrix: train on ``trained_on``, then its results on every rig of ``tests``."""
     run = train_on(data, trained_on, config, runs, device, seed, progress)
-    results = {test: {"metrics": evaluate_on(run.checkpoint, data, test, device, config.family)} for test in tests}
+    metrics = evaluate_on_rigs(run.checkpoint, data, tests, device, config.family)
+    results = {test: {"metrics": metrics[test]} for test in tests}
     return {"model": config.family, "trained_on": trained_on, "results": results,
             "training": {"epochs": run.epochs, "seed": seed, "config": config.to_dict()}}
 

@@ -14,7 +14,7 @@ import json
 from pathlib import Path
 from typing import Callable
 
-from rigopt.baselines.protocol import TEST_SPLIT, evaluate_on, run_folder
+from rigopt.baselines.protocol import TEST_SPLIT, evaluate_on_rigs, run_folder
 from rigopt.errors import DataError, RigFileError
 from rigopt.metrics.calibration import Calibration
 from rigopt.rig.library import load_rig
@@ -79,11 +79,12 @@ def validate_design(design: Rig, reference: str, family: str, data, calibration:
     generate_split([rig for _, rig in rigs], scenes, data, size, render_rig, ego_mesh_lookup(progress))
 
     progress(f"evaluating the {family} model trained on {reference_rig.name}")
-    own = evaluate_on(checkpoint, data, reference_rig.name, device, family)["mAP"]
+    metrics = evaluate_on_rigs(checkpoint, data, [reference_rig.name, *names], device, family)
+    own = metrics[reference_rig.name]["mAP"]
     predictions = predict_transfer(reference_rig, [rig for _, rig in rigs], calibration)
     entries = []
     for (role, rig), prediction in zip(rigs, predictions):
-        measured = evaluate_on(checkpoint, data, rig.name, device, family)["mAP"]
+        measured = metrics[rig.name]["mAP"]
         drop = (own - measured) / own if own and measured is not None else None
         entries.append({"role": role, "rig": rig.name, "n_cameras": len(rig), "mAP": measured,
                         "measured_drop": drop, "predicted_drop": prediction.predicted_drop,
