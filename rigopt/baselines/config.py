@@ -19,7 +19,8 @@ class ModelConfig:
 
     bev_range : half-width (m) of the square bird's-eye area both families detect in, centred on the ego;
     bev_cell : LSS grid cell (m); depth_min, depth_max, depth_bins : LSS depth distribution (m, along the
-    optical axis); position_depths : points per pixel ray in PETR's 3D position embedding; image_size :
+    optical axis); position_depths : points per pixel ray in PETR's 3D position embedding; dn_groups : PETR's groups of
+    denoising queries in training (0: none); image_size :
     (width, height) pixels the images are resized to, None to keep them as stored.
     """
 
@@ -36,6 +37,7 @@ class ModelConfig:
     decoder_layers: int = 3
     heads: int = 4
     position_depths: int = 16
+    dn_groups: int = 3
     image_size: tuple | None = None
     lr: float = 1e-3
     weight_decay: float = 1e-2
@@ -54,7 +56,7 @@ class ModelConfig:
 
 _PRESETS = {
     "tiny": dict(width=8, bev_channels=8, bev_cell=6.4, depth_bins=6, queries=12, decoder_layers=1, heads=2,
-                 position_depths=4, batch_size=2, epochs=2),
+                 position_depths=4, dn_groups=1, batch_size=2, epochs=2),
     "small": dict(),
     "base": dict(width=64, bev_channels=96, bev_cell=0.8, depth_bins=60, queries=200, decoder_layers=6, heads=8,
                  position_depths=32, batch_size=8, epochs=36),
@@ -75,6 +77,8 @@ def model_config(family: str, size: str = "small", **overrides) -> ModelConfig:
                  "batch_size", "epochs"):
         if getattr(config, name) < 1:
             raise RigoptError(f"model setting {name} must be at least 1, got {getattr(config, name)}")
+    if config.dn_groups < 0:
+        raise RigoptError(f"model setting dn_groups must be 0 (no denoising queries) or more, got {config.dn_groups}")
     if not (config.bev_range > 0 and 0 < config.bev_cell <= config.bev_range and 0 < config.depth_min
             < config.depth_max and config.lr > 0):
         raise RigoptError(f"model ranges must be positive and ordered: bev_range {config.bev_range}, bev_cell "

@@ -12,6 +12,12 @@
    and cos of the yaw.
 4. Training matches queries to boxes one to one (Hungarian, on class and centre costs) and applies a
    focal class loss to all queries and L1 box losses to the matched ones, after every layer.
+5. Query denoising (training only, as DN-DETR): ``dn_groups`` copies of the true boxes, their centres jittered
+   by up to half the box's length and width and 1 in 5 labels flipped, enter the decoder as extra queries
+   (label embedding as content, jittered centre as reference) and must reconstruct their box and class; no
+   matching is needed for them. An attention mask keeps the object queries and the other groups from
+   seeing a group, so inference, which has no such queries, is unchanged. On small data it shortens the
+   slow start of set prediction several-fold.
 
 Any camera count works: the memory is as long as the rig's cameras make it.
 """
@@ -34,6 +40,9 @@ from rigopt.bench.scene_model import CLASSES
 Z_SCALE = 4.0  # m: z of centres and position-embedding points is divided by this
 #: Loss weights: focal class loss, L1 of the normalised centre, L1 of the other box terms.
 CLASS_WEIGHT, CENTER_WEIGHT, BOX_WEIGHT = 2.0, 10.0, 1.0
+#: Query denoising: centre jitter as a fraction of the box's length / width (at least DN_MIN_NOISE m), and
+#: the probability that a denoising query's label is replaced by a random class.
+DN_NOISE, DN_MIN_NOISE, DN_FLIP = 0.5, 1.0, 0.2
 
 
 def _mlp(c_in: int, c_hidden: int, c_out: int) -> nn.Sequential:
@@ -52,9 +61,11 @@ class DecoderLayer(nn.Module):
         self.feed_forward = _mlp(channels, 2 * channels, channels)
         self.norms = nn.ModuleList([nn.LayerNorm(channels) for _ in range(3)])
 
-    def forward(self, x: torch.Tensor, position: torch.Tensor, memory: torch.Tensor) -> torch.Tensor:
+    def forward(self, x: torch.Tensor, position: torch.Tensor, memory: torch.Tensor,
+                blocked: torch.Tensor | None = None) -> torch.Tensor:
+        """``blocked`` (B * heads, Q, Q) bool: True where query i must not attend to query j."""
         q = x + position
-        x = self.norms[0](x + self.self_attention(q, q, x, need_weights=False)[0])
+        x = self.norms[0](x + self.self_attention(q, q, x, attn_mask=blocked, need_weights=False)[0])
         x = self.norms[1](x + self.cross_attention(x + position, memory, memory, need_weights=False)[0])
         return self.norms[2](x + self.feed_forward(x))
 
@@ -79,6 +90,7 @@ class PETRDetector(nn.Module):
         self.query_content = nn.Parameter(torch.zeros(config.queries, c))
         self.query_position = _mlp(2, c, c)
         self.layers = nn.ModuleList([DecoderLayer(c, config.heads) for _ in range(config.decoder_layers)])
+        self.label_embedding = nn.Embedding(n_classes, c)
         self.class_head = nn.Linear(c, n_classes)
         self.box_head = _mlp(c, c, 8)
         nn.init.constant_(self.class_head.bias, -math.log((1 - 0.01) / 0.01))
@@ -96,15 +108,75 @@ class PETRDetector(nn.Module):
 
         reference = self.reference[None].expand(b, -1, -1)  # (B, Q, 2) logits of [0, 1] over the square
         x = self.query_content[None].expand(b, -1, -1)
+        denoising = self.denoising_queries(batch) if self.training and self.config.dn_groups else None
+        blocked = None
+        if denoising is not None:
+            x = torch.cat([denoising["content"], x], dim=1)
+            reference = torch.cat([denoising["reference"], reference], dim=1)
+            blocked = denoising["blocked"]
         logits, boxes = [], []
         for layer in self.layers:
-            x = layer(x, self.query_position(torch.sigmoid(reference) * 2 - 1), memory)
-            raw = self.box_head(x)  # (B, Q, 8)
+            x = layer(x, self.query_position(torch.sigmoid(reference) * 2 - 1), memory, blocked)
+            raw = self.box_head(x)  # (B, D + Q, 8)
             center_logit = reference + raw[..., :2]
             boxes.append(torch.cat([torch.sigmoid(center_logit), raw[..., 2:]], dim=-1))
             logits.append(self.class_head(x))
             reference = center_logit.detach()  # the next layer refines this layer's centres
-        return {"logits": logits, "boxes": boxes}
+        if denoising is None:
+            return {"logits": logits, "boxes": boxes}
+        d = denoising["valid"].shape[1]
+        return {"logits": [l[:, d:] for l in logits], "boxes": [x[:, d:] for x in boxes],
+                "denoising": {**denoising, "logits": [l[:, :d] for l in logits], "boxes": [x[:, :d] for x in boxes]}}
+
+    def targets(self, batch: Batch) -> list[tuple[torch.Tensor, torch.Tensor]]:
+        """Per sample the classes (n,) and box targets (n, 8) of the boxes inside the bird's-eye square."""
+        r = self.config.bev_range
+        result = []
+        for boxes in batch.boxes:
+            inside = (boxes.centers[:, :2].abs() < r).all(dim=1)
+            result.append((boxes.classes[inside], self.box_targets(boxes.centers[inside], boxes.sizes[inside],
+                                                                   boxes.yaws[inside])))
+        return result
+
+    def denoising_queries(self, batch: Batch) -> dict | None:
+        """The denoising queries of a training batch, D = dn_groups x (most boxes in a sample), slot
+        g * n_max + j holding box j of group g: content (B, D, C), reference (B, D, 2) logits, classes
+        (B, D) true labels, target (B, D, 8), valid (B, D) bool (False: padding), blocked (B * heads,
+        D + Q, D + Q) self-attention mask. None when the batch has no boxes."""
+        targets = self.targets(batch)
+        n_max = max(len(classes) for classes, _ in targets)
+        if n_max == 0:
+            return None
+        groups, device = self.config.dn_groups, batch.images.device
+        b, d, q = len(targets), self.config.dn_groups * n_max, self.config.queries
+        classes = torch.zeros(b, d, dtype=torch.long, device=device)
+        target = torch.zeros(b, d, 8, device=device)
+        target[..., :2] = 0.5
+        valid = torch.zeros(b, d, dtype=torch.bool, device=device)
+        r = self.config.bev_range
+        for i, (labels, boxes) in enumerate(targets):
+            n = len(labels)
+            for g in range(groups):
+                classes[i, g * n_max:g * n_max + n] = labels
+                target[i, g * n_max:g * n_max + n] = boxes
+                valid[i, g * n_max:g * n_max + n] = True
+        half_extent = (torch.exp(target[..., 3:5]) * DN_NOISE).clamp(min=DN_MIN_NOISE) / (2 * r)  # normalised
+        center = target[..., :2] + (2 * torch.rand_like(half_extent) - 1) * half_extent
+        flip = torch.rand(b, d, device=device) < DN_FLIP
+        labels = torch.where(flip, torch.randint_like(classes, self.n_classes), classes)
+        content = self.label_embedding(labels) * valid[..., None]
+        reference = torch.logit(center.clamp(0.01, 0.99))
+
+        group = torch.arange(d, device=device) // n_max
+        allowed = torch.zeros(d + q, d + q, dtype=torch.bool, device=device)
+        allowed[:d, :d] = group[:, None] == group[None, :]  # a denoising group sees itself ...
+        allowed[:, d:] = True  # ... and every query sees the object queries, which see no denoising query
+        allowed = allowed[None].repeat(b, 1, 1)
+        allowed[:, :, :d] &= valid[:, None, :]  # nobody attends to padding ...
+        allowed |= torch.eye(d + q, dtype=torch.bool, device=device)  # ... but every query to itself
+        blocked = (~allowed).repeat_interleave(self.config.heads, dim=0)
+        return {"content": content, "reference": reference, "classes": classes, "target": target,
+                "valid": valid, "blocked": blocked}
 
     def box_targets(self, centers, sizes, yaws) -> torch.Tensor:
         """(n, 8) regression targets in the box head's units: centre x, y in [0, 1] over the square,
@@ -115,12 +187,7 @@ class PETRDetector(nn.Module):
 
     def loss(self, outputs: dict, batch: Batch) -> tuple[torch.Tensor, dict]:
         total, parts = 0.0, {"class": 0.0, "center": 0.0, "box": 0.0}
-        targets = []
-        r = self.config.bev_range
-        for boxes in batch.boxes:
-            inside = (boxes.centers[:, :2].abs() < r).all(dim=1)
-            targets.append((boxes.classes[inside], self.box_targets(boxes.centers[inside], boxes.sizes[inside],
-                                                                    boxes.yaws[inside])))
+        targets = self.targets(batch)
         n_boxes = max(sum(len(t[0]) for t in targets), 1)
         for logits, boxes in zip(outputs["logits"], outputs["boxes"]):
             class_target = torch.zeros_like(logits)
@@ -138,7 +205,23 @@ class PETRDetector(nn.Module):
             total = total + layer_loss
             parts = {"class": float(class_loss.detach()), "center": float(center_loss.detach()) / n_boxes,
                      "box": float(box_loss.detach()) / n_boxes}  # the last layer's terms
+        if "denoising" in outputs:
+            total = total + self.denoising_loss(outputs["denoising"])
         return total, parts
+
+    def denoising_loss(self, denoising: dict) -> torch.Tensor:
+        """Reconstruction loss of the denoising queries, every layer: focal class loss towards the true
+        label and L1 box losses, over the valid queries, per query, with the matching loss's weights."""
+        valid = denoising["valid"]
+        n = max(int(valid.sum()), 1)
+        class_target = F.one_hot(denoising["classes"], self.n_classes).float()
+        total = 0.0
+        for logits, boxes in zip(denoising["logits"], denoising["boxes"]):
+            class_loss = sigmoid_focal_loss(logits[valid], class_target[valid])
+            center_loss = F.l1_loss(boxes[valid][:, :2], denoising["target"][valid][:, :2], reduction="sum")
+            box_loss = F.l1_loss(boxes[valid][:, 2:], denoising["target"][valid][:, 2:], reduction="sum")
+            total = total + (CLASS_WEIGHT * class_loss + CENTER_WEIGHT * center_loss + BOX_WEIGHT * box_loss) / n
+        return total
 
     @torch.no_grad()
     def detections(self, outputs: dict, top_k: int = 100) -> list[dict]:

@@ -295,3 +295,66 @@ def test_splat_keeps_the_in_range_points_of_a_level_ray_and_sums_shared_cells():
     assert float(expected.sum()) == 15.0  # 56 m is outside; 6 -> ix 8, 16 -> 10, 26 -> 12, 36 -> 13, 46 -> 15
     expected[1, 8, 7] += 10.0
     torch.testing.assert_close(bev[0], expected)
+
+
+# ---------------------------------------------------------------- PETR query denoising
+
+
+def _boxes(centers, classes):
+    n = len(classes)
+    return BoxTargets(torch.tensor(centers, dtype=torch.float32), torch.full((n, 3), 2.0), torch.zeros(n),
+                      torch.tensor(classes, dtype=torch.long))
+
+
+def test_denoising_queries_attend_only_within_their_group_and_never_to_padding(tiny_data):
+    from rigopt.baselines.petr import PETRDetector
+
+    config = model_config("petr", "tiny", dn_groups=2, queries=5)
+    model = PETRDetector(config).train()
+    batch = RigSplit(tiny_data, "R5", "train").batch([0])
+    # sample 0: two boxes; sample 1: one box, so its second slot in each group is padding
+    batch = Batch(batch.images.repeat(2, 1, 1, 1, 1), batch.intrinsics.repeat(2, 1, 1, 1),
+                  batch.cam_to_ego.repeat(2, 1, 1, 1),
+                  [_boxes([[5.0, 1.0, 0.5], [-8.0, 3.0, 0.5]], [0, 5]), _boxes([[10.0, -2.0, 0.5]], [1])], ["a", "b"])
+    dn = model.denoising_queries(batch)
+    d, q, heads = 4, 5, config.heads  # 2 groups x 2 slots, then the object queries
+    assert dn["valid"].tolist() == [[True, True, True, True], [True, False, True, False]]
+    assert dn["classes"][0].tolist() == [0, 5, 0, 5] and dn["classes"][1, 0] == 1
+    torch.testing.assert_close(dn["target"][0, 2, :2], torch.tensor([(5 + 51.2) / 102.4, (1 + 51.2) / 102.4]))
+    jitter = (torch.sigmoid(dn["reference"]) - dn["target"][..., :2]).abs() * 102.4
+    assert float(jitter[dn["valid"]].max()) <= 1.0 + 1e-4  # 2 m boxes: jitter at most max(0.5 x 2 m, 1 m)
+    assert dn["blocked"].shape == (2 * heads, d + q, d + q)
+    allowed = ~dn["blocked"][::heads]  # one mask per sample
+    assert not allowed[:, d:, :d].any()  # object queries never see a denoising query
+    assert allowed[:, :, d:].all()  # everybody sees the object queries
+    assert allowed[0, 0, 1] and not allowed[0, 0, 2] and not allowed[0, 2, 1]  # groups see only themselves
+    assert not allowed[1, 0, 1] and not allowed[1, 2, 3]  # padding is seen by nobody but itself
+    assert allowed[1, 1, 1] and allowed[1, 3, 3]
+
+
+def test_denoising_changes_training_outputs_but_not_inference(tiny_data):
+    from rigopt.baselines.petr import PETRDetector
+
+    torch.manual_seed(0)
+    model = PETRDetector(model_config("petr", "tiny", dn_groups=2))
+    batch = RigSplit(tiny_data, "R1", "train").batch([0, 1])
+    model.train()
+    outputs = model(batch)
+    n_max = max(len(b.classes[(b.centers[:, :2].abs() < 51.2).all(dim=1)]) for b in batch.boxes)
+    assert outputs["logits"][-1].shape == (2, model.config.queries, len(CLASSES))
+    assert outputs["denoising"]["logits"][-1].shape == (2, 2 * n_max, len(CLASSES))
+    loss, _ = model.loss(outputs, batch)
+    loss.backward()
+    assert model.label_embedding.weight.grad.abs().sum() > 0  # the denoising queries are trained
+    # object queries cannot see denoising queries, so their outputs equal a run without them
+    plain = PETRDetector(model_config("petr", "tiny", dn_groups=0))
+    plain.load_state_dict(model.state_dict())
+    plain.train()
+    torch.testing.assert_close(plain(batch)["boxes"][-1], outputs["boxes"][-1], atol=1e-5, rtol=1e-4)
+    model.eval()
+    assert "denoising" not in model(batch)
+
+
+def test_negative_denoising_groups_are_refused():
+    with pytest.raises(RigoptError, match="dn_groups"):
+        model_config("petr", "tiny", dn_groups=-1)
