@@ -90,5 +90,5 @@ def validate_design(design: Rig, reference: str, family: str, data, calibration:
                         "measured_drop": drop, "predicted_drop": prediction.predicted_drop,
                         "rigcd": prediction.rigcd})
     return {"reference": reference_rig.name, "model": family, "checkpoint": str(checkpoint),
-            "weights": calibration.name, "reference_mAP": own, "test_scenes": len(scenes),
+            "metric": calibration.metric, "weights": calibration.name, "reference_mAP": own, "test_scenes": len(scenes),
             "image_size": list(size), "rigs": entries}

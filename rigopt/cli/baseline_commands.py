@@ -13,6 +13,7 @@ import typer
 
 from rigopt.cli.app import app, console, print_json, print_table
 from rigopt.cli.bench_commands import bench_app
+from rigopt.cli.metric_commands import METRIC_HELP
 from rigopt.errors import RigoptError
 
 MODEL_HELP = "Detector family: lss (lift-splat, BEVDet-like) or petr (3D position embeddings, PETR-like)."
@@ -153,6 +154,7 @@ def validate_command(
     model: str = typer.Option(..., "--model", help=MODEL_HELP),
     data: Path = typer.Option(..., "--data", help="Benchmark folder with the reference's test split and trained run."),
     weights: str = typer.Option("joint", "--weights", help="Calibrated weights for the predicted drops."),
+    metric: str = typer.Option("rigcd", "--metric", help=METRIC_HELP),
     device: str = typer.Option("cpu", "--device", help=DEVICE_HELP),
     runs: Optional[Path] = typer.Option(None, "--runs", help=RUNS_HELP),
     out: Optional[Path] = typer.Option(None, "--out", help="Also write the result as JSON here."),
@@ -168,7 +170,7 @@ def validate_command(
     from rigopt.metrics.calibration import load_weights
     from rigopt.report.json_values import json_ready
 
-    family, calibration, rig = model_config(model).family, load_weights(weights), load_design(design)
+    family, calibration, rig = model_config(model).family, load_weights(weights, metric), load_design(design)
     resolve_device(device)
     with console.status("validating") as status:
         result = validate_design(rig, ref, family, data, calibration, runs, device, status.update)
@@ -181,7 +183,7 @@ def validate_command(
     rows = [[e["role"], e["rig"], e["n_cameras"], _number(e["mAP"]), _number(e["measured_drop"]),
              _number(e["predicted_drop"]), e["rigcd"]] for e in result["rigs"]]
     print_table(f"{family} trained on {result['reference']} (own mAP {_number(result['reference_mAP'])}), "
-                f"{result['test_scenes']} test scenes; predicted with {weights} weights",
+                f"{result['test_scenes']} test scenes; predicted with {calibration.metric}, {weights} weights",
                 ["role", "rig", "cameras", "mAP", "measured drop", "predicted drop", "RigCD"], rows)
 
 

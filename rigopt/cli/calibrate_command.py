@@ -9,6 +9,7 @@ from typing import Optional
 import typer
 
 from rigopt.cli.app import app, console, print_json, print_table
+from rigopt.cli.metric_commands import METRIC_HELP
 from rigopt.errors import RigoptError
 from rigopt.metrics.protocol import CONTROL_RIGS, calibrate
 from rigopt.metrics.reliability import DEFAULT_BOOTSTRAP, DEFAULT_SEED
@@ -35,14 +36,15 @@ def calibrate_command(
     seed: int = typer.Option(DEFAULT_SEED, help="Seed of the bootstrap."),
     rigs: Optional[Path] = typer.Option(None, help="Folder of <rig>.json files for rigs not in the library."),
     solver: str = typer.Option("lbfgsb", help="Whose beta is reported: lbfgsb (the benchmark's) or qp (cvxpy)."),
+    metric: str = typer.Option("rigcd", "--metric", help=METRIC_HELP),
     out: Optional[Path] = typer.Option(None, help="Folder for the JSON, pairs CSV, weights and figures."),
     as_json: bool = typer.Option(False, "--json", help="Print the JSON report instead of tables."),
 ):
-    """Fit calibrated RigCD per detector and jointly; report reliability on control and held-out pairs."""
+    """Fit calibrated RigCD (or RigCD+) per detector and jointly; report reliability on control and held-out pairs."""
     if bootstrap < 0:
         raise RigoptError(f"--bootstrap must be >= 0, got {bootstrap}")
     control_rigs = tuple(r.strip() for r in control.split(",") if r.strip())
-    study = calibrate(read_transfer(results), control_rigs, _rig_lookup(rigs), bootstrap, seed, solver)
+    study = calibrate(read_transfer(results), control_rigs, _rig_lookup(rigs), bootstrap, seed, solver, metric)
     report = study_dict(study)
     if out is not None:
         from rigopt.report.calibration_figures import write_calibration_figures
@@ -60,7 +62,7 @@ def calibrate_command(
 
 def _print_tables(report: dict) -> None:
     models = report["models"]
-    print_table("Per-detector weights", ["model", "K", "alpha", "l_t", "l_r", "l_f", "fallback", "QP agrees"],
+    print_table(f"Per-detector weights ({report['metric']})", ["model", "K", "alpha", "l_t", "l_r", "l_f", "fallback", "QP agrees"],
                 [[m, e["weights"]["K"], e["weights"]["alpha"], e["weights"]["lambda_t"], e["weights"]["lambda_r"],
                   e["weights"]["lambda_f"], "yes" if e["weights"]["fallback"] else "no",
                   "yes" if e["weights"]["qp_agrees"] else "NO"] for m, e in models.items()])

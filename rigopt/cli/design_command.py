@@ -11,6 +11,7 @@ import typer
 from rich.console import Console
 
 from rigopt.cli.app import app, print_json, print_table
+from rigopt.cli.metric_commands import METRIC_HELP
 from rigopt.errors import RigoptError
 
 DEFAULT_FOVS = "60,65,70,75,80,90,100,110,120"
@@ -66,6 +67,7 @@ def design_command(
     ref: str = typer.Option(..., help="Reference rig the detector was trained on: library name or rig file; "
                                       "several, comma-separated, for a fleet (minimise the worst predicted drop)."),
     weights: str = typer.Option("joint", help="Calibrated weights: BEVDet, BEVFusion, Fast-BEV, PETR, joint, or a file."),
+    metric: str = typer.Option("rigcd", "--metric", help=METRIC_HELP),
     cameras: Optional[str] = typer.Option(None, help="Camera count or range (e.g. 6-10); default: the reference's."),
     fov: str = typer.Option(DEFAULT_FOVS, help="Lens catalogue: horizontal FOVs in degrees, or a continuous "
                                                 "range such as 60-120."),
@@ -97,7 +99,7 @@ def design_command(
     references = [load_rig(name.strip()) for name in ref.split(",") if name.strip()]
     if not references:
         raise RigoptError("--ref needs at least one rig")
-    target, calibration = load_vehicle(vehicle), load_weights(weights)
+    target, calibration = load_vehicle(vehicle), load_weights(weights, metric)
     label = "+".join(r.name for r in references)
     out = out or Path(f"design-{target.name}-{label}")
     status = Console(stderr=True)
@@ -121,7 +123,7 @@ def design_command(
         if entry:
             rows.append([name, entry["predicted_drop"], entry["rigcd"], entry["n_cameras"], entry["coverage"],
                          "yes" if entry["meets_coverage_requirements"] else "no"])
-    print_table(f"{label} -> {target.name} ({weights} weights); reference coverage "
+    print_table(f"{label} -> {target.name} ({calibration.metric}, {weights} weights); reference coverage "
                 f"{summary['reference_coverage']:.3f}", ["rig", "predicted drop", "rigcd", "cameras", "coverage",
                                                            "meets coverage"], rows)
     solver = summary["solver"]

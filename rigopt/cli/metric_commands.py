@@ -8,13 +8,16 @@ from typing import List, Optional
 import typer
 
 from rigopt.cli.app import app, print_json, print_table
-from rigopt.metrics.calibration import load_weights
+from rigopt.errors import RigoptError
+from rigopt.metrics.calibration import check_metric, load_weights
 from rigopt.metrics.ranking import predict_transfer, rank_candidates
 from rigopt.metrics.rigcd import DEFAULT_LAMBDAS
 from rigopt.metrics.rigv import rigv
 from rigopt.rig.library import load_rig
 
 WEIGHTS_HELP = "Calibrated weights: a shipped name (BEVDet, BEVFusion, Fast-BEV, PETR, joint) or a weights JSON file."
+METRIC_HELP = ("Rig distance: rigcd (the published RigCD, default) or rigcd+ (RigCD+: matching under the calibrated "
+               "weights; see docs/metrics.md for the evidence).")
 JSON_HELP = "Print JSON instead of a table."
 
 
@@ -39,10 +42,14 @@ def rigcd_command(
     a: str = typer.Argument(..., help="First rig: library name or rig file."),
     b: str = typer.Argument(..., help="Second rig: library name or rig file."),
     weights: Optional[str] = typer.Option(None, help=WEIGHTS_HELP + " Adds the predicted drop a -> b."),
+    metric: str = typer.Option("rigcd", "--metric", help=METRIC_HELP + " Needs --weights for rigcd+."),
     as_json: bool = typer.Option(False, "--json", help=JSON_HELP),
 ):
     """Rig Contrastive Distance between two rigs, its components and (with --weights) the predicted drop."""
-    calibration = load_weights(weights) if weights else None
+    metric = check_metric(metric)
+    if metric == "rigcd+" and not weights:
+        raise RigoptError("--metric rigcd+ matches cameras under calibrated weights: add --weights (e.g. joint)")
+    calibration = load_weights(weights, metric) if weights else None
     p = predict_transfer(load_rig(a), [load_rig(b)], calibration)[0]
     data = {"a": p.reference, "b": p.rig, "rigcd": p.rigcd, "match": p.match, "count": p.count,
             "t": p.t, "r": p.r, "f": p.f, "predicted_drop": p.predicted_drop}
@@ -59,14 +66,16 @@ def rank_command(
     candidates: List[str] = typer.Argument(..., help="Candidate rigs: library names or rig files."),
     ref: str = typer.Option(..., "--ref", help="Reference rig the detector was trained on."),
     weights: str = typer.Option("joint", help=WEIGHTS_HELP),
+    metric: str = typer.Option("rigcd", "--metric", help=METRIC_HELP),
     as_json: bool = typer.Option(False, "--json", help=JSON_HELP),
 ):
     """Rank candidate rigs by the predicted relative mAP drop of a detector trained on the reference."""
-    ranked = rank_candidates(load_rig(ref), [load_rig(c) for c in candidates], load_weights(weights))
+    calibration = load_weights(weights, metric)
+    ranked = rank_candidates(load_rig(ref), [load_rig(c) for c in candidates], calibration)
     if as_json:
         print_json([{"rig": p.rig, "predicted_drop": p.predicted_drop, "rigcd": p.rigcd, "t": p.t, "r": p.r,
                      "f": p.f, "count": p.count} for p in ranked])
         return
-    print_table(f"Candidates ranked by predicted drop from {ref} ({weights} weights)",
+    print_table(f"Candidates ranked by predicted drop from {ref} ({calibration.metric}, {weights} weights)",
                 ["rank", "rig", "predicted drop", "rigcd", "t (m)", "r (rad)", "f (deg)", "count"],
                 [[k + 1, p.rig, p.predicted_drop, p.rigcd, p.t, p.r, p.f, p.count] for k, p in enumerate(ranked)])

@@ -108,6 +108,7 @@ class DesignResult:
     naive_transfer: RigSummary | None
     benchmark_rigs: tuple[RigSummary, ...]
     refine_status: str = "not run"
+    calibration: Calibration | None = None
 
     @property
     def reference(self) -> Rig:
@@ -281,7 +282,8 @@ def design_rig(vehicle: Vehicle, reference: Rig | Sequence[Rig], calibration: Ca
     benchmark = tuple(summarise(b, vehicle, references, calibration, needed, settings)
                       for b in benchmark_rigs(vehicle))
     return DesignResult(design, tuple(references), float(reference_summary), best, len(prepared.candidates),
-                        offered, repairs, time.perf_counter() - start, naive_summary, benchmark, refine_status)
+                        offered, repairs, time.perf_counter() - start, naive_summary, benchmark, refine_status,
+                        calibration)
 
 
 def _refined(design: RigSummary, vehicle: Vehicle, reference: Rig, calibration: Calibration, needed: np.ndarray,

@@ -10,6 +10,14 @@ whose optimum certifies the first (they must agree). The fit is reported as
 
 with the fallback alpha = 0.9, lambdas = 1, K = max(avg + beta_count, 1) when ``avg <= 1e-9``.
 Predictions always come from (K, alpha, lambdas).
+
+Two metrics share this model and differ only in the matching under which the features are measured:
+
+- ``rigcd`` (the published RigCD, the default): the unit-weight matching, lambdas (1, 1, 1);
+- ``rigcd+`` (RigCD+ with calibrated matching, variant V6 of ``studies/rigcd_plus``): the matching that
+  minimises the calibration's own weighted cost ``lt t + lr r + lf f``, found by iterating fit -> rematch ->
+  refit until the training features stop changing. Its predicted drop is exactly K x RigCD under its own
+  weights, the quantity ``rigopt design`` minimises.
 """
 
 from __future__ import annotations
@@ -22,7 +30,7 @@ from typing import Sequence
 import numpy as np
 
 from rigopt.errors import DataError, RigoptError, unknown_name
-from rigopt.metrics.rigcd import DEFAULT_ALPHA, rigcd_matrix
+from rigopt.metrics.rigcd import DEFAULT_ALPHA, rigcd_matrix, tie_broken_lambdas
 from rigopt.resources import data_dir
 from rigopt.rig.model import Rig
 
@@ -34,6 +42,10 @@ AVG_EPSILON = 1e-9
 AGREEMENT_OBJECTIVE_RTOL = 1e-6
 AGREEMENT_BETA_ATOL = 1e-3
 FIT_SOLVERS = ("lbfgsb", "qp")
+#: The rig distances a calibration can belong to (see the module docstring), and their shipped weights.
+METRICS = ("rigcd", "rigcd+")
+WEIGHTS_FOLDERS = {"rigcd": "weights", "rigcd+": "weights-plus"}
+UNIT_LAMBDAS = (1.0, 1.0, 1.0)
 #: Features are rounded to this many decimals so that pairs of identical geometry tie exactly whatever
 #: the floating-point path (ties change Spearman rho in the fourth decimal); far below any real difference.
 FEATURE_DECIMALS = 10
@@ -45,7 +57,9 @@ class Calibration:
 
     Attributes: ``name``; ``K`` (scale), ``alpha`` in [0, 1], ``lambda_t`` (1/m), ``lambda_r`` (1/rad),
     ``lambda_f`` (1/deg) relative to their mean; ``beta`` (t, r, f, count) the fitted linear weights;
-    ``fallback`` true when no geometric weight survived the fit.
+    ``fallback`` true when no geometric weight survived the fit; ``metric`` (one of METRICS) the matching
+    its features are measured under: ``rigcd`` unit weights, ``rigcd+`` its own lambdas
+    (:attr:`match_lambdas`).
     """
 
     name: str
@@ -56,10 +70,17 @@ class Calibration:
     lambda_f: float
     beta: tuple[float, float, float, float]
     fallback: bool
+    metric: str = "rigcd"
 
     @property
     def lambdas(self) -> tuple[float, float, float]:
         return (self.lambda_t, self.lambda_r, self.lambda_f)
+
+    @property
+    def match_lambdas(self) -> tuple[float, float, float]:
+        """The lambdas of the matching the features are measured under: (1, 1, 1) for rigcd, the
+        calibration's own for rigcd+."""
+        return self.lambdas if self.metric == "rigcd+" else UNIT_LAMBDAS
 
     def predict(self, t, r, f, count) -> np.ndarray:
         """Predicted relative drop; t (m), r (rad), f (deg), count (-) are broadcastable arrays."""
@@ -95,14 +116,16 @@ def reparameterise(beta: Sequence[float], name: str) -> Calibration:
     return Calibration(name, k, avg / k, bt / avg, br / avg, bf / avg, (bt, br, bf, bc), False)
 
 
-def pair_features(rigs: Sequence[Rig], train: Sequence[str], test: Sequence[str]) -> np.ndarray:
-    """Unit-weight features (P, 4) = (t m, r rad, f deg, count) of the pairs (train[p] -> test[p]),
+def pair_features(rigs: Sequence[Rig], train: Sequence[str], test: Sequence[str],
+                  match_lambdas: Sequence[float] = UNIT_LAMBDAS) -> np.ndarray:
+    """Features (P, 4) = (t m, r rad, f deg, count) of the pairs (train[p] -> test[p]) under the matching
+    with ``match_lambdas`` (unit: the published features; ties broken as ``rigcd.tie_broken_lambdas``),
     rounded to FEATURE_DECIMALS.
 
     ``rigs`` holds every rig named in ``train`` and ``test`` (matched by ``Rig.name``).
     """
     index = {rig.name: k for k, rig in enumerate(rigs)}
-    matrix = rigcd_matrix(rigs, rigs)
+    matrix = rigcd_matrix(rigs, rigs, DEFAULT_ALPHA, tie_broken_lambdas(match_lambdas))
     ia = np.array([index[name] for name in train], dtype=int)
     ib = np.array([index[name] for name in test], dtype=int)
     features = np.stack([getattr(matrix, key)[ia, ib] for key in FEATURES], axis=1)
@@ -180,9 +203,19 @@ def fit_calibration(features: np.ndarray, delta: np.ndarray, name: str, solver: 
 
 # --- Weights files: shipped calibrations and the user's own JSON ---------------------------------------
 
-def shipped_weight_names() -> list[str]:
-    """Names of the calibrations shipped in ``metrics/weights/`` (the four detectors and ``joint``)."""
-    return sorted(p.stem for p in (data_dir("metrics") / "weights").glob("*.json"))
+def check_metric(metric: str) -> str:
+    """``metric`` (case-insensitive) as one of METRICS, else an UnknownNameError listing them."""
+    by_lower = {m.lower(): m for m in METRICS}
+    if str(metric).lower() not in by_lower:
+        raise unknown_name("metric", metric, METRICS)
+    return by_lower[str(metric).lower()]
+
+
+def shipped_weight_names(metric: str = "rigcd") -> list[str]:
+    """Names of the calibrations shipped for ``metric`` in ``metrics/<WEIGHTS_FOLDERS[metric]>/`` (the four
+    detectors and ``joint``)."""
+    folder = data_dir("metrics") / WEIGHTS_FOLDERS[check_metric(metric)]
+    return sorted(p.stem for p in folder.glob("*.json"))
 
 
 def write_weights(calibration: Calibration, path) -> Path:
@@ -193,22 +226,29 @@ def write_weights(calibration: Calibration, path) -> Path:
     return path
 
 
-def load_weights(name_or_path) -> Calibration:
-    """Calibrated weights from a shipped name (case-insensitive) or a JSON file written by rigopt."""
+def load_weights(name_or_path, metric: str = "rigcd") -> Calibration:
+    """Calibrated weights of ``metric`` from a shipped name (case-insensitive) or a JSON file written by
+    rigopt; a file of the other metric is refused (its predictions would be silently wrong)."""
+    metric = check_metric(metric)
     text = str(name_or_path)
     path = Path(text)
     if path.suffix.lower() != ".json" and not path.exists():
-        by_lower = {n.lower(): n for n in shipped_weight_names()}
+        names = shipped_weight_names(metric)
+        by_lower = {n.lower(): n for n in names}
         if text.lower() not in by_lower:
-            raise unknown_name("weights", text, shipped_weight_names())
-        path = data_dir("metrics") / "weights" / f"{by_lower[text.lower()]}.json"
+            raise unknown_name(f"{metric} weights", text, names)
+        path = data_dir("metrics") / WEIGHTS_FOLDERS[metric] / f"{by_lower[text.lower()]}.json"
     try:
         data = json.loads(path.read_text())
     except OSError as error:
         raise DataError(f"{path}: cannot read the weights file ({error.strerror})") from None
     except json.JSONDecodeError as error:
         raise DataError(f"{path}: not valid JSON (line {error.lineno}: {error.msg})") from None
-    return _calibration_from_dict(data, path)
+    calibration = _calibration_from_dict(data, path)
+    if calibration.metric != metric:
+        raise DataError(f"{path}: these are {calibration.metric} weights, not {metric}; pass --metric "
+                        f"{calibration.metric} or {metric} weights (rigopt calibrate --metric {metric} writes them)")
+    return calibration
 
 
 def _calibration_from_dict(data, path: Path) -> Calibration:
@@ -225,4 +265,8 @@ def _calibration_from_dict(data, path: Path) -> Calibration:
         raise DataError(f"{path}: alpha must be in [0, 1], got {values['alpha']}")
     beta = data.get("beta", {})
     beta = tuple(float(beta.get(k, np.nan)) for k in FEATURES) if isinstance(beta, dict) else (np.nan,) * 4
-    return Calibration(str(data.get("name", path.stem)), **values, beta=beta, fallback=bool(data.get("fallback", False)))
+    metric = data.get("metric", "rigcd")
+    if metric not in METRICS:
+        raise DataError(f"{path}: metric must be one of {', '.join(METRICS)}, got {metric!r}")
+    return Calibration(str(data.get("name", path.stem)), **values, beta=beta, fallback=bool(data.get("fallback", False)),
+                       metric=metric)

@@ -3,18 +3,23 @@
 The calibration set of a detector is every pair whose training and test rigs are both control rigs
 (diagonal included); the held-out set is every other pair. Each detector is fitted on its own, and all
 detectors jointly (calibration pairs stacked, one beta) with each detector then evaluated separately.
-Component knockout re-evaluates held-out rho with one fitted component removed (no refit).
+Component knockout re-evaluates held-out rho with one fitted component removed (no refit, features kept).
+
+``metric="rigcd+"`` fits RigCD+ (calibrated matching; ``calibration.py``) instead: each fit iterates fit ->
+rematch under its lambdas -> refit on its own calibration pairs, and its pairs are predicted from the
+features under its final lambdas.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Callable, Sequence
 
 import numpy as np
 
 from rigopt.errors import DataError
-from rigopt.metrics.calibration import Calibration, CalibrationFit, fit_calibration, pair_features
+from rigopt.metrics.calibration import (UNIT_LAMBDAS, Calibration, CalibrationFit, check_metric, fit_calibration,
+                                       pair_features)
 from rigopt.metrics.reliability import DEFAULT_BOOTSTRAP, DEFAULT_SEED, Reliability, drop_ranks, reliability, spearman
 from rigopt.metrics.transfer import TransferDrops, TransferTable
 from rigopt.rig.library import load_rig
@@ -100,6 +105,7 @@ class CalibrationStudy:
     models: tuple[ModelCalibration, ...]
     joint: JointCalibration
     skipped: tuple[tuple[str, str], ...]
+    metric: str = "rigcd"
 
 
 def _predictions(drops: TransferDrops, features: np.ndarray, calibration: Calibration,
@@ -130,15 +136,17 @@ def _knockout(calibration: Calibration, pairs: PairPredictions) -> Knockout:
 
 def calibrate(table: TransferTable, control_rigs: Sequence[str] = CONTROL_RIGS,
               rig_lookup: Callable[[str], Rig] = load_rig, resamples: int = DEFAULT_BOOTSTRAP,
-              seed: int = DEFAULT_SEED, solver: str = "lbfgsb") -> CalibrationStudy:
-    """Run the protocol on measured transfer ``table``; rigs are resolved by name with ``rig_lookup``."""
+              seed: int = DEFAULT_SEED, solver: str = "lbfgsb", metric: str = "rigcd") -> CalibrationStudy:
+    """Run the protocol on measured transfer ``table`` for ``metric`` (rigcd or rigcd+); rigs are resolved
+    by name with ``rig_lookup``."""
+    metric = check_metric(metric)
     control_rigs = tuple(control_rigs)
     drops = table.drops()
     if len(drops.delta) == 0:
         raise DataError("no pair has a training rig with a positive own mAP; nothing to calibrate")
     rig_names = list(dict.fromkeys(drops.train.tolist() + drops.test.tolist()))
     rigs = [_named(rig_lookup(name), name) for name in rig_names]
-    features = pair_features(rigs, drops.train, drops.test)
+    features_under = _features_under(rigs, drops.train, drops.test)
     control = np.isin(drops.train, control_rigs) & np.isin(drops.test, control_rigs)
     if not control.any():
         raise DataError(f"no pair has both rigs among the control rigs {', '.join(control_rigs)}; "
@@ -147,12 +155,12 @@ def calibrate(table: TransferTable, control_rigs: Sequence[str] = CONTROL_RIGS,
     models = []
     for model in dict.fromkeys(drops.model.tolist()):
         mine = drops.model == model
-        fit = fit_calibration(features[mine & control], drops.delta[mine & control], model, solver)
+        fit, features = _fit(features_under, mine & control, drops.delta, model, solver, metric)
         pairs = _predictions(drops.select(mine), features[mine], fit.calibration, control[mine])
         control_rel, heldout_rel = _split_reliability(pairs, resamples, seed)
         models.append(ModelCalibration(model, fit, control_rel, heldout_rel, _knockout(fit.calibration, pairs), pairs))
 
-    joint_fit = fit_calibration(features[control], drops.delta[control], JOINT, solver)
+    joint_fit, features = _fit(features_under, control, drops.delta, JOINT, solver, metric)
     joint_pairs = _predictions(drops, features, joint_fit.calibration, control)
     per_model = []
     for model in dict.fromkeys(drops.model.tolist()):
@@ -160,7 +168,34 @@ def calibrate(table: TransferTable, control_rigs: Sequence[str] = CONTROL_RIGS,
         subset = PairPredictions(*(getattr(joint_pairs, f)[mine] for f in PairPredictions.__dataclass_fields__))
         per_model.append(ModelReliability(model, *_split_reliability(subset, resamples, seed)))
     joint = JointCalibration(joint_fit, tuple(per_model), joint_pairs)
-    return CalibrationStudy(control_rigs, tuple(models), joint, drops.skipped)
+    return CalibrationStudy(control_rigs, tuple(models), joint, drops.skipped, metric)
+
+
+def _features_under(rigs: Sequence[Rig], train, test) -> Callable[[Sequence[float]], np.ndarray]:
+    """A cached function: match lambdas (3,) -> (P, 4) features of every pair (``pair_features``)."""
+    cache: dict[tuple[float, ...], np.ndarray] = {}
+
+    def features(match_lambdas) -> np.ndarray:
+        key = tuple(float(v) for v in match_lambdas)
+        if key not in cache:
+            cache[key] = pair_features(rigs, train, test, key)
+        return cache[key]
+
+    return features
+
+
+def _fit(features_under, mask: np.ndarray, delta: np.ndarray, name: str, solver: str,
+         metric: str) -> tuple[CalibrationFit, np.ndarray]:
+    """The fit of ``metric`` on the pairs in ``mask`` (P,) bool, and the (P, 4) features that it predicts
+    every pair from."""
+    if metric == "rigcd":
+        return fit_calibration(features_under(UNIT_LAMBDAS)[mask], delta[mask], name, solver), features_under(UNIT_LAMBDAS)
+    from rigopt.metrics.plus_study import fit_rematched
+
+    rematch = fit_rematched(lambda lambdas: features_under(lambdas)[mask], delta[mask], solver=solver)
+    fit = fit_calibration(features_under(rematch.lambdas)[mask], delta[mask], name, solver)
+    fit = replace(fit, calibration=replace(fit.calibration, metric=metric))
+    return fit, features_under(fit.calibration.match_lambdas)
 
 
 def _named(rig: Rig, name: str) -> Rig:

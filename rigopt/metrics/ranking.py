@@ -8,7 +8,7 @@ from typing import Sequence
 import numpy as np
 
 from rigopt.metrics.calibration import Calibration
-from rigopt.metrics.rigcd import DEFAULT_ALPHA, DEFAULT_LAMBDAS, rigcd_matrix
+from rigopt.metrics.rigcd import DEFAULT_ALPHA, DEFAULT_LAMBDAS, rigcd_matrix, tie_broken_lambdas
 from rigopt.rig.model import Rig
 
 
@@ -16,7 +16,8 @@ from rigopt.rig.model import Rig
 class TransferPrediction:
     """A reference -> candidate pair.
 
-    ``t`` (m), ``r`` (rad), ``f`` (deg), ``count``: unit-weight features (the calibration's inputs);
+    ``t`` (m), ``r`` (rad), ``f`` (deg), ``count``: the calibration's input features, under the matching of
+    its metric (unit weights for rigcd and without a calibration, its own lambdas for rigcd+);
     ``rigcd`` and ``match``: RigCD under the calibration's alpha and lambdas (the defaults without one);
     ``predicted_drop``: the calibrated relative mAP drop, None without a calibration.
     """
@@ -35,7 +36,8 @@ class TransferPrediction:
 def predict_transfer(reference: Rig, candidates: Sequence[Rig],
                      calibration: Calibration | None = None) -> list[TransferPrediction]:
     """One prediction per candidate, in the candidates' order."""
-    features = rigcd_matrix([reference], candidates)
+    match_lambdas = calibration.match_lambdas if calibration is not None else DEFAULT_LAMBDAS
+    features = rigcd_matrix([reference], candidates, DEFAULT_ALPHA, tie_broken_lambdas(match_lambdas))
     if calibration is None:
         weighted = rigcd_matrix([reference], candidates, DEFAULT_ALPHA, DEFAULT_LAMBDAS)
         drops = [None] * len(candidates)

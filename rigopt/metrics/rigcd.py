@@ -67,6 +67,20 @@ def check_weights(alpha: float, lambdas: Sequence[float]) -> tuple[float, tuple[
     return alpha, lambdas
 
 
+#: Added (times the largest lambda, at least 1) to every lambda when one is 0; see tie_broken_lambdas.
+TIE_BREAK = 1e-9
+
+
+def tie_broken_lambdas(lambdas: Sequence[float]) -> tuple[float, float, float]:
+    """Matching lambdas with ties of a zero-weighted term broken by the unit-weight cost: unchanged when all
+    three are positive, else each raised by TIE_BREAK x max(largest, 1), so that a rig against itself is
+    always matched camera to itself whatever the weights."""
+    values = np.asarray(check_weights(DEFAULT_ALPHA, lambdas)[1])
+    if np.all(values > 0):
+        return tuple(float(v) for v in values)
+    return tuple(float(v) for v in values + TIE_BREAK * max(float(values.max()), 1.0))
+
+
 @dataclass(frozen=True)
 class RigCDMatrix:
     """RigCD and its components for every pair (a, b); each array is (len(rigs_a), len(rigs_b)) float.

@@ -9,7 +9,7 @@ Matching (*ours*, switchable): the minimum-cost assignment of RigCD with cost
 ``lt ||t_i - t_j|| + lr dR + lf |f_i - f_j|`` and ``PlusSettings.match_lambdas`` = (lt, lr, lf), default
 (1, 1, 1): exactly the published unit-weight matching (the same solver, so the same choice among ties).
 When a lambda is 0, ties of the weighted cost are broken by the unit-weight cost (every lambda is raised by
-``TIE_BREAK`` times the largest), so that a rig against itself is always matched camera to itself.
+``rigcd.TIE_BREAK`` times the largest, ``rigcd.tie_broken_lambdas``), so that a rig against itself is always matched camera to itself.
 All matched terms of one call use that one matching.
 
 Published features, under the matching:
@@ -65,7 +65,7 @@ from rigopt.coverage.visibility import first_hit_distance, image_rays
 from rigopt.errors import RigoptError
 from rigopt.geometry import rotation_angle
 from rigopt.metrics.calibration import FEATURE_DECIMALS
-from rigopt.metrics.rigcd import DEFAULT_ALPHA, RigBatch, _match_pairs, check_weights
+from rigopt.metrics.rigcd import DEFAULT_ALPHA, RigBatch, _match_pairs, check_weights, tie_broken_lambdas
 from rigopt.rig.model import Rig
 from rigopt.vehicle.library import load_vehicle
 from rigopt.vehicle.model import Vehicle
@@ -81,8 +81,6 @@ MATCHED_TERMS = ("t", "r", "f", "dz", "dxy", "focal", "selfocc", "cw_t", "cw_r",
 COVERAGE_TERMS = ("cover", "overlap", "cw_t", "cw_r", "cw_f")
 SELF_OCCLUSION_TERMS = ("selfocc",)
 FOCAL_WIDTHS = ("common", "own")
-#: Relative size of the unit-weight cost added to break ties of a matching cost with a zero lambda.
-TIE_BREAK = 1e-9
 
 
 def _default_coverage() -> CoverageSettings:
@@ -296,19 +294,12 @@ def matched_weights(shares_a, rows) -> np.ndarray:
     return picked / total if total > 0 else np.full(len(picked), 1.0 / len(picked))
 
 
-def _effective_lambdas(lambdas) -> tuple[float, float, float]:
-    lambdas = np.asarray(lambdas, dtype=float)
-    if np.all(lambdas > 0):
-        return tuple(float(v) for v in lambdas)
-    return tuple(float(v) for v in lambdas + TIE_BREAK * max(float(lambdas.max()), 1.0))
-
-
 def matching(rig_a: Rig, rig_b: Rig, match_lambdas: Sequence[float] = (1.0, 1.0, 1.0)):
     """The matching of the terms: (rows (M,), cols (M,)) int camera indices of A and B."""
     settings = PlusSettings(match_lambdas=tuple(match_lambdas))
     zero = np.zeros(1, dtype=int)
     _, assignments = _match_pairs(RigBatch.from_rigs([rig_a]), zero, RigBatch.from_rigs([rig_b]), zero,
-                                  DEFAULT_ALPHA, _effective_lambdas(settings.match_lambdas), keep_assignment=True)
+                                  DEFAULT_ALPHA, tie_broken_lambdas(settings.match_lambdas), keep_assignment=True)
     return assignments[0]
 
 
@@ -390,7 +381,7 @@ def term_matrices(rigs_a: Iterable[Rig | RigProfile], rigs_b: Iterable[Rig | Rig
     ia, ib = (g.ravel() for g in np.meshgrid(np.arange(shape[0]), np.arange(shape[1]), indexing="ij"))
     if any(t in MATCHED_TERMS or t == "count" for t in terms):
         matched, assignments = _match_pairs(RigBatch.from_rigs(rig_a), ia, RigBatch.from_rigs(rig_b), ib,
-                                            DEFAULT_ALPHA, _effective_lambdas(settings.match_lambdas),
+                                            DEFAULT_ALPHA, tie_broken_lambdas(settings.match_lambdas),
                                             keep_assignment=True)
         for key in ("t", "r", "f", "count"):
             if key in out:

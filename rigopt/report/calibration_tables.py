@@ -29,8 +29,7 @@ def weights_dict(fit: CalibrationFit) -> dict:
 
 
 def study_dict(study: CalibrationStudy) -> dict:
-    """The JSON of ``rigopt calibrate``:
-    ``{"models": {M: {"weights", "control", "heldout", "knockout"}}, "joint": {"weights", "models": {M:
+    """The JSON of ``rigopt calibrate``: ``{"metric", "models": {M: {"weights", "control", "heldout", "knockout"}}, "joint": {"weights", "models": {M:
     {"control", "heldout"}}}}`` plus the control rigs and the skipped training rigs."""
     models = {
         m.model: {
@@ -47,7 +46,7 @@ def study_dict(study: CalibrationStudy) -> dict:
         "models": {r.model: {"control": r.control.to_dict(), "heldout": r.heldout.to_dict()}
                    for r in study.joint.models},
     }
-    return {"control_rigs": list(study.control_rigs), "models": models, "joint": joint,
+    return {"metric": study.metric, "control_rigs": list(study.control_rigs), "models": models, "joint": joint,
             "skipped": [list(s) for s in study.skipped]}
 
 

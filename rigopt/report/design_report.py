@@ -28,6 +28,8 @@ def design_dict(result: DesignResult, rig_file: Path | None) -> dict:
         "rig_file": str(rig_file) if rig_file else None,
         "vehicle": design.rig.vehicle,
         "reference": ",".join(r.name for r in result.references),
+        "metric": result.calibration.metric if result.calibration else None,
+        "weights": result.calibration.name if result.calibration else None,
         "predicted_drop": design.prediction.predicted_drop,
         "rigcd": design.prediction.rigcd,
         "n_cameras": len(design.rig),
