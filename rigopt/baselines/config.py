@@ -20,7 +20,9 @@ class ModelConfig:
     bev_range : half-width (m) of the square bird's-eye area both families detect in, centred on the ego;
     bev_cell : LSS grid cell (m); depth_min, depth_max, depth_bins : LSS depth distribution (m, along the
     optical axis); position_depths : points per pixel ray in PETR's 3D position embedding; dn_groups : PETR's groups of
-    denoising queries in training (0: none); image_size :
+    denoising queries in training (0: none); azimuth_prior : PETR's cross-attention favours the tokens whose rays
+    pass over each query's reference point; token_supervision : PETR's auxiliary loss on its image tokens
+    (object centre and depth); image_size :
     (width, height) pixels the images are resized to, None to keep them as stored.
     """
 
@@ -38,6 +40,8 @@ class ModelConfig:
     heads: int = 4
     position_depths: int = 16
     dn_groups: int = 3
+    azimuth_prior: bool = True
+    token_supervision: bool = True
     image_size: tuple | None = None
     lr: float = 1e-3
     weight_decay: float = 1e-2

@@ -7,12 +7,18 @@
    tokens of all N cameras form one memory of N h w tokens.
 3. Q object queries, each anchored at a learned bird's-eye reference point, attend to the memory through
    a transformer decoder whose attention sees each query's position embedding (of its current reference
-   point); after every layer a class head (sigmoid per class) and a box head predict the box: the centre
+   point) and, with ``azimuth_prior``, favours the tokens whose rays pass over that point (an additive
+   bias on the cross-attention logits, Gaussian in the azimuth gap, one cell wide, weighted per head and
+   layer by a learned factor); after every layer a class head (sigmoid per class) and a box head predict the box: the centre
    as a refinement of the reference point, which becomes the next layer's reference, z, log sizes, sin
    and cos of the yaw.
 4. Training matches queries to boxes one to one (Hungarian, on class and centre costs) and applies a
    focal class loss to all queries and L1 box losses to the matched ones, after every layer.
-5. Query denoising (training only, as DN-DETR): ``dn_groups`` copies of the true boxes, their centres jittered
+5. Auxiliary token supervision (training only, ``token_supervision``): a 1 x 1 head on the image features
+   predicts, per token, whether a box centre projects into it and that centre's log depth, against the
+   projections of the true boxes through the calibration (focal loss and L1), so that the features learn
+   where objects are and how far before the sparse set loss can teach it.
+6. Query denoising (training only, as DN-DETR): ``dn_groups`` copies of the true boxes, their centres jittered
    by up to half the box's length and width and 1 in 5 labels flipped, enter the decoder as extra queries
    (label embedding as content, jittered centre as reference) and must reconstruct their box and class; no
    matching is needed for them. An attention mask keeps the object queries and the other groups from
@@ -43,6 +49,8 @@ CLASS_WEIGHT, CENTER_WEIGHT, BOX_WEIGHT = 2.0, 10.0, 1.0
 #: Query denoising: centre jitter as a fraction of the box's length / width (at least DN_MIN_NOISE m), and
 #: the probability that a denoising query's label is replaced by a random class.
 DN_NOISE, DN_MIN_NOISE, DN_FLIP = 0.5, 1.0, 0.2
+#: Weight of the auxiliary image-token loss (object centre and its depth per token).
+TOKEN_WEIGHT = 1.0
 
 
 def _mlp(c_in: int, c_hidden: int, c_out: int) -> nn.Sequential:
@@ -62,11 +70,13 @@ class DecoderLayer(nn.Module):
         self.norms = nn.ModuleList([nn.LayerNorm(channels) for _ in range(3)])
 
     def forward(self, x: torch.Tensor, position: torch.Tensor, memory: torch.Tensor,
-                blocked: torch.Tensor | None = None) -> torch.Tensor:
-        """``blocked`` (B * heads, Q, Q) bool: True where query i must not attend to query j."""
+                blocked: torch.Tensor | None = None, memory_bias: torch.Tensor | None = None) -> torch.Tensor:
+        """``blocked`` (B * heads, Q, Q) bool: True where query i must not attend to query j;
+        ``memory_bias`` (B * heads, Q, M) float: added to the cross-attention logits."""
         q = x + position
         x = self.norms[0](x + self.self_attention(q, q, x, attn_mask=blocked, need_weights=False)[0])
-        x = self.norms[1](x + self.cross_attention(x + position, memory, memory, need_weights=False)[0])
+        x = self.norms[1](x + self.cross_attention(x + position, memory, memory, attn_mask=memory_bias,
+                                                   need_weights=False)[0])
         return self.norms[2](x + self.feed_forward(x))
 
 
@@ -91,9 +101,13 @@ class PETRDetector(nn.Module):
         self.query_position = _mlp(2, c, c)
         self.layers = nn.ModuleList([DecoderLayer(c, config.heads) for _ in range(config.decoder_layers)])
         self.label_embedding = nn.Embedding(n_classes, c)
+        # per layer and head, softplus -> the weight of the azimuth prior (1 at the start)
+        self.azimuth_weight = nn.Parameter(torch.full((config.decoder_layers, config.heads), math.log(math.e - 1)))
         self.class_head = nn.Linear(c, n_classes)
         self.box_head = _mlp(c, c, 8)
+        self.token_head = nn.Conv2d(c, 2, 1)  # per image token: object-centre logit, log depth (m)
         nn.init.constant_(self.class_head.bias, -math.log((1 - 0.01) / 0.01))
+        nn.init.constant_(self.token_head.bias[0], -math.log((1 - 0.01) / 0.01))
 
     def forward(self, batch: Batch) -> dict:
         b, n = batch.images.shape[:2]
@@ -105,6 +119,7 @@ class PETRDetector(nn.Module):
         embedding = self.position((points / scale).flatten(-2))  # (B, N, h, w, C)
         memory = features.view(b, n, -1, h, w).permute(0, 1, 3, 4, 2) + embedding
         memory = memory.reshape(b, n * h * w, -1)
+        rays = self.ray_azimuths(origins, directions, batch.intrinsics)
 
         reference = self.reference[None].expand(b, -1, -1)  # (B, Q, 2) logits of [0, 1] over the square
         x = self.query_content[None].expand(b, -1, -1)
@@ -115,18 +130,47 @@ class PETRDetector(nn.Module):
             reference = torch.cat([denoising["reference"], reference], dim=1)
             blocked = denoising["blocked"]
         logits, boxes = [], []
-        for layer in self.layers:
-            x = layer(x, self.query_position(torch.sigmoid(reference) * 2 - 1), memory, blocked)
+        for k, layer in enumerate(self.layers):
+            bias = self.azimuth_bias(reference, rays, k) if self.config.azimuth_prior else None
+            x = layer(x, self.query_position(torch.sigmoid(reference) * 2 - 1), memory, blocked, bias)
             raw = self.box_head(x)  # (B, D + Q, 8)
             center_logit = reference + raw[..., :2]
             boxes.append(torch.cat([torch.sigmoid(center_logit), raw[..., 2:]], dim=-1))
             logits.append(self.class_head(x))
             reference = center_logit.detach()  # the next layer refines this layer's centres
-        if denoising is None:
-            return {"logits": logits, "boxes": boxes}
-        d = denoising["valid"].shape[1]
-        return {"logits": [l[:, d:] for l in logits], "boxes": [x[:, d:] for x in boxes],
-                "denoising": {**denoising, "logits": [l[:, :d] for l in logits], "boxes": [x[:, :d] for x in boxes]}}
+        outputs = {"logits": logits, "boxes": boxes}
+        if self.training and self.config.token_supervision:
+            outputs["tokens"] = self.token_head(features).view(b, n, 2, h, w)
+        if denoising is not None:
+            d = denoising["valid"].shape[1]
+            outputs.update({"logits": [l[:, d:] for l in logits], "boxes": [x[:, d:] for x in boxes],
+                            "denoising": {**denoising, "logits": [l[:, :d] for l in logits],
+                                          "boxes": [x[:, :d] for x in boxes]}})
+        return outputs
+
+    def ray_azimuths(self, origins, directions, intrinsics) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+        """Per memory token (M = N h w): its camera's (x, y) (B, M, 2) m, its ray's azimuth (B, M) rad in the
+        ego frame, and the azimuth width of one feature cell (B, M) rad (stride / fx)."""
+        b, n, h, w = directions.shape[:4]
+        origin = origins[..., :2].expand(b, n, h, w, 2).reshape(b, -1, 2)
+        azimuth = torch.atan2(directions[..., 1], directions[..., 0]).reshape(b, -1)
+        width = (self.encoder.stride / intrinsics[..., 0, 0])[:, :, None].expand(b, n, h * w).reshape(b, -1)
+        return origin, azimuth, width
+
+    def azimuth_bias(self, reference: torch.Tensor, rays, layer: int) -> torch.Tensor:
+        """The azimuth prior of layer ``layer``'s cross-attention, (B * heads, Q, M): -weight x (da / width)^2 / 2
+        with da the angle between a token's ray and the direction from its camera to the query's reference
+        point (Q queries, reference (B, Q, 2) logits). A query thus looks first along the rays that pass over
+        it; each head learns its weight (softplus)."""
+        origin, azimuth, width = rays
+        r = self.config.bev_range
+        point = (torch.sigmoid(reference) * 2 - 1) * r  # (B, Q, 2) m
+        offset = point[:, :, None, :] - origin[:, None]  # (B, Q, M, 2)
+        angle = torch.remainder(torch.atan2(offset[..., 1], offset[..., 0]) - azimuth[:, None] + math.pi,
+                                2 * math.pi) - math.pi
+        penalty = -0.5 * (angle / width[:, None]) ** 2  # (B, Q, M)
+        weight = F.softplus(self.azimuth_weight[layer])  # (heads,)
+        return (weight[None, :, None, None] * penalty[:, None]).flatten(0, 1)
 
     def targets(self, batch: Batch) -> list[tuple[torch.Tensor, torch.Tensor]]:
         """Per sample the classes (n,) and box targets (n, 8) of the boxes inside the bird's-eye square."""
@@ -207,7 +251,45 @@ class PETRDetector(nn.Module):
                      "box": float(box_loss.detach()) / n_boxes}  # the last layer's terms
         if "denoising" in outputs:
             total = total + self.denoising_loss(outputs["denoising"])
+        if "tokens" in outputs:
+            token_loss = self.token_loss(outputs["tokens"], batch)
+            total = total + TOKEN_WEIGHT * token_loss
+            parts["tokens"] = float(token_loss.detach())
         return total, parts
+
+    def token_targets(self, batch: Batch, feature_hw: tuple[int, int]) -> tuple[torch.Tensor, torch.Tensor]:
+        """Which image tokens hold a box centre, and the depth of the nearest one: (B, N, h, w) bool and
+        (B, N, h, w) float depth (m along the optical axis; inf where there is none). A centre belongs to the
+        cell (v // stride, u // stride) of its projection (u, v) when in front of the camera (depth > 0.5 m)
+        and inside the image."""
+        b, n, _, height, width = batch.images.shape
+        h, w = feature_hw
+        stride = self.encoder.stride
+        depth = batch.images.new_full((b, n * h * w), math.inf)
+        ego_to_cam = torch.linalg.inv(batch.cam_to_ego)  # (B, N, 4, 4)
+        for i, boxes in enumerate(batch.boxes):
+            if not len(boxes.classes):
+                continue
+            points = ego_to_cam[i, :, :3, :3] @ boxes.centers.T + ego_to_cam[i, :, :3, 3:]  # (N, 3, n)
+            z = points[:, 2]
+            k = batch.intrinsics[i]
+            u = k[:, 0, 0, None] * points[:, 0] / z.clamp(min=1e-3) + k[:, 0, 2, None]
+            v = k[:, 1, 1, None] * points[:, 1] / z.clamp(min=1e-3) + k[:, 1, 2, None]
+            seen = (z > 0.5) & (u >= 0) & (u < width) & (v >= 0) & (v < height)
+            camera = torch.arange(n, device=z.device)[:, None].expand_as(z)
+            cell = (camera * h + (v // stride).clamp(0, h - 1).long()) * w + (u // stride).clamp(0, w - 1).long()
+            depth[i].scatter_reduce_(0, cell[seen], z[seen], reduce="amin")
+        depth = depth.view(b, n, h, w)
+        return torch.isfinite(depth), depth
+
+    def token_loss(self, tokens: torch.Tensor, batch: Batch) -> torch.Tensor:
+        """Auxiliary supervision of the image tokens (tokens (B, N, 2, h, w)): focal loss of the centre
+        logits, per centre-holding token, plus the L1 error of their log depth."""
+        holds, depth = self.token_targets(batch, tokens.shape[-2:])
+        n = max(int(holds.sum()), 1)
+        centre_loss = sigmoid_focal_loss(tokens[:, :, 0], holds.float()) / n
+        depth_loss = F.l1_loss(tokens[:, :, 1][holds], torch.log(depth[holds]), reduction="sum") / n
+        return centre_loss + depth_loss
 
     def denoising_loss(self, denoising: dict) -> torch.Tensor:
         """Reconstruction loss of the denoising queries, every layer: focal class loss towards the true

@@ -358,3 +358,56 @@ def test_denoising_changes_training_outputs_but_not_inference(tiny_data):
 def test_negative_denoising_groups_are_refused():
     with pytest.raises(RigoptError, match="dn_groups"):
         model_config("petr", "tiny", dn_groups=-1)
+
+
+def test_token_targets_mark_the_cell_of_each_projected_centre_with_the_nearest_depth():
+    """A camera at the origin looking along ego x (fx = fy = 10, principal point (32, 18), 64 x 36 image;
+    right = -y, down = -z): ego (10, 2, -1) is at (right, down, depth) = (-2, 1, 10), so (u, v) = (30, 19),
+    cell (19 // 8, 30 // 8) = (2, 3); ego (20, 4, -2) projects to the same pixel at depth 20; ego (-5, 0, 0) is
+    behind the camera; ego (10, -40, 0) projects outside the image (u = 72); ego (10, -1, 0.5) to (u, v) =
+    (33, 17.5), cell (2, 4)."""
+    from rigopt.baselines.petr import PETRDetector
+
+    model = PETRDetector(model_config("petr", "tiny"))
+    centers = [[10.0, 2.0, -1.0], [20.0, 4.0, -2.0], [-5.0, 0.0, 0.0], [10.0, -40.0, 0.0], [10.0, -1.0, 0.5]]
+    batch = Batch(torch.zeros(1, 1, 3, HEIGHT, WIDTH), intrinsics(10.0, 10.0, 32.0, 18.0)[None, None],
+                  camera_to_ego(0.0, [0.0, 0.0, 0.0])[None, None], [_boxes(centers, [0, 1, 2, 3, 4])], ["s"])
+    holds, depth = model.token_targets(batch, (5, 8))
+    assert holds.shape == depth.shape == (1, 1, 5, 8)
+    expected = torch.zeros(5, 8, dtype=torch.bool)
+    expected[2, 3] = expected[2, 4] = True
+    assert torch.equal(holds[0, 0], expected)
+    assert float(depth[0, 0, 2, 3]) == pytest.approx(10.0)  # the nearer of the two centres in that cell
+    assert float(depth[0, 0, 2, 4]) == pytest.approx(10.0)
+    assert torch.isinf(depth[0, 0][~expected]).all()
+    tokens = torch.zeros(1, 1, 2, 5, 8)
+    tokens[:, :, 1] = math.log(10.0)  # exact depths: only the centre term is left
+    exact = model.token_loss(tokens, batch)
+    tokens[:, :, 1] = math.log(20.0)
+    assert float(model.token_loss(tokens, batch) - exact) == pytest.approx(math.log(2.0), rel=1e-5)
+
+
+def test_azimuth_bias_is_zero_along_the_ray_over_the_query_and_falls_off_per_cell():
+    """Camera at the origin looking along ego x, fx = 10, stride 8: one cell is 0.8 rad of azimuth wide. A
+    query over ego (20, 0) sees the central column's rays (azimuth 0 at u = 32, cell centre u = 32.5 is off by
+    atan(0.05)) almost unpenalised; a ray one cell width (0.8 rad) away gets -w / 2 with w = 1 at the start."""
+    from rigopt.baselines.petr import PETRDetector
+
+    model = PETRDetector(model_config("petr", "tiny"))
+    b_intrinsics = intrinsics(10.0, 10.0, 32.0, 18.0)[None, None]
+    origins, directions = pixel_rays(b_intrinsics, camera_to_ego(0.0, [0.0, 0.0, 0.0])[None, None], (5, 8), 8)
+    origin, azimuth, width = model.ray_azimuths(origins, directions, b_intrinsics)
+    assert origin.shape == (1, 40, 2) and azimuth.shape == width.shape == (1, 40)
+    torch.testing.assert_close(width, torch.full((1, 40), 0.8))
+    r = model.config.bev_range
+    reference = torch.logit(torch.tensor([[[(20.0 + r) / (2 * r), 0.5]]]))  # (1, 1, 2): ego (20, 0)
+    bias = model.azimuth_bias(reference, (origin, azimuth, width), 0)
+    assert bias.shape == (model.config.heads, 1, 40)
+    angle = azimuth[0]  # (40,) rad; the query is straight ahead, so the gap is the ray's own azimuth
+    bias = bias.detach()
+    torch.testing.assert_close(bias[0, 0], -0.5 * (angle / 0.8) ** 2, atol=1e-5, rtol=1e-5)
+    assert float(bias[0, 0].max()) > -0.01  # the column over the query
+    # a reference point behind the camera: the gap is pi - |azimuth| for every (forward-looking) ray
+    behind = torch.logit(torch.tensor([[[(-20.0 + r) / (2 * r), 0.5]]]))
+    torch.testing.assert_close(model.azimuth_bias(behind, (origin, azimuth, width), 0)[0, 0].detach(),
+                               -0.5 * ((math.pi - angle.abs()) / 0.8) ** 2, atol=1e-4, rtol=1e-4)
