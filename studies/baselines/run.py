@@ -60,22 +60,31 @@ def calibration_step() -> None:
 
 
 def agreement_step() -> list[list]:
+    """Spearman rho of every synthetic family against every real detector on the pairs both hold (the
+    counterparts marked), and, as a yardstick, of the real detectors against one another on those rigs."""
+    import numpy as np
+
     from rigopt.metrics.agreement import drop_agreement
     from rigopt.metrics.transfer import read_transfer
     from rigopt.resources import data_dir
 
     synthetic = read_transfer(RESULTS / "transfer").drops()
     real = read_transfer(data_dir("metrics") / "pccr_transfer.csv").drops()
-    rows = []
-    for family, detectors in COUNTERPARTS.items():
-        if family not in set(synthetic.model):
-            continue
-        for detector in detectors:
-            agreement = drop_agreement(synthetic, family, real, detector)
-            rows.append([family, detector, agreement.n, agreement.rho, agreement.ci[0], agreement.ci[1], agreement.p,
-                         agreement.mae])
-    return write_csv(RESULTS / "agreement.csv",
-                     ["family", "real detector", "pairs", "rho", "ci_low", "ci_high", "p_value", "mae"], rows)
+    rigs = CONTROL + DIVERSE
+    real = real.select(np.isin(real.train, rigs) & np.isin(real.test, rigs))
+    detectors = list(dict.fromkeys(real.model))
+    header = ["family", "real detector", "counterpart", "pairs", "rho", "ci_low", "ci_high", "p_value", "mae"]
+
+    def measures(first, model_a, second, model_b) -> list:
+        agreement = drop_agreement(first, model_a, second, model_b)
+        return [agreement.n, agreement.rho, *agreement.ci, agreement.p, agreement.mae]
+
+    rows = [[family, detector, "yes" if detector in COUNTERPARTS[family] else "no",
+             *measures(synthetic, family, real, detector)]
+            for family in COUNTERPARTS if family in set(synthetic.model) for detector in detectors]
+    yardstick = [[a, b, *measures(real, a, real, b)] for i, a in enumerate(detectors) for b in detectors[i + 1:]]
+    write_csv(RESULTS / "agreement_real.csv", ["real detector", "real detector", *header[3:]], yardstick)
+    return write_csv(RESULTS / "agreement.csv", header, rows)
 
 
 def validation_step(data: Path, family: str, device: str) -> None:
@@ -115,6 +124,20 @@ def training_table(family: str) -> list[list]:
     return [["rig", "epochs", "steps", "loss epoch 1", "loss last epoch", "minutes"], *rows]
 
 
+def read_csv_table(path: Path) -> list[list]:
+    """[header, *rows] of a CSV written by write_csv, numbers back as int or float."""
+    def value(text: str):
+        for kind in (int, float):
+            try:
+                return kind(text)
+            except ValueError:
+                pass
+        return text
+
+    header, *rows = csv.reader(path.open())
+    return [header, *([value(v) for v in row] for row in rows)]
+
+
 def report_step(families) -> None:
     parts = ["# Synthetic cross-rig study: results", "",
              "Produced by `python studies/baselines/run.py`; read [the README](../README.md) for the protocol "
@@ -136,9 +159,12 @@ def report_step(families) -> None:
                   markdown([["family", "rho control", "rho held-out", "ci_low", "ci_high", "held-out pairs", "K",
                              "alpha", "fallback"], *rows]), ""]
     if (RESULTS / "agreement.csv").is_file():
-        table = list(csv.reader((RESULTS / "agreement.csv").open()))
+        table = read_csv_table(RESULTS / "agreement.csv")
         parts += ["## Agreement with the benchmark's real transfer (Spearman rho of relative drops)", "",
                   markdown(table), ""]
+    if (RESULTS / "agreement_real.csv").is_file():
+        table = read_csv_table(RESULTS / "agreement_real.csv")
+        parts += ["## Yardstick: the real detectors against one another on the same pairs", "", markdown(table), ""]
     for path in sorted((RESULTS / "validation").glob("*.json")):
         result = json.loads(path.read_text())
         rows = [[e["role"], e["rig"], e["n_cameras"], e["mAP"], e["measured_drop"], e["predicted_drop"], e["rigcd"]]

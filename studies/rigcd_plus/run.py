@@ -56,7 +56,7 @@ NOTES = "\n".join([
     "- Paired bootstrap: one generator (seed 0) draws, detector by detector in the order of the data, a "
     "(1000, n_detector) array of indices within that detector; both rhos are computed on the same resampled "
     "pairs; resamples with a constant side are skipped.",
-    "- Synthetic: the joint fit stacks the families run (lss only, so it equals the per-family fit).",
+    "- Synthetic: the joint fit stacks the pairs of every family run (synthetic.md names them), one beta for all.",
 ])
 START = time.time()
 
