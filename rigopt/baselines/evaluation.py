@@ -36,7 +36,7 @@ import numpy as np
 from rigopt.bench.dataset import TrainingSample
 from rigopt.bench.scene_model import CLASSES
 from rigopt.errors import DataError
-from rigopt.metrics.reliability import finite_or_none
+from rigopt.metrics.reliability import DEFAULT_BOOTSTRAP, DEFAULT_SEED, finite_or_none
 
 DEFAULT_THRESHOLDS = (0.5, 1.0, 2.0, 4.0)
 #: Recall points at which precision is read (r = i / RECALL_STEPS for i = 0..RECALL_STEPS).
@@ -144,6 +144,76 @@ def evaluate(detections: Detections, ground_truth: GroundTruth, classes: Sequenc
     Raises DataError for arrays of mismatched lengths, non-finite centres or scores, class indices outside
     ``classes``, sample ids of incompatible kinds (int vs str), or non-positive thresholds.
     """
+    return match(detections, ground_truth, classes, thresholds).evaluation()
+
+
+@dataclass(frozen=True)
+class MatchedDetections:
+    """Detections matched to ground truth once, so that the AP of any multiset of the S samples follows
+    without matching again (a detection is matched only within its own sample).
+
+    ``samples`` (S,) ids; ``rank_sample[c]`` (m_c,) int sample index of class c's detections in rank order;
+    ``tp[c]`` (T, m_c) bool, true positive at each threshold; ``gt_count`` (C, S) int ground truths per
+    class and sample.
+    """
+
+    samples: np.ndarray
+    rank_sample: tuple[np.ndarray, ...]
+    tp: tuple[np.ndarray, ...]
+    gt_count: np.ndarray
+    classes: tuple[str, ...]
+    thresholds: tuple[float, ...]
+
+    def evaluation(self, weights: np.ndarray | None = None) -> Evaluation:
+        """AP and mAP with sample i counted ``weights[i]`` times ((S,) int >= 0; default all once).
+
+        Repeated samples are scored as distinct samples whose detections are ranked next to each other;
+        with all weights 1 this is exactly ``evaluate``.
+        """
+        weights = np.ones(len(self.samples), dtype=int) if weights is None else np.asarray(weights, dtype=int)
+        n_gt = self.gt_count @ weights
+        ap = np.full((len(self.classes), len(self.thresholds)), np.nan)
+        for c in np.flatnonzero(n_gt):
+            repeats = weights[self.rank_sample[c]]
+            for j in range(len(self.thresholds)):
+                ap[c, j] = average_precision(np.repeat(self.tp[c][j], repeats), int(n_gt[c]))
+        per_class = ap.mean(axis=1)
+        has_gt = n_gt > 0
+        mean = float(per_class[has_gt].mean()) if has_gt.any() else float("nan")
+        return Evaluation(mean, ap, per_class, self.classes, self.thresholds, n_gt)
+
+
+def resampled_maps(matched: Sequence[MatchedDetections], groups: Sequence[Sequence[int]],
+                   resamples: int = DEFAULT_BOOTSTRAP, seed: int = DEFAULT_SEED) -> np.ndarray:
+    """(resamples, K) mAP of K matched runs over the same samples, each resample drawing ``len(groups)``
+    groups of sample indices with replacement (the same draw for all K, so differences are paired).
+
+    Groups are the resampling unit: samples that are not independent (consecutive frames) belong together.
+    """
+    if not matched:
+        raise DataError("resampling needs at least one matched run")
+    samples = matched[0].samples
+    if any(len(m.samples) != len(samples) or np.any(m.samples != samples) for m in matched):
+        raise DataError("resampled runs must be matched on the same samples in the same order")
+    members = [np.asarray(g, dtype=int) for g in groups]
+    if not members or any(len(g) == 0 or g.min() < 0 or g.max() >= len(samples) for g in members):
+        raise DataError(f"groups must be non-empty lists of sample indices in 0..{len(samples) - 1}")
+    rng = np.random.default_rng(seed)
+    maps = np.empty((resamples, len(matched)))
+    for r in range(resamples):
+        drawn = np.concatenate([members[i] for i in rng.integers(len(members), size=len(members))])
+        weights = np.bincount(drawn, minlength=len(samples))
+        maps[r] = [m.evaluation(weights).map for m in matched]
+    return maps
+
+
+def match(detections: Detections, ground_truth: GroundTruth, classes: Sequence[str] = CLASSES,
+          thresholds: Sequence[float] = DEFAULT_THRESHOLDS, samples: Sequence | None = None) -> MatchedDetections:
+    """Match ``detections`` to ``ground_truth`` per class and threshold (rules in the module docstring).
+
+    ``samples``: the ids that index the result (default: every id either side holds, sorted); they must
+    include every id of the detections and the ground truth. Raises DataError as ``evaluate`` does.
+    """
     classes = tuple(str(c) for c in classes)
     thresholds = tuple(float(d) for d in thresholds)
     if not classes or not thresholds:
@@ -154,19 +224,18 @@ def evaluate(detections: Detections, ground_truth: GroundTruth, classes: Sequenc
                                           len(classes), detections.score)
     gt_cls, gt_xy, _ = _checked("ground truth", ground_truth.sample, ground_truth.cls, ground_truth.xy,
                                 len(classes))
-    det_sample, gt_sample = _sample_codes(detections.sample, ground_truth.sample)
+    ids, det_sample, gt_sample = _sample_codes(detections.sample, ground_truth.sample, samples)
 
-    n_gt = np.bincount(gt_cls, minlength=len(classes))
-    ap = np.full((len(classes), len(thresholds)), np.nan)
-    for c in np.flatnonzero(n_gt):
+    gt_count = np.zeros((len(classes), len(ids)), dtype=int)
+    np.add.at(gt_count, (gt_cls, gt_sample), 1)
+    rank_sample, tp = [], []
+    for c in range(len(classes)):
         d_rows, g_rows = det_cls == c, gt_cls == c
-        for j, d in enumerate(thresholds):
-            tp = _match(det_sample[d_rows], det_xy[d_rows], det_score[d_rows], gt_sample[g_rows], gt_xy[g_rows], d)
-            ap[c, j] = average_precision(tp, int(n_gt[c]))
-    per_class = ap.mean(axis=1)
-    has_gt = n_gt > 0
-    mean = float(per_class[has_gt].mean()) if has_gt.any() else float("nan")
-    return Evaluation(mean, ap, per_class, classes, thresholds, n_gt)
+        order = _rank(det_sample[d_rows], det_xy[d_rows], det_score[d_rows])
+        rank_sample.append(det_sample[d_rows][order])
+        tp.append(np.array([_match(det_sample[d_rows][order], det_xy[d_rows][order], gt_sample[g_rows],
+                                   gt_xy[g_rows], d) for d in thresholds]).reshape(len(thresholds), -1))
+    return MatchedDetections(ids, tuple(rank_sample), tuple(tp), gt_count, classes, thresholds)
 
 
 def average_precision(tp: np.ndarray, n_ground_truth: int) -> float:
@@ -190,19 +259,23 @@ def average_precision(tp: np.ndarray, n_ground_truth: int) -> float:
     return math.fsum(kept) / len(kept) / (1.0 - MIN_PRECISION)  # exact sum: a perfect ranking gives 1.0
 
 
-def _match(det_sample: np.ndarray, det_xy: np.ndarray, det_score: np.ndarray, gt_sample: np.ndarray,
-           gt_xy: np.ndarray, threshold: float) -> np.ndarray:
-    """Greedy matching of one class's detections (m,) to its ground truths (g,) -> tp (m,) bool in rank order."""
-    order = np.lexsort((det_xy[:, 1], det_xy[:, 0], det_sample, -det_score))
+def _rank(det_sample: np.ndarray, det_xy: np.ndarray, det_score: np.ndarray) -> np.ndarray:
+    """Rank order of one class's detections: score descending, then sample, x, y ascending."""
+    return np.lexsort((det_xy[:, 1], det_xy[:, 0], det_sample, -det_score))
+
+
+def _match(det_sample: np.ndarray, det_xy: np.ndarray, gt_sample: np.ndarray, gt_xy: np.ndarray,
+           threshold: float) -> np.ndarray:
+    """Greedy matching of one class's ranked detections (m,) to its ground truths (g,) -> tp (m,) bool."""
     gt_order = np.lexsort((gt_xy[:, 1], gt_xy[:, 0], gt_sample))
     gt_sample, gt_xy = gt_sample[gt_order], gt_xy[gt_order]
     free = np.ones(len(gt_sample), dtype=bool)
-    tp = np.zeros(len(order), dtype=bool)
-    for rank, k in enumerate(order):
-        candidates = np.flatnonzero(free & (gt_sample == det_sample[k]))
+    tp = np.zeros(len(det_sample), dtype=bool)
+    for rank in range(len(det_sample)):
+        candidates = np.flatnonzero(free & (gt_sample == det_sample[rank]))
         if len(candidates) == 0:
             continue
-        distance = np.hypot(*(gt_xy[candidates] - det_xy[k]).T)
+        distance = np.hypot(*(gt_xy[candidates] - det_xy[rank]).T)
         nearest = int(np.argmin(distance))  # first of equal distances: canonical (x, y) order
         if distance[nearest] < threshold:
             tp[rank] = True
@@ -237,16 +310,32 @@ def _checked(what: str, sample, cls, xy, n_classes: int, score=None):
     return cls, xy, score
 
 
-def _sample_codes(det_sample, gt_sample) -> tuple[np.ndarray, np.ndarray]:
-    """Integer codes (m,), (g,) of the sample ids, ordered as the sorted ids; ids must all be int or all str."""
+def _sample_codes(det_sample, gt_sample, samples=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(ids (S,), detection codes (m,), ground-truth codes (g,)): integer codes index ``ids``, which are
+    ``samples`` when given (else the sorted ids of both sides); ids must all be int or all str."""
     det_sample, gt_sample = np.asarray(det_sample), np.asarray(gt_sample)
-    kinds = {_id_kind(a) for a in (det_sample, gt_sample) if len(a)}
+    given = None if samples is None else np.asarray(samples)
+    kinds = {_id_kind(a) for a in (det_sample, gt_sample, given) if a is not None and len(a)}
     if None in kinds or len(kinds) > 1:
         raise DataError(f"sample ids must be all integers or all strings, got dtypes {det_sample.dtype} "
                         f"(detections) and {gt_sample.dtype} (ground truth)")
-    ids = [a if len(a) else a.astype(int if kinds == {"int"} else str) for a in (det_sample, gt_sample)]
-    _, codes = np.unique(np.concatenate(ids), return_inverse=True)
-    return codes[:len(det_sample)], codes[len(det_sample):]
+    kind = int if kinds == {"int"} else str
+    det_sample, gt_sample = (a if len(a) else a.astype(kind) for a in (det_sample, gt_sample))
+    if given is None:
+        ids, codes = np.unique(np.concatenate([det_sample, gt_sample]), return_inverse=True)
+        return ids, codes[:len(det_sample)], codes[len(det_sample):]
+    if len(np.unique(given)) != len(given):
+        raise DataError("the sample ids to index by must be distinct")
+    order = np.argsort(given, kind="stable")
+    codes = []
+    for side, name in ((det_sample, "detections"), (gt_sample, "ground truth")):
+        at = np.searchsorted(given[order], side)
+        found = at < len(given)
+        found[found] = given[order][at[found]] == side[found]
+        if not found.all():
+            raise DataError(f"{name}: sample id {side[~found][0].item()!r} is not among the samples to index by")
+        codes.append(order[at])
+    return given, codes[0], codes[1]
 
 
 def _id_kind(ids: np.ndarray):

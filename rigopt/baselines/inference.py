@@ -10,7 +10,8 @@ import numpy as np
 import torch
 
 from rigopt.baselines.data import RigSplit
-from rigopt.baselines.evaluation import Detections, Evaluation, GroundTruth, SamplePrediction, evaluate
+from rigopt.baselines.evaluation import (Detections, Evaluation, GroundTruth, MatchedDetections, SamplePrediction,
+                                         match)
 from rigopt.baselines.models import resolve_device
 
 EVAL_RANGE = 50.0
@@ -34,11 +35,18 @@ def predict(model: torch.nn.Module, split: RigSplit, device: str = "cpu", batch_
     return predictions
 
 
-def evaluate_split(model: torch.nn.Module, split: RigSplit, device: str = "cpu", batch_size: int = 4,
-                   progress=lambda done, total: None) -> Evaluation:
-    """Centre-distance AP and mAP of ``model`` on ``split`` (ground truth within EVAL_RANGE)."""
+def match_split(model: torch.nn.Module, split: RigSplit, device: str = "cpu", batch_size: int = 4,
+                progress=lambda done, total: None) -> MatchedDetections:
+    """``model``'s detections on ``split`` matched to its ground truth (within EVAL_RANGE), indexed by the
+    split's sample tokens in split order."""
     predictions = predict(model, split, device, batch_size, progress=progress)
     truth = GroundTruth.from_samples(split.samples)
     near = np.hypot(truth.xy[:, 0], truth.xy[:, 1]) <= EVAL_RANGE
     truth = GroundTruth(truth.sample[near], truth.cls[near], truth.xy[near])
-    return evaluate(Detections.from_predictions(predictions), truth)
+    return match(Detections.from_predictions(predictions), truth, samples=[s.token for s in split.samples])
+
+
+def evaluate_split(model: torch.nn.Module, split: RigSplit, device: str = "cpu", batch_size: int = 4,
+                   progress=lambda done, total: None) -> Evaluation:
+    """Centre-distance AP and mAP of ``model`` on ``split`` (ground truth within EVAL_RANGE)."""
+    return match_split(model, split, device, batch_size, progress).evaluation()

@@ -55,13 +55,19 @@ def evaluate_on(checkpoint, data, rig: str, device: str = "cpu", family: str | N
 def evaluate_on_rigs(checkpoint, data, rigs: Sequence[str], device: str = "cpu", family: str | None = None,
                      split_name: str = TEST_SPLIT) -> dict:
     """{rig: metrics dict} of a checkpoint, loaded once, on ``<data>/<rig>/<split_name>`` of every rig."""
+    matched = match_on_rigs(checkpoint, data, rigs, device, family, split_name)
+    return {rig: matched[rig].evaluation().to_dict() for rig in rigs}
+
+
+def match_on_rigs(checkpoint, data, rigs: Sequence[str], device: str = "cpu", family: str | None = None,
+                  split_name: str = TEST_SPLIT) -> dict:
+    """{rig: MatchedDetections} of a checkpoint, loaded once, on ``<data>/<rig>/<split_name>`` of every rig."""
     from rigopt.baselines.data import RigSplit
-    from rigopt.baselines.inference import evaluate_split
+    from rigopt.baselines.inference import match_split
     from rigopt.baselines.models import load_checkpoint, model_from_checkpoint
 
     model, config = model_from_checkpoint(load_checkpoint(checkpoint, family))
-    return {rig: evaluate_split(model, RigSplit(data, rig, split_name, config.image_size), device).to_dict()
-            for rig in rigs}
+    return {rig: match_split(model, RigSplit(data, rig, split_name, config.image_size), device) for rig in rigs}
 
 
 def train_and_test(data, trained_on: str, tests: Sequence[str], config: ModelConfig, runs, device: str = "cpu",

@@ -4,7 +4,9 @@ The test split of the reference rig is rendered again, the same scenes and image
 the benchmark's hand-designed rigs for the design's vehicle and the naive transfer of the reference
 (each reference camera moved to the nearest valid mount facing its way). The detector trained on the
 reference is evaluated on each; the measured relative drop (mAP(ref -> ref) - mAP(ref -> rig)) /
-mAP(ref -> ref) stands beside the drop that the calibrated RigCD predicts.
+mAP(ref -> ref) stands beside the drop that the calibrated RigCD predicts. The test frames are resampled
+in blocks (paired across rigs) for a 95 % interval of each drop and of the design's drop minus each other
+rig's: the noise of one test split, not of training.
 """
 
 from __future__ import annotations
@@ -14,11 +16,19 @@ import json
 from pathlib import Path
 from typing import Callable
 
-from rigopt.baselines.protocol import TEST_SPLIT, evaluate_on_rigs, run_folder
+import numpy as np
+
+from rigopt.baselines.data import RigSplit
+from rigopt.baselines.evaluation import resampled_maps
+from rigopt.baselines.protocol import TEST_SPLIT, match_on_rigs, run_folder
 from rigopt.errors import DataError, RigFileError
 from rigopt.metrics.calibration import Calibration
+from rigopt.metrics.reliability import DEFAULT_BOOTSTRAP, DEFAULT_SEED, finite_or_none
 from rigopt.rig.library import load_rig
 from rigopt.rig.model import Rig
+
+#: Consecutive test frames resampled together (40 frames a scene give 4 blocks).
+BLOCK_SAMPLES = 10
 
 
 def load_design(path) -> Rig:
@@ -56,9 +66,15 @@ def comparison_rigs(design: Rig, reference: Rig) -> list[tuple[str, Rig]]:
 
 
 def validate_design(design: Rig, reference: str, family: str, data, calibration: Calibration, runs=None,
-                    device: str = "cpu", progress: Callable[[str], None] = lambda message: None) -> dict:
+                    device: str = "cpu", progress: Callable[[str], None] = lambda message: None,
+                    resamples: int = DEFAULT_BOOTSTRAP, seed: int = DEFAULT_SEED) -> dict:
     """Measured and predicted drops of the reference-trained ``family`` detector on the design and its
-    comparison rigs. Renders missing test splits into ``data``; returns a JSON-ready dict."""
+    comparison rigs. Renders missing test splits into ``data``; returns a JSON-ready dict.
+
+    Each measured drop has a 95 % interval from resampling blocks of BLOCK_SAMPLES consecutive test
+    frames (the same draw for every rig); ``design_minus`` holds the design's drop minus each other rig's,
+    with its paired interval (below 0: the design loses less).
+    """
     from rigopt.baselines.data import split_root
     from rigopt.bench.generate import ego_mesh_lookup, generate_split, split_layout
     from rigopt.bench.render import render_rig
@@ -79,16 +95,48 @@ def validate_design(design: Rig, reference: str, family: str, data, calibration:
     generate_split([rig for _, rig in rigs], scenes, data, size, render_rig, ego_mesh_lookup(progress))
 
     progress(f"evaluating the {family} model trained on {reference_rig.name}")
-    metrics = evaluate_on_rigs(checkpoint, data, [reference_rig.name, *names], device, family)
-    own = metrics[reference_rig.name]["mAP"]
+    test_rigs = [reference_rig.name, *names]
+    matched = match_on_rigs(checkpoint, data, test_rigs, device, family)
+    maps = np.array([matched[name].evaluation().map for name in test_rigs])
+    blocks = sample_blocks(RigSplit(data, reference_rig.name, TEST_SPLIT).samples, BLOCK_SAMPLES)
+    progress(f"bootstrapping the drops over {len(blocks)} blocks of test samples")
+    resampled = resampled_maps([matched[name] for name in test_rigs], blocks, resamples, seed)
+    drops, resampled_drops = relative_drops(maps), relative_drops(resampled)
     predictions = predict_transfer(reference_rig, [rig for _, rig in rigs], calibration)
     entries = []
-    for (role, rig), prediction in zip(rigs, predictions):
-        measured = metrics[rig.name]["mAP"]
-        drop = (own - measured) / own if own and measured is not None else None
-        entries.append({"role": role, "rig": rig.name, "n_cameras": len(rig), "mAP": measured,
-                        "measured_drop": drop, "predicted_drop": prediction.predicted_drop,
-                        "rigcd": prediction.rigcd})
+    for k, ((role, rig), prediction) in enumerate(zip(rigs, predictions), start=1):
+        entries.append({"role": role, "rig": rig.name, "n_cameras": len(rig), "mAP": finite_or_none(maps[k]),
+                        "measured_drop": finite_or_none(drops[k]), "measured_drop_ci": interval(resampled_drops[:, k]),
+                        "predicted_drop": prediction.predicted_drop, "rigcd": prediction.rigcd})
+    design_minus = [{"rig": names[k - 1], "role": rigs[k - 1][0], "difference": finite_or_none(drops[1] - drops[k]),
+                     "ci": interval(resampled_drops[:, 1] - resampled_drops[:, k])} for k in range(2, len(test_rigs))]
     return {"reference": reference_rig.name, "model": family, "checkpoint": str(checkpoint),
-            "metric": calibration.metric, "weights": calibration.name, "reference_mAP": own, "test_scenes": len(scenes),
-            "image_size": list(size), "rigs": entries}
+            "metric": calibration.metric, "weights": calibration.name, "reference_mAP": finite_or_none(maps[0]),
+            "test_scenes": len(scenes), "image_size": list(size), "rigs": entries,
+            "design_minus": design_minus,
+            "bootstrap": {"resamples": resamples, "seed": seed, "blocks": len(blocks), "block_samples": BLOCK_SAMPLES}}
+
+
+def sample_blocks(samples, size: int) -> list[np.ndarray]:
+    """Indices into ``samples`` in runs of up to ``size`` consecutive frames of one scene: the resampling
+    unit, since neighbouring frames see nearly the same objects."""
+    blocks, start = [], 0
+    for k in range(1, len(samples) + 1):
+        if k == len(samples) or samples[k].scene != samples[start].scene or k - start == size:
+            blocks.append(np.arange(start, k))
+            start = k
+    return blocks
+
+
+def relative_drops(maps: np.ndarray) -> np.ndarray:
+    """(..., K) relative drops (maps[..., 0] - maps[..., k]) / maps[..., 0] of K mAPs, the first the
+    reference's own; NaN where the own mAP is 0 or an mAP is NaN."""
+    own = maps[..., :1]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(own > 0, (own - maps) / own, np.nan)
+
+
+def interval(values: np.ndarray) -> list:
+    """95 % percentile interval of the finite values ([None, None] when there are none)."""
+    finite = values[np.isfinite(values)]
+    return [float(v) for v in np.percentile(finite, [2.5, 97.5])] if len(finite) else [None, None]

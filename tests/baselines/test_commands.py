@@ -101,6 +101,15 @@ def test_validate_renders_the_design_and_reports_measured_beside_predicted(train
         assert (trained / entry["rig"] / "test" / "v1.0-test" / "sample.json").is_file()
         assert entry["predicted_drop"] is not None and entry["rigcd"] > 0
     assert result["reference"] == "R1" and result["test_scenes"] == 1 and result["image_size"] == [64, 36]
+    by_rig = {entry["rig"]: entry for entry in result["rigs"]}
+    assert [e["role"] for e in result["design_minus"]] == ["hand-designed", "naive transfer"]
+    for entry in result["design_minus"]:
+        design, other = roles["design"]["measured_drop"], by_rig[entry["rig"]]["measured_drop"]
+        if None not in (design, other):
+            assert entry["difference"] == pytest.approx(design - other)
+        low, high = entry["ci"]
+        assert low is None or low <= high
+    assert result["bootstrap"]["blocks"] >= 1 and result["bootstrap"]["resamples"] == 1000
 
 
 @pytest.mark.parametrize("args, message", [
