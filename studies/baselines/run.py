@@ -167,11 +167,14 @@ def report_step(families) -> None:
         parts += ["## Yardstick: the real detectors against one another on the same pairs", "", markdown(table), ""]
     for path in sorted((RESULTS / "validation").glob("*.json")):
         result = json.loads(path.read_text())
-        rows = [[e["role"], e["rig"], e["n_cameras"], e["mAP"], e["measured_drop"], e["predicted_drop"], e["rigcd"]]
-                for e in result["rigs"]]
+        rows = [[e["role"], e["rig"], e["n_cameras"], e["mAP"], e["measured_drop"], *e["measured_drop_ci"],
+                 e["predicted_drop"], e["rigcd"]] for e in result["rigs"]]
+        differences = [[f"design - {e['rig']}", e["role"], e["difference"], *e["ci"]] for e in result["design_minus"]]
         parts += [f"## Validation: {path.stem} ({result['model']} trained on {result['reference']}, own mAP "
                   f"{result['reference_mAP']:.3f})", "",
-                  markdown([["role", "rig", "cameras", "mAP", "measured drop", "predicted drop", "RigCD"], *rows]), ""]
+                  markdown([["role", "rig", "cameras", "mAP", "measured drop", "ci_low", "ci_high", "predicted drop",
+                             "RigCD"], *rows]), "",
+                  markdown([["difference", "other rig's role", "measured", "ci_low", "ci_high"], *differences]), ""]
     (RESULTS / "results.md").write_text("\n".join(parts))
 
 
