@@ -170,7 +170,10 @@ class MatchedDetections:
         Repeated samples are scored as distinct samples whose detections are ranked next to each other;
         with all weights 1 this is exactly ``evaluate``.
         """
-        weights = np.ones(len(self.samples), dtype=int) if weights is None else np.asarray(weights, dtype=int)
+        weights = np.ones(len(self.samples), dtype=int) if weights is None else np.asarray(weights)
+        if weights.shape != (len(self.samples),) or not np.issubdtype(weights.dtype, np.integer) or (weights < 0).any():
+            raise DataError(f"sample weights must be ({len(self.samples)},) integers >= 0, got {weights.dtype} "
+                            f"{weights.shape}")
         n_gt = self.gt_count @ weights
         ap = np.full((len(self.classes), len(self.thresholds)), np.nan)
         for c in np.flatnonzero(n_gt):

@@ -10,7 +10,7 @@ Steps (each resumable; rerun the script to continue):
   6. report:      results/results.md from all of the above.
 Writes results/ (matrices, loss logs, calibration, figures, tables, results.md); checkpoints stay under
 --data. Usage: python studies/baselines/run.py --data DIR [--families lss petr] [--epochs 8]
-              [--steps data matrix calibration agreement validation] [--device cpu]
+              [--steps data matrix calibration agreement validation] [--device cpu] [--seeds 0 1 2]
 """
 
 from __future__ import annotations
@@ -87,10 +87,18 @@ def agreement_step() -> list[list]:
     return write_csv(RESULTS / "agreement.csv", header, rows)
 
 
-def validation_step(data: Path, family: str, device: str) -> None:
-    for design in DESIGNS:
-        rigopt("validate", design, "--ref", "R1", "--model", family, "--data", data, "--device", device,
-               "--out", RESULTS / "validation" / f"{family}_{design.stem}.json")
+def validation_step(data: Path, family: str, device: str, epochs: int, seeds: list[int]) -> None:
+    """rigopt validate of each design with the R1-trained model of ``family``; seed 0 is the matrix's run
+    (``<data>/runs``), other seeds train R1 again in ``<data>/runs-seed<S>`` (resumable)."""
+    for seed in seeds:
+        runs = data / ("runs" if seed == 0 else f"runs-seed{seed}")
+        if seed:
+            rigopt("bench", "train", "--data", data, "--rig", "R1", "--model", family, "--epochs", epochs, "--seed",
+                   seed, "--device", device, "--runs", runs)
+        for design in DESIGNS:
+            suffix = "" if seed == 0 else f"_seed{seed}"
+            rigopt("validate", design, "--ref", "R1", "--model", family, "--data", data, "--device", device,
+                   "--runs", runs, "--out", RESULTS / "validation" / f"{family}_{design.stem}{suffix}.json")
 
 
 def matrix_tables(family: str) -> tuple[list[list], list[list]]:
@@ -138,6 +146,17 @@ def read_csv_table(path: Path) -> list[list]:
     return [header, *([value(v) for v in row] for row in rows)]
 
 
+def seed_row(path: Path) -> list:
+    """One validation file as [family, design, seed, own mAP, design drop, then the differences to the naive
+    transfer and to the hand-designed rig with their intervals]."""
+    result = json.loads(path.read_text())
+    stem, _, seed = path.stem.partition("_seed")
+    design = next(e for e in result["rigs"] if e["role"] == "design")
+    against = {e["role"]: [e["difference"], *e["ci"]] for e in result["design_minus"]}
+    return [result["model"], design["rig"], int(seed or 0), result["reference_mAP"], design["measured_drop"],
+            *against.get("naive transfer", [None] * 3), *against.get("hand-designed", [None] * 3)]
+
+
 def report_step(families) -> None:
     parts = ["# Synthetic cross-rig study: results", "",
              "Produced by `python studies/baselines/run.py`; read [the README](../README.md) for the protocol "
@@ -165,7 +184,13 @@ def report_step(families) -> None:
     if (RESULTS / "agreement_real.csv").is_file():
         table = read_csv_table(RESULTS / "agreement_real.csv")
         parts += ["## Yardstick: the real detectors against one another on the same pairs", "", markdown(table), ""]
-    for path in sorted((RESULTS / "validation").glob("*.json")):
+    validations = sorted((RESULTS / "validation").glob("*.json"))
+    if validations:
+        parts += ["## Validation across training seeds (design's drop minus the other rig's)", "",
+                  markdown([["model", "design", "seed", "own mAP", "design drop", "- naive", "ci_low", "ci_high",
+                             "- hand-designed", "ci_low", "ci_high"],
+                            *(seed_row(path) for path in validations)]), ""]
+    for path in validations:
         result = json.loads(path.read_text())
         rows = [[e["role"], e["rig"], e["n_cameras"], e["mAP"], e["measured_drop"], *e["measured_drop_ci"],
                  e["predicted_drop"], e["rigcd"]] for e in result["rigs"]]
@@ -184,6 +209,7 @@ def main() -> None:
     parser.add_argument("--families", nargs="+", default=["lss", "petr"])
     parser.add_argument("--epochs", type=int, default=8)
     parser.add_argument("--device", default="cpu")
+    parser.add_argument("--seeds", nargs="+", type=int, default=[0], help="training seeds of the validation step")
     parser.add_argument("--steps", nargs="+", default=list(STEPS), choices=STEPS)
     args = parser.parse_args()
     RESULTS.mkdir(parents=True, exist_ok=True)
@@ -193,7 +219,7 @@ def main() -> None:
         if "matrix" in args.steps:
             matrix_step(args.data, family, args.epochs, args.device)
         if "validation" in args.steps:
-            validation_step(args.data, family, args.device)
+            validation_step(args.data, family, args.device, args.epochs, args.seeds)
     if "calibration" in args.steps:
         calibration_step()
     if "agreement" in args.steps:

@@ -78,6 +78,13 @@ def test_unit_weights_are_the_plain_evaluation_and_a_zero_weight_drops_the_sampl
                                                                      CLASSES).map, abs=1e-12)
 
 
+@pytest.mark.parametrize("weights", [[1, 1], [1, -1, 1], [0.5, 1, 1]])
+def test_weights_of_the_wrong_shape_sign_or_kind_are_refused(weights):
+    detections, truth = as_arrays([("b", 0, 1.0, 0.0, 0.9)], [("b", 0, 1.0, 0.0)])
+    with pytest.raises(DataError, match="sample weights"):
+        match(detections, truth, CLASSES, samples=["a", "b", "c"]).evaluation(np.array(weights))
+
+
 def test_given_samples_index_the_result_in_their_order():
     detections, truth = as_arrays([("b", 0, 1.0, 0.0, 0.9)], [("b", 0, 1.0, 0.0), ("a", 1, 5.0, 5.0)])
     matched = match(detections, truth, CLASSES, samples=["c", "b", "a"])
