@@ -196,7 +196,7 @@ def resampled_maps(matched: Sequence[MatchedDetections], groups: Sequence[Sequen
     if not matched:
         raise DataError("resampling needs at least one matched run")
     samples = matched[0].samples
-    if any(len(m.samples) != len(samples) or np.any(m.samples != samples) for m in matched):
+    if not all(np.array_equal(m.samples, samples) for m in matched):
         raise DataError("resampled runs must be matched on the same samples in the same order")
     members = [np.asarray(g, dtype=int) for g in groups]
     if not members or any(len(g) == 0 or g.min() < 0 or g.max() >= len(samples) for g in members):
@@ -235,9 +235,13 @@ def match(detections: Detections, ground_truth: GroundTruth, classes: Sequence[s
     for c in range(len(classes)):
         d_rows, g_rows = det_cls == c, gt_cls == c
         order = _rank(det_sample[d_rows], det_xy[d_rows], det_score[d_rows])
-        rank_sample.append(det_sample[d_rows][order])
-        tp.append(np.array([_match(det_sample[d_rows][order], det_xy[d_rows][order], gt_sample[g_rows],
-                                   gt_xy[g_rows], d) for d in thresholds]).reshape(len(thresholds), -1))
+        ranked_sample, ranked_xy = det_sample[d_rows][order], det_xy[d_rows][order]
+        rank_sample.append(ranked_sample)
+        if not g_rows.any():  # nothing to match: every detection is a false positive
+            tp.append(np.zeros((len(thresholds), len(order)), dtype=bool))
+            continue
+        tp.append(np.array([_match(ranked_sample, ranked_xy, gt_sample[g_rows], gt_xy[g_rows], d)
+                            for d in thresholds]).reshape(len(thresholds), -1))
     return MatchedDetections(ids, tuple(rank_sample), tuple(tp), gt_count, classes, thresholds)
 
 

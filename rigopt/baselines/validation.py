@@ -18,7 +18,7 @@ from typing import Callable
 
 import numpy as np
 
-from rigopt.baselines.data import RigSplit
+from rigopt.baselines.data import RigSplit, split_root
 from rigopt.baselines.evaluation import resampled_maps
 from rigopt.baselines.protocol import TEST_SPLIT, match_on_rigs, run_folder
 from rigopt.errors import DataError, RigFileError
@@ -75,7 +75,6 @@ def validate_design(design: Rig, reference: str, family: str, data, calibration:
     frames (the same draw for every rig); ``design_minus`` holds the design's drop minus each other rig's,
     with its paired interval (below 0: the design loses less).
     """
-    from rigopt.baselines.data import split_root
     from rigopt.bench.generate import ego_mesh_lookup, generate_split, split_layout
     from rigopt.bench.render import render_rig
     from rigopt.metrics.ranking import predict_transfer

@@ -15,6 +15,21 @@ def write_csv(path: Path, header: list[str], rows: list[list]) -> list[list]:
     return [header, *rows]
 
 
+def read_csv(path: Path) -> list[list]:
+    """[header, *rows] of a CSV written by ``write_csv``, numbers back as int or float."""
+    def value(text: str):
+        for kind in (int, float):
+            try:
+                return kind(text)
+            except ValueError:
+                pass
+        return text
+
+    with Path(path).open(newline="") as handle:
+        header, *rows = csv.reader(handle)
+    return [header, *([value(v) for v in row] for row in rows)]
+
+
 def markdown(table: list[list]) -> str:
     """A markdown table of [header, *rows]; numbers with 3 decimals, columns named p_* in scientific
     notation, None as '-'."""

@@ -22,7 +22,7 @@ import shutil
 import subprocess
 from pathlib import Path
 
-from rigopt.report.tables import markdown, write_csv
+from rigopt.report.tables import markdown, read_csv, write_csv
 
 HERE = Path(__file__).resolve().parent
 RESULTS = HERE / "results"
@@ -132,25 +132,11 @@ def training_table(family: str) -> list[list]:
     return [["rig", "epochs", "steps", "loss epoch 1", "loss last epoch", "minutes"], *rows]
 
 
-def read_csv_table(path: Path) -> list[list]:
-    """[header, *rows] of a CSV written by write_csv, numbers back as int or float."""
-    def value(text: str):
-        for kind in (int, float):
-            try:
-                return kind(text)
-            except ValueError:
-                pass
-        return text
-
-    header, *rows = csv.reader(path.open())
-    return [header, *([value(v) for v in row] for row in rows)]
-
-
 def seed_row(path: Path) -> list:
     """One validation file as [family, design, seed, own mAP, design drop, then the differences to the naive
     transfer and to the hand-designed rig with their intervals]."""
     result = json.loads(path.read_text())
-    stem, _, seed = path.stem.partition("_seed")
+    seed = path.stem.partition("_seed")[2]
     design = next(e for e in result["rigs"] if e["role"] == "design")
     against = {e["role"]: [e["difference"], *e["ci"]] for e in result["design_minus"]}
     return [result["model"], design["rig"], int(seed or 0), result["reference_mAP"], design["measured_drop"],
@@ -178,11 +164,11 @@ def report_step(families) -> None:
                   markdown([["family", "rho control", "rho held-out", "ci_low", "ci_high", "held-out pairs", "K",
                              "alpha", "fallback"], *rows]), ""]
     if (RESULTS / "agreement.csv").is_file():
-        table = read_csv_table(RESULTS / "agreement.csv")
+        table = read_csv(RESULTS / "agreement.csv")
         parts += ["## Agreement with the benchmark's real transfer (Spearman rho of relative drops)", "",
                   markdown(table), ""]
     if (RESULTS / "agreement_real.csv").is_file():
-        table = read_csv_table(RESULTS / "agreement_real.csv")
+        table = read_csv(RESULTS / "agreement_real.csv")
         parts += ["## Yardstick: the real detectors against one another on the same pairs", "", markdown(table), ""]
     validations = sorted((RESULTS / "validation").glob("*.json"))
     if validations:

@@ -1,0 +1,12 @@
+"""Study tables: a CSV written by write_csv reads back with its numbers as numbers."""
+
+from __future__ import annotations
+
+from rigopt.report.tables import markdown, read_csv, write_csv
+
+
+def test_csv_round_trip_keeps_text_and_numbers_to_six_significant_digits(tmp_path):
+    path = tmp_path / "table.csv"
+    written = write_csv(path, ["family", "pairs", "rho"], [["lss", 72, 0.8662954321], ["petr", 72, -0.5]])
+    assert read_csv(path) == [["family", "pairs", "rho"], ["lss", 72, 0.866295], ["petr", 72, -0.5]]
+    assert markdown(read_csv(path)) == markdown(written)
