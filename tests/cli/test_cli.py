@@ -23,7 +23,7 @@ from rigopt.rig.library import load_rig
 REPO = Path(__file__).resolve().parents[2]
 SHIPPED_CSV = REPO / "metrics" / "pccr_transfer.csv"
 WEIGHTS_DIR = REPO / "metrics" / "weights"
-BENCHMARK_RIGS = Path("/work/shared/pccr/rigs")
+BENCHMARK_RIGS = REPO.parent / "shared" / "pccr" / "rigs"  # the shared data beside the checkout
 MODELS = {"BEVDet", "BEVFusion", "Fast-BEV", "PETR"}
 
 runner = CliRunner()

@@ -17,7 +17,7 @@ from rigopt.metrics.transfer import TransferTable, read_transfer
 
 REPO = Path(__file__).resolve().parents[2]
 SHIPPED_CSV = REPO / "metrics" / "pccr_transfer.csv"
-RESULTS = Path("/work/shared/pccr/results")
+RESULTS = Path(__file__).resolve().parents[3] / "shared" / "pccr" / "results"  # beside the checkout
 MODELS = ("BEVDet", "BEVFusion", "Fast-BEV", "PETR")
 
 needs_results = pytest.mark.skipif(not RESULTS.is_dir(), reason="the benchmark's results folder is not here")

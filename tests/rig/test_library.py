@@ -12,7 +12,7 @@ from rigopt.errors import RigFileError, RigoptError, UnknownNameError
 from rigopt.rig.library import library_rig, load_rig, rig_names
 from rigopt.rig.pccr_format import read_rig, write_rig
 
-BENCHMARK_RIGS = Path(os.environ.get("RIGOPT_PCCR_RIGS", "/work/shared/pccr/rigs"))
+BENCHMARK_RIGS = Path(os.environ.get("RIGOPT_PCCR_RIGS", Path(__file__).resolve().parents[3] / "shared" / "pccr" / "rigs"))
 
 #: Cameras per rig in the PCCR benchmark's rig files.
 BENCHMARK_CAMERA_COUNTS = {

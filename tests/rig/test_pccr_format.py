@@ -19,7 +19,7 @@ from rigopt.rig.model import Camera, Rig
 from rigopt.rig.pccr_format import read_rig, rig_from_dict, rig_to_dict, write_rig
 
 #: The benchmark's original rig files (CARLA frame, y right); the library holds rigopt's copies.
-BENCHMARK_RIGS = Path(os.environ.get("RIGOPT_PCCR_RIGS", "/work/shared/pccr/rigs"))
+BENCHMARK_RIGS = Path(os.environ.get("RIGOPT_PCCR_RIGS", Path(__file__).resolve().parents[3] / "shared" / "pccr" / "rigs"))
 LIBRARY_NAMES = ["R1", "R1-c10", "R1-c6", "R1-f", "R1-r", "R1-t", "R2", "R3", "R4", "R5", "R6", "R7", "R8", "R9"]
 
 needs_benchmark = pytest.mark.skipif(
