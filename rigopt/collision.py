@@ -19,7 +19,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from rigopt.camera import vertical_fov
+from rigopt.camera import CameraModel
 from rigopt.rig.model import Camera, Rig
 from rigopt.vehicle.model import Vehicle
 
@@ -105,11 +105,7 @@ def housing_object(foot: np.ndarray, normal: np.ndarray, forward: np.ndarray, si
 
 def frustum_vertices(camera: Camera, rules: MountRules) -> np.ndarray:
     """(8, 3) float: near-plane then far-plane corners of the checked frustum, vehicle frame, metres."""
-    keep = 1.0 - rules.frustum_margin
-    tan_h = np.tan(np.deg2rad(camera.fov) / 2.0 * keep)
-    tan_v = np.tan(np.deg2rad(vertical_fov(camera.fov, *camera.image_size)) / 2.0 * keep)
-    corners = np.array([[1.0, sy * tan_h, sz * tan_v] for sy in (1, -1) for sz in (1, -1)])
-    local = np.concatenate([corners * rules.near, corners * rules.frustum_range])
+    local = CameraModel.of_camera(camera).frustum_corners(rules.near, rules.frustum_range, 1.0 - rules.frustum_margin)
     return camera.position + local @ camera.rotation.T
 
 

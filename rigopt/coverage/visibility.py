@@ -14,7 +14,7 @@ from functools import lru_cache
 import numpy as np
 import trimesh
 
-from rigopt.camera import vertical_fov
+from rigopt.camera import CameraModel, in_frustum
 from rigopt.errors import RigoptError
 
 DEFAULT_MAX_RANGE = 80.0
@@ -71,48 +71,17 @@ def segments_clear(mesh: trimesh.Trimesh, starts, ends, backend: str = "auto") -
     return first_hit_distance(mesh, starts, direction, backend) >= length - SEGMENT_END_TOLERANCE
 
 
-def frustum_tangents(fovs, image_sizes) -> tuple[np.ndarray, np.ndarray]:
-    """tan of the horizontal and vertical half-angles, each (c,), of cameras with ``fovs`` (c,) degrees
-    and ``image_sizes`` (c, 2) pixels; FOVs must be in (0, 180)."""
-    fovs = np.asarray(fovs, dtype=float)
-    if np.any(~np.isfinite(fovs)) or np.any(fovs <= 0) or np.any(fovs >= 180):
-        raise RigoptError(f"a pinhole's FOV must be in (0, 180) degrees, got {fovs[(fovs <= 0) | (fovs >= 180)]}")
-    sizes = np.asarray(image_sizes, dtype=float).reshape(-1, 2)
-    vfov = vertical_fov(fovs, sizes[:, 0], sizes[:, 1])
-    return np.tan(np.deg2rad(fovs) / 2.0), np.tan(np.deg2rad(vfov) / 2.0)
-
-
-def in_frustum(positions, rotations, fovs, image_sizes, points, max_range: float = DEFAULT_MAX_RANGE) -> np.ndarray:
-    """(c, p) bool: point p inside camera c's frustum (ignoring the body).
-
-    positions : (c, 3) m; rotations : (c, 3, 3) R_vehicle_cam; fovs : (c,) deg; image_sizes : (c, 2) px;
-    points : (p, 3) m, vehicle frame.
-    """
-    tan_h, tan_v = frustum_tangents(fovs, image_sizes)
-    local = np.einsum("cji,cpj->cpi", np.asarray(rotations, dtype=float),
-                      np.asarray(points, dtype=float)[None] - np.asarray(positions, dtype=float)[:, None])
-    x = local[..., 0]
-    inside = (x > 0) & (np.abs(local[..., 1]) <= x * tan_h[:, None]) & (np.abs(local[..., 2]) <= x * tan_v[:, None])
-    return inside & (np.einsum("cpi,cpi->cp", local, local) <= max_range**2)
-
-
 def visible(mesh: trimesh.Trimesh, positions, rotations, fovs, image_sizes, points,
             max_range: float = DEFAULT_MAX_RANGE, backend: str = "auto") -> np.ndarray:
-    """(c, p) bool: point p seen by camera c: in its frustum and not hidden by the body ``mesh``."""
-    seen = in_frustum(positions, rotations, fovs, image_sizes, points, max_range)
+    """(c, p) bool: point p seen by camera c: in its frustum and not hidden by the body ``mesh``.
+
+    positions : (c, 3) m; rotations : (c, 3, 3) R_vehicle_cam; fovs : (c,) deg; image_sizes : (c, 2) px;
+    points : (p, 3) m, vehicle frame; max_range : m.
+    """
+    seen = in_frustum(CameraModel.from_fov(fovs, image_sizes), positions, rotations, points, max_range)
     cam, point = np.nonzero(seen)
     if len(cam):
         clear = segments_clear(mesh, np.asarray(positions, dtype=float)[cam], np.asarray(points, dtype=float)[point],
                                backend)
         seen[cam[~clear], point[~clear]] = False
     return seen
-
-
-def image_rays(fov: float, image_size, grid=(64, 36)) -> np.ndarray:
-    """(gw * gh, 3) unit rays in the camera body frame through the centres of a grid of image cells."""
-    tan_h, tan_v = (float(v[0]) for v in frustum_tangents([fov], [image_size]))
-    u = (np.arange(grid[0]) + 0.5) / grid[0] * 2.0 - 1.0  # -1 .. 1 left to right
-    v = (np.arange(grid[1]) + 0.5) / grid[1] * 2.0 - 1.0
-    uu, vv = np.meshgrid(u, v)
-    rays = np.stack([np.ones(uu.size), -uu.ravel() * tan_h, -vv.ravel() * tan_v], axis=1)
-    return rays / np.linalg.norm(rays, axis=1, keepdims=True)

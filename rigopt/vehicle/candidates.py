@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 import trimesh
 
-from rigopt.camera import vertical_fov
+from rigopt.camera import CameraModel
 from rigopt.collision import MountRules, housing_fits
 from rigopt.errors import RigoptError
 from rigopt.geometry import rotation_from_yaw_pitch_roll
@@ -105,11 +105,7 @@ def _quiet_trimesh():
 
 def probe_directions(fov: float, rules: MountRules = MountRules(), image_size=DEFAULT_IMAGE_SIZE) -> np.ndarray:
     """(9, 3) unit rays in the camera body frame: centre, edge midpoints and corners of the checked frustum."""
-    keep = 1.0 - rules.frustum_margin
-    tan_h = np.tan(np.deg2rad(fov) / 2.0 * keep)
-    tan_v = np.tan(np.deg2rad(vertical_fov(fov, *image_size)) / 2.0 * keep)
-    rays = np.array([[1.0, sy * tan_h, sz * tan_v] for sy in (-1, 0, 1) for sz in (-1, 0, 1)])
-    return rays / np.linalg.norm(rays, axis=1, keepdims=True)
+    return CameraModel.from_fov(fov, image_size).probe_rays(1.0 - rules.frustum_margin)
 
 
 def clear_directions(vehicle: Vehicle, points, yaws, pitches, fov: float, rules: MountRules = MountRules()):

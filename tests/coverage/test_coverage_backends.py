@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from rigopt.camera import CameraModel, in_frustum
 from rigopt.coverage.visibility import first_hit_distance, has_embree, ray_caster, segments_clear, visible
 from rigopt.errors import RigoptError
 from rigopt.geometry import quaternion_to_matrix
@@ -52,8 +53,8 @@ def test_embree_and_triangle_visibility_agree(which, box_vehicle, etron):
     embree = visible(vehicle.mesh, *cameras, points, backend="embree")
     triangle = visible(vehicle.mesh, *cameras, points, backend="triangle")
     # The comparison means something: the body hides some points that are in a frustum.
-    from rigopt.coverage.visibility import in_frustum
-    assert (in_frustum(*cameras, points) & ~triangle).sum() > 50
+    positions, rotations, fovs, sizes = cameras
+    assert (in_frustum(CameraModel.from_fov(fovs, sizes), positions, rotations, points) & ~triangle).sum() > 50
     assert triangle.sum() > 100
     np.testing.assert_array_equal(embree, triangle)
 
