@@ -25,7 +25,7 @@ import trimesh
 
 from rigopt.bench.scene_model import Boxes, Road, Scene
 from rigopt.camera import CameraModel, pixel_centres
-from rigopt.coverage.visibility import ray_caster
+from rigopt.raycast import first_hits
 from rigopt.rig.model import Camera, Rig
 
 #: Unit vector towards the sun, world frame.
@@ -272,14 +272,10 @@ def _cast_ego(mesh: trimesh.Trimesh, position, dirs: np.ndarray, cast: np.ndarra
     """Cast the rays ``dirs[cast]`` at the body; write their depths and normals into depth, normal."""
     norm = np.linalg.norm(dirs[cast], axis=1)
     unit = dirs[cast] / norm[:, None]
-    faces, rays, locations = ray_caster(mesh).intersects_id(position + EGO_RAY_OFFSET * unit, unit,
-                                                            multiple_hits=False, return_locations=True)
+    hits = first_hits(mesh, position + EGO_RAY_OFFSET * unit, unit)
+    rays = np.flatnonzero(hits.face >= 0)
     if len(rays):
-        distance = np.linalg.norm(locations - position, axis=1)
-        order = np.lexsort((distance, rays))  # nearest first per ray, should a backend return several
-        rays, faces, distance = rays[order], faces[order], distance[order]
-        first = np.r_[True, rays[1:] != rays[:-1]]
-        rays, faces, distance = rays[first], faces[first], distance[first]
+        faces, distance = hits.face[rays], np.linalg.norm(hits.location[rays] - position, axis=1)
         depth[cast[rays]] = distance / norm[rays]
         n = mesh.face_normals[faces]
         normal[cast[rays]] = np.where(np.sum(n * unit[rays], axis=1, keepdims=True) > 0, -n, n)

@@ -21,8 +21,9 @@ import numpy as np
 
 from rigopt.coverage.footprint import Footprint
 from rigopt.errors import RigoptError
+from rigopt.raycast import first_hit_distance
 from rigopt.camera import CameraModel
-from rigopt.coverage.visibility import DEFAULT_MAX_RANGE, first_hit_distance, visible
+from rigopt.coverage.visibility import DEFAULT_MAX_RANGE, visible
 from rigopt.rig.model import Rig
 from rigopt.vehicle.model import Vehicle
 

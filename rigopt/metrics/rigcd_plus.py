@@ -61,7 +61,7 @@ import numpy as np
 from rigopt.camera import CameraModel, focal_from_fov
 from rigopt.coverage.matrix import rig_coverage_matrix
 from rigopt.coverage.measures import CoverageSettings
-from rigopt.coverage.visibility import first_hit_distance
+from rigopt.raycast import first_hit_distance
 from rigopt.errors import RigoptError
 from rigopt.geometry import rotation_angle
 from rigopt.metrics.calibration import FEATURE_DECIMALS

@@ -21,6 +21,7 @@ from rigopt.camera import CameraModel
 from rigopt.collision import MountRules, housing_fits
 from rigopt.errors import RigoptError
 from rigopt.geometry import rotation_from_yaw_pitch_roll
+from rigopt.raycast import first_hit_distance
 from rigopt.rig.model import DEFAULT_IMAGE_SIZE
 from rigopt.vehicle.model import Vehicle
 
@@ -118,12 +119,8 @@ def clear_directions(vehicle: Vehicle, points, yaws, pitches, fov: float, rules:
     n, shape = len(points), rays.shape[:3]
     origins = points[:, None, None, None, :] + rules.near * rays[None]  # (n, k, m, r, 3)
     directions = np.broadcast_to(rays[None], origins.shape)
-    hit = np.zeros(origins.shape[:-1], dtype=bool).reshape(-1)
-    locations, index_ray, _ = vehicle.mesh.ray.intersects_location(origins.reshape(-1, 3), directions.reshape(-1, 3),
-                                                                   multiple_hits=False)
-    reach = rules.frustum_range - rules.near
-    within = np.linalg.norm(locations - origins.reshape(-1, 3)[index_ray], axis=1) <= reach
-    hit[index_ray[within]] = True
+    distance = first_hit_distance(vehicle.mesh, origins.reshape(-1, 3), directions.reshape(-1, 3))
+    hit = distance <= rules.frustum_range - rules.near
     return ~hit.reshape(n, *shape).any(axis=-1)
 
 

@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from rigopt.camera import CameraModel, in_frustum
-from rigopt.coverage.visibility import segments_clear, visible
+from rigopt.coverage.visibility import visible
+from rigopt.raycast import segments_clear
 from rigopt.geometry import rotation_from_yaw_pitch_roll
 
 SIZE = np.array([[1280, 720]])
@@ -47,20 +48,6 @@ def test_points_a_centimetre_off_the_surface(box_vehicle, backend):
     seen = visible(box_vehicle.mesh, CAMERA[None], LOOK_BACK, [90.0], SIZE, np.concatenate([inside, outside]),
                    backend=backend)[0]
     assert seen.tolist() == [False] * len(inside) + [True] * len(outside)
-
-
-@pytest.mark.parametrize("backend", ["auto", "triangle"])
-def test_segments_clear(box_vehicle, backend):
-    starts = np.array([CAMERA, CAMERA, CAMERA, [5.0, 1.5, 0.9], [-3.0, 0.0, 0.9], [0.0, 0.0, 2.0]])
-    ends = np.array([
-        [2.5, 0.0, 0.9],   # stops 0.5 m before the front face: clear
-        [-3.0, 0.0, 0.9],  # through the body: blocked
-        [1.0, 0.0, 0.9],   # ends inside the body: blocked by the front face
-        [-5.0, 1.5, 0.9],  # alongside the body at y = 1.5: clear
-        [5.0, 0.0, 0.9],   # the second one reversed: blocked
-        [0.0, 0.0, 1.6],   # from above, stops 0.1 m over the roof: clear
-    ])
-    assert segments_clear(box_vehicle.mesh, starts, ends, backend).tolist() == [True, False, False, True, False, True]
 
 
 # --- a point just hidden behind a body edge ------------------------------------------------------------------
