@@ -79,10 +79,11 @@ def intrinsic_matrix(fov_deg, width_px, height_px):
 def pinhole_half_tangents(hfov_deg, width_px, height_px, tan=np.tan):
     """tan of the horizontal and vertical half-angles of a centred square-pixel pinhole.
 
-    hfov_deg : (...,) float deg, or a casadi symbol; width_px, height_px : float, or (...,) float arrays. Only arithmetic and
-    ``tan`` are applied to ``hfov_deg``, so with ``tan=casadi.tan`` this is the symbolic form the design
-    refinement optimises a lens's FOV with; :meth:`CameraModel.from_fov` builds its focal length from the
-    same expression. Returns (tan_h, tan_v), the vertical one scaled by the aspect ratio (square pixels).
+    hfov_deg : (...,) float deg, or a casadi symbol; width_px, height_px : float, or (...,) float arrays.
+    Only arithmetic and ``tan`` are applied to ``hfov_deg``, so with ``tan=casadi.tan`` this is the symbolic
+    form the design refinement optimises a lens's FOV with; :meth:`CameraModel.from_fov` builds its focal
+    length from the same expression. Returns (tan_h, tan_v), the vertical one scaled by the aspect ratio
+    (square pixels).
     """
     tan_h = tan(hfov_deg * (np.pi / 180.0) / 2.0)
     return tan_h, tan_h * (height_px / width_px)
@@ -148,7 +149,8 @@ class CameraModel:
         fovs = np.asarray(hfov_deg, dtype=float)
         bad = ~np.isfinite(fovs) | (fovs <= 0) | (fovs >= 180)
         if np.any(bad):
-            raise RigoptError(f"a pinhole's FOV must be in (0, 180) degrees, got {np.atleast_1d(fovs)[np.atleast_1d(bad)]}")
+            bad_fovs = np.atleast_1d(fovs)[np.atleast_1d(bad)]
+            raise RigoptError(f"a pinhole's FOV must be in (0, 180) degrees, got {bad_fovs}")
         sizes = np.asarray(image_size, dtype=float)
         if sizes.ndim == 0 or sizes.shape[-1] != 2:
             raise RigoptError(f"image sizes must be (width, height) pairs in pixels, got shape {sizes.shape}")

@@ -134,7 +134,8 @@ def test_model_intrinsic_matrix_is_the_function():
 
 
 def test_of_cameras_reads_each_cameras_lens():
-    cameras = [Camera("A", np.zeros(3), np.eye(3), 90.0, (1280, 720)), Camera("B", np.zeros(3), np.eye(3), 60.0, (800, 600))]
+    cameras = [Camera("A", np.zeros(3), np.eye(3), 90.0, (1280, 720)),
+               Camera("B", np.zeros(3), np.eye(3), 60.0, (800, 600))]
     model = CameraModel.of_cameras(cameras)
     assert model.shape == (2,)
     np.testing.assert_allclose(model.hfov, [90.0, 60.0], rtol=1e-12)
@@ -258,7 +259,8 @@ def test_frustum_corners_span_near_to_far():
     assert corners.shape == (8, 3)
     np.testing.assert_allclose(corners[:4, 0], 0.1)
     np.testing.assert_allclose(corners[4:, 0], 2.0)
-    np.testing.assert_allclose(corners[4:], [[2, 2, 1.125], [2, 2, -1.125], [2, -2, 1.125], [2, -2, -1.125]], rtol=1e-12)
+    expected = [[2, 2, 1.125], [2, 2, -1.125], [2, -2, 1.125], [2, -2, -1.125]]
+    np.testing.assert_allclose(corners[4:], expected, rtol=1e-12)
     np.testing.assert_allclose(corners[:4] * 20, corners[4:], rtol=1e-12)
 
 

@@ -18,7 +18,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from rigopt.camera import CameraModel, camera_frame_points, pinhole_half_tangents
-from rigopt.collision import MountRules, surface_frame
+from rigopt.mounting.rules import MountRules
+from rigopt.mounting.shapes import surface_frame
 from rigopt.geometry import rotation_from_yaw_pitch_roll
 from rigopt.rig.model import Camera, Rig
 from rigopt.vehicle.model import Vehicle
