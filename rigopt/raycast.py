@@ -72,9 +72,9 @@ def first_hits(mesh: trimesh.Trimesh, origins, directions, backend: str = "auto"
                                                                      return_locations=True)
     if len(rays):
         hit = np.linalg.norm(locations - origins[rays], axis=1)
-        order = np.lexsort((hit, rays))  # nearest first per ray, should a backend return several
-        first = order[np.r_[True, rays[order][1:] != rays[order][:-1]]]
-        distance[rays[first]], face[rays[first]], location[rays[first]] = hit[first], faces[first], locations[first]
+        np.minimum.at(distance, rays, hit)  # the nearest, should a backend return several hits of a ray
+        first = hit == distance[rays]
+        face[rays[first]], location[rays[first]] = faces[first], locations[first]
     return RayHits(distance, face, location)
 
 
