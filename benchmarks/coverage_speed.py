@@ -14,10 +14,10 @@ import numpy as np
 from rigopt.coverage.matrix import coverage_matrix
 from rigopt.coverage.measures import CoverageSettings, coverage_report
 from rigopt.coverage.reference import first_hit_distance_bruteforce
-from rigopt.coverage.visibility import first_hit_distance, has_embree
+from rigopt.raycast import first_hit_distance, has_embree
 from rigopt.geometry import rotation_from_yaw_pitch_roll
 from rigopt.rig.library import load_rig
-from rigopt.vehicle.candidates import sample_zone_points
+from rigopt.mounting.sampling import sample_zone_points
 from rigopt.vehicle.library import load_vehicle
 
 

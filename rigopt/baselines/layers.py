@@ -52,6 +52,9 @@ def pixel_rays(intrinsics: torch.Tensor, cam_to_ego: torch.Tensor, feature_hw: t
     centre of the stride-2, padding-1 convolutions' receptive fields). Returns origins (B, N, 1, 1, 3) m and
     directions (B, N, h, w, 3) scaled so that a point at depth d (m, along the optical axis) is
     ``origin + d * direction``.
+
+    The torch mirror of :meth:`rigopt.camera.CameraModel.pixel_rays` (``unit=False``), which owns the
+    projection model; tests/baselines/test_layers.py checks that the two agree.
     """
     h, w = feature_hw
     device, dtype = intrinsics.device, intrinsics.dtype

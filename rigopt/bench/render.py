@@ -24,9 +24,8 @@ import shapely
 import trimesh
 
 from rigopt.bench.scene_model import Boxes, Road, Scene
-from rigopt.camera import intrinsic_matrix
-from rigopt.coverage.visibility import ray_caster
-from rigopt.geometry import R_CAM_OPTICAL
+from rigopt.camera import CameraModel, pixel_centres
+from rigopt.raycast import first_hits
 from rigopt.rig.model import Camera, Rig
 
 #: Unit vector towards the sun, world frame.
@@ -105,7 +104,8 @@ def render_camera(scene: Scene, frame_index: int, camera: Camera, ego_mesh: trim
     w, h = (int(v) for v in size)
     if w <= 0 or h <= 0:
         raise ValueError(f"image size must be two positive integers (width, height), got {size!r}")
-    K = intrinsic_matrix(camera.fov, w, h)
+    model = CameraModel.from_fov(camera.fov, (w, h))
+    K = model.intrinsic_matrix()
     f = K[0, 0]
     T_world_ego = np.asarray(scene.frames[frame_index].T_world_ego, dtype=float)
     R_world_cam = T_world_ego[:3, :3] @ camera.rotation
@@ -113,9 +113,7 @@ def render_camera(scene: Scene, frame_index: int, camera: Camera, ego_mesh: trim
 
     # Rays through pixel centres, body frame, scaled so that their optical-axis component is 1: then the
     # ray parameter t of a hit is its depth, and t * |d| its range.
-    u, v = np.meshgrid(np.arange(w) + 0.5, np.arange(h) + 0.5)
-    optical = np.stack([(u - K[0, 2]) / f, (v - K[1, 2]) / f, np.ones_like(u)], axis=-1).reshape(-1, 3)
-    body = optical @ R_CAM_OPTICAL.T
+    body = model.pixel_rays(pixel_centres(w, h), unit=False)
     dirs = body @ R_world_cam.T  # (h*w, 3) world
     norm = np.linalg.norm(dirs, axis=1)
 
@@ -124,7 +122,7 @@ def render_camera(scene: Scene, frame_index: int, camera: Camera, ego_mesh: trim
         down = dirs[:, 2] < 0
         t_ground[down] = -origin[2] / dirs[down, 2]
     boxes = scene.boxes_at(frame_index)
-    t_box, box_index = _box_hits(boxes, origin, dirs.reshape(h, w, 3), R_world_cam, K, max_range)
+    t_box, box_index = _box_hits(boxes, origin, dirs.reshape(h, w, 3), R_world_cam, model, max_range)
     t_box, box_index = t_box.ravel(), box_index.ravel()
     t_ego, normal_ego = np.full(h * w, np.inf), np.zeros((h * w, 3))
     if ego_mesh is not None and len(ego_mesh.faces):
@@ -190,7 +188,7 @@ def _slab(origins, dirs, half) -> tuple[np.ndarray, np.ndarray]:
     return near, far
 
 
-def _screen_rects(boxes: Boxes, origin, R_world_cam, K, w: int, h: int) -> np.ndarray:
+def _screen_rects(boxes: Boxes, origin, R_world_cam, model: CameraModel, w: int, h: int) -> np.ndarray:
     """(n, 4) int pixel bounds [col0, col1, row0, row1] (inclusive, 1 px margin) of each box's projection,
     clipped to the image; col0 > col1 where the box cannot be seen (behind the lens or off screen).
 
@@ -205,11 +203,10 @@ def _screen_rects(boxes: Boxes, origin, R_world_cam, K, w: int, h: int) -> np.nd
     crosses = (a[..., 0] < NEAR) != (b[..., 0] < NEAR)
     vertices = np.concatenate([cam, crossing], axis=1)
     valid = np.concatenate([cam[..., 0] >= NEAR, crosses], axis=1)
-    x = np.maximum(vertices[..., 0], NEAR)
-    u = K[0, 2] - K[0, 0] * vertices[..., 1] / x
-    v = K[1, 2] - K[1, 1] * vertices[..., 2] / x
+    in_front = np.concatenate([np.maximum(vertices[..., :1], NEAR), vertices[..., 1:]], axis=-1)
+    pixels = model.project(in_front)
     bounds = []
-    for coord, size in ((u, w), (v, h)):
+    for coord, size in ((pixels[..., 0], w), (pixels[..., 1], h)):
         lo = np.where(valid, coord, np.inf).min(axis=1)
         hi = np.where(valid, coord, -np.inf).max(axis=1)
         # pixel k (centre k + 0.5) can meet the box when lo <= k + 0.5 <= hi
@@ -219,7 +216,7 @@ def _screen_rects(boxes: Boxes, origin, R_world_cam, K, w: int, h: int) -> np.nd
     return rects.astype(int)
 
 
-def _box_hits(boxes: Boxes, origin, dirs: np.ndarray, R_world_cam, K, max_range: float):
+def _box_hits(boxes: Boxes, origin, dirs: np.ndarray, R_world_cam, model: CameraModel, max_range: float):
     """Nearest box along each ray: dirs (h, w, 3) world rays from ``origin`` (3,) -> depth (h, w) float
     (inf: no box) and index (h, w) int into ``boxes`` (-1: none). Boxes containing the lens are skipped."""
     h, w = dirs.shape[:2]
@@ -229,7 +226,7 @@ def _box_hits(boxes: Boxes, origin, dirs: np.ndarray, R_world_cam, K, max_range:
     half = boxes.sizes / 2.0
     local_origin = _to_box_frames(boxes, origin - boxes.centers)  # (n, 3)
     gap = np.linalg.norm(np.maximum(np.abs(local_origin) - half, 0.0), axis=1)
-    rects = _screen_rects(boxes, origin, R_world_cam, K, w, h)
+    rects = _screen_rects(boxes, origin, R_world_cam, model, w, h)
     keep = (gap > 0) & (gap <= max_range) & (rects[:, 0] <= rects[:, 1]) & (rects[:, 2] <= rects[:, 3])
     if not keep.any():
         return depth, index
@@ -275,14 +272,10 @@ def _cast_ego(mesh: trimesh.Trimesh, position, dirs: np.ndarray, cast: np.ndarra
     """Cast the rays ``dirs[cast]`` at the body; write their depths and normals into depth, normal."""
     norm = np.linalg.norm(dirs[cast], axis=1)
     unit = dirs[cast] / norm[:, None]
-    faces, rays, locations = ray_caster(mesh).intersects_id(position + EGO_RAY_OFFSET * unit, unit,
-                                                            multiple_hits=False, return_locations=True)
+    hits = first_hits(mesh, position + EGO_RAY_OFFSET * unit, unit)
+    rays = np.flatnonzero(hits.face >= 0)
     if len(rays):
-        distance = np.linalg.norm(locations - position, axis=1)
-        order = np.lexsort((distance, rays))  # nearest first per ray, should a backend return several
-        rays, faces, distance = rays[order], faces[order], distance[order]
-        first = np.r_[True, rays[1:] != rays[:-1]]
-        rays, faces, distance = rays[first], faces[first], distance[first]
+        faces, distance = hits.face[rays], np.linalg.norm(hits.location[rays] - position, axis=1)
         depth[cast[rays]] = distance / norm[rays]
         n = mesh.face_normals[faces]
         normal[cast[rays]] = np.where(np.sum(n * unit[rays], axis=1, keepdims=True) > 0, -n, n)

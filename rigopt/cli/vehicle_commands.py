@@ -21,7 +21,7 @@ def check_command(
     as_json: bool = typer.Option(False, "--json", help="Print JSON instead of a table."),
 ):
     """Check that every camera can be mounted: on the surface, in a zone, housing and view clear of the body."""
-    from rigopt.collision import check_rig
+    from rigopt.mounting.rules import check_rig
     from rigopt.vehicle.library import load_vehicle
 
     loaded = load_rig(rig)

@@ -21,7 +21,9 @@ import numpy as np
 
 from rigopt.coverage.footprint import Footprint
 from rigopt.errors import RigoptError
-from rigopt.coverage.visibility import DEFAULT_MAX_RANGE, first_hit_distance, image_rays, visible
+from rigopt.raycast import first_hit_distance
+from rigopt.camera import CameraModel
+from rigopt.coverage.visibility import DEFAULT_MAX_RANGE, visible
 from rigopt.rig.model import Rig
 from rigopt.vehicle.model import Vehicle
 
@@ -172,7 +174,7 @@ def camera_coverage(vehicle: Vehicle, rig: Rig, settings: CoverageSettings, foot
     degrees = 360.0 / ring.shape[1]
     out = []
     for k, camera in enumerate(rig.cameras):
-        rays = image_rays(camera.fov, camera.image_size, settings.image_grid) @ camera.rotation.T
+        rays = CameraModel.of_camera(camera).grid_rays(settings.image_grid) @ camera.rotation.T
         hits = first_hit_distance(vehicle.mesh, np.repeat(camera.position[None], len(rays), axis=0), rays,
                                   settings.backend)
         overlap = {other.id: float((ring[k] & ring[j]).sum() * degrees)

@@ -3,116 +3,33 @@
 A point p is *seen* by a camera (t, R, fov, image size) when, in the camera body frame
 ``d = R^T (p - t)`` (x along the optical axis): ``d_x > 0``, ``|d_y| <= d_x tan(hfov / 2)``,
 ``|d_z| <= d_x tan(vfov / 2)``, ``|d| <= max_range``, and the segment from the lens to p meets no body
-triangle. Segments are tested by casting rays with trimesh: embree (``embreex``) when installed, or
-trimesh's pure triangle intersector, which give the same answer (tested).
+triangle. Segments are tested by :func:`rigopt.raycast.segments_clear` (embree or trimesh's triangle
+intersector, ``backend``).
 """
 
 from __future__ import annotations
 
-from functools import lru_cache
-
 import numpy as np
 import trimesh
 
-from rigopt.camera import vertical_fov
-from rigopt.errors import RigoptError
+from rigopt.camera import CameraModel, in_frustum
+from rigopt.raycast import segments_clear
 
+#: Metres beyond which a camera sees nothing, unless the settings say otherwise.
 DEFAULT_MAX_RANGE = 80.0
-BACKENDS = ("auto", "embree", "triangle")
-#: A hit closer than this to the end of a segment does not block it (the point may lie on the surface).
-SEGMENT_END_TOLERANCE = 1e-6
-
-
-def has_embree() -> bool:
-    """True when trimesh can cast rays with embree."""
-    return bool(trimesh.ray.has_embree)
-
-
-@lru_cache(maxsize=32)
-def _intersector(mesh: trimesh.Trimesh, backend: str):
-    if backend == "embree":
-        if not has_embree():
-            raise RigoptError("the embree ray backend needs the embreex package: pip install embreex")
-        from trimesh.ray.ray_pyembree import RayMeshIntersector
-    else:
-        from trimesh.ray.ray_triangle import RayMeshIntersector
-    return RayMeshIntersector(mesh)
-
-
-def ray_caster(mesh: trimesh.Trimesh, backend: str = "auto"):
-    """A cached trimesh ray intersector of ``mesh`` for ``backend`` (auto: embree when installed)."""
-    if backend not in BACKENDS:
-        raise RigoptError(f"unknown ray backend {backend!r}; use one of {', '.join(BACKENDS)}")
-    if backend == "auto":
-        backend = "embree" if has_embree() else "triangle"
-    return _intersector(mesh, backend)
-
-
-def first_hit_distance(mesh: trimesh.Trimesh, origins, directions, backend: str = "auto") -> np.ndarray:
-    """(n,) float: distance along each unit ray (origins, directions (n, 3)) to the first body triangle;
-    inf where the ray misses."""
-    origins, directions = np.atleast_2d(origins), np.atleast_2d(directions)
-    distance = np.full(len(origins), np.inf)
-    if len(origins) == 0:
-        return distance
-    locations, index, _ = ray_caster(mesh, backend).intersects_location(origins, directions, multiple_hits=False)
-    if len(index):
-        hit = np.linalg.norm(locations - origins[index], axis=1)
-        np.minimum.at(distance, index, hit)
-    return distance
-
-
-def segments_clear(mesh: trimesh.Trimesh, starts, ends, backend: str = "auto") -> np.ndarray:
-    """(n,) bool: no body triangle lies on the segment from starts[k] to ends[k] ((n, 3) m each)."""
-    starts, ends = np.atleast_2d(starts), np.atleast_2d(ends)
-    vector = ends - starts
-    length = np.linalg.norm(vector, axis=1)
-    direction = vector / np.maximum(length, 1e-12)[:, None]
-    return first_hit_distance(mesh, starts, direction, backend) >= length - SEGMENT_END_TOLERANCE
-
-
-def frustum_tangents(fovs, image_sizes) -> tuple[np.ndarray, np.ndarray]:
-    """tan of the horizontal and vertical half-angles, each (c,), of cameras with ``fovs`` (c,) degrees
-    and ``image_sizes`` (c, 2) pixels; FOVs must be in (0, 180)."""
-    fovs = np.asarray(fovs, dtype=float)
-    if np.any(~np.isfinite(fovs)) or np.any(fovs <= 0) or np.any(fovs >= 180):
-        raise RigoptError(f"a pinhole's FOV must be in (0, 180) degrees, got {fovs[(fovs <= 0) | (fovs >= 180)]}")
-    sizes = np.asarray(image_sizes, dtype=float).reshape(-1, 2)
-    vfov = vertical_fov(fovs, sizes[:, 0], sizes[:, 1])
-    return np.tan(np.deg2rad(fovs) / 2.0), np.tan(np.deg2rad(vfov) / 2.0)
-
-
-def in_frustum(positions, rotations, fovs, image_sizes, points, max_range: float = DEFAULT_MAX_RANGE) -> np.ndarray:
-    """(c, p) bool: point p inside camera c's frustum (ignoring the body).
-
-    positions : (c, 3) m; rotations : (c, 3, 3) R_vehicle_cam; fovs : (c,) deg; image_sizes : (c, 2) px;
-    points : (p, 3) m, vehicle frame.
-    """
-    tan_h, tan_v = frustum_tangents(fovs, image_sizes)
-    local = np.einsum("cji,cpj->cpi", np.asarray(rotations, dtype=float),
-                      np.asarray(points, dtype=float)[None] - np.asarray(positions, dtype=float)[:, None])
-    x = local[..., 0]
-    inside = (x > 0) & (np.abs(local[..., 1]) <= x * tan_h[:, None]) & (np.abs(local[..., 2]) <= x * tan_v[:, None])
-    return inside & (np.einsum("cpi,cpi->cp", local, local) <= max_range**2)
 
 
 def visible(mesh: trimesh.Trimesh, positions, rotations, fovs, image_sizes, points,
             max_range: float = DEFAULT_MAX_RANGE, backend: str = "auto") -> np.ndarray:
-    """(c, p) bool: point p seen by camera c: in its frustum and not hidden by the body ``mesh``."""
-    seen = in_frustum(positions, rotations, fovs, image_sizes, points, max_range)
+    """(c, p) bool: point p seen by camera c: in its frustum and not hidden by the body ``mesh``.
+
+    positions : (c, 3) m; rotations : (c, 3, 3) R_vehicle_cam; fovs : (c,) deg; image_sizes : (c, 2) px;
+    points : (p, 3) m, vehicle frame; max_range : m.
+    """
+    seen = in_frustum(CameraModel.from_fov(fovs, image_sizes), positions, rotations, points, max_range)
     cam, point = np.nonzero(seen)
     if len(cam):
         clear = segments_clear(mesh, np.asarray(positions, dtype=float)[cam], np.asarray(points, dtype=float)[point],
                                backend)
         seen[cam[~clear], point[~clear]] = False
     return seen
-
-
-def image_rays(fov: float, image_size, grid=(64, 36)) -> np.ndarray:
-    """(gw * gh, 3) unit rays in the camera body frame through the centres of a grid of image cells."""
-    tan_h, tan_v = (float(v[0]) for v in frustum_tangents([fov], [image_size]))
-    u = (np.arange(grid[0]) + 0.5) / grid[0] * 2.0 - 1.0  # -1 .. 1 left to right
-    v = (np.arange(grid[1]) + 0.5) / grid[1] * 2.0 - 1.0
-    uu, vv = np.meshgrid(u, v)
-    rays = np.stack([np.ones(uu.size), -uu.ravel() * tan_h, -vv.ravel() * tan_v], axis=1)
-    return rays / np.linalg.norm(rays, axis=1, keepdims=True)

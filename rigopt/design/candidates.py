@@ -1,8 +1,8 @@
 """The designer's discrete candidate cameras: valid mount points x clear orientations x catalogue lenses.
 
-Mount points come from :func:`rigopt.vehicle.candidates.sample_zone_points`; for every lens of the
+Mount points come from :func:`rigopt.mounting.sampling.sample_zone_points`; for every lens of the
 catalogue, the (pitch, yaw) grid directions whose checked frustum is clear of the body
-(:func:`rigopt.vehicle.candidates.clear_directions`) become candidates. Angles in radians, ISO frame.
+(:func:`rigopt.mounting.candidates.clear_directions`) become candidates. Angles in radians, ISO frame.
 """
 
 from __future__ import annotations
@@ -11,10 +11,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rigopt.collision import MountRules
+from rigopt.mounting.rules import MountRules
 from rigopt.errors import RigoptError
 from rigopt.geometry import rotation_from_yaw_pitch_roll
-from rigopt.vehicle.candidates import clear_directions, sample_zone_points
+from rigopt.mounting.candidates import clear_directions
+from rigopt.mounting.sampling import sample_zone_points
 from rigopt.vehicle.model import Vehicle
 
 

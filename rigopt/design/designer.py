@@ -19,7 +19,7 @@ from typing import Callable, Sequence
 import numpy as np
 from scipy.spatial import cKDTree
 
-from rigopt.collision import MountRules, RigCheck, check_rig
+from rigopt.mounting.rules import MountRules, RigCheck, check_rig
 from rigopt.coverage.footprint import Footprint
 from rigopt.coverage.matrix import rig_coverage_matrix, sector_points
 from rigopt.coverage.measures import CoverageSettings

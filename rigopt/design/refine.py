@@ -17,8 +17,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rigopt.camera import vertical_fov
-from rigopt.collision import MountRules, surface_frame
+from rigopt.camera import CameraModel, camera_frame_points, pinhole_half_tangents
+from rigopt.mounting.rules import MountRules
+from rigopt.mounting.shapes import surface_frame
 from rigopt.geometry import rotation_from_yaw_pitch_roll
 from rigopt.rig.model import Camera, Rig
 from rigopt.vehicle.model import Vehicle
@@ -98,10 +99,7 @@ def refine(problem: RefineProblem, max_iter: int = 200) -> RefineOutcome:
             angle = ca.atan2(ca.sqrt(ca.sumsqr(skew) / 8 + SMOOTHING), (ca.trace(m) - 1) / 2)
             cost += lt * ca.sqrt(ca.sumsqr(offset) + SMOOTHING) + lr * angle + lf * ca.sqrt((lens - target.fov) ** 2
                                                                                            + SMOOTHING)
-        half_h = np.deg2rad(camera.fov) / 2 if fov is None else ca.pi / 360 * lens
-        tan_h = ca.tan(half_h) * (1 - FRUSTUM_INSET)
-        aspect = camera.image_size[1] / camera.image_size[0]
-        tan_v = ca.tan(half_h) * aspect * (1 - FRUSTUM_INSET)
+        tan_h, tan_v = (t * (1 - FRUSTUM_INSET) for t in pinhole_half_tangents(lens, *camera.image_size, tan=ca.tan))
         for q in np.flatnonzero(problem.duties[k]):
             local = ca.mtimes(rotation.T, ca.DM(problem.points[q]) - position)
             opti.subject_to(local[0] >= 0.1)
@@ -166,9 +164,4 @@ def duty_points(sees: np.ndarray, needed: np.ndarray, margins: np.ndarray) -> np
 def frustum_margins(rig: Rig, points: np.ndarray) -> np.ndarray:
     """(k, q) float: how deep each point lies inside each camera's frustum, as the smallest of
     1 - |y| / (x tan h) and 1 - |z| / (x tan v) (negative outside)."""
-    local = np.einsum("kji,kqj->kqi", rig.rotations, points[None] - rig.positions[:, None])
-    x = np.maximum(local[..., 0], 1e-9)
-    tan_h = np.tan(np.deg2rad(rig.fovs) / 2)[:, None]
-    sizes = np.array([c.image_size for c in rig.cameras], dtype=float)
-    tan_v = np.tan(np.deg2rad(vertical_fov(rig.fovs, sizes[:, 0], sizes[:, 1])) / 2)[:, None]
-    return np.minimum(1 - np.abs(local[..., 1]) / (x * tan_h), 1 - np.abs(local[..., 2]) / (x * tan_v))
+    return CameraModel.of_cameras(rig.cameras).view_margin(camera_frame_points(rig.positions, rig.rotations, points))

@@ -58,10 +58,10 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from rigopt.camera import focal_from_fov
+from rigopt.camera import CameraModel, focal_from_fov
 from rigopt.coverage.matrix import rig_coverage_matrix
 from rigopt.coverage.measures import CoverageSettings
-from rigopt.coverage.visibility import first_hit_distance, image_rays
+from rigopt.raycast import first_hit_distance
 from rigopt.errors import RigoptError
 from rigopt.geometry import rotation_angle
 from rigopt.metrics.calibration import FEATURE_DECIMALS
@@ -180,7 +180,7 @@ def self_occlusion_fractions(rig: Rig, vehicle: Vehicle, coverage: CoverageSetti
     coverage = CoverageSettings() if coverage is None else coverage
     rays, origins, owner = [], [], []
     for k, camera in enumerate(rig.cameras):
-        r = image_rays(camera.fov, camera.image_size, tuple(int(g) for g in coverage.image_grid)) @ camera.rotation.T
+        r = CameraModel.of_camera(camera).grid_rays(coverage.image_grid) @ camera.rotation.T
         rays.append(r)
         origins.append(np.repeat(camera.position[None], len(r), axis=0))
         owner.append(np.full(len(r), k))

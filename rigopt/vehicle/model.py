@@ -8,6 +8,7 @@ from functools import cached_property
 import numpy as np
 import trimesh
 
+from rigopt import raycast
 from rigopt.vehicle.build import build_mesh
 from rigopt.vehicle.spec import VehicleSpec, ZoneSpec
 
@@ -101,7 +102,7 @@ class Vehicle:
         """Nearest surface of ``points`` (n, 3) m; the sign of the distance comes from containment."""
         points = np.atleast_2d(np.asarray(points, dtype=float))
         foot, unsigned, face = trimesh.proximity.closest_point(self.mesh, points)
-        inside = self.mesh.contains(points)
+        inside = raycast.inside(self.mesh, points)
         normal = self.mesh.face_normals[face]
         return SurfaceQuery(foot, np.where(inside, -unsigned, unsigned), normal, face)
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 import csv
 from pathlib import Path
 
-from rigopt.collision import check_rig
+from rigopt.mounting.rules import check_rig
 from rigopt.report.vehicle_figures import write_vehicle_figure
 from rigopt.rig.library import library_rig, rig_names
 from rigopt.vehicle.library import load_vehicle

@@ -8,7 +8,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from rigopt.coverage.measures import CoverageSettings, ring_coverage
-from rigopt.coverage.visibility import in_frustum, visible
+from rigopt.camera import CameraModel, in_frustum
+from rigopt.coverage.visibility import DEFAULT_MAX_RANGE, visible
 from rigopt.rig.model import Camera, Rig
 
 
@@ -50,7 +51,7 @@ def test_adding_a_camera_adds_exactly_its_own_view(box_vehicle, box_footprint, r
 def test_occlusion_never_adds_coverage(box_vehicle, rig, seed):
     points = np.random.default_rng(seed).uniform([-8, -6, -1], [8, 6, 4], (200, 3))
     sizes = np.array([c.image_size for c in rig.cameras])
-    frustum = in_frustum(rig.positions, rig.rotations, rig.fovs, sizes, points)
+    frustum = in_frustum(CameraModel.from_fov(rig.fovs, sizes), rig.positions, rig.rotations, points, DEFAULT_MAX_RANGE)
     seen = visible(box_vehicle.mesh, rig.positions, rig.rotations, rig.fovs, sizes, points)
     assert seen.shape == frustum.shape == (len(rig), 200)
     assert not np.any(seen & ~frustum)
@@ -64,6 +65,6 @@ def test_occlusion_check_is_not_vacuous(box_vehicle):
     rotations = quaternion_to_matrix(rng.normal(size=(30, 4)))
     points = rng.uniform([-8, -6, -1], [8, 6, 4], (300, 3))
     sizes = np.tile([1280, 720], (30, 1))
-    frustum = in_frustum(positions, rotations, np.full(30, 90.0), sizes, points)
+    frustum = in_frustum(CameraModel.from_fov(np.full(30, 90.0), sizes), positions, rotations, points, DEFAULT_MAX_RANGE)
     seen = visible(box_vehicle.mesh, positions, rotations, np.full(30, 90.0), sizes, points)
     assert (frustum & ~seen).sum() > 50 and seen.sum() > 100

@@ -1,4 +1,5 @@
-"""Exact visibility cases: the pinhole frustum, a camera facing the box car, points just behind a corner."""
+"""Exact visibility cases: a camera facing the box car, points just behind a corner (the frustum alone is tested
+in tests/test_camera.py)."""
 
 from __future__ import annotations
 
@@ -7,83 +8,12 @@ import math
 import numpy as np
 import pytest
 
-from rigopt.coverage.visibility import frustum_tangents, in_frustum, segments_clear, visible
-from rigopt.errors import RigoptError
+from rigopt.camera import CameraModel, in_frustum
+from rigopt.coverage.visibility import visible
+from rigopt.raycast import segments_clear
 from rigopt.geometry import rotation_from_yaw_pitch_roll
 
-IDENTITY = np.eye(3)[None]
 SIZE = np.array([[1280, 720]])
-
-
-def frustum(points, rotation=IDENTITY, position=(0.0, 0.0, 0.0), fov=90.0, size=SIZE, **kwargs):
-    return in_frustum(np.array([position], dtype=float), rotation, [fov], size, np.array(points, dtype=float),
-                      **kwargs)[0]
-
-
-# --- the frustum of a camera at the origin looking +x, FOV 90 deg, 1280 x 720 ------------------------------
-
-def test_horizontal_limit_is_the_45_degree_line():
-    # tan(90 / 2) = 1: at x = 10 the frustum reaches |y| = 10.
-    assert frustum([[10, 9.99, 0], [10, -9.99, 0]]).tolist() == [True, True]
-    assert frustum([[10, 10.01, 0], [10, -10.01, 0]]).tolist() == [False, False]
-
-
-def test_vertical_limit_follows_the_aspect_ratio():
-    # Square pixels: tan(vfov / 2) = tan(45 deg) * 720 / 1280 = 0.5625, so at x = 10 the limit is |z| = 5.625.
-    tan_v = math.tan(math.radians(45.0)) * 720 / 1280
-    limit = 10 * tan_v
-    assert limit == pytest.approx(5.625)
-    inside = [[10, 0, limit - 0.01], [10, 0, -(limit - 0.01)]]
-    outside = [[10, 0, limit + 0.01], [10, 0, -(limit + 0.01)], [10, 0, 6.0]]  # 6 < 10: inside horizontally
-    assert frustum(inside).tolist() == [True, True]
-    assert frustum(outside).tolist() == [False, False, False]
-
-
-def test_frustum_tangents_by_hand():
-    tan_h, tan_v = frustum_tangents([90.0, 60.0], [[1280, 720], [800, 800]])
-    np.testing.assert_allclose(tan_h, [1.0, math.tan(math.radians(30))], rtol=1e-12)
-    np.testing.assert_allclose(tan_v, [0.5625, math.tan(math.radians(30))], rtol=1e-12)
-
-
-def test_behind_the_camera_is_outside():
-    # Mirror images of points well inside the frustum.
-    assert not frustum([[-10, 0, 0], [-10, 1, 1], [-0.01, 0, 0], [0, 0, 0]]).any()
-    assert frustum([[10, 0, 0], [10, 1, 1], [0.01, 0, 0]]).all()
-
-
-def test_beyond_max_range_is_outside():
-    assert frustum([[79.9, 0, 0], [80.1, 0, 0]]).tolist() == [True, False]  # default max range 80 m
-    # The range is the Euclidean distance, not the depth: (4, 3, 0) is 5 m away.
-    assert frustum([[4, 2.9, 0], [4, 3.1, 0], [4.9, 0, 0]], max_range=5.0).tolist() == [True, False, True]
-
-
-def test_yawed_camera_sees_left():
-    rotation = rotation_from_yaw_pitch_roll(np.pi / 2, 0.0, 0.0)[None]
-    seen = frustum([[0, 10, 0], [10, 0, 0], [0, -10, 0], [-9.99, 10, 0], [-10.01, 10, 0]], rotation)
-    assert seen.tolist() == [True, False, False, True, False]
-
-
-def test_translated_and_pitched_camera():
-    # A camera at (1, 2, 3) pitched 90 deg down looks along -z; its image's horizontal axis is then
-    # vehicle y, so the horizontal half-width at depth 3 is 3 m and the vertical one is 3 * 0.5625 m.
-    rotation = rotation_from_yaw_pitch_roll(0.0, -np.pi / 2, 0.0)[None]
-    points = [[1, 2, 0], [1, 2 + 2.99, 0], [1, 2 + 3.01, 0], [1 + 1.68, 2, 0], [1 + 1.70, 2, 0], [1, 2, 4]]
-    assert frustum(points, rotation, position=(1, 2, 3)).tolist() == [True, True, False, True, False, False]
-
-
-# --- bad FOVs ------------------------------------------------------------------------------------------------
-
-@pytest.mark.parametrize("fov", [0.0, 180.0, float("nan"), -30.0, 200.0, float("inf")])
-def test_bad_fov_raises(fov):
-    with pytest.raises(RigoptError):
-        frustum_tangents([fov], SIZE)
-    with pytest.raises(RigoptError):
-        in_frustum(np.zeros((1, 3)), IDENTITY, [fov], SIZE, np.array([[10.0, 0, 0]]))
-
-
-def test_one_bad_fov_among_good_ones_raises():
-    with pytest.raises(RigoptError):
-        frustum_tangents([90.0, float("nan"), 60.0], np.tile(SIZE, (3, 1)))
 
 
 # --- one camera facing the box car ---------------------------------------------------------------------------
@@ -100,7 +30,7 @@ def face_points(x):
 def test_camera_facing_the_box(box_vehicle, backend):
     near, far = face_points(2.0), face_points(-2.0)
     # Both faces are inside the frustum (|y| <= 0.95 < depth, |z - 0.9| <= 0.55 < 0.5625 * depth) ...
-    assert in_frustum(CAMERA[None], LOOK_BACK, [90.0], SIZE, np.concatenate([near, far])).all()
+    assert in_frustum(CameraModel.from_fov([90.0], SIZE), CAMERA[None], LOOK_BACK, np.concatenate([near, far])).all()
     # ... the near face (the points lie on the surface) is seen, the far face is behind the body.
     assert visible(box_vehicle.mesh, CAMERA[None], LOOK_BACK, [90.0], SIZE, near, backend=backend).all()
     assert not visible(box_vehicle.mesh, CAMERA[None], LOOK_BACK, [90.0], SIZE, far, backend=backend).any()
@@ -118,20 +48,6 @@ def test_points_a_centimetre_off_the_surface(box_vehicle, backend):
     seen = visible(box_vehicle.mesh, CAMERA[None], LOOK_BACK, [90.0], SIZE, np.concatenate([inside, outside]),
                    backend=backend)[0]
     assert seen.tolist() == [False] * len(inside) + [True] * len(outside)
-
-
-@pytest.mark.parametrize("backend", ["auto", "triangle"])
-def test_segments_clear(box_vehicle, backend):
-    starts = np.array([CAMERA, CAMERA, CAMERA, [5.0, 1.5, 0.9], [-3.0, 0.0, 0.9], [0.0, 0.0, 2.0]])
-    ends = np.array([
-        [2.5, 0.0, 0.9],   # stops 0.5 m before the front face: clear
-        [-3.0, 0.0, 0.9],  # through the body: blocked
-        [1.0, 0.0, 0.9],   # ends inside the body: blocked by the front face
-        [-5.0, 1.5, 0.9],  # alongside the body at y = 1.5: clear
-        [5.0, 0.0, 0.9],   # the second one reversed: blocked
-        [0.0, 0.0, 1.6],   # from above, stops 0.1 m over the roof: clear
-    ])
-    assert segments_clear(box_vehicle.mesh, starts, ends, backend).tolist() == [True, False, False, True, False, True]
 
 
 # --- a point just hidden behind a body edge ------------------------------------------------------------------
@@ -178,5 +94,5 @@ def test_point_just_behind_an_edge(box_vehicle, case, backend):
     assert segments_clear(mesh, [camera, camera], [hidden, seen], backend).tolist() == [False, True]
     rotation = rotation_from_yaw_pitch_roll(np.deg2rad(yaw), np.deg2rad(pitch), 0.0)[None]
     points = np.array([hidden, seen])
-    assert in_frustum(camera[None], rotation, [90.0], SIZE, points).all()
+    assert in_frustum(CameraModel.from_fov([90.0], SIZE), camera[None], rotation, points).all()
     assert visible(mesh, camera[None], rotation, [90.0], SIZE, points, backend=backend)[0].tolist() == [False, True]

@@ -14,7 +14,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from rigopt.collision import check_rig
+from rigopt.mounting.rules import check_rig
 from rigopt.coverage.matrix import rig_coverage_matrix
 from rigopt.design import designer
 from rigopt.design.designer import DesignSettings, design_rig, requirements

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from rigopt.collision import check_rig
+from rigopt.mounting.rules import check_rig
 from rigopt.rig.library import library_rig, rig_names
 from rigopt.vehicle.library import find_spec, load_vehicle
 

@@ -1,4 +1,5 @@
-"""Where a camera may go: python-fcl checks of housings and near view frustums against the body.
+"""The mount rules: where a camera may go on a vehicle, checked with python-fcl (the solids are in
+:mod:`rigopt.mounting.shapes`).
 
 A camera is valid on a vehicle when
   1. its lens is outside the body and at most ``max_distance`` from the surface;
@@ -15,12 +16,11 @@ The lens sits at the housing's centre, so a well-mounted camera is ``housing[2] 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from functools import lru_cache
 
 import numpy as np
 
-from rigopt.camera import vertical_fov
-from rigopt.rig.model import Camera, Rig
+from rigopt.mounting.shapes import body_object, collides, frustum_object, housing_object
+from rigopt.rig.model import Rig
 from rigopt.vehicle.model import Vehicle
 
 
@@ -61,87 +61,19 @@ class RigCheck:
         return all(c.valid for c in self.cameras)
 
 
-def _fcl():
-    import fcl
-
-    return fcl
-
-
-@lru_cache(maxsize=16)
-def _body(vehicle: Vehicle):
-    """The body as an fcl BVH collision object; one per vehicle."""
-    fcl = _fcl()
-    model = fcl.BVHModel()
-    mesh = vehicle.mesh
-    model.beginModel(len(mesh.vertices), len(mesh.faces))
-    model.addSubModel(np.asarray(mesh.vertices, dtype=float), np.asarray(mesh.faces, dtype=np.int32))
-    model.endModel()
-    return fcl.CollisionObject(model, fcl.Transform())
-
-
-def surface_frame(normal: np.ndarray, forward: np.ndarray) -> np.ndarray:
-    """(3, 3) columns (width axis, height axis, outward normal) of a housing on a surface of ``normal`` (3,).
-
-    The width axis is horizontal; on a horizontal surface it is perpendicular to ``forward`` (3,).
-    """
-    width = np.cross([0.0, 0.0, 1.0], normal)
-    if np.linalg.norm(width) < 1e-6:
-        width = np.cross(normal, forward)
-        if np.linalg.norm(width) < 1e-6:
-            width = np.cross(normal, [1.0, 0.0, 0.0])
-    width /= np.linalg.norm(width)
-    return np.stack([width, np.cross(normal, width), normal], axis=1)
-
-
-def housing_object(foot: np.ndarray, normal: np.ndarray, forward: np.ndarray, size, sink: float = 0.0):
-    """fcl box of ``size`` (w, h, d) m with its back face on the surface at ``foot`` (3,), raised by
-    ``sink`` m and shortened by it (so that only penetration deeper than ``sink`` collides)."""
-    fcl = _fcl()
-    w, h, d = size
-    frame = surface_frame(normal, forward)
-    centre = foot + normal * (sink + (d - sink) / 2.0)
-    return fcl.CollisionObject(fcl.Box(w, h, d - sink), fcl.Transform(frame, centre))
-
-
-def frustum_vertices(camera: Camera, rules: MountRules) -> np.ndarray:
-    """(8, 3) float: near-plane then far-plane corners of the checked frustum, vehicle frame, metres."""
-    keep = 1.0 - rules.frustum_margin
-    tan_h = np.tan(np.deg2rad(camera.fov) / 2.0 * keep)
-    tan_v = np.tan(np.deg2rad(vertical_fov(camera.fov, *camera.image_size)) / 2.0 * keep)
-    corners = np.array([[1.0, sy * tan_h, sz * tan_v] for sy in (1, -1) for sz in (1, -1)])
-    local = np.concatenate([corners * rules.near, corners * rules.frustum_range])
-    return camera.position + local @ camera.rotation.T
-
-
-# Faces of the frustum hexahedron over frustum_vertices' order, outward-facing.
-_FRUSTUM_FACES = np.array([[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]])
-
-
-def frustum_object(camera: Camera, rules: MountRules):
-    fcl = _fcl()
-    faces = np.concatenate([[4, *f] for f in _FRUSTUM_FACES]).astype(np.int64)
-    return fcl.CollisionObject(fcl.Convex(frustum_vertices(camera, rules), len(_FRUSTUM_FACES), faces),
-                               fcl.Transform())
-
-
-def _collides(a, b) -> bool:
-    fcl = _fcl()
-    return fcl.collide(a, b, fcl.CollisionRequest(), fcl.CollisionResult()) > 0
-
-
 def housing_fits(vehicle: Vehicle, feet, normals, rules: MountRules = MountRules()) -> np.ndarray:
     """(n,) bool: a housing with its back face at each foot point (n, 3) on a surface of normal (n, 3) sinks
     no deeper than ``rules.penetration_tolerance`` into the body (the housing rule, for mount points)."""
-    body = _body(vehicle)
+    body = body_object(vehicle)
     feet, normals = np.atleast_2d(feet), np.atleast_2d(normals)
     forward = np.array([1.0, 0.0, 0.0])
-    return np.array([not _collides(housing_object(foot, normal, forward, rules.housing, rules.penetration_tolerance),
+    return np.array([not collides(housing_object(foot, normal, forward, rules.housing, rules.penetration_tolerance),
                                    body) for foot, normal in zip(feet, normals)], dtype=bool)
 
 
 def check_rig(rig: Rig, vehicle: Vehicle, rules: MountRules = MountRules()) -> RigCheck:
     """Apply every mount rule to every camera of ``rig`` on ``vehicle``."""
-    body = _body(vehicle)
+    body = body_object(vehicle)
     surface = vehicle.surface(rig.positions)
     zones = vehicle.zone_names(surface.foot, surface.normal)
     housings = [housing_object(surface.foot[k], surface.normal[k], c.forward, rules.housing)
@@ -156,13 +88,13 @@ def check_rig(rig: Rig, vehicle: Vehicle, rules: MountRules = MountRules()) -> R
             problems.append(f"{distance * 100:.1f} cm off the surface (at most {rules.max_distance * 100:.0f} cm)")
         sunk = housing_object(surface.foot[k], surface.normal[k], camera.forward, rules.housing,
                               rules.penetration_tolerance)
-        if distance >= 0 and _collides(sunk, body):
+        if distance >= 0 and collides(sunk, body):
             problems.append(f"housing penetrates the body by more than {rules.penetration_tolerance * 100:.0f} cm")
-        if _collides(frustum_object(camera, rules), body):
+        if collides(frustum_object(camera, rules), body):
             problems.append(f"the body is in its view within {rules.frustum_range:g} m")
         if zones[k] is None:
             problems.append("outside every mounting zone")
-        clashes = [other.id for j, other in enumerate(rig.cameras) if j != k and _collides(housings[k], housings[j])]
+        clashes = [other.id for j, other in enumerate(rig.cameras) if j != k and collides(housings[k], housings[j])]
         if clashes:
             problems.append(f"housing collides with {', '.join(clashes)}")
         checks.append(CameraCheck(camera.id, not problems, distance, zones[k], tuple(problems)))

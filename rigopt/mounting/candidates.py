@@ -1,0 +1,73 @@
+"""Mount candidates: the directions a camera at a mount point can face without the body in its near view.
+
+Mount points are lens positions sampled on the zones (:mod:`rigopt.mounting.sampling`). For a grid of yaw
+and pitch angles (ISO: yaw > 0 left of forward, pitch > 0 up, radians) a direction is *clear* when every
+probe ray of the checked frustum (centre, edge midpoints and corners of the image with each half-angle shrunk by
+``MountRules.frustum_margin``) travels from ``near`` to ``frustum_range`` without meeting the body: the
+ray-cast counterpart of the fcl frustum rule, vectorised over all candidates at once.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from rigopt.camera import CameraModel
+from rigopt.geometry import rotation_from_yaw_pitch_roll
+from rigopt.mounting.rules import MountRules
+from rigopt.mounting.sampling import DEFAULT_SPACING, sample_zone_points
+from rigopt.raycast import first_hit_distance
+from rigopt.rig.model import DEFAULT_IMAGE_SIZE
+from rigopt.vehicle.model import Vehicle
+
+DEFAULT_YAWS_DEG = tuple(range(-180, 180, 10))
+DEFAULT_PITCHES_DEG = (-20, -10, 0, 10, 20)
+
+
+@dataclass(frozen=True)
+class MountCandidates:
+    """Candidate lens positions and the directions they can face.
+
+    points : (n, 3) float, metres, vehicle frame (lens positions); normals : (n, 3) outward unit normals;
+    zones : (n,) str; yaws : (m,) float rad; pitches : (k,) float rad; clear : (n, k, m) bool;
+    fov : the horizontal FOV (deg) the directions were checked with.
+    """
+
+    points: np.ndarray
+    normals: np.ndarray
+    zones: np.ndarray
+    yaws: np.ndarray
+    pitches: np.ndarray
+    clear: np.ndarray
+    fov: float
+
+
+def probe_directions(fov: float, rules: MountRules = MountRules(), image_size=DEFAULT_IMAGE_SIZE) -> np.ndarray:
+    """(9, 3) unit rays in the camera body frame: centre, edge midpoints and corners of the checked frustum."""
+    return CameraModel.from_fov(fov, image_size).probe_rays(1.0 - rules.frustum_margin)
+
+
+def clear_directions(vehicle: Vehicle, points, yaws, pitches, fov: float, rules: MountRules = MountRules()):
+    """(n, k, m) bool: the checked frustum of a camera at ``points`` (n, 3) facing (pitches[k], yaws[m])
+    meets no body surface between ``rules.near`` and ``rules.frustum_range``."""
+    points = np.atleast_2d(points)
+    yaw_grid, pitch_grid = np.meshgrid(yaws, pitches)  # (k, m)
+    rotations = rotation_from_yaw_pitch_roll(yaw_grid, pitch_grid, np.zeros_like(yaw_grid))  # (k, m, 3, 3)
+    rays = np.einsum("kmij,rj->kmri", rotations, probe_directions(fov, rules))  # (k, m, r, 3)
+    n, shape = len(points), rays.shape[:3]
+    origins = points[:, None, None, None, :] + rules.near * rays[None]  # (n, k, m, r, 3)
+    directions = np.broadcast_to(rays[None], origins.shape)
+    distance = first_hit_distance(vehicle.mesh, origins.reshape(-1, 3), directions.reshape(-1, 3))
+    hit = distance <= rules.frustum_range - rules.near
+    return ~hit.reshape(n, *shape).any(axis=-1)
+
+
+def mount_candidates(vehicle: Vehicle, spacing: float = DEFAULT_SPACING, fov: float = 65.0, zones=None,
+                     yaws_deg=DEFAULT_YAWS_DEG, pitches_deg=DEFAULT_PITCHES_DEG,
+                     rules: MountRules = MountRules()) -> MountCandidates:
+    """Sample the zones and check every (point, pitch, yaw) for a clear view with a ``fov`` lens."""
+    points, normals, names = sample_zone_points(vehicle, spacing, zones, rules=rules)
+    yaws, pitches = np.deg2rad(np.asarray(yaws_deg, dtype=float)), np.deg2rad(np.asarray(pitches_deg, dtype=float))
+    clear = clear_directions(vehicle, points, yaws, pitches, fov, rules)
+    return MountCandidates(points, normals, names, yaws, pitches, clear, float(fov))

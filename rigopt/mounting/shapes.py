@@ -1,0 +1,85 @@
+"""The solids the mount rules collide, as python-fcl objects: the body, a camera housing on the surface, and the
+near view frustum (its shape from the camera model, :class:`rigopt.camera.CameraModel`).
+
+Frames and units: vehicle frame (ISO 8855), metres. python-fcl is imported on first use.
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from rigopt.camera import CameraModel
+from rigopt.rig.model import Camera
+from rigopt.vehicle.model import Vehicle
+
+if TYPE_CHECKING:
+    from rigopt.mounting.rules import MountRules
+
+
+def _fcl():
+    import fcl
+
+    return fcl
+
+
+@lru_cache(maxsize=16)
+def body_object(vehicle: Vehicle):
+    """The body as an fcl BVH collision object; one per vehicle."""
+    fcl = _fcl()
+    model = fcl.BVHModel()
+    mesh = vehicle.mesh
+    model.beginModel(len(mesh.vertices), len(mesh.faces))
+    model.addSubModel(np.asarray(mesh.vertices, dtype=float), np.asarray(mesh.faces, dtype=np.int32))
+    model.endModel()
+    return fcl.CollisionObject(model, fcl.Transform())
+
+
+def surface_frame(normal: np.ndarray, forward: np.ndarray) -> np.ndarray:
+    """(3, 3) columns (width axis, height axis, outward normal) of a housing on a surface of ``normal`` (3,).
+
+    The width axis is horizontal; on a horizontal surface it is perpendicular to ``forward`` (3,).
+    """
+    width = np.cross([0.0, 0.0, 1.0], normal)
+    if np.linalg.norm(width) < 1e-6:
+        width = np.cross(normal, forward)
+        if np.linalg.norm(width) < 1e-6:
+            width = np.cross(normal, [1.0, 0.0, 0.0])
+    width /= np.linalg.norm(width)
+    return np.stack([width, np.cross(normal, width), normal], axis=1)
+
+
+def housing_object(foot: np.ndarray, normal: np.ndarray, forward: np.ndarray, size, sink: float = 0.0):
+    """fcl box of ``size`` (w, h, d) m with its back face on the surface at ``foot`` (3,), raised by
+    ``sink`` m and shortened by it (so that only penetration deeper than ``sink`` collides)."""
+    fcl = _fcl()
+    w, h, d = size
+    frame = surface_frame(normal, forward)
+    centre = foot + normal * (sink + (d - sink) / 2.0)
+    return fcl.CollisionObject(fcl.Box(w, h, d - sink), fcl.Transform(frame, centre))
+
+
+def frustum_vertices(camera: Camera, rules: MountRules) -> np.ndarray:
+    """(8, 3) float: near-plane then far-plane corners of the checked frustum, vehicle frame, metres."""
+    local = CameraModel.of_camera(camera).frustum_corners(rules.near, rules.frustum_range, 1.0 - rules.frustum_margin)
+    return camera.position + local @ camera.rotation.T
+
+
+# Faces of the frustum hexahedron over frustum_vertices' order, outward-facing.
+_FRUSTUM_FACES = np.array([[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]])
+
+
+def frustum_object(camera: Camera, rules: MountRules):
+    """fcl convex hexahedron of :func:`frustum_vertices`."""
+    fcl = _fcl()
+    faces = np.concatenate([[4, *f] for f in _FRUSTUM_FACES]).astype(np.int64)
+    return fcl.CollisionObject(fcl.Convex(frustum_vertices(camera, rules), len(_FRUSTUM_FACES), faces),
+                               fcl.Transform())
+
+
+def collides(a, b) -> bool:
+    """True when the fcl objects ``a`` and ``b`` intersect."""
+    fcl = _fcl()
+    return fcl.collide(a, b, fcl.CollisionRequest(), fcl.CollisionResult()) > 0

@@ -1,0 +1,177 @@
+"""Ray casting: embree and trimesh's triangle intersector agree with each other and with a brute-force
+Möller–Trumbore intersection written here; segments and first hits by hand on a box.
+
+The box is the coverage tests' box car as a plain trimesh box: x in [-2, 2], y in [-1, 1], z in [0.3, 1.5] m.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import trimesh
+
+from rigopt.errors import RigoptError
+from rigopt.raycast import first_hit_distance, first_hits, has_embree, inside, ray_caster, segments_clear
+from rigopt.vehicle.library import load_vehicle
+
+needs_embree = pytest.mark.skipif(not has_embree(), reason="embreex is not installed")
+CAMERA = np.array([5.0, 0.0, 0.9])  # 3 m in front of the box's front face x = 2, at mid-height
+
+
+class Body:
+    """A mesh under the name the tests use for vehicles (``.mesh``)."""
+
+    def __init__(self, mesh):
+        self.mesh = mesh
+
+
+@pytest.fixture(scope="module")
+def box_vehicle():
+    box = trimesh.creation.box(extents=(4.0, 2.0, 1.2))
+    box.apply_translation([0.0, 0.0, 0.9])
+    np.testing.assert_allclose(box.bounds, [[-2, -1, 0.3], [2, 1, 1.5]])
+    return Body(box)
+
+
+@pytest.fixture(scope="module")
+def etron():
+    return load_vehicle("etron")
+
+
+def random_rays(rng, count, low, high, aim_low, aim_high):
+    """Rays from random origins in [low, high] towards random targets in [aim_low, aim_high] (unit directions)."""
+    origins = rng.uniform(low, high, (count, 3))
+    targets = rng.uniform(aim_low, aim_high, (count, 3))
+    directions = targets - origins
+    return origins, directions / np.linalg.norm(directions, axis=1, keepdims=True)
+
+
+def vehicle_volume(vehicle, margin):
+    low, high = vehicle.mesh.bounds
+    return low - margin, high + margin
+
+
+@needs_embree
+@pytest.mark.parametrize("which", ["box", "etron"])
+def test_embree_and_triangle_first_hit_agree(which, box_vehicle, etron):
+    vehicle = box_vehicle if which == "box" else etron
+    rng = np.random.default_rng(12)
+    low, high = vehicle_volume(vehicle, np.array([4.0, 4.0, 1.5]))
+    origins, directions = random_rays(rng, 500, low, high, *vehicle.mesh.bounds)
+    embree = first_hit_distance(vehicle.mesh, origins, directions, backend="embree")
+    triangle = first_hit_distance(vehicle.mesh, origins, directions, backend="triangle")
+    np.testing.assert_array_equal(np.isinf(embree), np.isinf(triangle))
+    assert np.isfinite(triangle).sum() > 200
+    hit = np.isfinite(triangle)
+    np.testing.assert_allclose(embree[hit], triangle[hit], rtol=0, atol=1e-6)
+
+
+@pytest.mark.parametrize("backend", ["embree!", "pyembree", "", "Triangle"])
+def test_unknown_backend_raises(box_vehicle, backend):
+    with pytest.raises(RigoptError):
+        ray_caster(box_vehicle.mesh, backend)
+    with pytest.raises(RigoptError):
+        first_hit_distance(box_vehicle.mesh, [[5.0, 0, 0.9]], [[-1.0, 0, 0]], backend=backend)
+    with pytest.raises(RigoptError):
+        segments_clear(box_vehicle.mesh, [[5.0, 0, 0.9]], [[-5.0, 0, 0.9]], backend=backend)
+
+
+def test_no_rays_gives_no_distances(box_vehicle):
+    assert first_hit_distance(box_vehicle.mesh, np.zeros((0, 3)), np.zeros((0, 3))).shape == (0,)
+
+
+@pytest.mark.parametrize("backend", ["auto", "triangle"])
+def test_segments_clear(box_vehicle, backend):
+    starts = np.array([CAMERA, CAMERA, CAMERA, [5.0, 1.5, 0.9], [-3.0, 0.0, 0.9], [0.0, 0.0, 2.0]])
+    ends = np.array([
+        [2.5, 0.0, 0.9],   # stops 0.5 m before the front face: clear
+        [-3.0, 0.0, 0.9],  # through the body: blocked
+        [1.0, 0.0, 0.9],   # ends inside the body: blocked by the front face
+        [-5.0, 1.5, 0.9],  # alongside the body at y = 1.5: clear
+        [5.0, 0.0, 0.9],   # the second one reversed: blocked
+        [0.0, 0.0, 1.6],   # from above, stops 0.1 m over the roof: clear
+    ])
+    assert segments_clear(box_vehicle.mesh, starts, ends, backend).tolist() == [True, False, False, True, False, True]
+
+
+
+
+@pytest.mark.parametrize("backend", ["auto", "triangle"])
+def test_first_hits_by_hand(box_vehicle, backend):
+    origins = np.array([[5.0, 0, 0.9], [5.0, 0, 0.9], [0.0, 0.5, 3.0]])
+    directions = np.array([[-1.0, 0, 0], [1.0, 0, 0], [0.0, 0, -1.0]])
+    hits = first_hits(box_vehicle.mesh, origins, directions, backend)
+    np.testing.assert_allclose(hits.distance, [3.0, np.inf, 1.5], atol=1e-9)
+    np.testing.assert_allclose(hits.location[[0, 2]], [[2.0, 0, 0.9], [0.0, 0.5, 1.5]], atol=1e-9)
+    assert np.isnan(hits.location[1]).all() and hits.face[1] == -1
+    normals = box_vehicle.mesh.face_normals[hits.face[[0, 2]]]
+    np.testing.assert_allclose(normals, [[1.0, 0, 0], [0, 0, 1.0]], atol=1e-9)  # the front face, the roof
+
+
+@pytest.mark.parametrize("backend", ["auto", "triangle"])
+def test_first_hits_lie_on_their_rays_and_faces(box_vehicle, backend):
+    rng = np.random.default_rng(7)
+    origins, directions = random_rays(rng, 300, *vehicle_volume(box_vehicle, np.array([4.0, 4.0, 1.5])),
+                                      *vehicle_volume(box_vehicle, 0.5))
+    hits = first_hits(box_vehicle.mesh, origins, directions, backend)
+    hit = hits.face >= 0
+    assert 50 < hit.sum() < 300
+    np.testing.assert_array_equal(np.isfinite(hits.distance), hit)
+    np.testing.assert_allclose(hits.location[hit], origins[hit] + hits.distance[hit, None] * directions[hit], atol=1e-6)
+    plane = box_vehicle.mesh.face_normals[hits.face[hit]]
+    on_plane = np.einsum("ij,ij->i", plane, hits.location[hit] - box_vehicle.mesh.triangles[hits.face[hit], 0])
+    np.testing.assert_allclose(on_plane, 0.0, atol=1e-6)
+    np.testing.assert_array_equal(first_hit_distance(box_vehicle.mesh, origins, directions, backend), hits.distance)
+
+
+
+@pytest.mark.parametrize("backend", ["auto", "triangle"])
+def test_inside_by_hand(box_vehicle, backend):
+    points = np.array([[0.0, 0, 0.9], [1.9, 0.9, 1.4], [2.1, 0, 0.9], [0, 0, 0.2], [0, 0, 1.6], [0, -1.1, 0.9]])
+    assert inside(box_vehicle.mesh, points, backend).tolist() == [True, True, False, False, False, False]
+    assert inside(box_vehicle.mesh, np.zeros((0, 3)), backend).shape == (0,)
+
+
+# --- brute force ---------------------------------------------------------------------------------------------
+
+def moller_trumbore(triangles, origin, direction, eps=1e-12):
+    """Distance along one unit ray to the nearest of ``triangles`` (t, 3, 3) it crosses (two-sided); inf if none."""
+    v0, v1, v2 = triangles[:, 0], triangles[:, 1], triangles[:, 2]
+    e1, e2 = v1 - v0, v2 - v0
+    p = np.cross(direction, e2)
+    det = np.einsum("ij,ij->i", e1, p)
+    ok = np.abs(det) > eps
+    inv = np.where(ok, 1.0 / np.where(ok, det, 1.0), 0.0)
+    s = origin - v0
+    u = np.einsum("ij,ij->i", s, p) * inv
+    q = np.cross(s, e1)
+    v = (q @ direction) * inv
+    t = np.einsum("ij,ij->i", e2, q) * inv
+    hit = ok & (u >= 0) & (v >= 0) & (u + v <= 1) & (t > eps)
+    return float(t[hit].min()) if hit.any() else np.inf
+
+
+@pytest.mark.parametrize("backend", ["auto", "triangle"])
+def test_first_hit_equals_brute_force(box_vehicle, backend):
+    rng = np.random.default_rng(5)
+    mesh = box_vehicle.mesh
+    low, high = vehicle_volume(box_vehicle, np.array([4.0, 4.0, 1.5]))
+    origins, directions = random_rays(rng, 400, low, high, *vehicle_volume(box_vehicle, 0.5))
+    outside = ~mesh.contains(origins)
+    origins, directions = origins[outside][:200], directions[outside][:200]
+    assert len(origins) == 200
+    triangles = np.asarray(mesh.triangles, dtype=float)
+    expected = np.array([moller_trumbore(triangles, o, d) for o, d in zip(origins, directions)])
+    assert 50 < np.isfinite(expected).sum() < 190  # both hits and misses
+    got = first_hit_distance(mesh, origins, directions, backend)
+    np.testing.assert_array_equal(np.isinf(got), np.isinf(expected))
+    hit = np.isfinite(expected)
+    np.testing.assert_allclose(got[hit], expected[hit], rtol=0, atol=1e-6)
+
+
+def test_brute_force_reference_by_hand(box_vehicle):
+    """The reference itself: a ray along -x from (5, 0, 0.9) meets the front face x = 2 at 3 m."""
+    triangles = np.asarray(box_vehicle.mesh.triangles, dtype=float)
+    assert moller_trumbore(triangles, np.array([5.0, 0, 0.9]), np.array([-1.0, 0, 0])) == pytest.approx(3.0)
+    assert moller_trumbore(triangles, np.array([5.0, 0, 0.9]), np.array([1.0, 0, 0])) == np.inf
+    assert moller_trumbore(triangles, np.array([0.0, 0, 3.0]), np.array([0.0, 0, -1.0])) == pytest.approx(1.5)
