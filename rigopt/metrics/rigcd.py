@@ -179,12 +179,15 @@ def _as_batch(rigs) -> RigBatch:
     return rigs if isinstance(rigs, RigBatch) else RigBatch.from_rigs(rigs)
 
 
-def _match_pairs(pack_a, index_a, pack_b, index_b, alpha, lambdas, keep_assignment=False):
-    """RigCD of the pairs (pack_a[index_a[p]], pack_b[index_b[p]]); index_* : (P,) int.
+def match_pairs(pack_a: RigBatch, index_a, pack_b: RigBatch, index_b, alpha: float, lambdas,
+                keep_assignment: bool = False):
+    """RigCD of the pairs (pack_a[index_a[p]], pack_b[index_b[p]]); index_* : (P,) int; alpha and lambdas
+    as checked by :func:`check_weights` (the matching minimises the cost with these lambdas).
 
     Pairs are grouped by camera counts so that cost tensors are built in one vectorised step per group
-    and only the small assignment solves run per pair. Returns a dict of (P,) arrays and, with
-    ``keep_assignment``, a list of (rows, cols) per pair.
+    and only the small assignment solves run per pair. Returns (values, assignments): values a dict of (P,)
+    float arrays keyed rigcd, match, count, t, r, f; assignments, with ``keep_assignment``, a list of
+    (rows (M,), cols (M,)) int camera indices per pair, else None.
     """
     lt, lr, lf = lambdas
     n_pairs = len(index_a)
@@ -222,7 +225,7 @@ def rigcd_matrix(rigs_a: Sequence[Rig] | RigBatch, rigs_b: Sequence[Rig] | RigBa
     alpha, lambdas = check_weights(alpha, lambdas)
     pack_a, pack_b = _as_batch(rigs_a), _as_batch(rigs_b)
     ia, ib = np.meshgrid(np.arange(len(rigs_a)), np.arange(len(rigs_b)), indexing="ij")
-    out, _ = _match_pairs(pack_a, ia.ravel(), pack_b, ib.ravel(), alpha, lambdas)
+    out, _ = match_pairs(pack_a, ia.ravel(), pack_b, ib.ravel(), alpha, lambdas)
     shape = (len(rigs_a), len(rigs_b))
     return RigCDMatrix(**{k: v.reshape(shape) for k, v in out.items()}, alpha=alpha, lambdas=lambdas)
 
@@ -234,7 +237,7 @@ def rigcd_pairs(rigs_a: Sequence[Rig] | RigBatch, rigs_b: Sequence[Rig] | RigBat
         raise RigoptError(f"rigcd_pairs needs two lists of equal length, got {len(rigs_a)} and {len(rigs_b)}")
     alpha, lambdas = check_weights(alpha, lambdas)
     index = np.arange(len(rigs_a))
-    out, _ = _match_pairs(_as_batch(rigs_a), index, _as_batch(rigs_b), index, alpha, lambdas)
+    out, _ = match_pairs(_as_batch(rigs_a), index, _as_batch(rigs_b), index, alpha, lambdas)
     return RigCDMatrix(**out, alpha=alpha, lambdas=lambdas)
 
 
@@ -243,7 +246,7 @@ def rigcd(rig_a: Rig, rig_b: Rig, alpha: float = DEFAULT_ALPHA,
     """RigCD of one pair with every component and the matched camera pairs."""
     alpha, lambdas = check_weights(alpha, lambdas)
     zero = np.zeros(1, dtype=int)
-    out, assignments = _match_pairs(RigBatch.from_rigs([rig_a]), zero, RigBatch.from_rigs([rig_b]), zero, alpha, lambdas, True)
+    out, assignments = match_pairs(RigBatch.from_rigs([rig_a]), zero, RigBatch.from_rigs([rig_b]), zero, alpha, lambdas, True)
     rows, cols = assignments[0]
     pairs = tuple((rig_a.cameras[i].id, rig_b.cameras[j].id) for i, j in zip(rows, cols))
     values = {k: float(v[0]) for k, v in out.items()}
