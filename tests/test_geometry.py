@@ -16,6 +16,7 @@ from rigopt.geometry import (
     is_rotation,
     iso_to_carla,
     matrix_to_quaternion,
+    quaternion_angle,
     quaternion_to_matrix,
     rot_x,
     rot_y,
@@ -425,3 +426,42 @@ def test_is_rotation_rejects_non_rotations(matrix):
 
 def test_is_rotation_is_elementwise_on_stacks():
     np.testing.assert_array_equal(is_rotation(np.stack([np.eye(3), S, rot_y(1.0)])), [True, False, True])
+
+
+# --- quaternion angle and batched conversion ------------------------------------------------------------
+
+
+def test_matrix_to_quaternion_batched_equals_one_at_a_time():
+    rng = np.random.default_rng(3)
+    stack = np.concatenate([quaternion_to_matrix(rng.normal(size=(200, 4))),
+                            np.stack([np.eye(3), _rx(math.pi), _ry(math.pi), _rz(math.pi)])])
+    batched = matrix_to_quaternion(stack.reshape(2, -1, 3, 3)).reshape(-1, 4)
+    for rotation, q in zip(stack, batched):
+        assert np.array_equal(matrix_to_quaternion(rotation), q)
+
+
+@given(a=rotations, b=rotations)
+def test_quaternion_angle_is_the_geodesic_distance(a, b):
+    qa, qb = matrix_to_quaternion(a), matrix_to_quaternion(b)
+    assert quaternion_angle(qa, qb) == pytest.approx(geodesic_distance(a, b), abs=1e-12)
+    assert quaternion_angle(qa, -qb) == quaternion_angle(qa, qb)
+    assert quaternion_angle(qb, qa) == quaternion_angle(qa, qb)
+    assert 0.0 <= quaternion_angle(qa, qb) <= math.pi
+
+
+@given(q=quaternions())
+def test_quaternion_angle_to_itself_is_exactly_zero(q):
+    unit = q / np.linalg.norm(q)
+    assert quaternion_angle(unit, unit) == 0.0 and quaternion_angle(unit, -unit) == 0.0
+
+
+@pytest.mark.parametrize("angle", [0.0, 1e-9, 1e-6, 0.5, math.pi / 2, math.pi - 1e-6, math.pi])
+def test_quaternion_angle_is_exact_near_zero_and_pi(angle):
+    turn = [math.cos(angle / 2), 0.0, math.sin(angle / 2), 0.0]
+    assert quaternion_angle([1.0, 0.0, 0.0, 0.0], turn) == pytest.approx(angle, rel=1e-14, abs=1e-15)
+
+
+def test_quaternion_angle_components_on_any_axis_give_the_same_bits():
+    rng = np.random.default_rng(4)
+    qa, qb = (q / np.linalg.norm(q, axis=-1, keepdims=True) for q in rng.normal(size=(2, 50, 4)))
+    np.testing.assert_array_equal(quaternion_angle(qa, qb), quaternion_angle(qa.T, qb.T, axis=0))

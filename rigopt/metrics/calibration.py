@@ -16,8 +16,8 @@ Two metrics share this model and differ only in the matching under which the fea
 - ``rigcd`` (the published RigCD, the default): the unit-weight matching, lambdas (1, 1, 1);
 - ``rigcd+`` (RigCD+ with calibrated matching, variant V6 of ``studies/rigcd_plus``): the matching that
   minimises the calibration's own weighted cost ``lt t + lr r + lf f``, found by iterating fit -> rematch ->
-  refit until the training features stop changing. Its predicted drop is exactly K x RigCD under its own
-  weights, the quantity ``rigopt design`` minimises.
+  refit until the training features stop changing (``matched_fit.py``). Its predicted drop is exactly
+  K x RigCD under its own weights, the quantity ``rigopt design`` minimises.
 """
 
 from __future__ import annotations

@@ -6,7 +6,7 @@ detectors jointly (calibration pairs stacked, one beta) with each detector then 
 Component knockout re-evaluates held-out rho with one fitted component removed (no refit, features kept).
 
 ``metric="rigcd+"`` fits RigCD+ (calibrated matching; ``calibration.py``) instead: each fit iterates fit ->
-rematch under its lambdas -> refit on its own calibration pairs, and its pairs are predicted from the
+rematch under its lambdas -> refit on its own calibration pairs (``matched_fit.fit_rematched``), and its pairs are predicted from the
 features under its final lambdas.
 """
 
@@ -20,6 +20,7 @@ import numpy as np
 from rigopt.errors import DataError
 from rigopt.metrics.calibration import (UNIT_LAMBDAS, Calibration, CalibrationFit, check_metric, fit_calibration,
                                        pair_features)
+from rigopt.metrics.matched_fit import fit_rematched
 from rigopt.metrics.reliability import DEFAULT_BOOTSTRAP, DEFAULT_SEED, Reliability, drop_ranks, reliability, spearman
 from rigopt.metrics.transfer import TransferDrops, TransferTable
 from rigopt.rig.library import load_rig
@@ -190,8 +191,6 @@ def _fit(features_under, mask: np.ndarray, delta: np.ndarray, name: str, solver:
     every pair from."""
     if metric == "rigcd":
         return fit_calibration(features_under(UNIT_LAMBDAS)[mask], delta[mask], name, solver), features_under(UNIT_LAMBDAS)
-    from rigopt.metrics.plus_study import fit_rematched
-
     rematch = fit_rematched(lambda lambdas: features_under(lambdas)[mask], delta[mask], solver=solver)
     fit = fit_calibration(features_under(rematch.lambdas)[mask], delta[mask], name, solver)
     fit = replace(fit, calibration=replace(fit.calibration, metric=metric))

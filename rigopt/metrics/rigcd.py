@@ -9,7 +9,13 @@ matching of ``M = min(N_A, N_B)`` pairs, and over the matched pairs
     rigcd = alpha match + (1 - alpha) count
 
 The cost of every candidate camera against every reference camera (:func:`camera_costs`) is the same
-function the designer's MILP uses.
+function the designer's MILP uses. Rotations are compared through unit quaternions
+(:func:`rigopt.geometry.quaternion_angle`): the same geodesic angle as the definition's arccos of a trace,
+but exact near 0 and pi, so RigCD(A, A) is exactly 0.
+
+Speed (``benchmarks/rigcd_speed.py``): pairs are grouped by camera counts; each group's costs are one array
+expression over (G, N_A, N_B) and only the exact assignment (scipy's ``linear_sum_assignment``, the
+reference's solver, so the same choice among tied matchings) runs per pair.
 """
 
 from __future__ import annotations
@@ -21,7 +27,7 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from rigopt.errors import RigoptError
-from rigopt.geometry import rotation_angle
+from rigopt.geometry import matrix_to_quaternion, quaternion_angle, sum_of_squares
 from rigopt.rig.model import Rig
 
 DEFAULT_ALPHA = 0.9
@@ -35,25 +41,37 @@ def camera_costs(positions_a, rotations_a, fovs_a, positions_b, rotations_b, fov
     fovs_* : (..., Na|Nb) float degrees. Leading axes broadcast.
     Returns (t, r, f), each (..., Na, Nb) float: metres, radians, degrees.
     """
-    pa, pb = np.asarray(positions_a, dtype=float), np.asarray(positions_b, dtype=float)
-    d = pa[..., :, None, :] - pb[..., None, :, :]
-    t = np.sqrt(np.einsum("...k,...k->...", d, d))
-    ra, rb = np.asarray(rotations_a, dtype=float), np.asarray(rotations_b, dtype=float)
-    r = rotation_angle(_relative_rotations(ra, rb))
-    f = np.abs(np.asarray(fovs_a, dtype=float)[..., :, None] - np.asarray(fovs_b, dtype=float)[..., None, :])
+    a = camera_columns(positions_a, rotations_a, fovs_a)[..., :, None]  # (8, ..., Na, 1)
+    b = camera_columns(positions_b, rotations_b, fovs_b)[..., None, :]  # (8, ..., 1, Nb)
+    return column_costs(a, b)
+
+
+#: Rows of :func:`camera_columns`: position (m), unit quaternion, FOV (deg).
+POSITION, QUATERNION, FOV = slice(0, 3), slice(3, 7), 7
+
+
+def camera_columns(positions, rotations, fovs) -> np.ndarray:
+    """Cameras as component-first columns: positions (..., N, 3) float m, rotations (..., N, 3, 3) float,
+    fovs (..., N) float deg -> (8, ..., N) float: x, y, z; qw, qx, qy, qz (unit, w >= 0); fov."""
+    p = np.asarray(positions, dtype=float)
+    q = matrix_to_quaternion(rotations)
+    q = q / np.sqrt(sum_of_squares(np.moveaxis(q, -1, 0)))[..., None]
+    f = np.asarray(fovs, dtype=float)
+    lead = np.broadcast_shapes(p.shape[:-1], q.shape[:-1], f.shape)
+    out = np.empty((8, *lead))
+    out[POSITION] = np.moveaxis(p, -1, 0)
+    out[QUATERNION] = np.moveaxis(q, -1, 0)
+    out[FOV] = f
+    return out
+
+
+def column_costs(a, b):
+    """(t m, r rad, f deg) between cameras given as broadcastable columns a, b : (8, ...) float
+    (:func:`camera_columns`); each result has the broadcast shape without the first axis."""
+    t = np.sqrt(sum_of_squares(a[POSITION] - b[POSITION]))
+    r = quaternion_angle(a[QUATERNION], b[QUATERNION], axis=0)
+    f = np.abs(a[FOV] - b[FOV])
     return t, r, f
-
-
-def _relative_rotations(ra: np.ndarray, rb: np.ndarray) -> np.ndarray:
-    """``Ra_i^T Rb_j`` for every pair: ra (..., Na, 3, 3), rb (..., Nb, 3, 3) -> (..., Na, Nb, 3, 3), as one
-    batched matrix product (many tiny 3 x 3 products are slow in numpy)."""
-    na, nb = ra.shape[-3], rb.shape[-3]
-    lead = np.broadcast_shapes(ra.shape[:-3], rb.shape[:-3])
-    ra, rb = np.broadcast_to(ra, (*lead, na, 3, 3)), np.broadcast_to(rb, (*lead, nb, 3, 3))
-    left = np.swapaxes(ra, -1, -2).reshape(*lead, na * 3, 3)  # rows (i, column of Ra), summing over k
-    right = np.moveaxis(rb, -3, -2).reshape(*lead, 3, nb * 3)  # (k, (j, column of Rb))
-    product = (left @ right).reshape(*lead, na, 3, nb, 3)
-    return np.moveaxis(product, -2, -3)
 
 
 def check_weights(alpha: float, lambdas: Sequence[float]) -> tuple[float, tuple[float, float, float]]:
@@ -122,6 +140,8 @@ class RigBatch:
 
     positions : (C, 3) float metres; rotations : (C, 3, 3) float; fovs : (C,) float degrees;
     counts : (n,) int cameras per rig, each >= 1; rig k owns rows ``offsets[k] : offsets[k] + counts[k]``.
+    ``columns`` (8, C) float: the cameras as :func:`camera_columns` (rotations as unit quaternions), built
+    once here.
     """
 
     def __init__(self, positions, rotations, fovs, counts):
@@ -136,6 +156,7 @@ class RigBatch:
         if self.positions.shape != (total, 3) or self.rotations.shape != (total, 3, 3) or self.fovs.shape != (total,):
             raise RigoptError(f"rig batch arrays must be ({total}, 3), ({total}, 3, 3) and ({total},) for "
                               f"{total} cameras")
+        self.columns = np.ascontiguousarray(camera_columns(self.positions, self.rotations, self.fovs))
 
     @classmethod
     def from_rigs(cls, rigs: Sequence[Rig]) -> "RigBatch":
@@ -148,42 +169,44 @@ class RigBatch:
     def __len__(self) -> int:
         return len(self.counts)
 
-    def gather(self, index: np.ndarray, n: int):
-        """Cameras of rigs ``index`` (G,), all with ``n`` cameras: (G, n, 3), (G, n, 3, 3), (G, n)."""
-        rows = self.offsets[index][:, None] + np.arange(n)
-        return self.positions[rows], self.rotations[rows], self.fovs[rows]
+    def gather(self, index: np.ndarray, n: int) -> np.ndarray:
+        """Columns of the cameras of rigs ``index`` (G,), all with ``n`` cameras: (8, n, G) float, the rigs
+        on the last axis (long, contiguous inner loops for the pairwise costs)."""
+        return self.columns[:, self.offsets[index] + np.arange(n)[:, None]]
 
 
 def _as_batch(rigs) -> RigBatch:
     return rigs if isinstance(rigs, RigBatch) else RigBatch.from_rigs(rigs)
 
 
-def _match_pairs(pack_a, index_a, pack_b, index_b, alpha, lambdas, keep_assignment=False):
-    """RigCD of the pairs (pack_a[index_a[p]], pack_b[index_b[p]]); index_* : (P,) int.
+def match_pairs(pack_a: RigBatch, index_a, pack_b: RigBatch, index_b, alpha: float, lambdas,
+                keep_assignment: bool = False):
+    """RigCD of the pairs (pack_a[index_a[p]], pack_b[index_b[p]]); index_* : (P,) int; alpha and lambdas
+    as checked by :func:`check_weights` (the matching minimises the cost with these lambdas).
 
     Pairs are grouped by camera counts so that cost tensors are built in one vectorised step per group
-    and only the small assignment solves run per pair. Returns a dict of (P,) arrays and, with
-    ``keep_assignment``, a list of (rows, cols) per pair.
+    and only the small assignment solves run per pair. Returns (values, assignments): values a dict of (P,)
+    float arrays keyed rigcd, match, count, t, r, f; assignments, with ``keep_assignment``, a list of
+    (rows (M,), cols (M,)) int camera indices per pair, else None.
     """
     lt, lr, lf = lambdas
     n_pairs = len(index_a)
     out = {key: np.zeros(n_pairs) for key in ("t", "r", "f")}
     na_all, nb_all = pack_a.counts[index_a], pack_b.counts[index_b]
     assignments = [None] * n_pairs if keep_assignment else None
-    shapes = np.unique(np.stack([na_all, nb_all], axis=1), axis=0)
-    for na, nb in shapes:
-        group = np.flatnonzero((na_all == na) & (nb_all == nb))
+    key = na_all * (int(nb_all.max()) + 1) + nb_all  # one int per (N_A, N_B)
+    order = np.argsort(key, kind="stable")
+    starts = np.flatnonzero(np.r_[True, np.diff(key[order]) != 0])
+    for group in np.split(order, starts[1:]):
+        na, nb = int(na_all[group[0]]), int(nb_all[group[0]])
         ia, ib = index_a[group], index_b[group]
-        t, r, f = camera_costs(*pack_a.gather(ia, na), *pack_b.gather(ib, nb))  # each (G, na, nb)
-        cost = lt * t + lr * r + lf * f
-        m = min(na, nb)
-        rows = np.empty((len(group), m), dtype=int)
-        cols = np.empty((len(group), m), dtype=int)
-        for g in range(len(group)):
-            rows[g], cols[g] = linear_sum_assignment(cost[g])
+        a, b = pack_a.gather(ia, na)[:, :, None, :], pack_b.gather(ib, nb)[:, None, :, :]
+        t, r, f = column_costs(a, b)  # each (na, nb, G)
+        cost = np.ascontiguousarray(np.moveaxis(lt * t + lr * r + lf * f, -1, 0))  # (G, na, nb)
+        rows, cols = np.moveaxis(np.array([linear_sum_assignment(c) for c in cost]), 1, 0)  # each (G, M)
         take = np.arange(len(group))[:, None]
         for key, values in (("t", t), ("r", r), ("f", f)):
-            out[key][group] = values[take, rows, cols].mean(axis=1)
+            out[key][group] = values[rows, cols, take].mean(axis=1)
         if keep_assignment:
             for g, p in enumerate(group):
                 assignments[p] = (rows[g], cols[g])
@@ -202,7 +225,7 @@ def rigcd_matrix(rigs_a: Sequence[Rig] | RigBatch, rigs_b: Sequence[Rig] | RigBa
     alpha, lambdas = check_weights(alpha, lambdas)
     pack_a, pack_b = _as_batch(rigs_a), _as_batch(rigs_b)
     ia, ib = np.meshgrid(np.arange(len(rigs_a)), np.arange(len(rigs_b)), indexing="ij")
-    out, _ = _match_pairs(pack_a, ia.ravel(), pack_b, ib.ravel(), alpha, lambdas)
+    out, _ = match_pairs(pack_a, ia.ravel(), pack_b, ib.ravel(), alpha, lambdas)
     shape = (len(rigs_a), len(rigs_b))
     return RigCDMatrix(**{k: v.reshape(shape) for k, v in out.items()}, alpha=alpha, lambdas=lambdas)
 
@@ -214,7 +237,7 @@ def rigcd_pairs(rigs_a: Sequence[Rig] | RigBatch, rigs_b: Sequence[Rig] | RigBat
         raise RigoptError(f"rigcd_pairs needs two lists of equal length, got {len(rigs_a)} and {len(rigs_b)}")
     alpha, lambdas = check_weights(alpha, lambdas)
     index = np.arange(len(rigs_a))
-    out, _ = _match_pairs(_as_batch(rigs_a), index, _as_batch(rigs_b), index, alpha, lambdas)
+    out, _ = match_pairs(_as_batch(rigs_a), index, _as_batch(rigs_b), index, alpha, lambdas)
     return RigCDMatrix(**out, alpha=alpha, lambdas=lambdas)
 
 
@@ -223,7 +246,7 @@ def rigcd(rig_a: Rig, rig_b: Rig, alpha: float = DEFAULT_ALPHA,
     """RigCD of one pair with every component and the matched camera pairs."""
     alpha, lambdas = check_weights(alpha, lambdas)
     zero = np.zeros(1, dtype=int)
-    out, assignments = _match_pairs(RigBatch.from_rigs([rig_a]), zero, RigBatch.from_rigs([rig_b]), zero, alpha, lambdas, True)
+    out, assignments = match_pairs(RigBatch.from_rigs([rig_a]), zero, RigBatch.from_rigs([rig_b]), zero, alpha, lambdas, True)
     rows, cols = assignments[0]
     pairs = tuple((rig_a.cameras[i].id, rig_b.cameras[j].id) for i, j in zip(rows, cols))
     values = {k: float(v[0]) for k, v in out.items()}

@@ -7,6 +7,8 @@ Implements the protocol of README.md (fixed before any held-out result). Steps, 
                 against V0 and the decision -> heldout.csv, paired.csv, fits.json, chosen.json, results.md;
   4. synthetic: the same on rigopt's synthetic transfer (studies/baselines/results/transfer) -> synthetic.md.
 Usage: OMP_NUM_THREADS=1 python studies/rigcd_plus/run.py [--bootstrap 1000] [--seed 0]
+The study's own modules sit beside this script (plus_terms.py: the candidate terms; plus_study.py: variants,
+fits, cross-validation, bootstrap); Python finds them because it puts the script's folder on sys.path.
 """
 
 from __future__ import annotations
@@ -19,13 +21,12 @@ from pathlib import Path
 
 import numpy as np
 
+from plus_study import (BASELINE, REMATCH, VARIANTS, StudyPairs, beats_baseline, choose_variant,
+                        cv_predictions, fit_full, groups_above, pair_index, paired_rho_difference, rematcher)
+from plus_terms import TERMS, PlusSettings, rig_profile, term_matrices
 from rigopt.metrics.calibration import AGREEMENT_BETA_ATOL, load_weights, pair_features
-from rigopt.metrics.plus_study import (BASELINE, REMATCH, VARIANTS, StudyPairs, beats_baseline, choose_variant,
-                                       cv_predictions, fit_full, groups_above, pair_index, paired_rho_difference,
-                                       rematcher)
 from rigopt.metrics.protocol import calibrate
 from rigopt.metrics.reliability import reliability, spearman
-from rigopt.metrics.rigcd_plus import TERMS, PlusSettings, rig_profile, term_matrices
 from rigopt.metrics.transfer import read_transfer
 from rigopt.report.tables import markdown, write_csv
 from rigopt.resources import data_dir

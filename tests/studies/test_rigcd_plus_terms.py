@@ -1,4 +1,4 @@
-"""rigopt.metrics.rigcd_plus: the candidate RigCD+ terms on cases with known answers.
+"""studies/rigcd_plus/plus_terms.py: the candidate RigCD+ terms on cases with known answers.
 
 The box car here is the coverage tests' box: x in [-2, 2], y in [-1, 1], z in [0.3, 1.5] m (ISO frame, x
 forward, y left, z up); its footprint is the rectangle [-2, 2] x [-1, 1]. Coverage settings are coarse
@@ -20,13 +20,14 @@ from rigopt.coverage.measures import CoverageSettings, camera_coverage
 from rigopt.coverage.visibility import visible
 from rigopt.errors import RigoptError
 from rigopt.geometry import rotation_from_yaw_pitch_roll
-from rigopt.metrics import rigcd_plus as plus
 from rigopt.metrics.calibration import FEATURE_DECIMALS
 from rigopt.metrics.rigcd import rigcd_matrix
 from rigopt.rig.library import load_rig, rig_names
 from rigopt.rig.model import Camera, Rig
 from rigopt.vehicle.model import Vehicle
 from rigopt.vehicle.spec import read_spec
+
+import plus_terms as plus  # studies/rigcd_plus, see conftest.py
 
 BOX = "vehicle.test.plusbox"
 

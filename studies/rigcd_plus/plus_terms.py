@@ -1,6 +1,6 @@
-"""RigCD+: candidate rig-distance terms beyond the published RigCD, for the study ``studies/rigcd_plus/``.
+"""RigCD+: candidate rig-distance terms beyond the published RigCD, for the study in this folder.
 
-The published RigCD (``rigcd.py``) sees camera poses and FOVs only. The terms here also use what the vehicle
+The published RigCD (``rigopt/metrics/rigcd.py``) sees camera poses and FOVs only. The terms here also use what the vehicle
 does to the cameras' views. Every term is a number per ordered pair of rigs (A, B), A the reference
 (training) rig, B the other (test) rig; units in brackets. ``N_A``, ``N_B`` cameras, ``M = min(N_A, N_B)``
 matched pairs (p = 1 .. M, camera ``a_p`` of A with ``b_p`` of B).
@@ -65,7 +65,7 @@ from rigopt.raycast import first_hit_distance
 from rigopt.errors import RigoptError
 from rigopt.geometry import rotation_angle
 from rigopt.metrics.calibration import FEATURE_DECIMALS
-from rigopt.metrics.rigcd import DEFAULT_ALPHA, RigBatch, _match_pairs, check_weights, tie_broken_lambdas
+from rigopt.metrics.rigcd import DEFAULT_ALPHA, RigBatch, check_weights, match_pairs, tie_broken_lambdas
 from rigopt.rig.model import Rig
 from rigopt.vehicle.library import load_vehicle
 from rigopt.vehicle.model import Vehicle
@@ -298,7 +298,7 @@ def matching(rig_a: Rig, rig_b: Rig, match_lambdas: Sequence[float] = (1.0, 1.0,
     """The matching of the terms: (rows (M,), cols (M,)) int camera indices of A and B."""
     settings = PlusSettings(match_lambdas=tuple(match_lambdas))
     zero = np.zeros(1, dtype=int)
-    _, assignments = _match_pairs(RigBatch.from_rigs([rig_a]), zero, RigBatch.from_rigs([rig_b]), zero,
+    _, assignments = match_pairs(RigBatch.from_rigs([rig_a]), zero, RigBatch.from_rigs([rig_b]), zero,
                                   DEFAULT_ALPHA, tie_broken_lambdas(settings.match_lambdas), keep_assignment=True)
     return assignments[0]
 
@@ -380,7 +380,7 @@ def term_matrices(rigs_a: Iterable[Rig | RigProfile], rigs_b: Iterable[Rig | Rig
     out = {t: np.zeros(shape) for t in terms}
     ia, ib = (g.ravel() for g in np.meshgrid(np.arange(shape[0]), np.arange(shape[1]), indexing="ij"))
     if any(t in MATCHED_TERMS or t == "count" for t in terms):
-        matched, assignments = _match_pairs(RigBatch.from_rigs(rig_a), ia, RigBatch.from_rigs(rig_b), ib,
+        matched, assignments = match_pairs(RigBatch.from_rigs(rig_a), ia, RigBatch.from_rigs(rig_b), ib,
                                             DEFAULT_ALPHA, tie_broken_lambdas(settings.match_lambdas),
                                             keep_assignment=True)
         for key in ("t", "r", "f", "count"):

@@ -1,5 +1,6 @@
-"""rigopt.metrics.plus_study: fits, the V6 loop, leave-one-rig-out folds, the choice rule and the paired
-bootstrap, on cases with known answers."""
+"""studies/rigcd_plus/plus_study.py: variants, leave-one-rig-out folds, the choice rule and the paired
+bootstrap, on cases with known answers (the fits and the V6 loop it uses: tests/metrics/test_matched_fit.py).
+The study's modules are imported from their folder (tests/studies/conftest.py puts it on sys.path)."""
 
 from __future__ import annotations
 
@@ -7,10 +8,11 @@ import numpy as np
 import pytest
 
 from rigopt.errors import RigoptError
-from rigopt.metrics import plus_study as ps
 from rigopt.metrics.calibration import fit_calibration, pair_features
-from rigopt.metrics.rigcd_plus import PlusSettings
 from rigopt.rig.library import load_rig
+
+import plus_study as ps  # studies/rigcd_plus, see conftest.py
+from plus_terms import PlusSettings
 
 CONTROL = ("R1", "R1-r", "R1-t", "R1-f", "R1-c6", "R1-c10")
 OTHERS = ("R2", "R5")
@@ -27,37 +29,6 @@ def toy_pairs(x_terms: dict, delta, train=None, test=None) -> ps.StudyPairs:
     published = np.stack([x_terms.get(t, np.zeros(n)) for t in ("t", "r", "f", "count")], axis=1)
     return ps.StudyPairs(np.array(["m"] * n), names, names if test is None else test, np.asarray(delta, float),
                          x_terms, published, lambda lambdas: published)
-
-
-def test_nonneg_fit_recovers_known_betas():
-    rng = np.random.default_rng(1)
-    x = rng.uniform(0, 1, (40, 5))
-    beta = np.array([0.3, 0.0, 1.2, 0.05, 0.0])
-    fit = ps.fit_nonneg(x, x @ beta)
-    np.testing.assert_allclose(fit.beta_qp, beta, atol=1e-6)
-    np.testing.assert_allclose(fit.beta_lbfgsb, beta, atol=1e-4)
-    assert fit.objective_qp < 1e-10 and fit.n == 40
-
-
-def test_nonneg_fit_solvers_agree_on_noisy_data():
-    rng = np.random.default_rng(4)
-    x = rng.uniform(0, 1, (60, 4))
-    fit = ps.fit_nonneg(x, x @ np.array([0.5, 0.0, 0.2, 1.0]) + rng.normal(0, 0.01, 60))
-    assert fit.agrees and fit.beta_qp[1] < 0.01
-    np.testing.assert_allclose(fit.beta_qp, [0.5, 0.0, 0.2, 1.0], atol=0.02)
-
-
-def test_nonneg_fit_clips_a_negative_direction_to_zero():
-    # delta = 3 - x: the unconstrained slope is -1; with slope >= 0 the optimum is slope 0, intercept mean = 1
-    x = np.stack([np.ones(5), np.arange(5.0)], axis=1)
-    fit = ps.fit_nonneg(x, 3.0 - np.arange(5.0))
-    np.testing.assert_allclose(fit.beta_qp, [1.0, 0.0], atol=1e-7)
-    assert fit.beta_qp[1] == 0.0 and fit.agrees
-
-
-def test_nonneg_fit_rejects_mismatched_shapes():
-    with pytest.raises(RigoptError, match="x \\(n, k\\)"):
-        ps.fit_nonneg(np.ones((3, 2)), np.ones(4))
 
 
 def test_loro_folds_never_contain_the_left_out_rig():
@@ -143,44 +114,6 @@ def test_choice_rule(scores, expected):
     assert ps.choose_variant(scores, n) == expected
 
 
-def test_rematch_loop_stops_when_features_stop_changing():
-    # the matching (so the features) changes once: t halves under the unit lambdas, not when lambda_t > lambda_r
-    delta = np.array([0.0, 1.0, 2.0, 3.0])
-    calls = []
-
-    def features_under(lambdas):
-        calls.append(tuple(lambdas))
-        t = delta / 2 if lambdas == ps.UNIT_LAMBDAS else delta.copy()
-        return np.stack([t, np.zeros(4), np.zeros(4), np.zeros(4)], axis=1)
-
-    loop = ps.fit_rematched(features_under, delta)
-    assert loop.converged and loop.rounds == 1 and len(calls) == 3
-    np.testing.assert_allclose(calls[1], [2.0, 0.0, 0.0], atol=1e-6)  # round 0 fitted beta_t = 2 on t / 2
-    np.testing.assert_allclose(loop.lambdas, [1.0, 0.0, 0.0], atol=1e-6)
-    np.testing.assert_allclose(loop.fit.beta_qp, [1, 0, 0, 0], atol=1e-6)
-
-
-def test_rematch_loop_with_all_zero_betas_keeps_the_unit_matching():
-    x = np.zeros((4, 4))
-    x[:, 3] = [0, 1, 1, 0]
-    loop = ps.fit_rematched(lambda lambdas: x, np.array([0.0, 1.0, 1.0, 0.0]))
-    assert loop.converged and loop.lambdas == ps.UNIT_LAMBDAS
-
-
-def test_rematch_loop_without_convergence_keeps_the_lowest_objective():
-    rng = np.random.default_rng(0)
-    delta = rng.uniform(0, 1, 6)
-    counter = iter(range(100))
-
-    def features_under(lambdas):  # changes every call; round k fits delta to within 1 / (k + 1)
-        k = next(counter)
-        return np.stack([delta + rng.normal(0, 1.0 / (k + 1), 6), np.zeros(6), np.zeros(6), np.zeros(6)], axis=1)
-
-    loop = ps.fit_rematched(features_under, delta, max_rounds=3)
-    assert not loop.converged and loop.rounds == 3 and len(loop.objectives) == 4
-    assert loop.fit.objective_qp == min(loop.objectives)
-
-
 def test_variant_v0_is_the_published_fit():
     rigs = [load_rig(n) for n in CONTROL]
     model, train, test = all_pairs(CONTROL)
@@ -219,14 +152,6 @@ def test_rematcher_with_unit_lambdas_gives_the_published_features():
     assert features((1.0, 1.0, 1.0)) is features((1, 1, 1))  # cached
     diagonal = train == test
     assert np.all(features((0.3, 0.0, 0.02))[diagonal] == 0.0)
-
-
-def test_a_feature_that_is_zero_everywhere_is_a_non_unique_optimum():
-    # column 2 is 0 on every pair: QP returns 0 for it, L-BFGS-B keeps its start 0.5, at the same objective
-    x = np.stack([np.arange(6.0), np.zeros(6)], axis=1)
-    fit = ps.fit_nonneg(x, 0.2 * np.arange(6.0) + np.array([0.01, -0.01] * 3))
-    assert fit.beta_qp[1] == 0.0 and fit.beta_lbfgsb[1] == pytest.approx(0.5)
-    assert fit.objectives_agree and not fit.agrees
 
 
 def test_variant_solver_switch_picks_that_solvers_betas():
