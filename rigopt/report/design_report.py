@@ -51,7 +51,7 @@ def design_dict(result: DesignResult, rig_file: Path | None) -> dict:
 
 def write_design_outputs(result: DesignResult, out_dir) -> list[Path]:
     """Write rig.json (benchmark format), report.json, the pictures and report.html into ``out_dir``."""
-    from rigopt.coverage.measures import coverage_report
+    from rigopt.coverage.measures import ring_report
     from rigopt.report.coverage_figures import write_rings_figure
     from rigopt.report.design_html import write_design_html
     from rigopt.report.vehicle_figures import write_vehicle_figure
@@ -69,8 +69,8 @@ def write_design_outputs(result: DesignResult, out_dir) -> list[Path]:
     if result.naive_transfer is not None:
         pictures["naive_transfer"] = write_vehicle_figure(vehicle, out_dir / "naive_transfer.png",
                                                           result.naive_transfer.rig)
-    design_coverage = coverage_report(result.design.rig, vehicle)
-    reference_coverage = coverage_report(result.reference, reference_vehicle)
+    design_coverage = ring_report(result.design.rig, vehicle)
+    reference_coverage = ring_report(result.reference, reference_vehicle)
     pictures["coverage"] = write_rings_figure(design_coverage, out_dir / "coverage.png", compare=reference_coverage)
     page = write_design_html(summary, out_dir, pictures)
     return [rig_file, report, *pictures.values(), page]
