@@ -30,7 +30,9 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from rigopt.design.candidates import build_candidates
-from rigopt.design.designer import DesignSettings, default_spacing, design_rig
+from rigopt.design.designer import default_spacing, design_rig
+from rigopt.design.problem import ReferenceRig, benchmark_rigs
+from rigopt.design.settings import DesignSettings
 from rigopt.metrics.calibration import load_weights
 from rigopt.metrics.rigcd import camera_costs
 from rigopt.report.design_report import write_design_outputs
@@ -49,15 +51,17 @@ def main() -> None:
     settings = DesignSettings()
     stamps = []
     start = time.perf_counter()
-    result = design_rig(vehicle, reference, calibration, settings,
+    result = design_rig(vehicle, ReferenceRig.on_own_vehicle(reference), calibration, settings,
+                        compare_with=benchmark_rigs(vehicle),
                         progress=lambda message: stamps.append((time.perf_counter() - start, message)))
     total = time.perf_counter() - start
     print(f"design of {args.ref} -> {vehicle.name} ({args.weights} weights): {total:.1f} s in all")
     for (t0, message), (t1, _) in zip(stamps, stamps[1:] + [(total, "")]):
         print(f"  {t1 - t0:6.2f} s  {message}")
-    s = result.selection
-    print(f"candidates {result.n_candidates}, offered to the MILP {result.n_offered}; MILP {s.status}, gap {s.gap:.2e}, "
-          f"{s.seconds:.2f} s; repairs {result.repairs}; refinement {result.refine_status}")
+    milp = result.milp
+    print(f"candidates {milp.n_candidates}, offered to the MILP {milp.n_offered}; MILP {milp.status}, gap "
+          f"{milp.gap:.2e}, {milp.selection.seconds:.2f} s; repairs {milp.repairs}; "
+          f"refinement {result.refinement.status}")
 
     spacing = settings.spacing or default_spacing(vehicle, settings)
     candidates = build_candidates(vehicle, settings.lenses, spacing, np.arange(-180.0, 180.0, settings.yaw_step_deg),
@@ -72,9 +76,9 @@ def main() -> None:
 
     print(f"\n{'rig':<26} {'predicted drop':>14} {'RigCD':>8} {'coverage':>9} {'meets req.':>10}")
     rows = [("design", result.design)]
-    if result.naive_transfer:
-        rows.append(("naive transfer", result.naive_transfer))
-    rows += [(f"benchmark {b.rig.name}", b) for b in result.benchmark_rigs]
+    if result.comparisons.naive_transfer:
+        rows.append(("naive transfer", result.comparisons.naive_transfer))
+    rows += [(f"benchmark {b.rig.name}", b) for b in result.comparisons.rigs]
     for name, summary in rows:
         p = summary.prediction
         print(f"{name:<26} {p.predicted_drop:14.3f} {p.rigcd:8.3f} {summary.coverage:9.3f} "

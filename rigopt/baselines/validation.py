@@ -53,7 +53,9 @@ def load_design(path) -> Rig:
 
 def comparison_rigs(design: Rig, reference: Rig) -> list[tuple[str, Rig]]:
     """(role, rig): the design, the library's hand-designed rigs for its vehicle, the naive transfer."""
-    from rigopt.design.designer import DesignSettings, benchmark_rigs, mount_candidates, naive_transfer
+    from rigopt.design.designer import mount_candidates, naive_transfer
+    from rigopt.design.problem import benchmark_rigs
+    from rigopt.design.settings import DesignSettings
     from rigopt.vehicle.library import load_vehicle
 
     vehicle = load_vehicle(design.vehicle)
