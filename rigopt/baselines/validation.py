@@ -19,7 +19,7 @@ from typing import Callable
 import numpy as np
 
 from rigopt.baselines.data import RigSplit, split_root
-from rigopt.baselines.evaluation import resampled_maps
+from rigopt.bench.evaluation import resampled_maps
 from rigopt.baselines.protocol import TEST_SPLIT, match_on_rigs, run_folder
 from rigopt.errors import DataError, RigFileError
 from rigopt.metrics.calibration import Calibration
