@@ -13,7 +13,8 @@ import time
 
 import torch
 
-from rigopt.baselines.config import FAMILIES, model_config
+from rigopt.baselines.config import model_config
+from rigopt.baselines.families import DETECTORS
 from rigopt.baselines.data import Batch, BoxTargets
 from rigopt.baselines.models import build_model, resolve_device
 from rigopt.bench.scene_model import CLASSES
@@ -110,7 +111,7 @@ def main() -> None:
     device = resolve_device(args.device)
     print(f"torch {torch.__version__}, {torch.get_num_threads()} threads, device {device}; rig {args.rig}, 160x90")
     for size in args.sizes:
-        for family in FAMILIES:
+        for family in DETECTORS:
             batch = synthetic_batch(args.rig, model_config(family, size).batch_size)
             training, inference = throughput(family, size, batch, device, args.steps)
             hours = CONTROL_RIGS * args.samples * args.epochs / training / 3600

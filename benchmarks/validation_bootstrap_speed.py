@@ -13,7 +13,7 @@ import time
 
 import numpy as np
 
-from rigopt.baselines.evaluation import Detections, GroundTruth, evaluate, match
+from rigopt.bench.evaluation import Detections, GroundTruth, evaluate, match
 from rigopt.bench.scene_model import CLASSES
 
 

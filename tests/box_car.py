@@ -42,3 +42,27 @@ cone_deg = 30
 def spec_text(name: str = "boxcar", solids: str = BOX_BODY, zones: str = BOX_ZONES) -> str:
     """Spec TOML of a vehicle ``name`` (blueprint ``vehicle.test.<name>``) with ``solids`` and ``zones``."""
     return f'name = "{name}"\nblueprint = "vehicle.test.{name}"\n' + textwrap.dedent(solids) + textwrap.dedent(zones)
+
+
+def install_user_vehicle(home, name: str = "boxcar", zones: str = BOX_ZONES + ROOF_ZONE):
+    """Write the box car (with ``zones``) as user vehicle ``name`` under ``home`` (a RIGOPT_HOME folder), so
+    that commands find it by name; returns its spec file."""
+    from pathlib import Path
+
+    folder = Path(home) / "vehicles" / name
+    folder.mkdir(parents=True, exist_ok=True)
+    path = folder / "vehicle.toml"
+    path.write_text(spec_text(name, zones=zones))
+    return path
+
+
+def front_and_left_rig(blueprint: str, name: str = "boxrig"):
+    """A two-camera rig on the box car: F on the front face looking forward (100 deg), L on the left side
+    looking left (90 deg); both 4 cm off the surface."""
+    import numpy as np
+
+    from rigopt.rig.model import Camera, Rig
+
+    left = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+    return Rig(name, blueprint, (Camera("CAM_FRONT", np.array([2.04, 0.0, 1.0]), np.eye(3), 100.0),
+                                 Camera("CAM_LEFT", np.array([0.0, 0.94, 1.0]), left, 90.0)))

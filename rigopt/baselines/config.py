@@ -1,4 +1,6 @@
-"""Detector settings: the two families and their size presets (torch-free, so the CLI can check them).
+"""Detector settings: ``ModelConfig`` and the size presets; each family's own defaults come from its class
+in the registry (``families.DETECTORS``, read when a config is built, so importing this module needs no
+torch).
 
 Sizes: ``tiny`` for tests (seconds on a CPU), ``small`` for the 2-core CPU studies, ``base`` for a GPU.
 """
@@ -9,7 +11,6 @@ from dataclasses import asdict, dataclass, fields, replace
 
 from rigopt.errors import RigoptError, unknown_name
 
-FAMILIES = ("lss", "petr")
 SIZES = ("tiny", "small", "base")
 
 
@@ -65,17 +66,20 @@ _PRESETS = {
     "base": dict(width=64, bev_channels=96, bev_cell=0.8, depth_bins=60, queries=200, decoder_layers=6, heads=8,
                  position_depths=32, batch_size=8, epochs=36),
 }
-_FAMILY_DEFAULTS = {"lss": dict(lr=1e-3), "petr": dict(lr=4e-4)}
 
 
 def model_config(family: str, size: str = "small", **overrides) -> ModelConfig:
-    """The preset ``size`` of detector ``family`` with ``overrides`` (None values ignored)."""
+    """The preset ``size`` of detector ``family`` (a key of ``families.DETECTORS``) with ``overrides`` (None
+    values ignored): the family's ``config_defaults``, then the size preset, then the overrides."""
+    from rigopt.baselines.families import DETECTORS
+
     family, size = str(family).lower(), str(size).lower()
-    if family not in FAMILIES:
-        raise unknown_name("model family", family, FAMILIES)
+    if family not in DETECTORS:
+        raise unknown_name("model family", family, tuple(DETECTORS))
     if size not in SIZES:
         raise unknown_name("model size", size, SIZES)
-    values = {**_FAMILY_DEFAULTS[family], **_PRESETS[size], **{k: v for k, v in overrides.items() if v is not None}}
+    values = {**DETECTORS[family].config_defaults, **_PRESETS[size],
+              **{k: v for k, v in overrides.items() if v is not None}}
     config = ModelConfig(family=family, size=size, **values)
     for name in ("width", "bev_channels", "depth_bins", "queries", "decoder_layers", "heads", "position_depths",
                  "batch_size", "epochs"):

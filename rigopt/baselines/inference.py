@@ -1,4 +1,5 @@
-"""Running a trained detector on a rig's split and scoring it with the benchmark's centre-distance mAP.
+"""Running a trained detector on a rig's split and scoring it with the benchmark's centre-distance mAP
+(``rigopt.bench.evaluation``).
 
 Both ground truth and detections are kept within ``EVAL_RANGE`` m (bird's-eye distance) of the ego, as
 nuScenes' evaluation keeps each class within its range; the detectors' bird's-eye square covers it.
@@ -6,20 +7,20 @@ nuScenes' evaluation keeps each class within its range; the detectors' bird's-ey
 
 from __future__ import annotations
 
-import numpy as np
 import torch
 
 from rigopt.baselines.data import RigSplit
-from rigopt.baselines.evaluation import (Detections, Evaluation, GroundTruth, MatchedDetections, SamplePrediction,
-                                         match)
+from rigopt.baselines.families import Detector
 from rigopt.baselines.models import resolve_device
+from rigopt.bench.evaluation import (EVAL_RANGE, Detections, Evaluation, GroundTruth, MatchedDetections,
+                                     SamplePrediction, match)
 
-EVAL_RANGE = 50.0
+#: Detections per sample evaluated (the highest-scoring).
 TOP_K = 100
 
 
 @torch.no_grad()
-def predict(model: torch.nn.Module, split: RigSplit, device: str = "cpu", batch_size: int = 4,
+def predict(model: Detector, split: RigSplit, device: str = "cpu", batch_size: int = 4,
             top_k: int = TOP_K, progress=lambda done, total: None) -> list[SamplePrediction]:
     """The ``top_k`` highest-scoring detections of every sample of ``split``, within EVAL_RANGE."""
     target = resolve_device(device)
@@ -27,26 +28,22 @@ def predict(model: torch.nn.Module, split: RigSplit, device: str = "cpu", batch_
     predictions = []
     for batch in split.batches(batch_size):
         for token, found in zip(batch.tokens, model.detections(model(batch.to(target)), top_k)):
-            centers = found["centers"].numpy().astype(float)
-            keep = np.hypot(centers[:, 0], centers[:, 1]) <= EVAL_RANGE
-            predictions.append(SamplePrediction(token, centers[keep], found["classes"].numpy()[keep],
-                                                found["scores"].numpy().astype(float)[keep]))
+            predictions.append(SamplePrediction(token, found["centers"].numpy().astype(float), found["classes"].numpy(),
+                                                found["scores"].numpy().astype(float)).within(EVAL_RANGE))
         progress(len(predictions), len(split))
     return predictions
 
 
-def match_split(model: torch.nn.Module, split: RigSplit, device: str = "cpu", batch_size: int = 4,
+def match_split(model: Detector, split: RigSplit, device: str = "cpu", batch_size: int = 4,
                 progress=lambda done, total: None) -> MatchedDetections:
     """``model``'s detections on ``split`` matched to its ground truth (within EVAL_RANGE), indexed by the
     split's sample tokens in split order."""
     predictions = predict(model, split, device, batch_size, progress=progress)
-    truth = GroundTruth.from_samples(split.samples)
-    near = np.hypot(truth.xy[:, 0], truth.xy[:, 1]) <= EVAL_RANGE
-    truth = GroundTruth(truth.sample[near], truth.cls[near], truth.xy[near])
+    truth = GroundTruth.from_samples(split.samples).within(EVAL_RANGE)
     return match(Detections.from_predictions(predictions), truth, samples=[s.token for s in split.samples])
 
 
-def evaluate_split(model: torch.nn.Module, split: RigSplit, device: str = "cpu", batch_size: int = 4,
+def evaluate_split(model: Detector, split: RigSplit, device: str = "cpu", batch_size: int = 4,
                    progress=lambda done, total: None) -> Evaluation:
     """Centre-distance AP and mAP of ``model`` on ``split`` (ground truth within EVAL_RANGE)."""
     return match_split(model, split, device, batch_size, progress).evaluation()

@@ -25,7 +25,10 @@ HEIGHT_LIMITS = (-2.0, 6.0)  # m, ego z of the lifted points kept
 
 
 class LSSDetector(nn.Module):
+    """The LSS-style family (see the module docstring); satisfies ``families.Detector``."""
+
     family = "lss"
+    config_defaults = {"lr": 1e-3}
 
     def __init__(self, config: ModelConfig):
         super().__init__()

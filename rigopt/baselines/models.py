@@ -11,6 +11,7 @@ from pathlib import Path
 import torch
 
 from rigopt.baselines.config import ModelConfig
+from rigopt.baselines.families import DETECTORS, Detector
 from rigopt.errors import DataError, RigoptError
 
 #: The settings that shape a model's weights; a checkpoint only loads into a model with the same ones.
@@ -18,12 +19,9 @@ ARCHITECTURE = ("family", "width", "bev_channels", "bev_range", "bev_cell", "dep
                 "queries", "decoder_layers", "heads", "position_depths")
 
 
-def build_model(config: ModelConfig) -> torch.nn.Module:
+def build_model(config: ModelConfig) -> Detector:
     """A freshly initialised detector of ``config.family`` (seed torch first for reproducible weights)."""
-    from rigopt.baselines.lss import LSSDetector
-    from rigopt.baselines.petr import PETRDetector
-
-    return {"lss": LSSDetector, "petr": PETRDetector}[config.family](config)
+    return DETECTORS[config.family](config)
 
 
 def resolve_device(name: str) -> torch.device:
@@ -68,8 +66,13 @@ def load_checkpoint(path, family: str | None = None) -> dict:
     return state
 
 
-def model_from_checkpoint(state: dict) -> tuple[torch.nn.Module, ModelConfig]:
+def model_from_checkpoint(state: dict) -> tuple[Detector, ModelConfig]:
+    """The detector a checkpoint ``state`` holds (its family's class from the registry, its weights) and its
+    settings."""
     config = ModelConfig.from_dict(state["config"])
+    if config.family not in DETECTORS:
+        raise DataError(f"a checkpoint of detector family {config.family!r}, which this rigopt does not have "
+                        f"(families: {', '.join(DETECTORS)})")
     model = build_model(config)
     model.load_state_dict(state["model"])
     return model, config

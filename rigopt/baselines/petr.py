@@ -81,7 +81,10 @@ class DecoderLayer(nn.Module):
 
 
 class PETRDetector(nn.Module):
+    """The PETR-style family (see the module docstring); satisfies ``families.Detector``."""
+
     family = "petr"
+    config_defaults = {"lr": 4e-4}
 
     def __init__(self, config: ModelConfig, n_classes: int = len(CLASSES)):
         super().__init__()

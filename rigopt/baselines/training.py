@@ -25,6 +25,7 @@ import torch
 
 from rigopt.baselines.config import ModelConfig
 from rigopt.baselines.data import RigSplit
+from rigopt.baselines.families import Detector
 from rigopt.baselines.models import build_model, check_compatible, load_checkpoint, resolve_device, save_checkpoint
 
 WARMUP_STEPS = 50
@@ -65,7 +66,7 @@ def train(split: RigSplit, config: ModelConfig, folder, device: str = "cpu", see
     target = resolve_device(device)
     path, log_path = folder / "checkpoint.pt", folder / "train_log.csv"
     torch.manual_seed(seed)
-    model = build_model(config).to(target)
+    model: Detector = build_model(config).to(target)
     optimizer = torch.optim.AdamW(model.parameters(), lr=config.lr, weight_decay=config.weight_decay)
     epoch = step = 0
     if path.is_file():

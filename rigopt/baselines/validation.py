@@ -19,7 +19,7 @@ from typing import Callable
 import numpy as np
 
 from rigopt.baselines.data import RigSplit, split_root
-from rigopt.baselines.evaluation import resampled_maps
+from rigopt.bench.evaluation import resampled_maps
 from rigopt.baselines.protocol import TEST_SPLIT, match_on_rigs, run_folder
 from rigopt.errors import DataError, RigFileError
 from rigopt.metrics.calibration import Calibration
@@ -53,7 +53,9 @@ def load_design(path) -> Rig:
 
 def comparison_rigs(design: Rig, reference: Rig) -> list[tuple[str, Rig]]:
     """(role, rig): the design, the library's hand-designed rigs for its vehicle, the naive transfer."""
-    from rigopt.design.designer import DesignSettings, benchmark_rigs, mount_candidates, naive_transfer
+    from rigopt.design.designer import mount_candidates, naive_transfer
+    from rigopt.design.problem import benchmark_rigs
+    from rigopt.design.settings import DesignSettings
     from rigopt.vehicle.library import load_vehicle
 
     vehicle = load_vehicle(design.vehicle)

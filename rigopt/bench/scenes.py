@@ -41,6 +41,9 @@ SIZES = {
 #: First seed of each split; a split holds at most SEEDS_PER_SPLIT seeds, so splits never share scenes.
 SPLIT_OFFSETS = {"train": 0, "val": 100_000, "test": 200_000, "mini": 300_000}
 SEEDS_PER_SPLIT = 100_000
+#: A seed offset k (``rigopt bench generate --seed k``) moves every split's seeds by k times this, past the
+#: ranges of all four splits, so that different offsets never share a scene.
+SEED_OFFSET_STEP = 10_000_000
 #: Footprint (length, width) m centred on the ego origin that every box keeps out of: the largest
 #: benchmark vehicles (8.5 x 3.0 m) fit, with >= 2.5 m ahead/behind and 0.6 m beside a 5 x 2.2 m car.
 EGO_CLEARANCE = (10.0, 3.4)
@@ -60,6 +63,21 @@ def split_seeds(split: str, count: int) -> list[int]:
     if not 1 <= count <= SEEDS_PER_SPLIT:
         raise RigoptError(f"scene count must be in [1, {SEEDS_PER_SPLIT}], got {count}")
     return list(range(SPLIT_OFFSETS[split], SPLIT_OFFSETS[split] + count))
+
+
+def scene_name(split: str, index: int, seed: int) -> str:
+    """``scene-<split>-<index:04d>-s<seed>``: the name of a generated split's ``index``-th scene; the seed at
+    its end is what ``generate.split_layout`` regenerates the scene from."""
+    return f"scene-{split}-{index:04d}-s{seed}"
+
+
+def split_scenes(split: str, count: int, n_frames: int = 40, seed_offset: int = 0) -> list[Scene]:
+    """The first ``count`` scenes of ``split``, ``n_frames`` samples each, under seed offset ``seed_offset``
+    (0 or more; see SEED_OFFSET_STEP), named by ``scene_name``: what ``rigopt bench generate`` renders."""
+    if isinstance(seed_offset, bool) or not isinstance(seed_offset, (int, np.integer)) or seed_offset < 0:
+        raise RigoptError(f"the seed offset must be a whole number >= 0, got {seed_offset!r}")
+    seeds = [seed + int(seed_offset) * SEED_OFFSET_STEP for seed in split_seeds(split, count)]
+    return [generate_scene(seed, split, n_frames, name=scene_name(split, k, seed)) for k, seed in enumerate(seeds)]
 
 
 @dataclass(frozen=True)

@@ -16,7 +16,8 @@ from rigopt.cli.bench_commands import bench_app
 from rigopt.cli.metric_commands import METRIC_HELP
 from rigopt.errors import RigoptError
 
-MODEL_HELP = "Detector family: lss (lift-splat, BEVDet-like) or petr (3D position embeddings, PETR-like)."
+MODEL_HELP = ("Detector family, a name in the registry (rigopt.baselines.families): lss (lift-splat, BEVDet-like), "
+              "petr (3D position embeddings, PETR-like), ...; an unknown name lists them.")
 SIZE_HELP = "Model size preset: tiny (tests), small (CPU), base (GPU)."
 DEVICE_HELP = "cpu, cuda or cuda:K."
 RUNS_HELP = "Training runs folder (<runs>/<model>/<rig>/checkpoint.pt); default <data>/runs."
@@ -93,7 +94,7 @@ def evaluate_command(
     """Evaluate a trained detector on any rig's split: centre-distance AP per class and mAP."""
     require_torch()
     from rigopt.baselines.config import model_config
-    from rigopt.baselines.evaluation import DEFAULT_THRESHOLDS
+    from rigopt.bench.evaluation import DEFAULT_THRESHOLDS
     from rigopt.baselines.protocol import evaluate_on, run_folder
     from rigopt.bench.scene_model import CLASSES
 

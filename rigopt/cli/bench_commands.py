@@ -31,7 +31,7 @@ def generate_command(
 
     from rigopt.bench.generate import ego_mesh_lookup, generate_split
     from rigopt.bench.render import render_rig
-    from rigopt.bench.scenes import generate_scene, split_seeds
+    from rigopt.bench.scenes import split_scenes
     from rigopt.cli.rig_commands import parse_image_size
     from rigopt.rig.library import load_rig
 
@@ -47,8 +47,7 @@ def generate_command(
 
     ego_mesh_of = ego_mesh_lookup(lambda message: console.print(f"[yellow]warning:[/] {message}"))
 
-    seeds = [s + seed * 10_000_000 for s in split_seeds(split, scenes)]
-    scene_list = [generate_scene(s, split, frames, name=f"scene-{split}-{k:04d}-s{s}") for k, s in enumerate(seeds)]
+    scene_list = split_scenes(split, scenes, frames, seed)
     with Progress(console=console, transient=True) as progress:
         task = progress.add_task("rendering", total=len(loaded) * len(scene_list))
 

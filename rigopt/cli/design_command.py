@@ -6,15 +6,19 @@ import sys
 from pathlib import Path
 from typing import Optional
 
-import numpy as np
 import typer
 from rich.console import Console
 
 from rigopt.cli.app import app, print_json, print_table
 from rigopt.cli.metric_commands import METRIC_HELP
+from rigopt.design.settings import (DEFAULT_LENSES, DEFAULT_PITCHES_DEG, DEFAULT_YAW_STEP_DEG, DesignSettings,
+                                    lens_catalogue, range_lenses)
 from rigopt.errors import RigoptError
 
-DEFAULT_FOVS = "60,65,70,75,80,90,100,110,120"
+
+def numbers_text(values) -> str:
+    """(60.0, 65.0) -> ``"60,65"``: the form ``parse_numbers`` reads."""
+    return ",".join(f"{v:g}" for v in values)
 
 
 def parse_numbers(text: str, what: str) -> tuple[float, ...]:
@@ -42,22 +46,19 @@ def parse_camera_count(text: Optional[str]) -> tuple[int, int] | None:
     return counts
 
 
-#: Step (deg) of the discrete lenses that seed a continuous FOV range.
-RANGE_STEP = 10.0
-
-
 def parse_lenses(text: str) -> tuple[tuple[float, ...], tuple[float, float] | None]:
-    """A lens catalogue ``"60,65,70"``, or a continuous range ``"60-120"`` (then the MILP picks among lenses
-    every RANGE_STEP degrees and the refinement adjusts the FOV within the range). Returns (lenses, range)."""
+    """A lens catalogue ``"60,65,70"``, or a continuous range ``"60-120"`` (its lenses by the library's rule,
+    ``design.settings.range_lenses``). Returns (lenses, range or None)."""
     if "-" in text.strip()[1:] and "," not in text:
         low_text, _, high_text = text.partition("-")
-        low, high = parse_numbers(low_text, "--fov"), parse_numbers(high_text, "--fov")
-        fov_range = (low[0], high[0])
-        lenses = tuple(float(f) for f in np.arange(fov_range[0], fov_range[1] + 1e-9, RANGE_STEP))
+        fov_range = (parse_numbers(low_text, "--fov")[0], parse_numbers(high_text, "--fov")[0])
     else:
-        lenses, fov_range = parse_numbers(text, "--fov"), None
-    if not all(0 < f < 180 for f in (*lenses, *(fov_range or ()))) or (fov_range and fov_range[0] > fov_range[1]):
-        raise RigoptError(f"--fov must be lenses or a range (low-high) within (0, 180) degrees, got {text!r}")
+        catalogue, fov_range = parse_numbers(text, "--fov"), None
+    try:
+        lenses = range_lenses(*fov_range) if fov_range else lens_catalogue(catalogue)
+    except RigoptError as error:
+        raise RigoptError(f"--fov must be lenses or a range (low-high) within (0, 180) degrees, got {text!r} "
+                          f"({error})") from None
     return lenses, fov_range
 
 
@@ -69,11 +70,11 @@ def design_command(
     weights: str = typer.Option("joint", help="Calibrated weights: BEVDet, BEVFusion, Fast-BEV, PETR, joint, or a file."),
     metric: str = typer.Option("rigcd", "--metric", help=METRIC_HELP),
     cameras: Optional[str] = typer.Option(None, help="Camera count or range (e.g. 6-10); default: the reference's."),
-    fov: str = typer.Option(DEFAULT_FOVS, help="Lens catalogue: horizontal FOVs in degrees, or a continuous "
-                                                "range such as 60-120."),
+    fov: str = typer.Option(numbers_text(DEFAULT_LENSES), help="Lens catalogue: horizontal FOVs in degrees, or a "
+                                                                "continuous range such as 60-120."),
     zones: Optional[str] = typer.Option(None, help="Allowed zones, comma-separated (default: all of the vehicle's)."),
-    pitch: str = typer.Option("-20,-10,0,10", help="Pitch angles to consider, degrees (> 0 up)."),
-    yaw_step: float = typer.Option(10.0, help="Yaw grid step, degrees."),
+    pitch: str = typer.Option(numbers_text(DEFAULT_PITCHES_DEG), help="Pitch angles to consider, degrees (> 0 up)."),
+    yaw_step: float = typer.Option(DEFAULT_YAW_STEP_DEG, help="Yaw grid step, degrees."),
     spacing: Optional[float] = typer.Option(None, help="Mount point spacing (m); default: sized to the vehicle."),
     min_coverage: int = typer.Option(0, help="Cameras every ring sector needs, beyond the reference's coverage."),
     min_overlap: int = typer.Option(0, help="Cameras needed where the reference sees a sector twice (e.g. 2)."),
@@ -84,7 +85,8 @@ def design_command(
     as_json: bool = typer.Option(False, "--json", help="Print the JSON summary."),
 ):
     """Design a rig on VEHICLE that minimises the calibrated RigCD to REF while covering what REF covers."""
-    from rigopt.design.designer import DesignSettings, design_rig
+    from rigopt.design.designer import design_rig
+    from rigopt.design.problem import ReferenceRig, benchmark_rigs
     from rigopt.metrics.calibration import load_weights
     from rigopt.report.design_report import design_dict, write_design_outputs
     from rigopt.rig.library import load_rig
@@ -96,18 +98,18 @@ def design_command(
         zones=tuple(z.strip() for z in zones.split(",")) if zones else None,
         pitches_deg=parse_numbers(pitch, "--pitch"), yaw_step_deg=yaw_step, spacing=spacing,
         min_coverage=min_coverage, min_overlap=min_overlap, time_limit=time_limit)
-    references = [load_rig(name.strip()) for name in ref.split(",") if name.strip()]
+    references = [ReferenceRig.on_own_vehicle(load_rig(name.strip())) for name in ref.split(",") if name.strip()]
     if not references:
         raise RigoptError("--ref needs at least one rig")
     target, calibration = load_vehicle(vehicle), load_weights(weights, metric)
-    label = "+".join(r.name for r in references)
+    label = "+".join(r.rig.name for r in references)
     out = out or Path(f"design-{target.name}-{label}")
     status = Console(stderr=True)
     if pareto:
         _pareto(target, references, calibration, settings, out, as_json, status)
         return
     with status.status(f"designing a rig on {target.name} from {label}") as spinner:
-        result = design_rig(target, references, calibration, settings,
+        result = design_rig(target, references, calibration, settings, compare_with=benchmark_rigs(target),
                             progress=lambda message: spinner.update(message) or status.print(f"  {message}"))
     try:
         files = write_design_outputs(result, out)

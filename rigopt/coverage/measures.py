@@ -119,6 +119,17 @@ class CoverageReport:
     cameras_inside: tuple[str, ...]
 
 
+@dataclass(frozen=True)
+class RingReport:
+    """The rings alone of ``rig`` on ``vehicle`` (what a ring plot needs, without the bird's-eye map, the
+    blind zone and the per-camera facts of a full ``CoverageReport``)."""
+
+    rig: str
+    vehicle: str
+    settings: CoverageSettings
+    rings: tuple[RingCoverage, ...]
+
+
 def _camera_arrays(rig: Rig):
     return rig.positions, rig.rotations, rig.fovs, np.array([c.image_size for c in rig.cameras])
 
@@ -195,6 +206,12 @@ def coverage_report(rig: Rig, vehicle: Vehicle, settings: CoverageSettings = Cov
         camera_coverage(vehicle, rig, settings, footprint),
         tuple(c.id for c, flag in zip(rig.cameras, inside) if flag),
     )
+
+
+def ring_report(rig: Rig, vehicle: Vehicle, settings: CoverageSettings = CoverageSettings()) -> RingReport:
+    """The rings of ``rig`` on ``vehicle``, as in ``coverage_report`` and at a fraction of its cost."""
+    return RingReport(rig.name, vehicle.name, settings,
+                      ring_coverage(vehicle, rig, settings, Footprint.of_mesh(vehicle.mesh)))
 
 
 @dataclass(frozen=True)

@@ -7,113 +7,43 @@ With several reference rigs (a fleet) it minimises the largest RigCD over them a
 their coverage requirements; the continuous refinement then stays off.
 A selected camera that fails the python-fcl checks is removed from the candidates and the MILP solved
 again, so a returned design is always valid.
+
+Every input is explicit: the references come with the vehicles they were designed on and the rigs to
+compare with are passed in (:mod:`rigopt.design.problem` builds the usual ones); the result
+(:mod:`rigopt.design.result`) carries everything the reports show.
 """
 
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from functools import reduce
 from typing import Callable, Sequence
 
 import numpy as np
 from scipy.spatial import cKDTree
 
-from rigopt.mounting.rules import MountRules, RigCheck, check_rig
+from rigopt.mounting.rules import RigCheck, check_rig
 from rigopt.coverage.footprint import Footprint
 from rigopt.coverage.matrix import rig_coverage_matrix, sector_points
-from rigopt.coverage.measures import CoverageSettings
 from rigopt.coverage.visibility import visible
 from rigopt.design.candidates import CandidateSet, build_candidates
+from rigopt.design.problem import ReferenceRig
 from rigopt.design.refine import RefineProblem, duty_points, frustum_margins, project_to_surface, refine
+from rigopt.design.result import Comparisons, DesignResult, MilpStage, RefinementReport, RigSummary
 from rigopt.design.selection import DesignInfeasible, Selection, prune, select_cameras
+from rigopt.design.settings import DesignSettings
+from rigopt.errors import RigoptError
 from rigopt.metrics.calibration import Calibration
-from rigopt.metrics.ranking import TransferPrediction, predict_transfer
+from rigopt.metrics.ranking import predict_transfer
 from rigopt.metrics.rigcd import camera_costs
 from rigopt.rig.model import Camera, Rig
-from rigopt.vehicle.library import load_vehicle
 from rigopt.vehicle.model import Vehicle
 
-DEFAULT_LENSES = (60.0, 65.0, 70.0, 75.0, 80.0, 90.0, 100.0, 110.0, 120.0)
 #: Mount points closer than this (m) may not both hold a camera (8 cm housings plus a margin).
 CLASH_DISTANCE = 0.10
 #: How many validation rounds (re-solves after removing cameras that fail the fcl checks) at most.
 MAX_REPAIRS = 10
-
-
-@dataclass(frozen=True)
-class DesignSettings:
-    """What the designer may choose from and what it must achieve.
-
-    ``cameras``: (min, max) camera count, None for the reference's; ``lenses``: catalogue FOVs (deg);
-    ``zones``: allowed zone names (None: all); ``pitches_deg`` and ``yaw_step_deg``: the orientation grid;
-    ``spacing``: mount point spacing (m), None to size it from the vehicle (about ``target_mounts`` points);
-    ``min_coverage``: cameras every sector point needs (0: only where the reference sees it, 1);
-    ``min_overlap``: cameras needed where the reference sees with >= 2 (0: no overlap requirement);
-    pruning sizes, MILP ``time_limit`` (s) and ``mip_gap``; ``refine``: run the continuous stage;
-    ``fov_range``: (min, max) deg when the lens is continuous (the refinement then adjusts FOVs);
-    coverage ring settings.
-    """
-
-    cameras: tuple[int, int] | None = None
-    lenses: tuple[float, ...] = DEFAULT_LENSES
-    zones: tuple[str, ...] | None = None
-    pitches_deg: tuple[float, ...] = (-20.0, -10.0, 0.0, 10.0)
-    yaw_step_deg: float = 10.0
-    spacing: float | None = None
-    target_mounts: int = 400
-    min_coverage: int = 0
-    min_overlap: int = 0
-    keep_per_reference: int = 150
-    keep_per_sector: int = 6
-    coverage_mounts: int = 80
-    time_limit: float = 60.0
-    mip_gap: float = 1e-4
-    refine: bool = True
-    fov_range: tuple[float, float] | None = None
-    coverage: CoverageSettings = field(default_factory=lambda: CoverageSettings(ring_distances=(2.0, 5.0, 10.0, 20.0),
-                                                                                sectors=36))
-    rules: MountRules = field(default_factory=MountRules)
-
-
-@dataclass(frozen=True)
-class RigSummary:
-    """A rig judged against the reference(s): predicted transfer from each, coverage (fraction of sector
-    points seen), and whether it meets the design's coverage requirements."""
-
-    rig: Rig
-    predictions: tuple[TransferPrediction, ...]
-    coverage: float
-    meets_requirements: bool
-    check: RigCheck | None = None
-
-    @property
-    def prediction(self) -> TransferPrediction:
-        """The worst (largest predicted drop) of the predictions: the single one without a fleet."""
-        return max(self.predictions, key=lambda p: p.predicted_drop)
-
-
-@dataclass(frozen=True)
-class DesignResult:
-    """The validated design and its comparisons; solver facts of the final MILP."""
-
-    design: RigSummary
-    references: tuple[Rig, ...]
-    reference_coverage: float
-    selection: Selection
-    n_candidates: int
-    n_offered: int
-    repairs: int
-    seconds: float
-    naive_transfer: RigSummary | None
-    benchmark_rigs: tuple[RigSummary, ...]
-    refine_status: str = "not run"
-    calibration: Calibration | None = None
-
-    @property
-    def reference(self) -> Rig:
-        """The (first) reference rig."""
-        return self.references[0]
 
 
 def no_progress(message: str) -> None:
@@ -208,17 +138,17 @@ def mount_candidates(vehicle: Vehicle, settings: DesignSettings, spacing: float 
                             settings.rules)
 
 
-def fleet_requirements(references: Sequence[Rig], settings: DesignSettings) -> np.ndarray:
-    """(q,) int: the largest requirement of any reference at each sector point."""
-    return np.max([requirements(rig, load_vehicle(rig.vehicle), settings) for rig in references], axis=0)
+def fleet_requirements(references: Sequence[ReferenceRig], settings: DesignSettings) -> np.ndarray:
+    """(q,) int: the largest requirement of any reference (on its own vehicle) at each sector point."""
+    return np.max([requirements(r.rig, r.vehicle, settings) for r in references], axis=0)
 
 
 def select_valid(prepared: Prepared, vehicle: Vehicle, calibration: Calibration, needed: np.ndarray,
-                 counts: tuple[int, int], settings: DesignSettings, progress: Callable[[str], None] = no_progress):
+                 counts: tuple[int, int], settings: DesignSettings, progress: Callable[[str], None] = no_progress
+                 ) -> MilpStage:
     """The best selection meeting ``needed`` whose cameras all pass the mount checks.
 
-    Returns (rig, selection, check, repairs, offered count). Raises DesignInfeasible with the uncoverable
-    sectors, or when repairs run out.
+    Raises DesignInfeasible with the uncoverable sectors, or when repairs run out.
     """
     seen = np.minimum(prepared.sees_pool.sum(axis=0), needed.max(initial=1))
     if np.any(seen < needed):
@@ -238,7 +168,7 @@ def select_valid(prepared: Prepared, vehicle: Vehicle, calibration: Calibration,
         check = check_rig(rig, vehicle, settings.rules)
         failed = [(chosen[k], c) for k, c in enumerate(check.cameras) if not c.valid]
         if not failed:
-            return rig, best, check, repairs, len(offered)
+            return MilpStage(rig, check, best, len(candidates), len(offered), repairs)
         progress(f"{len(failed)} camera(s) failed the mount checks; solving again without them")
         for index, camera_check in failed:
             # A view problem belongs to the orientation; any other to the mount point and all its candidates.
@@ -250,46 +180,50 @@ def select_valid(prepared: Prepared, vehicle: Vehicle, calibration: Calibration,
     raise DesignInfeasible(f"after {MAX_REPAIRS} repairs the design still fails the mount checks ({problems})")
 
 
-def design_rig(vehicle: Vehicle, reference: Rig | Sequence[Rig], calibration: Calibration,
-               settings: DesignSettings = DesignSettings(), progress: Callable[[str], None] = no_progress
-               ) -> DesignResult:
-    """Design a rig on ``vehicle`` for a detector trained on ``reference`` (one rig, or a fleet of rigs;
-    see the module docstring)."""
+def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRig], calibration: Calibration,
+               settings: DesignSettings = DesignSettings(), compare_with: Sequence[Rig] = (),
+               progress: Callable[[str], None] = no_progress) -> DesignResult:
+    """Design a rig on ``vehicle`` for a detector trained on the reference (one rig, or a fleet of rigs, each
+    on its own vehicle; see the module docstring), judged beside the naive transfer and ``compare_with``
+    (e.g. ``problem.benchmark_rigs(vehicle)``)."""
     start = time.perf_counter()
-    references = [reference] if isinstance(reference, Rig) else list(reference)
-    reference = references[0]
-    prepared = prepare(vehicle, references, calibration, settings, progress)
-    progress(f"coverage requirements from {', '.join(r.name for r in references)}")
+    references = (references,) if isinstance(references, ReferenceRig) else tuple(references)
+    if not references:
+        raise RigoptError("a design needs at least one reference rig")
+    rigs = [r.rig for r in references]
+    reference = rigs[0]
+    prepared = prepare(vehicle, rigs, calibration, settings, progress)
+    progress(f"coverage requirements from {', '.join(r.name for r in rigs)}")
     needed = fleet_requirements(references, settings)
     counts = settings.cameras or (len(reference), len(reference))
-    rig, best, check, repairs, offered = select_valid(prepared, vehicle, calibration, needed, counts, settings,
-                                                      progress)
+    milp = select_valid(prepared, vehicle, calibration, needed, counts, settings, progress)
 
     progress("validating the design: mount checks, coverage, RigCD")
-    design = summarise(rig, vehicle, references, calibration, needed, settings, check)
-    refine_status = "off" if len(references) == 1 else "off (fleet design)"
-    if settings.refine and design.meets_requirements and len(references) == 1:
+    design = summarise(milp.rig, vehicle, rigs, calibration, needed, settings, milp.check)
+    refinement = RefinementReport("off" if len(rigs) == 1 else "off (fleet design)")
+    if settings.refine and design.meets_requirements and len(rigs) == 1:
         progress("continuous refinement (casadi + IPOPT)")
-        design, refine_status = _refined(design, vehicle, reference, calibration, needed, prepared.points,
-                                         prepared.spacing, settings)
+        refinement = _refined(design, vehicle, reference, calibration, needed, prepared.points, prepared.spacing,
+                              settings)
+        if refinement.accepted:
+            design = refinement.refined
     if not design.meets_requirements:
         raise DesignInfeasible("the selected rig does not meet the coverage requirements when recomputed; "
                                "this should not happen: please report it")
-    reference_summary = rig_coverage_matrix(reference, load_vehicle(reference.vehicle),
-                                            settings.coverage).sees.any(axis=0).mean()
+    reference_coverage = rig_coverage_matrix(reference, references[0].vehicle,
+                                             settings.coverage).sees.any(axis=0).mean()
     naive = naive_transfer(vehicle, reference, prepared.candidates, settings)
-    naive_summary = summarise(naive, vehicle, references, calibration, needed, settings) if naive else None
-    benchmark = tuple(summarise(b, vehicle, references, calibration, needed, settings)
-                      for b in benchmark_rigs(vehicle))
-    return DesignResult(design, tuple(references), float(reference_summary), best, len(prepared.candidates),
-                        offered, repairs, time.perf_counter() - start, naive_summary, benchmark, refine_status,
-                        calibration)
+    comparisons = Comparisons(
+        summarise(naive, vehicle, rigs, calibration, needed, settings) if naive else None,
+        tuple(summarise(rig, vehicle, rigs, calibration, needed, settings) for rig in compare_with))
+    return DesignResult(design, milp, refinement, comparisons, float(reference_coverage), vehicle, references,
+                        calibration, settings, time.perf_counter() - start)
 
 
 def _refined(design: RigSummary, vehicle: Vehicle, reference: Rig, calibration: Calibration, needed: np.ndarray,
-             points: np.ndarray, spacing: float, settings: DesignSettings) -> tuple[RigSummary, str]:
-    """The refined design when it validates, meets the requirements and lowers the calibrated RigCD; else
-    the MILP design, with a status saying why."""
+             points: np.ndarray, spacing: float, settings: DesignSettings) -> RefinementReport:
+    """Refine the MILP ``design``; the refined rig is accepted when it validates, meets the requirements and
+    lowers the calibrated RigCD, and the report says why not otherwise."""
     rig = design.rig
     sees = rig_coverage_matrix(rig, vehicle, settings.coverage).sees
     index = {c.id: k for k, c in enumerate(reference.cameras)}
@@ -300,7 +234,7 @@ def _refined(design: RigSummary, vehicle: Vehicle, reference: Rig, calibration: 
         settings.fov_range, spacing)
     outcome = refine(problem)
     if outcome.rig is None:
-        return design, f"rejected: IPOPT {outcome.status}"
+        return RefinementReport(f"rejected: IPOPT {outcome.status}", solver_status=outcome.status)
     refined_rig = project_to_surface(Rig(rig.name, rig.vehicle, outcome.rig.cameras), vehicle, settings.rules)
     check = check_rig(refined_rig, vehicle, settings.rules)
     moved = len(rig)
@@ -310,14 +244,18 @@ def _refined(design: RigSummary, vehicle: Vehicle, reference: Rig, calibration: 
         refined_rig = Rig(rig.name, rig.vehicle, cameras)
         check = check_rig(refined_rig, vehicle, settings.rules)
     if not check.valid or moved == 0:
-        return design, f"rejected: IPOPT {outcome.status}, refined cameras fail the mount checks"
+        return RefinementReport(f"rejected: IPOPT {outcome.status}, refined cameras fail the mount checks",
+                                solver_status=outcome.status)
     refined = summarise(refined_rig, vehicle, [reference], calibration, needed, settings, check)
     if not refined.meets_requirements:
-        return design, f"rejected: IPOPT {outcome.status}, refined rig loses required coverage"
+        return RefinementReport(f"rejected: IPOPT {outcome.status}, refined rig loses required coverage",
+                                solver_status=outcome.status, cameras_moved=moved, refined=refined)
     if refined.prediction.rigcd >= design.prediction.rigcd:
-        return design, f"rejected: IPOPT {outcome.status}, no improvement"
-    return refined, (f"accepted: IPOPT {outcome.status}, {moved} of {len(rig)} cameras moved, RigCD "
-                     f"{design.prediction.rigcd:.4f} -> {refined.prediction.rigcd:.4f}")
+        return RefinementReport(f"rejected: IPOPT {outcome.status}, no improvement", solver_status=outcome.status,
+                                cameras_moved=moved, refined=refined)
+    return RefinementReport(f"accepted: IPOPT {outcome.status}, {moved} of {len(rig)} cameras moved, RigCD "
+                            f"{design.prediction.rigcd:.4f} -> {refined.prediction.rigcd:.4f}", accepted=True,
+                            solver_status=outcome.status, cameras_moved=moved, refined=refined)
 
 
 def _best_selection(costs, sees, needed, mount, mount_points, counts, alpha, settings, progress) -> Selection:
@@ -386,11 +324,3 @@ def naive_transfer(vehicle: Vehicle, reference: Rig, candidates: CandidateSet, s
         cameras.append(Camera(camera.id, candidates.positions[best], candidates.rotations[best],
                               float(candidates.fovs[best])))
     return Rig(f"naive_{vehicle.name}_from_{reference.name}", vehicle.blueprint, tuple(cameras))
-
-
-def benchmark_rigs(vehicle: Vehicle) -> list[Rig]:
-    """The library's hand-designed rigs for ``vehicle`` (R6 on the firetruck, R9 on the hgv, ...)."""
-    from rigopt.rig.library import library_rig, rig_names
-
-    rigs = [library_rig(name) for name in rig_names()]
-    return [rig for rig in rigs if rig.vehicle.lower() == vehicle.blueprint.lower()]

@@ -12,10 +12,10 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Callable, Sequence
 
-
-from rigopt.design.designer import (DesignSettings, no_progress, fleet_requirements, prepare, select_valid,
-                                    summarise)
+from rigopt.design.designer import fleet_requirements, no_progress, prepare, select_valid, summarise
+from rigopt.design.problem import ReferenceRig
 from rigopt.design.selection import DesignInfeasible
+from rigopt.design.settings import DesignSettings
 from rigopt.metrics.calibration import Calibration
 from rigopt.rig.model import Rig
 from rigopt.vehicle.model import Vehicle
@@ -40,11 +40,13 @@ class ParetoPoint:
     rig: Rig | None = None
 
 
-def pareto_designs(vehicle: Vehicle, references: Sequence[Rig], calibration: Calibration, settings: DesignSettings,
-                   counts: tuple[int, int], levels: Sequence[str] = tuple(LEVELS),
+def pareto_designs(vehicle: Vehicle, references: Sequence[ReferenceRig], calibration: Calibration,
+                   settings: DesignSettings, counts: tuple[int, int], levels: Sequence[str] = tuple(LEVELS),
                    progress: Callable[[str], None] = no_progress) -> list[ParetoPoint]:
-    """Solve every camera count in ``counts`` (inclusive range) at every coverage level."""
-    prepared = prepare(vehicle, list(references), calibration, settings, progress)
+    """Solve every camera count in ``counts`` (inclusive range) at every coverage level, for the references
+    each on its own vehicle."""
+    rigs = [r.rig for r in references]
+    prepared = prepare(vehicle, rigs, calibration, settings, progress)
     points = []
     for level in levels:
         min_coverage, min_overlap = LEVELS[level]
@@ -53,11 +55,11 @@ def pareto_designs(vehicle: Vehicle, references: Sequence[Rig], calibration: Cal
         for n in range(counts[0], counts[1] + 1):
             progress(f"pareto: {n} cameras, coverage level {level}")
             try:
-                rig, *_ = select_valid(prepared, vehicle, calibration, needed, (n, n), level_settings, progress)
+                rig = select_valid(prepared, vehicle, calibration, needed, (n, n), level_settings, progress).rig
             except DesignInfeasible as error:
                 points.append(ParetoPoint(n, level, False, reason=str(error)))
                 continue
-            summary = summarise(rig, vehicle, references, calibration, needed, level_settings)
+            summary = summarise(rig, vehicle, rigs, calibration, needed, level_settings)
             points.append(ParetoPoint(n, level, True, summary.prediction.predicted_drop, summary.prediction.rigcd,
                                       summary.coverage, rig=rig))
     return _mark_frontier(points)
@@ -114,9 +116,7 @@ def write_pareto(points: list[ParetoPoint], out_dir) -> list[Path]:
     return [table, picture]
 
 
-def default_counts(references: Sequence[Rig]) -> tuple[int, int]:
-    """The reference's camera count +- 2 (at least 1)."""
-    n = len(references[0])
+def default_counts(references: Sequence[ReferenceRig]) -> tuple[int, int]:
+    """The (first) reference's camera count +- 2 (at least 1)."""
+    n = len(references[0].rig)
     return max(1, n - 2), n + 2
-
-

@@ -18,7 +18,7 @@ from matplotlib.colors import BoundaryNorm, ListedColormap
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
-from rigopt.coverage.measures import CoverageComparison, CoverageReport
+from rigopt.coverage.measures import CoverageComparison, CoverageReport, RingReport
 from rigopt.rig.model import Rig
 
 DPI = 120
@@ -144,7 +144,7 @@ def _closed(azimuths, values) -> tuple[np.ndarray, np.ndarray]:
     return np.append(theta, theta[0] + 2 * np.pi), np.append(r, r[0])
 
 
-def _ring_heights(report: CoverageReport) -> list[float]:
+def _ring_heights(report: CoverageReport | RingReport) -> list[float]:
     return list(dict.fromkeys(r.height_m for r in report.rings))
 
 
@@ -241,9 +241,9 @@ def write_bev_figure(report: CoverageReport, path, rig: Rig | None = None) -> Pa
 # ------------------------------------------------------------------------------------------------ rings
 
 
-def rings_figure(report: CoverageReport, compare: CoverageReport | None = None) -> Figure:
+def rings_figure(report: CoverageReport | RingReport, compare: CoverageReport | RingReport | None = None) -> Figure:
     """One polar panel per ring height: cameras seeing each azimuth, one curve per ring distance; ``compare``
-    dashed."""
+    dashed. Either report kind: only the rings are drawn."""
     heights = _ring_heights(report)
     distances = list(dict.fromkeys(r.distance_m for r in report.rings))
     colours = _distance_colours(distances)
@@ -279,7 +279,8 @@ def rings_figure(report: CoverageReport, compare: CoverageReport | None = None) 
     return figure
 
 
-def write_rings_figure(report: CoverageReport, path, compare: CoverageReport | None = None) -> Path:
+def write_rings_figure(report: CoverageReport | RingReport, path,
+                       compare: CoverageReport | RingReport | None = None) -> Path:
     """Polar plots of the camera count per azimuth on every ring of ``report`` (``compare`` dashed); PNG."""
     return _save(rings_figure(report, compare), path)
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from rigopt.design.designer import DesignResult, RigSummary
+from rigopt.design.result import DesignResult, RigSummary
 from rigopt.report.json_values import json_ready
 from rigopt.rig.pccr_format import write_rig
 
@@ -22,40 +22,38 @@ def summary_dict(summary: RigSummary) -> dict:
 
 def design_dict(result: DesignResult, rig_file: Path | None) -> dict:
     """The ``rigopt design --json`` object (and the body of report.json)."""
-    design, selection = result.design, result.selection
-    best_benchmark = min(result.benchmark_rigs, key=lambda s: s.prediction.predicted_drop, default=None)
+    design, milp, comparisons = result.design, result.milp, result.comparisons
     return {
         "rig_file": str(rig_file) if rig_file else None,
         "vehicle": design.rig.vehicle,
-        "reference": ",".join(r.name for r in result.references),
-        "metric": result.calibration.metric if result.calibration else None,
-        "weights": result.calibration.name if result.calibration else None,
+        "reference": ",".join(r.rig.name for r in result.references),
+        "metric": result.calibration.metric,
+        "weights": result.calibration.name,
         "predicted_drop": design.prediction.predicted_drop,
         "rigcd": design.prediction.rigcd,
         "n_cameras": len(design.rig),
         "per_reference": summary_dict(design)["per_reference"],
         "coverage": design.coverage,
         "reference_coverage": result.reference_coverage,
-        "solver": {"milp_status": selection.status, "milp_gap": selection.gap, "milp_seconds": selection.seconds,
-                   "refine_status": result.refine_status, "candidates": result.n_candidates,
-                   "offered_to_milp": result.n_offered, "repairs": result.repairs, "seconds": result.seconds},
+        "solver": {"milp_status": milp.status, "milp_gap": milp.gap, "milp_seconds": milp.selection.seconds,
+                   "refine_status": result.refinement.status, "candidates": milp.n_candidates,
+                   "offered_to_milp": milp.n_offered, "repairs": milp.repairs, "seconds": result.seconds},
         "cameras": [{"id": c.id, "zone": c.zone, "fov": c.fov, "position": c.position.tolist()}
                     for c in design.rig.cameras],
         "comparisons": {
-            "naive_transfer": summary_dict(result.naive_transfer) if result.naive_transfer else None,
-            "benchmark_rig": summary_dict(best_benchmark) if best_benchmark else None,
-            "benchmark_rigs": [summary_dict(s) for s in result.benchmark_rigs],
+            "naive_transfer": summary_dict(comparisons.naive_transfer) if comparisons.naive_transfer else None,
+            "benchmark_rig": summary_dict(comparisons.best_rig) if comparisons.best_rig else None,
+            "benchmark_rigs": [summary_dict(s) for s in comparisons.rigs],
         },
     }
 
 
 def write_design_outputs(result: DesignResult, out_dir) -> list[Path]:
     """Write rig.json (benchmark format), report.json, the pictures and report.html into ``out_dir``."""
-    from rigopt.coverage.measures import coverage_report
+    from rigopt.coverage.measures import ring_report
     from rigopt.report.coverage_figures import write_rings_figure
     from rigopt.report.design_html import write_design_html
     from rigopt.report.vehicle_figures import write_vehicle_figure
-    from rigopt.vehicle.library import load_vehicle
 
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -63,14 +61,14 @@ def write_design_outputs(result: DesignResult, out_dir) -> list[Path]:
     summary = design_dict(result, rig_file)
     report = out_dir / "report.json"
     report.write_text(json.dumps(json_ready(summary), indent=2) + "\n")
-    vehicle, reference_vehicle = load_vehicle(result.design.rig.vehicle), load_vehicle(result.reference.vehicle)
+    vehicle, reference = result.vehicle, result.references[0]
     pictures = {"design": write_vehicle_figure(vehicle, out_dir / "design.png", result.design.rig),
-                "reference": write_vehicle_figure(reference_vehicle, out_dir / "reference.png", result.reference)}
-    if result.naive_transfer is not None:
+                "reference": write_vehicle_figure(reference.vehicle, out_dir / "reference.png", reference.rig)}
+    if result.comparisons.naive_transfer is not None:
         pictures["naive_transfer"] = write_vehicle_figure(vehicle, out_dir / "naive_transfer.png",
-                                                          result.naive_transfer.rig)
-    design_coverage = coverage_report(result.design.rig, vehicle)
-    reference_coverage = coverage_report(result.reference, reference_vehicle)
+                                                          result.comparisons.naive_transfer.rig)
+    design_coverage = ring_report(result.design.rig, vehicle)
+    reference_coverage = ring_report(reference.rig, reference.vehicle)
     pictures["coverage"] = write_rings_figure(design_coverage, out_dir / "coverage.png", compare=reference_coverage)
     page = write_design_html(summary, out_dir, pictures)
     return [rig_file, report, *pictures.values(), page]

@@ -17,19 +17,50 @@ FRUSTUM_DRAW_LENGTH = 1.2
 _BODY_GREY = (0.78, 0.78, 0.80)
 
 
-def _face_colours(vehicle: Vehicle) -> tuple[np.ndarray, dict[str, tuple]]:
-    """(F, 4) RGBA per face: its zone's colour, grey outside every zone; and the legend of zone colours."""
+def _zone_legend(vehicle: Vehicle) -> dict[str, tuple]:
+    """The RGBA colour of each zone name (tab20, names sorted)."""
     from matplotlib import colormaps
 
-    mesh = vehicle.fine_mesh
-    names = sorted({z.name for z in vehicle.zones})
     palette = colormaps["tab20"]
-    legend = {name: palette(k % 20) for k, name in enumerate(names)}
-    colours = np.tile((*_BODY_GREY, 1.0), (len(mesh.faces), 1))
-    for k, name in enumerate(vehicle.fine_face_zones):
-        if name is not None:
-            colours[k] = legend[name]
-    return colours, legend
+    return {name: palette(k % 20) for k, name in enumerate(sorted({z.name for z in vehicle.zones}))}
+
+
+def _clip_to_box(polygon: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarray:
+    """The part of a convex planar ``polygon`` (k, 3) m inside the box [``low``, ``high``] (3,) m, as (j, 3);
+    j < 3 when nothing of it is inside (Sutherland-Hodgman against the six faces of the box)."""
+    for axis in range(3):
+        for bound, side in ((low[axis], 1.0), (high[axis], -1.0)):
+            if len(polygon) < 3:
+                return polygon
+            inside = side * (polygon[:, axis] - bound)
+            kept = []
+            for k in range(len(polygon)):
+                a, b = polygon[k], polygon[(k + 1) % len(polygon)]
+                da, db = inside[k], inside[(k + 1) % len(polygon)]
+                if da >= 0:
+                    kept.append(a)
+                if (da >= 0) != (db >= 0):
+                    kept.append(a + (b - a) * (da / (da - db)))
+            polygon = np.array(kept).reshape(-1, 3)
+    return polygon
+
+
+def _zone_patches(vehicle: Vehicle) -> list[list[tuple[np.ndarray, str]]]:
+    """Per face of the body mesh, its zone patches: (polygon (j, 3) m, zone name), each the part of the face
+    inside a zone's box when the face's normal is within the zone's cone. Listed last zone first, so that
+    drawn in order the first matching zone lies on top (the zone a point belongs to)."""
+    mesh = vehicle.mesh
+    triangles, normals = mesh.triangles, mesh.face_normals
+    low, high = triangles.min(axis=1), triangles.max(axis=1)
+    patches: list[list[tuple[np.ndarray, str]]] = [[] for _ in range(len(triangles))]
+    for zone in reversed(vehicle.zones):
+        facing = normals @ zone.normal >= np.cos(np.deg2rad(zone.cone_deg)) - 1e-12
+        overlapping = np.all((high >= zone.min) & (low <= zone.max), axis=1)
+        for face in np.flatnonzero(facing & overlapping):
+            polygon = _clip_to_box(triangles[face], zone.min, zone.max)
+            if len(polygon) >= 3:
+                patches[face].append((polygon, zone.name))
+    return patches
 
 
 def _shaded(colours: np.ndarray, normals: np.ndarray, light: np.ndarray) -> np.ndarray:
@@ -39,17 +70,28 @@ def _shaded(colours: np.ndarray, normals: np.ndarray, light: np.ndarray) -> np.n
     return out
 
 
-def _draw_view(ax, vehicle: Vehicle, colours, axes: tuple[int, int], depth_axis: int, towards: float):
-    """Painter's algorithm: faces facing the viewer, drawn far to near, projected on ``axes``."""
-    mesh = vehicle.fine_mesh
-    facing = mesh.face_normals[:, depth_axis] * towards > 1e-6
-    order = np.argsort(mesh.triangles_center[facing, depth_axis] * towards)
-    triangles = mesh.triangles[facing][order][:, :, list(axes)]
+def _draw_view(ax, vehicle: Vehicle, patches, legend: dict[str, tuple], axes: tuple[int, int], depth_axis: int,
+               towards: float):
+    """Painter's algorithm on the body mesh: faces facing the viewer, drawn far to near, each followed by its
+    zone patches, projected on ``axes``."""
+    mesh = vehicle.mesh
+    facing = np.flatnonzero(mesh.face_normals[:, depth_axis] * towards > 1e-6)
+    order = facing[np.argsort(mesh.triangles_center[facing, depth_axis] * towards)]
+    polygons, colours, normals = [], [], []
+    for face in order:
+        polygons.append(mesh.triangles[face][:, list(axes)])
+        colours.append((*_BODY_GREY, 1.0))
+        normals.append(mesh.face_normals[face])
+        for polygon, name in patches[face]:
+            polygons.append(polygon[:, list(axes)])
+            colours.append(legend[name])
+            normals.append(mesh.face_normals[face])
     light = np.zeros(3)
     light[depth_axis] = towards
     light += np.array([0.3, 0.2, 0.5])
-    colour = _shaded(colours[facing][order], mesh.face_normals[facing][order], light / np.linalg.norm(light))
-    ax.add_collection(PolyCollection(triangles, facecolors=colour, edgecolors=colour, linewidths=0.2))
+    colour = _shaded(np.array(colours, dtype=float).reshape(-1, 4), np.array(normals).reshape(-1, 3),
+                     light / np.linalg.norm(light))
+    ax.add_collection(PolyCollection(polygons, facecolors=colour, edgecolors=colour, linewidths=0.2))
     low, high = mesh.bounds[0, list(axes)], mesh.bounds[1, list(axes)]
     pad = 1.0
     ax.set_xlim(low[0] - pad, high[0] + pad)
@@ -71,12 +113,13 @@ def _draw_cameras(ax, rig: Rig, axes: tuple[int, int], vertical: bool):
 
 
 def write_vehicle_figure(vehicle: Vehicle, path, rig: Rig | None = None) -> Path:
-    """Top view (x-y, from above) and side view (x-z, from the left) of ``vehicle``; PNG at ``path``."""
-    colours, legend = _face_colours(vehicle)
+    """Top view (x-y, from above) and side view (x-z, from the left) of ``vehicle``'s body mesh, zones
+    coloured; PNG at ``path``."""
+    legend, patches = _zone_legend(vehicle), _zone_patches(vehicle)
     figure = Figure(figsize=(12, 8.5), dpi=120, layout="constrained")
     top, side = figure.subplots(2, 1, height_ratios=[vehicle.size[1] + 2, vehicle.size[2] + 2])
-    _draw_view(top, vehicle, colours, (0, 1), 2, 1.0)
-    _draw_view(side, vehicle, colours, (0, 2), 1, 1.0)
+    _draw_view(top, vehicle, patches, legend, (0, 1), 2, 1.0)
+    _draw_view(side, vehicle, patches, legend, (0, 2), 1, 1.0)
     if rig is not None:
         _draw_cameras(top, rig, (0, 1), vertical=False)
         _draw_cameras(side, rig, (0, 2), vertical=True)

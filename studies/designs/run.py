@@ -15,6 +15,7 @@ import json
 from pathlib import Path
 
 from rigopt.design.designer import design_rig
+from rigopt.design.problem import ReferenceRig, benchmark_rigs
 from rigopt.metrics.calibration import load_weights
 from rigopt.report.design_report import design_dict
 from rigopt.report.json_values import json_ready
@@ -34,23 +35,24 @@ def main() -> None:
     rows = []
     for vehicle_name, ref in CASES:
         vehicle, reference = load_vehicle(vehicle_name), load_rig(ref)
-        result = design_rig(vehicle, reference, weights)
+        result = design_rig(vehicle, ReferenceRig.on_own_vehicle(reference), weights,
+                            compare_with=benchmark_rigs(vehicle))
         folder = out / f"{vehicle_name}_from_{ref}"
         folder.mkdir(exist_ok=True)
         rig_file = write_rig(result.design.rig, folder / "rig.json")
         (folder / "report.json").write_text(json.dumps(json_ready(design_dict(result, rig_file)), indent=2) + "\n")
         write_vehicle_figure(vehicle, folder / "design.png", result.design.rig)
-        s = result.selection
+        milp = result.milp
         entries = [("design", result.design)]
-        if result.naive_transfer:
-            entries.append(("naive transfer", result.naive_transfer))
-        entries += [(f"benchmark {b.rig.name}", b) for b in result.benchmark_rigs]
+        if result.comparisons.naive_transfer:
+            entries.append(("naive transfer", result.comparisons.naive_transfer))
+        entries += [(f"benchmark {b.rig.name}", b) for b in result.comparisons.rigs]
         for label, summary in entries:
             p = summary.prediction
             rows.append([vehicle_name, ref, label, len(summary.rig), f"{p.predicted_drop:.3f}", f"{p.rigcd:.3f}",
                          f"{summary.coverage:.3f}", "yes" if summary.meets_requirements else "no",
-                         f"{result.reference_coverage:.3f}", s.status, f"{s.gap:.1e}", result.n_candidates,
-                         result.n_offered, result.refine_status, f"{result.seconds:.1f}"])
+                         f"{result.reference_coverage:.3f}", milp.status, f"{milp.gap:.1e}", milp.n_candidates,
+                         milp.n_offered, result.refinement.status, f"{result.seconds:.1f}"])
         print(f"{vehicle_name} from {ref}: design {result.design.prediction.predicted_drop:.3f} in {result.seconds:.1f} s")
     header = ["vehicle", "reference", "rig", "cameras", "predicted_drop", "rigcd", "coverage", "meets_requirements",
               "reference_coverage", "milp_status", "milp_gap", "candidates", "offered", "refinement", "seconds"]

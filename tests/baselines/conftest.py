@@ -35,15 +35,14 @@ def tiny_data(tmp_path_factory):
     """``<data>/<rig>/<split>/`` for rigs R1 and R5, splits train and test (4 samples each)."""
     from rigopt.bench.generate import generate_split
     from rigopt.bench.render import render_rig
-    from rigopt.bench.scenes import generate_scene, split_seeds
+    from rigopt.bench.scenes import split_scenes
     from rigopt.rig.library import load_rig
 
     out = tmp_path_factory.mktemp("tiny_bench")
     rigs = [load_rig(name) for name in TINY_RIGS]
     assert [len(rig) for rig in rigs] == list(TINY_RIGS.values())
     for split in ("train", "test"):
-        scenes = [generate_scene(seed, split, TINY_FRAMES, name=f"scene-{split}-{k:04d}-s{seed}")
-                  for k, seed in enumerate(split_seeds(split, 1))]
+        scenes = split_scenes(split, 1, TINY_FRAMES)
         generate_split(rigs, scenes, out, TINY_SIZE, render_rig, lambda rig: None)
     return out
 

@@ -19,7 +19,8 @@ import pytest
 
 torch = pytest.importorskip("torch")
 
-from rigopt.baselines.config import FAMILIES, model_config  # noqa: E402
+from rigopt.baselines.config import model_config  # noqa: E402
+from rigopt.baselines.families import DETECTORS, Detector  # noqa: E402
 from rigopt.baselines.data import Batch, BoxTargets, RigSplit  # noqa: E402
 from rigopt.baselines.layers import pixel_rays  # noqa: E402
 from rigopt.baselines.lss import HEIGHT_LIMITS, LSSDetector  # noqa: E402
@@ -104,7 +105,7 @@ def test_rig_split_on_a_missing_data_folder_is_a_data_error(tmp_path):
 def test_unknown_family_and_size_are_unknown_names():
     with pytest.raises(UnknownNameError) as caught:
         model_config("yolo", "tiny")
-    assert "yolo" in str(caught.value) and all(f in str(caught.value) for f in FAMILIES)
+    assert "yolo" in str(caught.value) and all(f in str(caught.value) for f in DETECTORS)
     with pytest.raises(UnknownNameError, match="huge"):
         model_config("lss", "huge")
     assert isinstance(caught.value, RigoptError)
@@ -137,7 +138,7 @@ def test_device_names():
 
 
 @pytest.mark.parametrize("rig", sorted(RIG_CAMERAS))
-@pytest.mark.parametrize("family", FAMILIES)
+@pytest.mark.parametrize("family", sorted(DETECTORS))
 def test_forward_backward_on_rigs_of_different_camera_counts(tiny_data, family, rig):
     torch.manual_seed(0)
     config = model_config(family, "tiny")
@@ -173,7 +174,7 @@ def test_forward_backward_on_rigs_of_different_camera_counts(tiny_data, family, 
         assert float(d["centers"][:, :2].abs().max()) <= config.bev_range + 1e-4  # inside the square
 
 
-@pytest.mark.parametrize("family", FAMILIES)
+@pytest.mark.parametrize("family", sorted(DETECTORS))
 def test_outputs_follow_the_calibration(tiny_data, family):
     """Same images, one camera moved: the detector's outputs change (it uses the rig's calibration)."""
     torch.manual_seed(0)

@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rigopt.baselines.evaluation import Detections, GroundTruth, evaluate, match, resampled_maps
+from rigopt.bench.evaluation import Detections, GroundTruth, evaluate, match, resampled_maps
 from rigopt.errors import DataError
 
 pytest.importorskip("torch")

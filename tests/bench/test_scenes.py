@@ -7,7 +7,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from rigopt.bench.scene_model import CLASSES, SAMPLE_INTERVAL_US, SPLITS, Boxes
-from rigopt.bench.scenes import generate_scene, split_seeds
+from rigopt.bench.scenes import (SEED_OFFSET_STEP, SEEDS_PER_SPLIT, SPLIT_OFFSETS, generate_scene, scene_name,
+                                  split_scenes, split_seeds)
 from rigopt.errors import RigoptError
 
 FIELDS = ("centers", "sizes", "yaws", "classes", "instance")
@@ -100,6 +101,23 @@ def test_split_seeds_are_disjoint_deterministic_and_validated():
         generate_scene(0, "dev")
     with pytest.raises(RigoptError):
         generate_scene(0, "train", 0)
+
+
+def test_split_scenes_are_named_by_index_and_seed_and_offsets_never_share_a_scene():
+    plain, shifted = split_scenes("val", 2, 1), split_scenes("val", 2, 1, seed_offset=3)
+    first = split_seeds("val", 2)
+    assert [s.seed for s in plain] == first
+    assert [s.name for s in plain] == [scene_name("val", 0, first[0]), scene_name("val", 1, first[1])]
+    assert plain[1].name == f"scene-val-0001-s{first[1]}"
+    assert [s.seed for s in shifted] == [seed + 3 * SEED_OFFSET_STEP for seed in first]
+    assert SEED_OFFSET_STEP >= max(SPLIT_OFFSETS.values()) + SEEDS_PER_SPLIT  # past every split's range
+    assert all(len(s.frames) == 1 and s.split == "val" for s in plain + shifted)
+
+
+@pytest.mark.parametrize("offset", [-5, 1.5, True])
+def test_a_bad_seed_offset_is_refused_with_what_it_got(offset):
+    with pytest.raises(RigoptError, match=f"seed offset must be a whole number >= 0, got {offset!r}"):
+        split_scenes("mini", 1, 1, seed_offset=offset)
 
 
 def test_every_class_appears_and_indices_are_valid(scenes):

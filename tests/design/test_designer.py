@@ -1,14 +1,14 @@
 """The design pipeline (``design_rig``) end to end: the firetruck from R1 with the joint weights (one run,
 module-scoped), and infeasible requirements on a box car written as a spec in tmp_path.
 
-The firetruck run records every rig the pipeline summarises (a spy around ``summarise``); the first one
-named ``design_*`` is the MILP's rig, before the continuous refinement, so the MILP objective can be
-checked against the RigCD of the rig it chose.
+The result carries the MILP's rig (before the continuous refinement), so the MILP objective is checked
+against the RigCD of the rig it chose.
 """
 
 from __future__ import annotations
 
 import re
+from dataclasses import FrozenInstanceError
 from types import SimpleNamespace
 
 import numpy as np
@@ -16,13 +16,16 @@ import pytest
 
 from rigopt.mounting.rules import check_rig
 from rigopt.coverage.matrix import rig_coverage_matrix
-from rigopt.design import designer
-from rigopt.design.designer import DesignSettings, design_rig, requirements
+from rigopt.design.designer import design_rig, requirements
+from rigopt.design.problem import ReferenceRig, benchmark_rigs
+from rigopt.design.result import DesignResult
 from rigopt.design.selection import DesignInfeasible
+from rigopt.design.settings import DesignSettings
 from rigopt.errors import RigoptError
 from rigopt.metrics.calibration import load_weights
 from rigopt.metrics.rigcd import rigcd
 from rigopt.rig.library import load_rig
+from rigopt.rig.model import Camera, Rig
 from rigopt.vehicle.library import load_vehicle
 from rigopt.vehicle.model import Vehicle
 from rigopt.vehicle.spec import read_spec
@@ -37,20 +40,10 @@ UNCOVERED = re.compile(r"ring (?P<distance>[\d.]+) m at height (?P<height>[\d.]+
 @pytest.fixture(scope="module")
 def firetruck():
     vehicle, reference, calibration = load_vehicle("firetruck"), load_rig("R1"), load_weights("joint")
-    summarised = []
-    original = designer.summarise
-
-    def spy(rig, *args, **kwargs):
-        summary = original(rig, *args, **kwargs)
-        summarised.append(summary)
-        return summary
-
-    with pytest.MonkeyPatch.context() as patch:
-        patch.setattr(designer, "summarise", spy)
-        result = design_rig(vehicle, reference, calibration)
-    milp = next(s for s in summarised if s.rig.name.startswith("design_"))
+    result = design_rig(vehicle, ReferenceRig.on_own_vehicle(reference), calibration,
+                        compare_with=benchmark_rigs(vehicle))
     return SimpleNamespace(vehicle=vehicle, reference=reference, calibration=calibration, result=result,
-                           design=result.design, milp_rig=milp.rig, settings=DesignSettings())
+                           design=result.design, milp_rig=result.milp.rig, settings=DesignSettings())
 
 
 @pytest.fixture(scope="module")
@@ -58,6 +51,10 @@ def box_car(tmp_path_factory) -> Vehicle:
     path = tmp_path_factory.mktemp("designbox") / "vehicle.toml"
     path.write_text(BOX_CAR)
     return Vehicle.from_spec(read_spec(path))
+
+
+def r1_on_its_vehicle() -> ReferenceRig:
+    return ReferenceRig.on_own_vehicle(load_rig("R1"))
 
 
 def weighted_rigcd(run, rig) -> float:
@@ -81,7 +78,7 @@ def test_design_meets_the_coverage_requirements(firetruck):
 
 
 def test_recomputed_coverage_meets_the_requirements_at_every_sector_point(firetruck):
-    needed = requirements(firetruck.reference, load_vehicle(firetruck.reference.vehicle), firetruck.settings)
+    needed = requirements(firetruck.reference, firetruck.result.references[0].vehicle, firetruck.settings)
     assert needed.sum() > 0  # R1 sees most of the rings: the requirement is not empty
     counts = rig_coverage_matrix(firetruck.design.rig, firetruck.vehicle, firetruck.settings.coverage).sees.sum(axis=0)
     assert counts.shape == needed.shape
@@ -89,7 +86,7 @@ def test_recomputed_coverage_meets_the_requirements_at_every_sector_point(firetr
 
 
 def test_design_predicts_a_smaller_drop_than_the_benchmark_rig_r6(firetruck):
-    r6 = [s for s in firetruck.result.benchmark_rigs if s.rig.name == "R6"]
+    r6 = [s for s in firetruck.result.comparisons.rigs if s.rig.name == "R6"]
     assert len(r6) == 1
     assert firetruck.design.prediction.predicted_drop < r6[0].prediction.predicted_drop
 
@@ -100,22 +97,27 @@ def test_design_rigcd_is_the_calibrated_rigcd_to_the_reference(firetruck):
 
 def test_milp_objective_is_the_rigcd_of_the_rig_it_chose(firetruck):
     """The MILP's matching is an optimal one: its objective equals RigCD (optimal assignment) of its rig."""
-    assert abs(firetruck.result.selection.objective - weighted_rigcd(firetruck, firetruck.milp_rig)) <= 1e-6
+    assert abs(firetruck.result.milp.selection.objective - weighted_rigcd(firetruck, firetruck.milp_rig)) <= 1e-6
 
 
 def test_design_rigcd_equals_the_milp_objective_unless_refined(firetruck):
-    objective, value = firetruck.result.selection.objective, firetruck.design.prediction.rigcd
-    if firetruck.result.refine_status.startswith("accepted"):
+    objective, value = firetruck.result.milp.selection.objective, firetruck.design.prediction.rigcd
+    refinement = firetruck.result.refinement
+    if refinement.accepted:
         assert value < objective  # the refinement is kept only when it lowers the RigCD
+        assert refinement.status.startswith("accepted") and firetruck.design is refinement.refined
+        assert 0 < refinement.cameras_moved <= len(firetruck.design.rig)
     else:
         assert abs(value - objective) <= 1e-6
+        assert firetruck.design.rig is firetruck.milp_rig
 
 
 def test_milp_solved_to_optimality(firetruck):
-    selection = firetruck.result.selection
-    assert selection.status == "optimal"
-    assert 0.0 <= selection.gap <= DesignSettings().mip_gap
-    assert firetruck.result.n_offered <= firetruck.result.n_candidates
+    milp = firetruck.result.milp
+    assert milp.status == milp.selection.status == "optimal"
+    assert 0.0 <= milp.gap <= DesignSettings().mip_gap
+    assert 0 < milp.n_offered <= milp.n_candidates
+    assert milp.check.valid and milp.repairs >= 0
 
 
 def test_design_has_the_references_camera_count_by_default(firetruck):
@@ -129,7 +131,7 @@ def test_design_cameras_are_named_after_the_reference_cameras_they_match(firetru
 
 
 def test_naive_transfer_has_one_camera_per_reference_camera(firetruck):
-    naive = firetruck.result.naive_transfer
+    naive = firetruck.result.comparisons.naive_transfer
     assert naive is not None
     assert len(naive.rig) == len(firetruck.reference)
     assert [c.id for c in naive.rig.cameras] == [c.id for c in firetruck.reference.cameras]
@@ -137,14 +139,41 @@ def test_naive_transfer_has_one_camera_per_reference_camera(firetruck):
 
 def test_naive_transfer_keeps_each_reference_lens_on_the_catalogue(firetruck):
     lenses = np.asarray(firetruck.settings.lenses)
-    for moved, original in zip(firetruck.result.naive_transfer.rig.cameras, firetruck.reference.cameras):
+    for moved, original in zip(firetruck.result.comparisons.naive_transfer.rig.cameras, firetruck.reference.cameras):
         assert moved.fov == lenses[np.argmin(np.abs(lenses - original.fov))]
 
 
 def test_benchmark_rigs_are_the_library_rigs_of_the_target_vehicle(firetruck):
-    names = [s.rig.name for s in firetruck.result.benchmark_rigs]
+    names = [s.rig.name for s in firetruck.result.comparisons.rigs]
     assert "R6" in names
-    assert all(s.rig.vehicle == "vehicle.carlamotors.firetruck" for s in firetruck.result.benchmark_rigs)
+    assert all(s.rig.vehicle == "vehicle.carlamotors.firetruck" for s in firetruck.result.comparisons.rigs)
+    assert firetruck.result.comparisons.best_rig.prediction.predicted_drop == min(
+        s.prediction.predicted_drop for s in firetruck.result.comparisons.rigs)
+
+
+def test_the_result_carries_its_inputs(firetruck):
+    result = firetruck.result
+    assert isinstance(result, DesignResult)
+    assert result.vehicle is firetruck.vehicle and result.calibration is firetruck.calibration
+    assert [r.rig for r in result.references] == [firetruck.reference]
+    assert result.references[0].vehicle.blueprint == firetruck.reference.vehicle
+    assert result.settings == DesignSettings()
+    with pytest.raises(FrozenInstanceError):
+        result.seconds = 0.0
+
+
+def test_the_designer_compares_only_with_the_rigs_it_is_given(box_car):
+    """No hidden lookups: without ``compare_with`` there is nothing to compare with but the naive transfer,
+    and the reference's coverage is measured on the vehicle passed with it (here the box car itself)."""
+    reference = Rig("boxref", box_car.blueprint, (Camera("F", np.array([2.04, 0.0, 1.0]), np.eye(3), 100.0),))
+    settings = DesignSettings(lenses=(100.0,), pitches_deg=(0.0,), yaw_step_deg=30.0, refine=False,
+                              zones=("front",))
+    result = design_rig(box_car, ReferenceRig(reference, box_car), load_weights("joint"), settings)
+    assert result.comparisons.rigs == ()
+    assert result.comparisons.best_rig is None
+    assert result.references[0].vehicle is box_car
+    assert result.refinement.status == "off" and not result.refinement.accepted
+    assert len(result.design.rig) == 1 and result.design.meets_requirements
 
 
 # --- infeasible requirements --------------------------------------------------------------------------
@@ -159,7 +188,7 @@ def test_roof_patch_only_cannot_see_the_rings(box_car):
     heights 0 and 0.8 m that R1 requires: the designer says which ring sectors and what to change."""
     settings = DesignSettings(zones=("roof",), lenses=(60.0,), pitches_deg=(0.0, 10.0, 20.0), yaw_step_deg=30.0)
     with pytest.raises(DesignInfeasible) as error:
-        design_rig(box_car, load_rig("R1"), load_weights("joint"), settings)
+        design_rig(box_car, r1_on_its_vehicle(), load_weights("joint"), settings)
     message = str(error.value)
     assert "ring" in message and "azimuth" in message
     sectors = uncovered_sectors(message)
@@ -176,7 +205,7 @@ def test_front_zone_only_leaves_the_rear_unseen(box_car):
     """Cameras on the front face cannot see through the body: the uncovered sectors are behind the car."""
     settings = DesignSettings(zones=("front",), lenses=(60.0,), yaw_step_deg=30.0)
     with pytest.raises(DesignInfeasible) as error:
-        design_rig(box_car, load_rig("R1"), load_weights("joint"), settings)
+        design_rig(box_car, r1_on_its_vehicle(), load_weights("joint"), settings)
     sectors = uncovered_sectors(str(error.value))
     assert sectors
     assert all(abs(azimuth) > 90 for _, _, azimuth in sectors), sectors
@@ -186,7 +215,7 @@ def test_triple_coverage_with_narrow_lenses_is_infeasible(box_car):
     """8 cameras of 30 deg cannot see every ring sector three times."""
     settings = DesignSettings(min_coverage=3, lenses=(30.0,), yaw_step_deg=30.0, time_limit=30.0)
     with pytest.raises(DesignInfeasible) as error:
-        design_rig(box_car, load_rig("R1"), load_weights("joint"), settings)
+        design_rig(box_car, r1_on_its_vehicle(), load_weights("joint"), settings)
     message = str(error.value)
     assert "--cameras" in message or "--min-coverage" in message  # what to change
 

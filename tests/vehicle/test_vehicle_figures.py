@@ -3,8 +3,9 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
-from rigopt.report.vehicle_figures import write_vehicle_figure
+from rigopt.report.vehicle_figures import _clip_to_box, _zone_patches, write_vehicle_figure
 from rigopt.rig.model import Camera, Rig
 
 PNG = b"\x89PNG"
@@ -30,3 +31,27 @@ def test_figure_with_rig(box_car, tmp_path):
 
 def test_figure_creates_missing_folders(box_car, tmp_path):
     assert is_png(write_vehicle_figure(box_car, tmp_path / "a" / "b" / "car.png"))
+
+
+def _area(polygon) -> float:
+    """Area (m^2) of a planar polygon (k, 3)."""
+    return 0.5 * float(np.linalg.norm(sum(np.cross(polygon[k], polygon[(k + 1) % len(polygon)])
+                                          for k in range(len(polygon)))))
+
+
+def test_zone_patches_cover_exactly_the_zones_of_the_body_mesh(box_car):
+    patches = _zone_patches(box_car)
+    assert len(patches) == len(box_car.mesh.faces)
+    area = {}
+    for face in patches:
+        for polygon, name in face:
+            area[name] = area.get(name, 0.0) + _area(polygon)
+    # front: the whole 1.8 x 1.2 m front face; side: both 4 x 1.2 m sides (mirrored); no roof zone.
+    assert area == pytest.approx({"front": 1.8 * 1.2, "side": 2 * 4.0 * 1.2})
+
+
+def test_clip_to_box_keeps_the_part_inside():
+    triangle = np.array([[0.0, 0.0, 0.0], [2.0, 0.0, 0.0], [0.0, 2.0, 0.0]])
+    inside = _clip_to_box(triangle, np.array([0.0, 0.0, -1.0]), np.array([1.0, 1.0, 1.0]))
+    assert _area(inside) == pytest.approx(1.0)  # the unit square lies wholly below the hypotenuse x + y = 2
+    assert len(_clip_to_box(triangle, np.array([3.0, 3.0, -1.0]), np.array([4.0, 4.0, 1.0]))) < 3

@@ -15,7 +15,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from rigopt.baselines.evaluation import (
+from rigopt.bench.evaluation import (
+    EVAL_RANGE,
     Detections,
     GroundTruth,
     SamplePrediction,
@@ -241,3 +242,25 @@ def test_bad_input_raises_data_error(found, truth, message):
 def test_bad_thresholds_raise_data_error():
     with pytest.raises(DataError, match="thresholds"):
         evaluate(*hand_case(), thresholds=(0.5, 0.0))
+
+
+# --- the benchmark's evaluation range ----------------------------------------------------------------
+
+
+def test_ground_truth_within_the_range_keeps_the_near_objects():
+    truth = GroundTruth(np.array(["a", "a", "b"]), np.array([CAR, TRUCK, BUS]),
+                       np.array([[30.0, 40.0], [30.0, 40.1], [-10.0, 0.0]]))
+    near = truth.within(50.0)
+    assert list(near.cls) == [CAR, BUS]  # (30, 40) is exactly 50 m away: kept; (30, 40.1) is not
+    assert list(near.sample) == ["a", "b"]
+    assert near.xy.shape == (2, 2)
+
+
+def test_a_prediction_within_the_range_keeps_each_kept_detection_whole():
+    prediction = SamplePrediction("s", np.array([[60.0, 0.0, 1.0], [1.0, 2.0, 0.5]]), np.array([TRUCK, CAR]),
+                                  np.array([0.9, 0.4]))
+    near = prediction.within()
+    assert EVAL_RANGE == 50.0
+    assert near.token == "s"
+    assert near.centers.tolist() == [[1.0, 2.0, 0.5]]
+    assert near.classes.tolist() == [CAR] and near.scores.tolist() == [0.4]

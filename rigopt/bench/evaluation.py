@@ -1,5 +1,8 @@
 """Centre-distance mean average precision of 3D detections, as the PCCR benchmark reports it (nuScenes style).
 
+Torch-free and detector-agnostic: any detector's per-sample predictions are scored here (the torch
+families in ``rigopt.baselines`` call it through ``baselines.inference``).
+
 For each class and each distance threshold ``d`` (default 0.5, 1, 2 and 4 m):
 
 1. The class's detections over all samples are ranked by score, highest first. Equal scores are ordered
@@ -22,7 +25,9 @@ detection has AP 0. mAP is the mean over the classes with ground truth of the cl
 thresholds (NaN when no class has ground truth).
 
 Unlike the nuScenes devkit, precision between recall points is not interpolated linearly: the "highest
-precision to the right" rule of step 4 is used, and detections are not filtered by range or count.
+precision to the right" rule of step 4 is used, and detections are not filtered by count. The benchmark's
+protocol keeps ground truth and detections within ``EVAL_RANGE`` m (bird's-eye distance) of the ego, as
+nuScenes keeps each class within its range (``GroundTruth.within``, ``SamplePrediction.within``).
 """
 
 from __future__ import annotations
@@ -39,6 +44,8 @@ from rigopt.errors import DataError
 from rigopt.metrics.reliability import DEFAULT_BOOTSTRAP, DEFAULT_SEED, finite_or_none
 
 DEFAULT_THRESHOLDS = (0.5, 1.0, 2.0, 4.0)
+#: Ground truth and detections are evaluated within this bird's-eye distance (m) of the ego.
+EVAL_RANGE = 50.0
 #: Recall points at which precision is read (r = i / RECALL_STEPS for i = 0..RECALL_STEPS).
 RECALL_STEPS = 100
 MIN_RECALL = 0.1
@@ -58,6 +65,13 @@ class SamplePrediction:
     classes: np.ndarray
     scores: np.ndarray
 
+    def within(self, radius: float = EVAL_RANGE) -> SamplePrediction:
+        """The detections whose centre lies within ``radius`` m (bird's-eye distance) of the ego."""
+        centers = np.asarray(self.centers, dtype=float)
+        keep = np.hypot(centers[:, 0], centers[:, 1]) <= radius
+        return SamplePrediction(self.token, centers[keep], np.asarray(self.classes)[keep],
+                                np.asarray(self.scores, dtype=float)[keep])
+
 
 @dataclass(frozen=True)
 class GroundTruth:
@@ -70,6 +84,11 @@ class GroundTruth:
 
     def __len__(self) -> int:
         return len(self.cls)
+
+    def within(self, radius: float = EVAL_RANGE) -> GroundTruth:
+        """The objects whose centre lies within ``radius`` m (bird's-eye distance) of the ego."""
+        keep = np.hypot(self.xy[:, 0], self.xy[:, 1]) <= radius
+        return GroundTruth(self.sample[keep], self.cls[keep], self.xy[keep])
 
     @classmethod
     def from_samples(cls, samples: Iterable[TrainingSample]) -> GroundTruth:

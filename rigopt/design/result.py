@@ -1,0 +1,108 @@
+"""What ``design_rig`` returns: the design, each stage's facts (MILP, refinement) and the comparisons, in
+one ``DesignResult`` from which the report writers and the command line take everything they show."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from rigopt.mounting.rules import RigCheck
+from rigopt.design.problem import ReferenceRig
+from rigopt.design.selection import Selection
+from rigopt.design.settings import DesignSettings
+from rigopt.metrics.calibration import Calibration
+from rigopt.metrics.ranking import TransferPrediction
+from rigopt.rig.model import Rig
+from rigopt.vehicle.model import Vehicle
+
+
+@dataclass(frozen=True)
+class RigSummary:
+    """A rig judged against the reference(s): predicted transfer from each, coverage (fraction of sector
+    points seen), and whether it meets the design's coverage requirements; ``check``: its mount checks when
+    they were run."""
+
+    rig: Rig
+    predictions: tuple[TransferPrediction, ...]
+    coverage: float
+    meets_requirements: bool
+    check: RigCheck | None = None
+
+    @property
+    def prediction(self) -> TransferPrediction:
+        """The worst (largest predicted drop) of the predictions: the single one without a fleet."""
+        return max(self.predictions, key=lambda p: p.predicted_drop)
+
+
+@dataclass(frozen=True)
+class MilpStage:
+    """The discrete stage's outcome: ``rig``, the selected cameras (they pass the mount ``check``);
+    ``selection``, the final MILP's answer (status, relative gap, objective, seconds); ``n_candidates``
+    valid candidates in all, ``n_offered`` of them offered to the MILP after pruning; ``repairs``, the
+    re-solves after removing cameras that failed the mount checks."""
+
+    rig: Rig
+    check: RigCheck
+    selection: Selection
+    n_candidates: int
+    n_offered: int
+    repairs: int
+
+    @property
+    def status(self) -> str:
+        """The final MILP's solver status (``optimal``, or how it stopped)."""
+        return self.selection.status
+
+    @property
+    def gap(self) -> float:
+        """The final MILP's relative optimality gap."""
+        return self.selection.gap
+
+
+@dataclass(frozen=True)
+class RefinementReport:
+    """What the continuous stage did. ``status``: one line saying it ("off", "off (fleet design)",
+    "accepted: IPOPT ..., k of n cameras moved, RigCD a -> b", "rejected: IPOPT ..., why");
+    ``accepted``: the refined rig replaced the MILP's; ``solver_status``: IPOPT's return status (None when
+    it did not run); ``cameras_moved``: cameras of the refined rig off their MILP pose; ``refined``: the
+    refined rig's summary when it was built and passed the mount checks (accepted or not)."""
+
+    status: str
+    accepted: bool = False
+    solver_status: str | None = None
+    cameras_moved: int = 0
+    refined: RigSummary | None = None
+
+
+@dataclass(frozen=True)
+class Comparisons:
+    """The design's yardsticks, judged like the design: ``naive_transfer``, each reference camera moved to
+    the nearest mount point facing its way (None when some camera finds none); ``rigs``, the rigs the
+    caller asked to compare with (by default the library's hand-designed rigs for the vehicle)."""
+
+    naive_transfer: RigSummary | None
+    rigs: tuple[RigSummary, ...]
+
+    @property
+    def best_rig(self) -> RigSummary | None:
+        """The compared rig with the smallest predicted drop; None without any."""
+        return min(self.rigs, key=lambda s: s.prediction.predicted_drop, default=None)
+
+
+@dataclass(frozen=True)
+class DesignResult:
+    """A design and everything about how it was reached: the ``design`` (the MILP's rig, ``milp.rig``, or
+    the accepted refinement), the MILP stage, the refinement report, the comparisons, the first
+    reference's own coverage (fraction of sector points it sees on its vehicle), the inputs (``vehicle``,
+    ``references`` on their vehicles, ``calibration``, ``settings``) and the design stages' wall time
+    ``seconds``."""
+
+    design: RigSummary
+    milp: MilpStage
+    refinement: RefinementReport
+    comparisons: Comparisons
+    reference_coverage: float
+    vehicle: Vehicle
+    references: tuple[ReferenceRig, ...]
+    calibration: Calibration
+    settings: DesignSettings
+    seconds: float
