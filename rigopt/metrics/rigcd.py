@@ -27,8 +27,8 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from rigopt.errors import RigoptError
-from rigopt.geometry import matrix_to_quaternion, quaternion_angle, sum_of_squares
-from rigopt.rig.model import Rig
+from rigopt.geometry import quaternion_angle, sum_of_squares
+from rigopt.rig.model import FOV, POSITION, QUATERNION, Rig, camera_columns
 
 DEFAULT_ALPHA = 0.9
 DEFAULT_LAMBDAS = (1.0, 1.0, 1.0)
@@ -45,24 +45,6 @@ def camera_costs(positions_a, rotations_a, fovs_a, positions_b, rotations_b, fov
     b = camera_columns(positions_b, rotations_b, fovs_b)[..., None, :]  # (8, ..., 1, Nb)
     return column_costs(a, b)
 
-
-#: Rows of :func:`camera_columns`: position (m), unit quaternion, FOV (deg).
-POSITION, QUATERNION, FOV = slice(0, 3), slice(3, 7), 7
-
-
-def camera_columns(positions, rotations, fovs) -> np.ndarray:
-    """Cameras as component-first columns: positions (..., N, 3) float m, rotations (..., N, 3, 3) float,
-    fovs (..., N) float deg -> (8, ..., N) float: x, y, z; qw, qx, qy, qz (unit, w >= 0); fov."""
-    p = np.asarray(positions, dtype=float)
-    q = matrix_to_quaternion(rotations)
-    q = q / np.sqrt(sum_of_squares(np.moveaxis(q, -1, 0)))[..., None]
-    f = np.asarray(fovs, dtype=float)
-    lead = np.broadcast_shapes(p.shape[:-1], q.shape[:-1], f.shape)
-    out = np.empty((8, *lead))
-    out[POSITION] = np.moveaxis(p, -1, 0)
-    out[QUATERNION] = np.moveaxis(q, -1, 0)
-    out[FOV] = f
-    return out
 
 
 def column_costs(a, b):
@@ -136,35 +118,28 @@ class RigCDBreakdown:
 
 
 class RigBatch:
-    """Many rigs as concatenated camera arrays, the input of the batched metric core.
+    """Many rigs as one array of camera columns, the input of the batched metric core.
 
-    positions : (C, 3) float metres; rotations : (C, 3, 3) float; fovs : (C,) float degrees;
-    counts : (n,) int cameras per rig, each >= 1; rig k owns rows ``offsets[k] : offsets[k] + counts[k]``.
-    ``columns`` (8, C) float: the cameras as :func:`camera_columns` (rotations as unit quaternions), built
-    once here.
+    columns : (8, C) float, the C cameras of all rigs as :func:`rigopt.rig.model.camera_columns` (position m,
+    unit quaternion, FOV deg); counts : (n,) int cameras per rig, each >= 1; rig k owns columns
+    ``offsets[k] : offsets[k] + counts[k]``.
     """
 
-    def __init__(self, positions, rotations, fovs, counts):
+    def __init__(self, columns, counts):
         self.counts = np.asarray(counts, dtype=int)
         if self.counts.ndim != 1 or len(self.counts) == 0 or np.any(self.counts < 1):
             raise RigoptError("a rig batch needs at least one rig and at least one camera per rig")
         self.offsets = np.cumsum(self.counts) - self.counts
-        self.positions = np.asarray(positions, dtype=float)
-        self.rotations = np.asarray(rotations, dtype=float)
-        self.fovs = np.asarray(fovs, dtype=float)
-        total = int(self.counts.sum())
-        if self.positions.shape != (total, 3) or self.rotations.shape != (total, 3, 3) or self.fovs.shape != (total,):
-            raise RigoptError(f"rig batch arrays must be ({total}, 3), ({total}, 3, 3) and ({total},) for "
-                              f"{total} cameras")
-        self.columns = np.ascontiguousarray(camera_columns(self.positions, self.rotations, self.fovs))
+        self.columns = np.ascontiguousarray(columns, dtype=float)
+        if self.columns.shape != (8, int(self.counts.sum())):
+            raise RigoptError(f"rig batch columns must be (8, {int(self.counts.sum())}), got {self.columns.shape}")
 
     @classmethod
     def from_rigs(cls, rigs: Sequence[Rig]) -> "RigBatch":
-        """The batch of ``rigs``, in order."""
+        """The batch of ``rigs``, in order (each rig's columns are built once and cached on the rig)."""
         if len(rigs) == 0:
             raise RigoptError("no rigs given; pass at least one rig")
-        return cls(np.concatenate([rig.positions for rig in rigs]), np.concatenate([rig.rotations for rig in rigs]),
-                   np.concatenate([rig.fovs for rig in rigs]), [len(rig.cameras) for rig in rigs])
+        return cls(np.concatenate([rig.columns for rig in rigs], axis=1), [len(rig.cameras) for rig in rigs])
 
     def __len__(self) -> int:
         return len(self.counts)

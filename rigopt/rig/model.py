@@ -8,10 +8,31 @@ from functools import cached_property
 import numpy as np
 
 from rigopt.errors import RigFileError
-from rigopt.geometry import is_rotation
+from rigopt.geometry import is_rotation, matrix_to_quaternion, sum_of_squares
 
 #: The benchmark's image size (width, height) in pixels.
 DEFAULT_IMAGE_SIZE = (1280, 720)
+
+#: Rows of :func:`camera_columns`: position (m), unit quaternion, FOV (deg).
+POSITION, QUATERNION, FOV = slice(0, 3), slice(3, 7), 7
+
+
+def camera_columns(positions, rotations, fovs) -> np.ndarray:
+    """Cameras as component-first columns, the form batched metrics work on.
+
+    positions : (..., N, 3) float m; rotations : (..., N, 3, 3) float; fovs : (..., N) float deg
+    -> (8, ..., N) float: x, y, z; qw, qx, qy, qz (unit quaternion of the rotation, w >= 0); fov.
+    """
+    p = np.asarray(positions, dtype=float)
+    q = matrix_to_quaternion(rotations)
+    q = q / np.sqrt(sum_of_squares(np.moveaxis(q, -1, 0)))[..., None]
+    f = np.asarray(fovs, dtype=float)
+    lead = np.broadcast_shapes(p.shape[:-1], q.shape[:-1], f.shape)
+    out = np.empty((8, *lead))
+    out[POSITION] = np.moveaxis(p, -1, 0)
+    out[QUATERNION] = np.moveaxis(q, -1, 0)
+    out[FOV] = f
+    return out
 
 
 def _frozen_array(values, shape, what: str) -> np.ndarray:
@@ -138,6 +159,12 @@ class Rig:
     def fovs(self) -> np.ndarray:
         """(N,) float: horizontal FOVs in degrees."""
         return _read_only(np.array([c.fov for c in self.cameras]))
+
+    @cached_property
+    def columns(self) -> np.ndarray:
+        """(8, N) float: the cameras as :func:`camera_columns` (position, unit quaternion, FOV), built once;
+        batched metrics concatenate these blocks."""
+        return _read_only(np.ascontiguousarray(camera_columns(self.positions, self.rotations, self.fovs)))
 
     def same_as(self, other: "Rig", atol: float = 1e-9) -> bool:
         """True when names, vehicles and every camera agree (arrays within ``atol``)."""
