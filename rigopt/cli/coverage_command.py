@@ -10,9 +10,7 @@ from typing import Optional
 import typer
 
 from rigopt.cli.app import app, console, print_json, print_table
-from rigopt.report.json_values import json_ready
 from rigopt.errors import RigoptError
-from rigopt.rig.library import load_rig
 
 
 def _out_dir(text: str) -> Path:
@@ -37,6 +35,7 @@ def _warn_inside(report) -> None:
 
 def _report(rig_name: str, vehicle: Optional[str]):
     from rigopt.coverage.measures import coverage_report
+    from rigopt.rig.library import load_rig
     from rigopt.vehicle.library import load_vehicle
 
     rig = load_rig(rig_name)
@@ -85,6 +84,7 @@ def coverage_command(
 def _write_out(out_dir: Path, data: dict, report, rig, other, comparison) -> list[Path]:
     from rigopt.report.coverage_figures import write_bev_figure, write_blind_figure, write_rings_figure
     from rigopt.report.coverage_html import write_html_report
+    from rigopt.report.json_values import json_ready
 
     try:
         json_path = out_dir / "coverage.json"

@@ -6,9 +6,7 @@ import sys
 from pathlib import Path
 from typing import Optional
 
-import numpy as np
 import typer
-from rich.console import Console
 
 from rigopt.cli.app import app, print_json, print_table
 from rigopt.cli.metric_commands import METRIC_HELP
@@ -49,6 +47,8 @@ RANGE_STEP = 10.0
 def parse_lenses(text: str) -> tuple[tuple[float, ...], tuple[float, float] | None]:
     """A lens catalogue ``"60,65,70"``, or a continuous range ``"60-120"`` (then the MILP picks among lenses
     every RANGE_STEP degrees and the refinement adjusts the FOV within the range). Returns (lenses, range)."""
+    import numpy as np
+
     if "-" in text.strip()[1:] and "," not in text:
         low_text, _, high_text = text.partition("-")
         low, high = parse_numbers(low_text, "--fov"), parse_numbers(high_text, "--fov")
@@ -84,6 +84,8 @@ def design_command(
     as_json: bool = typer.Option(False, "--json", help="Print the JSON summary."),
 ):
     """Design a rig on VEHICLE that minimises the calibrated RigCD to REF while covering what REF covers."""
+    from rich.console import Console
+
     from rigopt.design.designer import DesignSettings, design_rig
     from rigopt.metrics.calibration import load_weights
     from rigopt.report.design_report import design_dict, write_design_outputs

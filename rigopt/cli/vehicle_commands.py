@@ -3,15 +3,13 @@
 from __future__ import annotations
 
 from dataclasses import asdict
+from pathlib import Path
 from typing import Optional
 
 import typer
 
-from pathlib import Path
-
 from rigopt.cli.app import app, console, print_json, print_table, vehicle_app
 from rigopt.errors import RigoptError
-from rigopt.rig.library import load_rig
 
 
 @app.command("check")
@@ -22,6 +20,7 @@ def check_command(
 ):
     """Check that every camera can be mounted: on the surface, in a zone, housing and view clear of the body."""
     from rigopt.collision import check_rig
+    from rigopt.rig.library import load_rig
     from rigopt.vehicle.library import load_vehicle
 
     loaded = load_rig(rig)
@@ -68,6 +67,7 @@ def vehicle_show_command(
 ):
     """Draw top and side views of a vehicle with its zones coloured (and a rig's cameras)."""
     from rigopt.report.vehicle_figures import write_vehicle_figure
+    from rigopt.rig.library import load_rig
     from rigopt.vehicle.library import load_vehicle
 
     path = write_vehicle_figure(load_vehicle(name), out, load_rig(rig) if rig else None)
