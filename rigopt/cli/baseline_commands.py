@@ -134,6 +134,9 @@ def matrix_command(
     from rigopt.baselines.protocol import configured, transfer_matrix
     from rigopt.metrics.transfer import read_transfer
 
+    from rigopt.output import check_out_folder
+
+    check_out_folder(out, resume=True)
     config = configured(model_config(model, size), epochs)
     resolve_device(device)
     names = [n.strip() for text in [*rigs, *(more or [])] for n in text.split(",") if n.strip()]
@@ -170,13 +173,16 @@ def validate_command(
     from rigopt.metrics.calibration import load_weights
     from rigopt.report.json_values import json_ready
 
+    from rigopt.output import check_out_file, write_text_atomic
+
+    if out is not None:
+        check_out_file(out, suffixes=(".json",))
     family, calibration, rig = model_config(model).family, load_weights(weights, metric), load_design(design)
     resolve_device(device)
     with console.status("validating") as status:
         result = validate_design(rig, ref, family, data, calibration, runs, device, status.update)
     if out is not None:
-        out.parent.mkdir(parents=True, exist_ok=True)
-        out.write_text(json.dumps(json_ready(result), indent=1) + "\n")
+        write_text_atomic(out, json.dumps(json_ready(result), indent=1) + "\n")
     if as_json:
         print_json(result)
         return

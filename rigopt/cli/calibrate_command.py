@@ -8,7 +8,7 @@ from typing import Optional
 
 import typer
 
-from rigopt.cli.app import app, console, print_json, print_table
+from rigopt.cli.app import FORCE_HELP, app, console, print_json, print_table
 from rigopt.cli.metric_commands import METRIC_HELP
 from rigopt.errors import RigoptError
 
@@ -37,14 +37,18 @@ def calibrate_command(
     solver: str = typer.Option("lbfgsb", help="Whose beta is reported: lbfgsb (the benchmark's) or qp (cvxpy)."),
     metric: str = typer.Option("rigcd", "--metric", help=METRIC_HELP),
     out: Optional[Path] = typer.Option(None, help="Folder for the JSON, pairs CSV, weights and figures."),
+    force: bool = typer.Option(False, "--force", help=FORCE_HELP),
     as_json: bool = typer.Option(False, "--json", help="Print the JSON report instead of tables."),
 ):
     """Fit calibrated RigCD (or RigCD+) per detector and jointly; report reliability on control and held-out pairs."""
     from rigopt.metrics.protocol import CONTROL_RIGS, calibrate
     from rigopt.metrics.reliability import DEFAULT_BOOTSTRAP, DEFAULT_SEED
     from rigopt.metrics.transfer import read_transfer
+    from rigopt.output import atomic_folder, check_out_folder, published
     from rigopt.report.calibration_tables import study_dict, write_study_tables
 
+    if out is not None:
+        check_out_folder(out, force=force)
     bootstrap = DEFAULT_BOOTSTRAP if bootstrap is None else bootstrap
     seed = DEFAULT_SEED if seed is None else seed
     control_rigs = CONTROL_RIGS if control is None else tuple(r.strip() for r in control.split(",") if r.strip())
@@ -53,9 +57,10 @@ def calibrate_command(
     if out is not None:
         from rigopt.report.calibration_figures import write_calibration_figures
 
-        out.mkdir(parents=True, exist_ok=True)
-        (out / "calibration.json").write_text(json.dumps(report, indent=2) + "\n")
-        written = [out / "calibration.json", *write_study_tables(study, out), *write_calibration_figures(study, out)]
+        with atomic_folder(out, force=force) as work:
+            (work / "calibration.json").write_text(json.dumps(report, indent=2) + "\n")
+            written = published([work / "calibration.json", *write_study_tables(study, work),
+                                 *write_calibration_figures(study, work)], work, out)
         if not as_json:
             console.print(f"wrote {len(written)} files to {out}")
     if as_json:

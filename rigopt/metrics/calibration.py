@@ -29,7 +29,7 @@ from typing import Sequence
 
 import numpy as np
 
-from rigopt.errors import DataError, RigoptError, unknown_name
+from rigopt.errors import DataError, RigoptError, not_utf8, unknown_name
 from rigopt.metrics.rigcd import DEFAULT_ALPHA, rigcd_matrix, tie_broken_lambdas
 from rigopt.resources import data_dir
 from rigopt.rig.model import Rig
@@ -242,6 +242,8 @@ def load_weights(name_or_path, metric: str = "rigcd") -> Calibration:
         data = json.loads(path.read_text())
     except OSError as error:
         raise DataError(f"{path}: cannot read the weights file ({error.strerror})") from None
+    except UnicodeDecodeError as error:
+        raise not_utf8(path, "weights file", error) from None
     except json.JSONDecodeError as error:
         raise DataError(f"{path}: not valid JSON (line {error.lineno}: {error.msg})") from None
     calibration = _calibration_from_dict(data, path)

@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from rigopt.errors import RigFileError
+from rigopt.errors import RigFileError, not_utf8
 from rigopt.geometry import carla_to_iso, iso_to_carla
 from rigopt.rig.model import DEFAULT_IMAGE_SIZE, Camera, Rig
 
@@ -113,6 +113,8 @@ def read_rig(path, name: str | None = None) -> Rig:
         text = path.read_text()
     except OSError as error:
         raise RigFileError(f"{path}: cannot read the rig file ({error.strerror})") from None
+    except UnicodeDecodeError as error:
+        raise not_utf8(path, "rig file", error, RigFileError) from None
     try:
         data = json.loads(text)
     except json.JSONDecodeError as error:
