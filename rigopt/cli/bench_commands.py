@@ -102,6 +102,10 @@ def show_command(
     samples = read_dataset(root)
     if not 0 <= sample < len(samples):
         raise RigoptError(f"--sample must be in 0..{len(samples) - 1} for {root}, got {sample}")
+    missing = [str(p) for p in samples[sample].images.values() if not Path(p).is_file()]
+    if missing:
+        raise RigoptError(f"{root}: sample {sample} lacks its image {missing[0]}; remove the rig's folder and generate "
+                          "it again with rigopt bench generate")
     with atomic_file(out) as work:
         write_sample_figure(samples[sample], work, f"{rig}: {samples[sample].scene}, sample {sample}")
     console.print(f"wrote {out}")

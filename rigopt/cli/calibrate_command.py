@@ -52,7 +52,9 @@ def calibrate_command(
     bootstrap = DEFAULT_BOOTSTRAP if bootstrap is None else bootstrap
     seed = DEFAULT_SEED if seed is None else seed
     control_rigs = CONTROL_RIGS if control is None else tuple(r.strip() for r in control.split(",") if r.strip())
-    study = calibrate(read_transfer(results), control_rigs, _rig_lookup(rigs), bootstrap, seed, solver, metric)
+    table = read_transfer(results)
+    _check_cross_rig_pairs(table, control_rigs, results)
+    study = calibrate(table, control_rigs, _rig_lookup(rigs), bootstrap, seed, solver, metric)
     report = study_dict(study)
     if out is not None:
         from rigopt.report.calibration_figures import write_calibration_figures
@@ -67,6 +69,21 @@ def calibrate_command(
         print_json(report)
         return
     _print_tables(report)
+
+
+def _check_cross_rig_pairs(table, control_rigs: tuple[str, ...], source: Path) -> None:
+    """Every detector needs cross-rig results (trained on one rig, tested on another) among the control rigs,
+    or its fit has nothing to fit and would silently return default weights."""
+    cross = table.train != table.test
+    if not cross.any():
+        raise RigoptError(f"--results {source}: only the diagonal (each rig tested on itself); calibration needs "
+                          "cross-rig results: detectors trained on one rig and tested on others")
+    control = set(control_rigs)
+    for model in sorted(set(table.model.tolist())):
+        mine = (table.model == model) & cross
+        if not any(a in control and b in control for a, b in zip(table.train[mine], table.test[mine])):
+            raise RigoptError(f"--results {source}: {model} has no cross-rig result among the control rigs "
+                              f"({', '.join(control_rigs)}); add such results or name other rigs with --control")
 
 
 def _print_tables(report: dict) -> None:

@@ -266,7 +266,13 @@ def _calibration_from_dict(data, path: Path) -> Calibration:
     if values["alpha"] > 1:
         raise DataError(f"{path}: alpha must be in [0, 1], got {values['alpha']}")
     beta = data.get("beta", {})
-    beta = tuple(float(beta.get(k, np.nan)) for k in FEATURES) if isinstance(beta, dict) else (np.nan,) * 4
+    if not isinstance(beta, dict):
+        raise DataError(f"{path}: beta must be an object of numbers ({', '.join(FEATURES)}), got {beta!r}")
+    for key, value in beta.items():
+        if key in FEATURES and (isinstance(value, bool) or not isinstance(value, (int, float))):
+            raise DataError(f"{path}: beta.{key} must be a number, got {value!r}; write a number or leave the key "
+                            "out")
+    beta = tuple(float(beta.get(k, np.nan)) for k in FEATURES)
     metric = data.get("metric", "rigcd")
     if metric not in METRICS:
         raise DataError(f"{path}: metric must be one of {', '.join(METRICS)}, got {metric!r}")
