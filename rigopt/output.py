@@ -16,6 +16,7 @@ import contextlib
 import errno
 import os
 import shutil
+import tempfile
 from pathlib import Path
 from typing import Iterator, Sequence
 
@@ -45,9 +46,11 @@ def _writable_parent(path: Path, option: str) -> None:
         parent = parent.parent
     if not parent.is_dir():
         raise RigoptError(f"{option} {path}: {parent} is a file, not a folder; choose a place inside a folder")
-    if not os.access(parent, os.W_OK | os.X_OK):
-        raise RigoptError(f"{option} {path}: cannot write in {parent} (permission denied); choose a place you can "
-                          "write to")
+    try:  # a real attempt: permissions, read-only and special file systems (/proc), even for root
+        probe = tempfile.mkdtemp(prefix=".rigopt-probe-", dir=parent)
+    except OSError as error:
+        raise RigoptError(f"{option} {path}: cannot write in {parent} ({_io_problem(error)})") from None
+    os.rmdir(probe)
 
 
 def check_out_folder(path, *, force: bool = False, resume: bool = False, option: str = "--out") -> Path:

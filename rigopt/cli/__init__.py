@@ -115,6 +115,8 @@ def run(argv: list[str] | None = None) -> int:
     except OSError as error:
         print(f"rigopt: error: {_os_message(error)}", file=sys.stderr)
         return INPUT_ERROR
+    if result == INTERRUPTED:  # typer turns Ctrl-C inside a command into this exit code
+        print("rigopt: interrupted", file=sys.stderr)
     return result if isinstance(result, int) else 0
 
 

@@ -26,6 +26,8 @@ app.add_typer(vehicle_app, name="vehicle")
 console = Console()
 if not console.is_terminal:
     console.width = 160  # piped or captured output: wide enough for every table
+#: Progress bars, spinners and warnings: stderr, so that stdout holds only results.
+status_console = Console(stderr=True)
 
 
 def print_json(data) -> None:

@@ -11,7 +11,7 @@ from typing import List, Optional
 
 import typer
 
-from rigopt.cli.app import app, console, print_json, print_table
+from rigopt.cli.app import app, console, print_json, print_table, status_console
 from rigopt.cli.bench_commands import bench_app
 from rigopt.cli.metric_commands import METRIC_HELP
 from rigopt.errors import RigoptError
@@ -36,7 +36,7 @@ def training_bar(label: str):
 
     columns = (TextColumn("{task.description}"), BarColumn(), TextColumn("{task.completed}/{task.total} steps"),
                TimeElapsedColumn(), TimeRemainingColumn())
-    with Progress(*columns, console=console, transient=True) as progress:
+    with Progress(*columns, console=status_console, transient=True) as progress:
         task = progress.add_task(label, total=None)
 
         def step(epoch: int, done: int, total: int, loss: float) -> None:
@@ -100,7 +100,7 @@ def evaluate_command(
     family = model_config(model).family
     if checkpoint is None:
         checkpoint = run_folder(runs if runs is not None else data / "runs", family, trained_on or rig) / "checkpoint.pt"
-    with console.status(f"evaluating {checkpoint} on {rig}/{split}"):
+    with status_console.status(f"evaluating {checkpoint} on {rig}/{split}"):
         metrics = evaluate_on(checkpoint, data, rig, device, family, split)
     if as_json:
         print_json(metrics)
@@ -179,7 +179,7 @@ def validate_command(
         check_out_file(out, suffixes=(".json",))
     family, calibration, rig = model_config(model).family, load_weights(weights, metric), load_design(design)
     resolve_device(device)
-    with console.status("validating") as status:
+    with status_console.status("validating") as status:
         result = validate_design(rig, ref, family, data, calibration, runs, device, status.update)
     if out is not None:
         write_text_atomic(out, json.dumps(json_ready(result), indent=1) + "\n")

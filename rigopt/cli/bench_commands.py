@@ -7,7 +7,7 @@ from typing import List
 
 import typer
 
-from rigopt.cli.app import PICTURE_SUFFIXES, app, console
+from rigopt.cli.app import PICTURE_SUFFIXES, app, console, status_console
 from rigopt.errors import RigoptError
 
 #: Largest image side ``bench generate`` renders (px); larger sizes are refused with a memory estimate.
@@ -65,11 +65,11 @@ def generate_command(
     except OSError as error:
         raise RigoptError(f"--out {out}: cannot create the output folder ({error.strerror})") from None
 
-    ego_mesh_of = ego_mesh_lookup(lambda message: console.print(f"[yellow]warning:[/] {message}"))
+    ego_mesh_of = ego_mesh_lookup(lambda message: status_console.print(f"[yellow]warning:[/] {message}"))
 
     seeds = [s + seed * 10_000_000 for s in split_seeds(split, scenes)]
     scene_list = [generate_scene(s, split, frames, name=f"scene-{split}-{k:04d}-s{s}") for k, s in enumerate(seeds)]
-    with Progress(console=console, transient=True) as progress:
+    with Progress(console=status_console, transient=True) as progress:
         task = progress.add_task("rendering", total=len(loaded) * len(scene_list))
 
         def step(message: str) -> None:
