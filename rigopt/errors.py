@@ -23,3 +23,9 @@ class DataError(RigoptError, ValueError):
 def unknown_name(kind: str, name: str, valid) -> UnknownNameError:
     """Build the error for an unknown ``name`` of ``kind``, listing the ``valid`` names."""
     return UnknownNameError(f"unknown {kind} {name!r}; valid names: {', '.join(valid)}")
+
+
+def not_utf8(path, what: str, error: UnicodeDecodeError, kind: type[RigoptError] = DataError) -> RigoptError:
+    """Build the error for a ``what`` file at ``path`` that is not UTF-8 text (``error`` from decoding it)."""
+    return kind(f"{path}: the {what} is not UTF-8 text (byte {error.start} is {error.object[error.start]:#04x}); "
+                "save it as UTF-8")

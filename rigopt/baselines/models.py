@@ -57,7 +57,8 @@ def load_checkpoint(path, family: str | None = None) -> dict:
     try:
         state = torch.load(path, map_location="cpu", weights_only=True)  # tensors and plain data only
     except Exception as error:  # torch raises many kinds for a damaged file
-        raise DataError(f"{path}: not a readable rigopt checkpoint ({type(error).__name__}: {error})") from None
+        raise DataError(f"{path}: not a readable rigopt checkpoint (torch cannot load it: {type(error).__name__}); "
+                        "train one with rigopt bench train or pass another --checkpoint") from None
     if not isinstance(state, dict) or not {"family", "config", "model", "rig"} <= state.keys():
         raise DataError(f"{path}: not a rigopt detector checkpoint (it lacks family, config, model or rig)")
     if family is not None and state["family"] != family:

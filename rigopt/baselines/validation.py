@@ -43,7 +43,7 @@ def load_design(path) -> Rig:
         if not rig_path.is_file():
             try:
                 rig_path = Path(json.loads(path.read_text())["rig_file"])
-            except (json.JSONDecodeError, KeyError, TypeError):
+            except (json.JSONDecodeError, UnicodeDecodeError, KeyError, TypeError):
                 raise RigFileError(f"{path}: a report without rig_file and no rig.json beside it") from None
     rig = load_rig(rig_path)
     if rig_path.stem in ("rig", "report"):

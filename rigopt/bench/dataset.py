@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from rigopt.bench.scene_model import CLASSES
-from rigopt.errors import DataError
+from rigopt.errors import DataError, not_utf8
 from rigopt.geometry import matrix_to_quaternion, quaternion_to_matrix, rot_z
 from rigopt.rig.nuscenes_format import nuscenes_token
 
@@ -100,6 +100,8 @@ def _load(folder: Path, name: str) -> list[dict]:
         return json.loads(path.read_text())
     except OSError:
         raise DataError(f"{path}: missing table; a dataset folder needs {', '.join(TABLES[:8])}") from None
+    except UnicodeDecodeError as error:
+        raise not_utf8(path, "dataset table", error) from None
     except json.JSONDecodeError as error:
         raise DataError(f"{path}: not valid JSON (line {error.lineno}: {error.msg})") from None
 

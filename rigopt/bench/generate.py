@@ -22,6 +22,7 @@ import numpy as np
 from rigopt.bench.dataset import pose_record, box_rotation, save_tables, static_tables, visibility_token
 from rigopt.bench.scene_model import CLASSES, Boxes, Scene
 from rigopt.errors import RigoptError
+from rigopt.output import atomic_file, atomic_folder
 from rigopt.rig.model import Rig
 from rigopt.rig.nuscenes_format import nuscenes_token, write_nuscenes_calibration
 
@@ -91,8 +92,8 @@ def scene_records(scene: Scene, rig: Rig, root: Path, size: tuple[int, int], ego
         for camera in rig.cameras:
             data_token = nuscenes_token("sample_data", f"{scene.name}/{k}/{camera.id}")
             filename = f"samples/{camera.id}/{data_token}.png"
-            (root / filename).parent.mkdir(parents=True, exist_ok=True)
-            Image.fromarray(rendered[camera.id].rgb).save(root / filename)
+            with atomic_file(root / filename) as work:  # an image on disk is always complete
+                Image.fromarray(rendered[camera.id].rgb).save(work, format="PNG")
             tables["sample_data"].append({
                 "token": data_token, "sample_token": sample_tokens[k], "ego_pose_token": ego_token,
                 "calibrated_sensor_token": nuscenes_token("calibrated_sensor", camera.id), "filename": filename,
@@ -150,14 +151,20 @@ def generate_split(rigs: Sequence[Rig], scenes: Sequence[Scene], out, size: tupl
 
 
 def assemble(root: Path, rig: Rig, split: str, size: tuple[int, int]) -> Path:
-    """Write the tables of ``root`` from all its scene parts, the rig's calibration and the fixed tables."""
+    """Write the tables of ``root`` from all its scene parts, the rig's calibration and the fixed tables.
+
+    The table folder ``v1.0-<split>`` is replaced whole (written beside it, then renamed), so that it always
+    describes complete scenes only: an interrupted run leaves the previous tables (or none) and the parts of
+    the scenes it finished, which a rerun skips.
+    """
     version = f"v1.0-{split}"
     tables = static_tables()
     for part in sorted((root / ".parts").glob("*.json")):
         for name, records in json.loads(part.read_text()).items():
             tables.setdefault(name, []).extend(records)
-    folder = save_tables(root, version, tables)
-    write_nuscenes_calibration(rig, folder, image_size=size)
+    with atomic_folder(root / version, force=True) as work:
+        save_tables(work.parent, work.name, tables)
+        write_nuscenes_calibration(rig, work, image_size=size)
     return root
 
 

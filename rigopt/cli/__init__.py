@@ -1,7 +1,15 @@
-"""rigopt's command line: thin commands over the library. ``main`` is the console script."""
+"""rigopt's command line: thin commands over the library. ``main`` is the console script.
+
+stdout carries only what rigopt itself prints (tables, JSON, "wrote" lines): ``main`` keeps a private
+duplicate of file descriptor 1 for Python's ``sys.stdout`` and points descriptor 1 at stderr, so whatever a
+C library prints there (HiGHS's "Running HiGHS ..." banner, IPOPT) lands on stderr. Every input error,
+including click's usage errors, is one ``rigopt: error: ...`` line on stderr and exit code 2.
+"""
 
 from __future__ import annotations
 
+import errno
+import os
 import sys
 
 from rigopt.cli.app import app
@@ -11,11 +19,109 @@ from rigopt.cli import (  # noqa: F401  (importing registers the commands)
 )
 from rigopt.errors import RigoptError
 
+#: Exit code of bad input (as argparse and click use).
+INPUT_ERROR = 2
+#: Exit code after Ctrl-C (128 + SIGINT).
+INTERRUPTED = 130
 
-def main() -> None:
-    """Run the CLI; input errors print one line on stderr and exit with code 2."""
+
+class _CStdoutToStderr:
+    """Point file descriptor 1 at stderr while ``sys.stdout`` writes to a private duplicate of it."""
+
+    def __init__(self) -> None:
+        self.saved_fd = None
+        self.original = sys.stdout
+
+    def __enter__(self) -> "_CStdoutToStderr":
+        try:
+            sys.stdout.flush()
+            saved = os.dup(1)
+        except (OSError, ValueError, AttributeError):  # no descriptor 1 (closed, or a fake stream)
+            return self
+        try:
+            os.dup2(2, 1)
+        except OSError:  # no descriptor 2: leave everything as it was
+            os.close(saved)
+            return self
+        self.saved_fd = saved
+        encoding = getattr(self.original, "encoding", None) or "utf-8"
+        errors = getattr(self.original, "errors", None) or "strict"
+        line_buffering = bool(getattr(self.original, "line_buffering", False))
+        sys.stdout = open(os.dup(saved), "w", buffering=1 if line_buffering else -1, encoding=encoding, errors=errors)
+        return self
+
+    def __exit__(self, *exc) -> None:
+        if self.saved_fd is None:
+            return
+        private, sys.stdout = sys.stdout, self.original
+        try:
+            private.close()  # flushes
+        except OSError:  # a closed pipe (rigopt ... | head): the reader has what it wanted
+            pass
+        os.dup2(self.saved_fd, 1)
+        os.close(self.saved_fd)
+
+
+def _usage_message(error) -> str:
+    """A click usage error as one line, with where to read about the command."""
+    message = " ".join(error.format_message().split())
+    if error.ctx is not None:
+        message += f" (see '{error.ctx.command_path} --help')"
+    return message
+
+
+def _os_message(error: OSError) -> str:
+    """An operating-system error that reached the top as one line naming the file and the fix."""
+    where = f"{error.filename}: " if error.filename else ""
+    if error.errno == errno.ENOSPC:
+        return f"{where}no space left on the device; free some space or write elsewhere (--out)"
+    if error.errno in (errno.EACCES, errno.EPERM, errno.EROFS):
+        return f"{where}permission denied; choose a place you can write to (--out) or read"
+    return f"{where}{error.strerror or error}"
+
+
+def run(argv: list[str] | None = None) -> int:
+    """Run the CLI on ``argv`` (default: the process's arguments) and return the exit code."""
+    import importlib
+
+    import typer
+
+    # click's exceptions, wherever this typer takes click from (click itself, or its own copy)
+    click = importlib.import_module(typer.BadParameter.__module__)
     try:
-        app()
+        result = app(args=argv, prog_name="rigopt", standalone_mode=False)
     except RigoptError as error:
         print(f"rigopt: error: {error}", file=sys.stderr)
-        sys.exit(2)
+        return INPUT_ERROR
+    except getattr(click, "NoArgsIsHelpError", ()) as error:  # a command group without a command: its help
+        text = error.ctx.get_help()  # typer's rich help prints itself and returns ""
+        if text:
+            print(text)
+        return INPUT_ERROR
+    except click.UsageError as error:
+        print(f"rigopt: error: {_usage_message(error)}", file=sys.stderr)
+        return INPUT_ERROR
+    except click.ClickException as error:
+        print(f"rigopt: error: {' '.join(error.format_message().split())}", file=sys.stderr)
+        return INPUT_ERROR
+    except (typer.Abort, KeyboardInterrupt):
+        print("rigopt: interrupted", file=sys.stderr)
+        return INTERRUPTED
+    except BrokenPipeError:
+        return 0  # the reader of stdout closed it (rigopt ... | head): not an error of rigopt's
+    except MemoryError:
+        print("rigopt: error: out of memory; ask for less (smaller sizes, fewer items)", file=sys.stderr)
+        return INPUT_ERROR
+    except OSError as error:
+        print(f"rigopt: error: {_os_message(error)}", file=sys.stderr)
+        return INPUT_ERROR
+    if result == INTERRUPTED:  # typer turns Ctrl-C inside a command into this exit code
+        print("rigopt: interrupted", file=sys.stderr)
+    return result if isinstance(result, int) else 0
+
+
+def main() -> None:
+    """The console script: run the CLI with C-level stdout diverted to stderr, exit with its code."""
+    with _CStdoutToStderr():
+        code = run()
+    sys.exit(code)

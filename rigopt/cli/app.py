@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 
 import typer
 from rich.console import Console
@@ -25,6 +26,8 @@ app.add_typer(vehicle_app, name="vehicle")
 console = Console()
 if not console.is_terminal:
     console.width = 160  # piped or captured output: wide enough for every table
+#: Progress bars, spinners and warnings: stderr, so that stdout holds only results.
+status_console = Console(stderr=True)
 
 
 def print_json(data) -> None:
@@ -41,3 +44,21 @@ def print_table(title: str, columns: list[str], rows: list[list]) -> None:
     for row in rows:
         table.add_row(*(f"{v:.3f}" if isinstance(v, float) else str(v) for v in row))
     console.print(table)
+
+
+def more_than(low: float, unit: str = "", high: float = math.inf):
+    """An option callback that refuses, at parse time, a number not in (low, high] (and NaN or inf)."""
+    def check(value):
+        if value is None:
+            return value
+        if not math.isfinite(value) or not low < value <= high:
+            upper = f" and at most {high:g}{unit}" if math.isfinite(high) else ""
+            raise typer.BadParameter(f"must be a number more than {low:g}{unit}{upper}, got {value:g}")
+        return value
+    return check
+
+
+#: Picture formats the figure writers (matplotlib) are offered for; the extension of --out picks one.
+PICTURE_SUFFIXES = (".png", ".pdf", ".svg", ".jpg", ".jpeg")
+
+FORCE_HELP = "Replace an existing output folder whole (without it, an existing non-empty folder is refused)."

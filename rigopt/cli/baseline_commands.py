@@ -11,7 +11,7 @@ from typing import List, Optional
 
 import typer
 
-from rigopt.cli.app import app, console, print_json, print_table
+from rigopt.cli.app import app, console, print_json, print_table, status_console
 from rigopt.cli.bench_commands import bench_app
 from rigopt.cli.metric_commands import METRIC_HELP
 from rigopt.errors import RigoptError
@@ -37,7 +37,7 @@ def training_bar(label: str):
 
     columns = (TextColumn("{task.description}"), BarColumn(), TextColumn("{task.completed}/{task.total} steps"),
                TimeElapsedColumn(), TimeRemainingColumn())
-    with Progress(*columns, console=console, transient=True) as progress:
+    with Progress(*columns, console=status_console, transient=True) as progress:
         task = progress.add_task(label, total=None)
 
         def step(epoch: int, done: int, total: int, loss: float) -> None:
@@ -101,7 +101,7 @@ def evaluate_command(
     family = model_config(model).family
     if checkpoint is None:
         checkpoint = run_folder(runs if runs is not None else data / "runs", family, trained_on or rig) / "checkpoint.pt"
-    with console.status(f"evaluating {checkpoint} on {rig}/{split}"):
+    with status_console.status(f"evaluating {checkpoint} on {rig}/{split}"):
         metrics = evaluate_on(checkpoint, data, rig, device, family, split)
     if as_json:
         print_json(metrics)
@@ -135,6 +135,9 @@ def matrix_command(
     from rigopt.baselines.protocol import configured, transfer_matrix
     from rigopt.metrics.transfer import read_transfer
 
+    from rigopt.output import check_out_folder
+
+    check_out_folder(out, resume=True)
     config = configured(model_config(model, size), epochs)
     resolve_device(device)
     names = [n.strip() for text in [*rigs, *(more or [])] for n in text.split(",") if n.strip()]
@@ -171,13 +174,16 @@ def validate_command(
     from rigopt.metrics.calibration import load_weights
     from rigopt.report.json_values import json_ready
 
+    from rigopt.output import check_out_file, write_text_atomic
+
+    if out is not None:
+        check_out_file(out, suffixes=(".json",))
     family, calibration, rig = model_config(model).family, load_weights(weights, metric), load_design(design)
     resolve_device(device)
-    with console.status("validating") as status:
+    with status_console.status("validating") as status:
         result = validate_design(rig, ref, family, data, calibration, runs, device, status.update)
     if out is not None:
-        out.parent.mkdir(parents=True, exist_ok=True)
-        out.write_text(json.dumps(json_ready(result), indent=1) + "\n")
+        write_text_atomic(out, json.dumps(json_ready(result), indent=1) + "\n")
     if as_json:
         print_json(result)
         return

@@ -7,8 +7,27 @@ from typing import List
 
 import typer
 
-from rigopt.cli.app import app, console
+from rigopt.cli.app import PICTURE_SUFFIXES, app, console, status_console
 from rigopt.errors import RigoptError
+
+#: Largest image side ``bench generate`` renders (px); larger sizes are refused with a memory estimate.
+MAX_SIDE = 8192
+#: A lower bound of the bytes the renderer holds per pixel of one image: eight float64 values (ray direction,
+#: hit point, depth, object id) while the image is rendered.
+BYTES_PER_PIXEL = 64
+
+
+def render_size(text: str) -> tuple[int, int]:
+    """``--size`` as (width, height), refused beyond MAX_SIDE with the memory one image would take."""
+    from rigopt.cli.rig_commands import parse_image_size
+
+    width, height = parse_image_size(text)
+    if max(width, height) > MAX_SIDE:
+        gib = width * height * BYTES_PER_PIXEL / 2**30
+        raise RigoptError(f"--size {text}: rendering one {width}x{height} image needs at least {gib:,.0f} GiB "
+                          f"of memory; use at most {MAX_SIDE} pixels a side (e.g. 1600x900)")
+    return width, height
+
 
 bench_app = typer.Typer(help="The synthetic multi-rig benchmark: identical scenes under any rig.", no_args_is_help=True)
 app.add_typer(bench_app, name="bench")
@@ -20,11 +39,12 @@ def generate_command(
                                                        "as arguments (--rigs R1 R1-f design.json) or commas."),
     more: List[str] = typer.Argument(None, hidden=True),
     split: str = typer.Option("mini", help="Split: train, val, test or mini (scenes never shared between splits)."),
-    scenes: int = typer.Option(2, help="Number of scenes."),
-    out: Path = typer.Option(..., "--out", help="Output folder: <out>/<rig>/<split>/ per rig."),
-    size: str = typer.Option("160x90", help="Image size WIDTHxHEIGHT in pixels."),
-    frames: int = typer.Option(40, help="Samples per scene (2 Hz)."),
-    seed: int = typer.Option(0, help="Seed offset of the scenes."),
+    scenes: int = typer.Option(2, min=1, help="Number of scenes."),
+    out: Path = typer.Option(..., "--out", help="Output folder: <out>/<rig>/<split>/ per rig (resumable: a rerun "
+                                                "renders only the scenes not finished)."),
+    size: str = typer.Option("160x90", help=f"Image size WIDTHxHEIGHT in pixels (at most {MAX_SIDE} a side)."),
+    frames: int = typer.Option(40, min=1, help="Samples per scene (2 Hz)."),
+    seed: int = typer.Option(0, min=0, help="Seed offset of the scenes (0 or more)."),
 ):
     """Render the same scenes under every rig and write images and nuScenes tables (resumable)."""
     from rich.progress import Progress
@@ -32,23 +52,23 @@ def generate_command(
     from rigopt.bench.generate import ego_mesh_lookup, generate_split
     from rigopt.bench.render import render_rig
     from rigopt.bench.scenes import split_scenes
-    from rigopt.cli.rig_commands import parse_image_size
     from rigopt.rig.library import load_rig
 
-    if scenes < 1 or frames < 1:
-        raise RigoptError(f"--scenes and --frames must be at least 1, got {scenes} and {frames}")
+    from rigopt.output import check_out_folder
+
+    check_out_folder(out, resume=True)
+    width_height = render_size(size)
     names = [n.strip() for text in [*rigs, *(more or [])] for n in text.split(",") if n.strip()]
     loaded = [load_rig(name) for name in names]
-    width_height = parse_image_size(size)
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as error:
-        raise RigoptError(f"{out}: cannot create the output folder ({error.strerror})") from None
+        raise RigoptError(f"--out {out}: cannot create the output folder ({error.strerror})") from None
 
-    ego_mesh_of = ego_mesh_lookup(lambda message: console.print(f"[yellow]warning:[/] {message}"))
+    ego_mesh_of = ego_mesh_lookup(lambda message: status_console.print(f"[yellow]warning:[/] {message}"))
 
     scene_list = split_scenes(split, scenes, frames, seed)
-    with Progress(console=console, transient=True) as progress:
+    with Progress(console=status_console, transient=True) as progress:
         task = progress.add_task("rendering", total=len(loaded) * len(scene_list))
 
         def step(message: str) -> None:
@@ -66,11 +86,14 @@ def show_command(
     rig: str = typer.Option(..., "--rig", help="Rig name (the folder under <out>)."),
     sample: int = typer.Option(0, "--sample", help="Sample index, in scene and time order."),
     split: str = typer.Option("mini", help="Split folder under the rig."),
-    out: Path = typer.Option(..., "--out", help="PNG file to write."),
+    out: Path = typer.Option(..., "--out", help="Picture to write: .png (or .pdf, .svg, .jpg)."),
 ):
     """Tile a sample's camera images with its projected boxes, and a bird's-eye view of the boxes."""
     from rigopt.bench.dataset import read_dataset
+    from rigopt.output import atomic_file, check_out_file
     from rigopt.report.bench_figures import write_sample_figure
+
+    out = check_out_file(out, suffixes=PICTURE_SUFFIXES)
 
     root = data / rig / split
     if not root.is_dir():
@@ -78,5 +101,10 @@ def show_command(
     samples = read_dataset(root)
     if not 0 <= sample < len(samples):
         raise RigoptError(f"--sample must be in 0..{len(samples) - 1} for {root}, got {sample}")
-    path = write_sample_figure(samples[sample], out, f"{rig}: {samples[sample].scene}, sample {sample}")
-    console.print(f"wrote {path}")
+    missing = [str(p) for p in samples[sample].images.values() if not Path(p).is_file()]
+    if missing:
+        raise RigoptError(f"{root}: sample {sample} lacks its image {missing[0]}; remove the rig's folder and generate "
+                          "it again with rigopt bench generate")
+    with atomic_file(out) as work:
+        write_sample_figure(samples[sample], work, f"{rig}: {samples[sample].scene}, sample {sample}")
+    console.print(f"wrote {out}")

@@ -8,18 +8,15 @@ from typing import Optional
 
 import typer
 
-from rigopt.cli.app import app, console, print_json, print_table
+from rigopt.cli.app import FORCE_HELP, app, console, print_json, print_table
 from rigopt.cli.metric_commands import METRIC_HELP
 from rigopt.errors import RigoptError
-from rigopt.metrics.protocol import CONTROL_RIGS, calibrate
-from rigopt.metrics.reliability import DEFAULT_BOOTSTRAP, DEFAULT_SEED
-from rigopt.metrics.transfer import read_transfer
-from rigopt.report.calibration_tables import study_dict, write_study_tables
-from rigopt.rig.library import load_rig
 
 
 def _rig_lookup(rigs_dir: Optional[Path]):
     """Resolve a rig name: ``<rigs_dir>/<name>.json`` when given and present, else the library."""
+    from rigopt.rig.library import load_rig
+
     def lookup(name: str):
         if rigs_dir is not None and (rigs_dir / f"{name}.json").is_file():
             return load_rig(rigs_dir / f"{name}.json")
@@ -31,33 +28,62 @@ def _rig_lookup(rigs_dir: Optional[Path]):
 def calibrate_command(
     results: Path = typer.Option(..., help="Measured transfer: a benchmark results folder "
                                            "(<model>/trained_on_<rig>.json) or a CSV model,train_rig,test_rig,mAP."),
-    control: str = typer.Option(",".join(CONTROL_RIGS), help="Comma-separated control rigs (the calibration set)."),
-    bootstrap: int = typer.Option(DEFAULT_BOOTSTRAP, help="Bootstrap resamples for the 95 % interval of rho."),
-    seed: int = typer.Option(DEFAULT_SEED, help="Seed of the bootstrap."),
+    control: Optional[str] = typer.Option(None, help="Comma-separated control rigs (the calibration set); default: "
+                                                     "the benchmark's (R1 and its five variants)."),
+    bootstrap: Optional[int] = typer.Option(None, min=0, help="Bootstrap resamples for the 95 % interval of rho "
+                                                               "(default: the benchmark protocol's 1000)."),
+    seed: Optional[int] = typer.Option(None, min=0, help="Seed of the bootstrap (default 0)."),
     rigs: Optional[Path] = typer.Option(None, help="Folder of <rig>.json files for rigs not in the library."),
     solver: str = typer.Option("lbfgsb", help="Whose beta is reported: lbfgsb (the benchmark's) or qp (cvxpy)."),
     metric: str = typer.Option("rigcd", "--metric", help=METRIC_HELP),
     out: Optional[Path] = typer.Option(None, help="Folder for the JSON, pairs CSV, weights and figures."),
+    force: bool = typer.Option(False, "--force", help=FORCE_HELP),
     as_json: bool = typer.Option(False, "--json", help="Print the JSON report instead of tables."),
 ):
     """Fit calibrated RigCD (or RigCD+) per detector and jointly; report reliability on control and held-out pairs."""
-    if bootstrap < 0:
-        raise RigoptError(f"--bootstrap must be >= 0, got {bootstrap}")
-    control_rigs = tuple(r.strip() for r in control.split(",") if r.strip())
-    study = calibrate(read_transfer(results), control_rigs, _rig_lookup(rigs), bootstrap, seed, solver, metric)
+    from rigopt.metrics.protocol import CONTROL_RIGS, calibrate
+    from rigopt.metrics.reliability import DEFAULT_BOOTSTRAP, DEFAULT_SEED
+    from rigopt.metrics.transfer import read_transfer
+    from rigopt.output import atomic_folder, check_out_folder, published
+    from rigopt.report.calibration_tables import study_dict, write_study_tables
+
+    if out is not None:
+        check_out_folder(out, force=force)
+    bootstrap = DEFAULT_BOOTSTRAP if bootstrap is None else bootstrap
+    seed = DEFAULT_SEED if seed is None else seed
+    control_rigs = CONTROL_RIGS if control is None else tuple(r.strip() for r in control.split(",") if r.strip())
+    table = read_transfer(results)
+    _check_cross_rig_pairs(table, control_rigs, results)
+    study = calibrate(table, control_rigs, _rig_lookup(rigs), bootstrap, seed, solver, metric)
     report = study_dict(study)
     if out is not None:
         from rigopt.report.calibration_figures import write_calibration_figures
 
-        out.mkdir(parents=True, exist_ok=True)
-        (out / "calibration.json").write_text(json.dumps(report, indent=2) + "\n")
-        written = [out / "calibration.json", *write_study_tables(study, out), *write_calibration_figures(study, out)]
+        with atomic_folder(out, force=force) as work:
+            (work / "calibration.json").write_text(json.dumps(report, indent=2) + "\n")
+            written = published([work / "calibration.json", *write_study_tables(study, work),
+                                 *write_calibration_figures(study, work)], work, out)
         if not as_json:
             console.print(f"wrote {len(written)} files to {out}")
     if as_json:
         print_json(report)
         return
     _print_tables(report)
+
+
+def _check_cross_rig_pairs(table, control_rigs: tuple[str, ...], source: Path) -> None:
+    """Every detector needs cross-rig results (trained on one rig, tested on another) among the control rigs,
+    or its fit has nothing to fit and would silently return default weights."""
+    cross = table.train != table.test
+    if not cross.any():
+        raise RigoptError(f"--results {source}: only the diagonal (each rig tested on itself); calibration needs "
+                          "cross-rig results: detectors trained on one rig and tested on others")
+    control = set(control_rigs)
+    for model in sorted(set(table.model.tolist())):
+        mine = (table.model == model) & cross
+        if not any(a in control and b in control for a, b in zip(table.train[mine], table.test[mine])):
+            raise RigoptError(f"--results {source}: {model} has no cross-rig result among the control rigs "
+                              f"({', '.join(control_rigs)}); add such results or name other rigs with --control")
 
 
 def _print_tables(report: dict) -> None:

@@ -9,24 +9,7 @@ from typing import Optional
 
 import typer
 
-from rigopt.cli.app import app, console, print_json, print_table
-from rigopt.report.json_values import json_ready
-from rigopt.errors import RigoptError
-from rigopt.rig.library import load_rig
-
-
-def _out_dir(text: str) -> Path:
-    """The output folder, created; a RigoptError when it cannot be (empty name, a file, no permission)."""
-    if not text.strip():
-        raise RigoptError("--out needs a folder name, got an empty string")
-    path = Path(text)
-    if path.exists() and not path.is_dir():
-        raise RigoptError(f"--out {path}: exists and is not a folder; give a new or existing folder")
-    try:
-        path.mkdir(parents=True, exist_ok=True)
-    except OSError as error:
-        raise RigoptError(f"--out {path}: cannot create the folder ({error.strerror or error})") from None
-    return path
+from rigopt.cli.app import FORCE_HELP, app, console, print_json, print_table
 
 
 def _warn_inside(report) -> None:
@@ -37,6 +20,7 @@ def _warn_inside(report) -> None:
 
 def _report(rig_name: str, vehicle: Optional[str]):
     from rigopt.coverage.measures import coverage_report
+    from rigopt.rig.library import load_rig
     from rigopt.vehicle.library import load_vehicle
 
     rig = load_rig(rig_name)
@@ -54,13 +38,16 @@ def coverage_command(
                                                                   "on its own vehicle; differences are RIG minus it."),
     out: Optional[str] = typer.Option(None, "--out", help="Folder for coverage.json, bev.png, rings.png, blind.png "
                                                           "and report.html (self-contained)."),
+    force: bool = typer.Option(False, "--force", help=FORCE_HELP),
     as_json: bool = typer.Option(False, "--json", help="Print the JSON report instead of tables."),
 ):
     """Coverage of a rig around its vehicle: rings at 2-50 m, bird's-eye counts, near-field blind zone, per camera."""
     from rigopt.coverage.measures import compare_coverage
     from rigopt.report.coverage_figures import comparison_dict, report_dict
 
-    out_dir = _out_dir(out) if out is not None else None
+    from rigopt.output import check_out_folder
+
+    out_dir = check_out_folder(out, force=force) if out is not None else None
     loaded, report = _report(rig, vehicle)
     other = comparison = None
     if compare is not None:
@@ -70,7 +57,7 @@ def coverage_command(
     if comparison is not None:
         data["compare"] = comparison_dict(comparison)
 
-    written = _write_out(out_dir, data, report, loaded, other, comparison) if out_dir is not None else []
+    written = _write_out(out_dir, force, data, report, loaded, other, comparison) if out_dir is not None else []
     message = f"wrote {', '.join(p.name for p in written)} to {out_dir}"
     if as_json:
         print_json(data)
@@ -82,20 +69,21 @@ def coverage_command(
         console.print(message)
 
 
-def _write_out(out_dir: Path, data: dict, report, rig, other, comparison) -> list[Path]:
+def _write_out(out_dir: Path, force: bool, data: dict, report, rig, other, comparison) -> list[Path]:
+    """Write the report folder whole (a temporary sibling renamed into place), or leave ``out_dir`` as it was."""
+    from rigopt.output import atomic_folder, published
     from rigopt.report.coverage_figures import write_bev_figure, write_blind_figure, write_rings_figure
     from rigopt.report.coverage_html import write_html_report
+    from rigopt.report.json_values import json_ready
 
-    try:
-        json_path = out_dir / "coverage.json"
+    with atomic_folder(out_dir, force=force) as work:
+        json_path = work / "coverage.json"
         json_path.write_text(json.dumps(json_ready(data), indent=2) + "\n")
-        figures = {"bev": write_bev_figure(report, out_dir / "bev.png", rig),
-                   "rings": write_rings_figure(report, out_dir / "rings.png", other),
-                   "blind": write_blind_figure(report, out_dir / "blind.png")}
-        page = write_html_report(report, out_dir, rig, comparison, other, figures=figures)
-    except OSError as error:
-        raise RigoptError(f"--out {out_dir}: cannot write the report ({error.strerror or error})") from None
-    return [json_path, *figures.values(), page]
+        figures = {"bev": write_bev_figure(report, work / "bev.png", rig),
+                   "rings": write_rings_figure(report, work / "rings.png", other),
+                   "blind": write_blind_figure(report, work / "blind.png")}
+        page = write_html_report(report, work, rig, comparison, other, figures=figures)
+    return published([json_path, *figures.values(), page], work, out_dir)
 
 
 def _print_tables(data: dict, other: dict | None) -> None:

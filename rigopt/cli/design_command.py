@@ -7,9 +7,8 @@ from pathlib import Path
 from typing import Optional
 
 import typer
-from rich.console import Console
 
-from rigopt.cli.app import app, print_json, print_table
+from rigopt.cli.app import FORCE_HELP, app, more_than, print_json, print_table
 from rigopt.cli.metric_commands import METRIC_HELP
 from rigopt.design.settings import (DEFAULT_LENSES, DEFAULT_PITCHES_DEG, DEFAULT_YAW_STEP_DEG, DesignSettings,
                                     lens_catalogue, range_lenses)
@@ -74,47 +73,57 @@ def design_command(
                                                                 "continuous range such as 60-120."),
     zones: Optional[str] = typer.Option(None, help="Allowed zones, comma-separated (default: all of the vehicle's)."),
     pitch: str = typer.Option(numbers_text(DEFAULT_PITCHES_DEG), help="Pitch angles to consider, degrees (> 0 up)."),
-    yaw_step: float = typer.Option(DEFAULT_YAW_STEP_DEG, help="Yaw grid step, degrees."),
-    spacing: Optional[float] = typer.Option(None, help="Mount point spacing (m); default: sized to the vehicle."),
-    min_coverage: int = typer.Option(0, help="Cameras every ring sector needs, beyond the reference's coverage."),
-    min_overlap: int = typer.Option(0, help="Cameras needed where the reference sees a sector twice (e.g. 2)."),
-    time_limit: float = typer.Option(60.0, help="MILP time limit (s); the best design found is returned."),
+    yaw_step: float = typer.Option(DEFAULT_YAW_STEP_DEG, callback=more_than(0, " degrees", 180), help="Yaw grid step, degrees."),
+    spacing: Optional[float] = typer.Option(None, callback=more_than(0, " m"),
+                                            help="Mount point spacing (m); default: sized to the vehicle."),
+    min_coverage: int = typer.Option(0, min=0, help="Cameras every ring sector needs, beyond the reference's "
+                                                    "coverage."),
+    min_overlap: int = typer.Option(0, min=0, help="Cameras needed where the reference sees a sector twice (e.g. 2)."),
+    time_limit: float = typer.Option(60.0, callback=more_than(0, " s"),
+                                     help="MILP time limit (s); the best design found is returned."),
     pareto: bool = typer.Option(False, "--pareto", help="Sweep camera counts (--cameras, default the reference's "
                                                         "+-2) and coverage levels; write the frontier."),
     out: Optional[Path] = typer.Option(None, help="Output folder (default: design-<vehicle>-<ref>)."),
+    force: bool = typer.Option(False, "--force", help=FORCE_HELP),
     as_json: bool = typer.Option(False, "--json", help="Print the JSON summary."),
 ):
     """Design a rig on VEHICLE that minimises the calibrated RigCD to REF while covering what REF covers."""
+    from rich.console import Console
+
     from rigopt.design.designer import design_rig
     from rigopt.design.problem import ReferenceRig, benchmark_rigs
     from rigopt.metrics.calibration import load_weights
+    from rigopt.output import atomic_folder, check_out_folder, published
     from rigopt.report.design_report import design_dict, write_design_outputs
     from rigopt.rig.library import load_rig
     from rigopt.vehicle.library import load_vehicle
 
+    if out is not None:
+        check_out_folder(out, force=force)
     lenses, fov_range = parse_lenses(fov)
+    pitches = parse_numbers(pitch, "--pitch")
+    if not all(-90 <= p <= 90 for p in pitches):
+        raise RigoptError(f"--pitch angles must be within [-90, 90] degrees (> 0 up), got {pitch!r}")
     settings = DesignSettings(
         cameras=parse_camera_count(cameras), lenses=lenses, fov_range=fov_range,
         zones=tuple(z.strip() for z in zones.split(",")) if zones else None,
-        pitches_deg=parse_numbers(pitch, "--pitch"), yaw_step_deg=yaw_step, spacing=spacing,
+        pitches_deg=pitches, yaw_step_deg=yaw_step, spacing=spacing,
         min_coverage=min_coverage, min_overlap=min_overlap, time_limit=time_limit)
     references = [ReferenceRig.on_own_vehicle(load_rig(name.strip())) for name in ref.split(",") if name.strip()]
     if not references:
         raise RigoptError("--ref needs at least one rig")
     target, calibration = load_vehicle(vehicle), load_weights(weights, metric)
     label = "+".join(r.rig.name for r in references)
-    out = out or Path(f"design-{target.name}-{label}")
+    out = check_out_folder(out or Path(f"design-{target.name}-{label}"), force=force)
     status = Console(stderr=True)
     if pareto:
-        _pareto(target, references, calibration, settings, out, as_json, status)
+        _pareto(target, references, calibration, settings, out, force, as_json, status)
         return
     with status.status(f"designing a rig on {target.name} from {label}") as spinner:
         result = design_rig(target, references, calibration, settings, compare_with=benchmark_rigs(target),
                             progress=lambda message: spinner.update(message) or status.print(f"  {message}"))
-    try:
-        files = write_design_outputs(result, out)
-    except OSError as error:
-        raise RigoptError(f"{out}: cannot write the design there ({error.strerror})") from None
+    with atomic_folder(out, force=force) as work:
+        files = published(write_design_outputs(result, work, published_as=out), work, out)
     summary = design_dict(result, files[0])
     if as_json:
         print_json(summary)
@@ -135,19 +144,19 @@ def design_command(
     print(f"wrote {', '.join(str(f) for f in files)}")
 
 
-def _pareto(target, references, calibration, settings, out: Path, as_json: bool, status: Console) -> None:
+def _pareto(target, references, calibration, settings, out: Path, force: bool, as_json: bool,
+            status: Console) -> None:
     from dataclasses import asdict
 
     from rigopt.design.pareto import default_counts, pareto_designs, write_pareto
+    from rigopt.output import atomic_folder, published
 
     counts = settings.cameras or default_counts(references)
     with status.status("sweeping camera counts and coverage levels") as spinner:
         points = pareto_designs(target, references, calibration, settings, counts,
                                 progress=lambda message: spinner.update(message) or status.print(f"  {message}"))
-    try:
-        files = write_pareto(points, out)
-    except OSError as error:
-        raise RigoptError(f"{out}: cannot write the sweep there ({error.strerror})") from None
+    with atomic_folder(out, force=force) as work:
+        files = published(write_pareto(points, work), work, out)
     if as_json:
         print_json([{k: v for k, v in asdict(p).items() if k != "rig"} for p in points])
         return

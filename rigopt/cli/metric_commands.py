@@ -9,11 +9,6 @@ import typer
 
 from rigopt.cli.app import app, print_json, print_table
 from rigopt.errors import RigoptError
-from rigopt.metrics.calibration import check_metric, load_weights
-from rigopt.metrics.ranking import predict_transfer, rank_candidates
-from rigopt.metrics.rigcd import DEFAULT_LAMBDAS
-from rigopt.metrics.rigv import rigv
-from rigopt.rig.library import load_rig
 
 WEIGHTS_HELP = "Calibrated weights: a shipped name (BEVDet, BEVFusion, Fast-BEV, PETR, joint) or a weights JSON file."
 METRIC_HELP = ("Rig distance: rigcd (the published RigCD, default) or rigcd+ (RigCD+: matching under the calibrated "
@@ -28,6 +23,11 @@ def rigv_command(
     as_json: bool = typer.Option(False, "--json", help=JSON_HELP),
 ):
     """Rig Variance of each rig: how diverse its cameras are (positions, orientations, FOVs)."""
+    from rigopt.metrics.calibration import load_weights
+    from rigopt.metrics.rigcd import DEFAULT_LAMBDAS
+    from rigopt.metrics.rigv import rigv
+    from rigopt.rig.library import load_rig
+
     lambdas = load_weights(weights).lambdas if weights else DEFAULT_LAMBDAS
     results = [rigv(load_rig(name), lambdas) for name in rigs]
     if as_json:
@@ -46,6 +46,10 @@ def rigcd_command(
     as_json: bool = typer.Option(False, "--json", help=JSON_HELP),
 ):
     """Rig Contrastive Distance between two rigs, its components and (with --weights) the predicted drop."""
+    from rigopt.metrics.calibration import check_metric, load_weights
+    from rigopt.metrics.ranking import predict_transfer
+    from rigopt.rig.library import load_rig
+
     metric = check_metric(metric)
     if metric == "rigcd+" and not weights:
         raise RigoptError("--metric rigcd+ matches cameras under calibrated weights: add --weights (e.g. joint)")
@@ -70,6 +74,10 @@ def rank_command(
     as_json: bool = typer.Option(False, "--json", help=JSON_HELP),
 ):
     """Rank candidate rigs by the predicted relative mAP drop of a detector trained on the reference."""
+    from rigopt.metrics.calibration import load_weights
+    from rigopt.metrics.ranking import rank_candidates
+    from rigopt.rig.library import load_rig
+
     calibration = load_weights(weights, metric)
     ranked = rank_candidates(load_rig(ref), [load_rig(c) for c in candidates], calibration)
     if as_json:

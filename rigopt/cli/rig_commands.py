@@ -9,14 +9,14 @@ import typer
 
 from rigopt.cli.app import app, console, import_app, print_json, print_table
 from rigopt.errors import RigoptError
-from rigopt.metrics.rigv import rigv
-from rigopt.rig.library import library_rig, rig_names
-from rigopt.rig.pccr_format import write_rig
 
 
 @app.command("rigs")
 def rigs_command(as_json: bool = typer.Option(False, "--json", help="Print JSON instead of a table.")):
     """List the built-in rigs (the PCCR benchmark's 14): vehicle, camera count, FOVs, RigV."""
+    from rigopt.metrics.rigv import rigv
+    from rigopt.rig.library import library_rig, rig_names
+
     rows = []
     for name in rig_names():
         rig = library_rig(name)
@@ -47,8 +47,12 @@ def import_nuscenes_command(
     vehicle: str = typer.Option("nuscenes", help="Vehicle name written as the rig's vehicle_type."),
 ):
     """Read a rig from nuScenes calibration tables (camera channels only) and write it as a rig file."""
+    from rigopt.output import atomic_file, check_out_file
     from rigopt.rig.nuscenes_format import read_nuscenes_rig
+    from rigopt.rig.pccr_format import write_rig
 
+    out = check_out_file(out, suffixes=(".json",))
     rig = read_nuscenes_rig(directory, image_size=parse_image_size(image_size), index=index, vehicle=vehicle)
-    write_rig(rig, out)
+    with atomic_file(out) as work:
+        write_rig(rig, work)
     console.print(f"wrote {out}: {len(rig)} cameras ({', '.join(c.id for c in rig.cameras)})")

@@ -3,15 +3,13 @@
 from __future__ import annotations
 
 from dataclasses import asdict
+from pathlib import Path
 from typing import Optional
 
 import typer
 
-from pathlib import Path
-
-from rigopt.cli.app import app, console, print_json, print_table, vehicle_app
+from rigopt.cli.app import PICTURE_SUFFIXES, app, console, print_json, print_table, vehicle_app
 from rigopt.errors import RigoptError
-from rigopt.rig.library import load_rig
 
 
 @app.command("check")
@@ -22,6 +20,7 @@ def check_command(
 ):
     """Check that every camera can be mounted: on the surface, in a zone, housing and view clear of the body."""
     from rigopt.mounting.rules import check_rig
+    from rigopt.rig.library import load_rig
     from rigopt.vehicle.library import load_vehicle
 
     loaded = load_rig(rig)
@@ -38,14 +37,18 @@ def check_command(
         raise typer.Exit(1)
 
 
+#: Mesh formats ``vehicle export`` writes (trimesh picks the format from the extension).
+MESH_SUFFIXES = (".ply", ".stl", ".obj", ".glb")
 FRAME_HELP = "Frame of the mesh file: iso (x forward, y left, z up; rigopt's) or carla (y right)."
 
 
 @app.command("vehicles")
 def vehicles_command(as_json: bool = typer.Option(False, "--json", help="Print JSON instead of a table.")):
     """List the known vehicles (built-in and your own) with their size and zones."""
-    from rigopt.vehicle.library import load_vehicle, vehicle_names
+    from rigopt.vehicle.library import broken_user_vehicles, load_vehicle, vehicle_names
 
+    for folder, problem in broken_user_vehicles().items():
+        typer.echo(f"rigopt: warning: user vehicle {folder!r} skipped: {problem}", err=True)
     rows = []
     for name in vehicle_names():
         v = load_vehicle(name)
@@ -63,15 +66,20 @@ def vehicles_command(as_json: bool = typer.Option(False, "--json", help="Print J
 @vehicle_app.command("show")
 def vehicle_show_command(
     name: str = typer.Argument(..., help="Vehicle name, alias or blueprint."),
-    out: Path = typer.Option(..., "--out", help="PNG file to write."),
+    out: Path = typer.Option(..., "--out", help="Picture to write: .png (or .pdf, .svg, .jpg)."),
     rig: Optional[str] = typer.Option(None, "--rig", help="Draw this rig's cameras and frustums too."),
 ):
     """Draw top and side views of a vehicle with its zones coloured (and a rig's cameras)."""
+    from rigopt.output import atomic_file, check_out_file
     from rigopt.report.vehicle_figures import write_vehicle_figure
+    from rigopt.rig.library import load_rig
     from rigopt.vehicle.library import load_vehicle
 
-    path = write_vehicle_figure(load_vehicle(name), out, load_rig(rig) if rig else None)
-    console.print(f"wrote {path}")
+    out = check_out_file(out, suffixes=PICTURE_SUFFIXES)
+    vehicle, drawn = load_vehicle(name), load_rig(rig) if rig else None
+    with atomic_file(out) as work:
+        write_vehicle_figure(vehicle, work, drawn)
+    console.print(f"wrote {out}")
 
 
 @vehicle_app.command("export")
@@ -81,18 +89,17 @@ def vehicle_export_command(
     frame: str = typer.Option("iso", help=FRAME_HELP),
 ):
     """Write a vehicle's body mesh in the internal (ISO) or the benchmark's CARLA frame."""
+    from rigopt.output import atomic_file, check_out_file
     from rigopt.vehicle.library import load_vehicle
     from rigopt.vehicle.user import FRAMES, carla_mesh_to_iso
 
     if frame not in FRAMES:
         raise RigoptError(f"--frame must be one of {', '.join(FRAMES)}, got {frame!r}")
+    out = check_out_file(out, suffixes=MESH_SUFFIXES)
     mesh = load_vehicle(name).mesh
     mesh = carla_mesh_to_iso(mesh) if frame == "carla" else mesh  # the reflection is its own inverse
-    out.parent.mkdir(parents=True, exist_ok=True)
-    try:
-        mesh.export(out)
-    except (ValueError, KeyError) as error:
-        raise RigoptError(f"{out}: cannot write this mesh format ({error}); use .ply, .stl, .obj or .glb") from None
+    with atomic_file(out) as work:
+        mesh.export(work)
     console.print(f"wrote {out} ({len(mesh.faces)} triangles, {frame} frame)")
 
 
@@ -102,9 +109,10 @@ def vehicle_add_command(
     mesh: Path = typer.Option(..., "--mesh", help="Mesh file (OBJ, STL, PLY, GLB, ...), metres, wheels on z = 0."),
     zones: Optional[Path] = typer.Option(None, "--zones", help="TOML file of [[zones]]; default: zones from the box."),
     frame: str = typer.Option("iso", help=FRAME_HELP),
+    force: bool = typer.Option(False, "--force", help="Replace a stored vehicle of the same name (any case)."),
 ):
     """Check a mesh and store it as a vehicle so that --vehicle NAME works everywhere."""
     from rigopt.vehicle.user import add_user_vehicle
 
-    path = add_user_vehicle(name, mesh, zones, frame)
+    path = add_user_vehicle(name, mesh, zones, frame, force=force)
     console.print(f"added vehicle {name!r}: {path}")

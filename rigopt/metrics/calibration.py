@@ -29,7 +29,7 @@ from typing import Sequence
 
 import numpy as np
 
-from rigopt.errors import DataError, RigoptError, unknown_name
+from rigopt.errors import DataError, RigoptError, not_utf8, unknown_name
 from rigopt.metrics.rigcd import DEFAULT_ALPHA, rigcd_matrix, tie_broken_lambdas
 from rigopt.resources import data_dir
 from rigopt.rig.model import Rig
@@ -242,6 +242,8 @@ def load_weights(name_or_path, metric: str = "rigcd") -> Calibration:
         data = json.loads(path.read_text())
     except OSError as error:
         raise DataError(f"{path}: cannot read the weights file ({error.strerror})") from None
+    except UnicodeDecodeError as error:
+        raise not_utf8(path, "weights file", error) from None
     except json.JSONDecodeError as error:
         raise DataError(f"{path}: not valid JSON (line {error.lineno}: {error.msg})") from None
     calibration = _calibration_from_dict(data, path)
@@ -264,7 +266,13 @@ def _calibration_from_dict(data, path: Path) -> Calibration:
     if values["alpha"] > 1:
         raise DataError(f"{path}: alpha must be in [0, 1], got {values['alpha']}")
     beta = data.get("beta", {})
-    beta = tuple(float(beta.get(k, np.nan)) for k in FEATURES) if isinstance(beta, dict) else (np.nan,) * 4
+    if not isinstance(beta, dict):
+        raise DataError(f"{path}: beta must be an object of numbers ({', '.join(FEATURES)}), got {beta!r}")
+    for key, value in beta.items():
+        if key in FEATURES and (isinstance(value, bool) or not isinstance(value, (int, float))):
+            raise DataError(f"{path}: beta.{key} must be a number, got {value!r}; write a number or leave the key "
+                            "out")
+    beta = tuple(float(beta.get(k, np.nan)) for k in FEATURES)
     metric = data.get("metric", "rigcd")
     if metric not in METRICS:
         raise DataError(f"{path}: metric must be one of {', '.join(METRICS)}, got {metric!r}")

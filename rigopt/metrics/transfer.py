@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from rigopt.errors import DataError
+from rigopt.errors import DataError, not_utf8
 
 CSV_HEADER = ("model", "train_rig", "test_rig", "mAP")
 
@@ -138,6 +138,8 @@ def _read_results_folder(root: Path) -> TransferTable:
             data = json.loads(file.read_text())
         except json.JSONDecodeError as error:
             raise DataError(f"{file}: not valid JSON (line {error.lineno}: {error.msg})") from None
+        except UnicodeDecodeError as error:
+            raise not_utf8(file, "results file", error) from None
         results = data.get("results") if isinstance(data, dict) else None
         if not isinstance(results, dict):
             raise DataError(f"{file}: missing the 'results' object of test rigs")
@@ -152,7 +154,14 @@ def _read_results_folder(root: Path) -> TransferTable:
 
 
 def _read_csv(path: Path) -> TransferTable:
-    with path.open(newline="") as handle:
+    try:
+        return _read_csv_rows(path)
+    except UnicodeDecodeError as error:
+        raise not_utf8(path, "transfer CSV", error) from None
+
+
+def _read_csv_rows(path: Path) -> TransferTable:
+    with path.open(newline="", encoding="utf-8") as handle:
         reader = csv.reader(handle)
         header = next(reader, None)
         if header is None or tuple(h.strip() for h in header) != CSV_HEADER:

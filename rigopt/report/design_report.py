@@ -48,8 +48,12 @@ def design_dict(result: DesignResult, rig_file: Path | None) -> dict:
     }
 
 
-def write_design_outputs(result: DesignResult, out_dir) -> list[Path]:
-    """Write rig.json (benchmark format), report.json, the pictures and report.html into ``out_dir``."""
+def write_design_outputs(result: DesignResult, out_dir, *, published_as=None) -> list[Path]:
+    """Write rig.json (benchmark format), report.json, the pictures and report.html into ``out_dir``.
+
+    ``published_as``: the folder ``out_dir`` becomes once complete (when it is a temporary one, see
+    rigopt.output.atomic_folder); the reports name the rig file there.
+    """
     from rigopt.coverage.measures import ring_report
     from rigopt.report.coverage_figures import write_rings_figure
     from rigopt.report.design_html import write_design_html
@@ -58,7 +62,7 @@ def write_design_outputs(result: DesignResult, out_dir) -> list[Path]:
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     rig_file = write_rig(result.design.rig, out_dir / "rig.json")
-    summary = design_dict(result, rig_file)
+    summary = design_dict(result, Path(published_as) / rig_file.name if published_as is not None else rig_file)
     report = out_dir / "report.json"
     report.write_text(json.dumps(json_ready(summary), indent=2) + "\n")
     vehicle, reference = result.vehicle, result.references[0]

@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from rigopt.camera import fov_from_focal, intrinsic_matrix
-from rigopt.errors import RigFileError
+from rigopt.errors import RigFileError, not_utf8
 from rigopt.geometry import R_CAM_OPTICAL, matrix_to_quaternion, quaternion_to_matrix
 from rigopt.rig.model import Camera, Rig
 
@@ -111,6 +111,8 @@ def _read_table(path: Path, keys: tuple[str, ...]) -> list[dict]:
     except OSError as error:
         raise RigFileError(f"{path}: cannot read the nuScenes table ({error.strerror}); "
                            f"the folder needs {SENSOR_FILE} and {CALIBRATION_FILE}") from None
+    except UnicodeDecodeError as error:
+        raise not_utf8(path, "nuScenes table", error, RigFileError) from None
     try:
         table = json.loads(text)
     except json.JSONDecodeError as error:

@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from rigopt.errors import RigFileError
+from rigopt.errors import RigFileError, not_utf8
 from rigopt.geometry import carla_to_iso, iso_to_carla
 from rigopt.rig.model import DEFAULT_IMAGE_SIZE, Camera, Rig
 
@@ -57,6 +57,9 @@ def _camera_from_dict(entry, index: int, source: str) -> Camera:
     if missing:
         raise RigFileError(f"{where} ({entry.get('id', 'no id')}) is missing {missing}")
     location = _numbers(entry["location"], 3, f"{where} ({entry['id']}) 'location' [x, y, z] metres")
+    if max(abs(v) for v in location) > MAX_LOCATION_M:
+        raise RigFileError(f"{where} ({entry['id']}) 'location' {location} is more than {MAX_LOCATION_M:g} m from "
+                           "the vehicle origin; rig files give metres in the vehicle frame")
     rotation = _numbers(entry["rotation"], 3, f"{where} ({entry['id']}) 'rotation' [pitch, yaw, roll] degrees")
     fov = _numbers([entry["fov"]], 1, f"{where} ({entry['id']}) 'fov' degrees")[0]
     size = entry.get("image_size", DEFAULT_IMAGE_SIZE)
@@ -64,6 +67,10 @@ def _camera_from_dict(entry, index: int, source: str) -> Camera:
         raise RigFileError(f"{where} ({entry['id']}) 'image_size' must be [width, height] in pixels, got {size!r}")
     position, rotation_matrix = carla_to_iso(location, rotation)
     return Camera(str(entry["id"]), position, rotation_matrix, fov, tuple(size), entry.get("zone"))
+
+
+#: Largest camera coordinate a rig file may give (m): a camera is on its vehicle, not kilometres away.
+MAX_LOCATION_M = 1000.0
 
 
 def _numbers(values, count: int, what: str) -> list[float]:
@@ -113,6 +120,8 @@ def read_rig(path, name: str | None = None) -> Rig:
         text = path.read_text()
     except OSError as error:
         raise RigFileError(f"{path}: cannot read the rig file ({error.strerror})") from None
+    except UnicodeDecodeError as error:
+        raise not_utf8(path, "rig file", error, RigFileError) from None
     try:
         data = json.loads(text)
     except json.JSONDecodeError as error:

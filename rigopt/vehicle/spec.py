@@ -50,7 +50,7 @@ from pathlib import Path
 
 import numpy as np
 
-from rigopt.errors import DataError
+from rigopt.errors import DataError, not_utf8
 
 SOLID_TYPES = ("prism", "wheels", "box", "mesh")
 
@@ -130,6 +130,8 @@ def read_toml(path, what: str) -> dict:
         return tomllib.loads(path.read_text())
     except OSError as error:
         raise DataError(f"{path}: cannot read the {what} ({error.strerror})") from None
+    except UnicodeDecodeError as error:
+        raise not_utf8(path, what, error) from None
     except tomllib.TOMLDecodeError as error:
         raise DataError(f"{path}: not valid TOML ({error})") from None
 

@@ -1,19 +1,23 @@
 """User vehicles: check a mesh file, bring it into the ISO frame, give it zones, and store it by name.
 
 A stored vehicle is ``$RIGOPT_HOME/vehicles/<name>/`` holding ``body.ply`` (ISO frame, metres) and a
-``vehicle.toml`` whose one solid is that mesh; from then on ``--vehicle <name>`` works everywhere.
+``vehicle.toml`` whose one solid is that mesh; from then on ``--vehicle <name>`` works everywhere. Names are
+unique without regard to case; replacing a stored vehicle needs ``force``, and the folder is written whole
+(rigopt.output.atomic_folder) or not at all.
 """
 
 from __future__ import annotations
 
 import re
+import shutil
 from pathlib import Path
 
 import numpy as np
 import trimesh
 
 from rigopt.errors import DataError, RigoptError
-from rigopt.vehicle.library import SPEC_FILE, find_spec, user_vehicles_dir
+from rigopt.output import atomic_folder
+from rigopt.vehicle.library import SPEC_FILE, broken_user_vehicles, find_spec, user_vehicles_dir
 from rigopt.vehicle.model import ZONE_QUERY_EDGE, expand_zones
 from rigopt.vehicle.spec import read_toml, spec_from_dict
 
@@ -130,28 +134,50 @@ def default_zones(bounds: np.ndarray) -> list[dict]:
     ]
 
 
-def add_user_vehicle(name: str, mesh_path, zones_path=None, frame: str = "iso") -> Path:
+def add_user_vehicle(name: str, mesh_path, zones_path=None, frame: str = "iso", *, force: bool = False) -> Path:
     """Check ``mesh_path``, store it as vehicle ``name`` with the zones of ``zones_path`` (a TOML file of
-    ``[[zones]]``) or defaults from its box, and return the stored spec's path."""
+    ``[[zones]]``) or defaults from its box, and return the stored spec's path.
+
+    A user vehicle of the same name (any case) is replaced only with ``force``; built-in names and aliases
+    are never taken.
+    """
     if not re.fullmatch(r"[A-Za-z0-9][A-Za-z0-9_.-]*", name):
         raise RigoptError(f"vehicle name {name!r} must be letters, digits, '_', '.' or '-'")
+    folder = _store_folder(name, force)
+    mesh = load_user_mesh(mesh_path, frame)
+    zones = _read_zones(zones_path) if zones_path else default_zones(mesh.bounds)
+    data = {"name": name, "blueprint": name, "aliases": [], "box": np.ptp(mesh.bounds, axis=0).tolist(),
+            "solids": [{"name": "body", "type": "mesh", "file": "body.ply"}], "zones": zones}
+    # validated before anything is written; problems name the user's zones file (or the mesh for default zones)
+    spec = spec_from_dict(data, str(zones_path or mesh_path))
+    _check_zones_select_surface(spec, mesh)
+    with atomic_folder(folder, force=True, option="vehicle store") as work:
+        mesh.export(work / "body.ply")
+        (work / SPEC_FILE).write_text(_to_toml(data))
+    for old in [p for p in folder.parent.iterdir() if p.name.lower() == name.lower() and p.name != name]:
+        shutil.rmtree(old, ignore_errors=True)  # the same name in another case, replaced (force was given)
+    return folder / SPEC_FILE
+
+
+def _store_folder(name: str, force: bool) -> Path:
+    """The store folder of ``name``, refused for a built-in name or alias, or a stored name (any case)
+    without ``force``."""
     try:
         existing = find_spec(name)
     except RigoptError:
         existing = None
     if existing is not None and not Path(existing.source).is_relative_to(user_vehicles_dir()):
         raise RigoptError(f"{name!r} is a built-in vehicle ({existing.name}); choose another name")
-    mesh = load_user_mesh(mesh_path, frame)
-    zones = _read_zones(zones_path) if zones_path else default_zones(mesh.bounds)
     folder = user_vehicles_dir() / name
-    data = {"name": name, "blueprint": name, "aliases": [], "box": np.ptp(mesh.bounds, axis=0).tolist(),
-            "solids": [{"name": "body", "type": "mesh", "file": "body.ply"}], "zones": zones}
-    spec = spec_from_dict(data, str(folder / SPEC_FILE))  # validates before anything is written
-    _check_zones_select_surface(spec, mesh)
-    folder.mkdir(parents=True, exist_ok=True)
-    mesh.export(folder / "body.ply")
-    (folder / SPEC_FILE).write_text(_to_toml(data))
-    return folder / SPEC_FILE
+    stored = [p.name for p in folder.parent.glob("*") if p.is_dir() and p.name.lower() == name.lower()] \
+        if folder.parent.is_dir() else []
+    stored += [n for n in broken_user_vehicles() if n.lower() == name.lower() and n not in stored]
+    if existing is not None:
+        stored.append(existing.name)
+    if stored and not force:
+        raise RigoptError(f"a user vehicle {stored[0]!r} exists (names ignore case); add --force to replace it, or "
+                          "choose another name")
+    return folder
 
 
 def _read_zones(path) -> list[dict]:

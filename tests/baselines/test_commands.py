@@ -131,3 +131,19 @@ def test_bad_input_exits_2_with_one_line(trained, args, message):
 def test_cuda_without_cuda_exits_2(trained):
     result = run_cli("bench", "train", "--data", trained, "--rig", "R1", "--model", "lss", "--device", "cuda")
     assert result.returncode == 2 and "no CUDA device" in result.stderr
+
+
+@pytest.mark.parametrize("args", [
+    ["bench", "evaluate", "--data", "{data}", "--rig", "R5", "--model", "lss", "--trained-on", "R1", "--json"],
+    ["validate", "{design}", "--ref", "R1", "--model", "lss", "--data", "{data}", "--json"],
+])
+def test_json_of_the_installed_console_script_parses(trained, args):
+    """stdout of the real ``rigopt`` script is JSON only (anything torch or a C library prints goes to stderr)."""
+    script = Path(sys.executable).parent / "rigopt"
+    script = str(script) if script.is_file() else shutil.which("rigopt")
+    assert script, "the rigopt console script is not installed; pip install -e . first"
+    design = REPO / "studies" / "baselines" / "rigs" / "hgv_from_R1.json"
+    result = subprocess.run([script, *(a.format(data=trained, design=design) for a in args)],
+                            capture_output=True, text=True, timeout=300)
+    assert result.returncode == 0, result.stderr
+    json.loads(result.stdout)

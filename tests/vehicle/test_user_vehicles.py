@@ -11,7 +11,7 @@ import pytest
 import trimesh
 
 from rigopt.errors import DataError, RigoptError
-from rigopt.vehicle.library import find_spec, load_vehicle, user_vehicles_dir, vehicle_names
+from rigopt.vehicle.library import broken_user_vehicles, find_spec, load_vehicle, user_vehicles_dir, vehicle_names
 from rigopt.vehicle.user import add_user_vehicle, carla_mesh_to_iso, load_user_mesh
 
 pytestmark = pytest.mark.usefixtures("rigopt_home")
@@ -160,8 +160,9 @@ def test_zone_that_selects_no_surface_raises(box_stl, tmp_path):
     zones = tmp_path / "zones.toml"
     zones.write_text('[[zones]]\nname = "nowhere"\nmin = [10, 10, 10]\nmax = [11, 11, 11]\nnormal = [1, 0, 0]\n'
                      'cone_deg = 30\n')
-    with pytest.raises(DataError, match="selects no surface"):
+    with pytest.raises(DataError, match="selects no surface") as caught:
         add_user_vehicle("zoned", box_stl, zones)
+    assert str(caught.value).startswith(f"{zones}:")  # the user's file, not the copy in the store
 
 
 def test_zones_file_is_used(box_stl, tmp_path):
@@ -217,7 +218,7 @@ def test_bad_name_raises(box_stl, rigopt_home):
 
 def test_user_vehicle_can_be_replaced(box_car, asymmetric_car, export):
     add_user_vehicle("mycar", export(box_car.mesh, "a.stl"))
-    add_user_vehicle("mycar", export(asymmetric_car.mesh, "b.stl"))
+    add_user_vehicle("mycar", export(asymmetric_car.mesh, "b.stl"), force=True)
     assert vehicle_names().count("mycar") == 1
     np.testing.assert_allclose(find_spec("mycar").box, np.ptp(asymmetric_car.mesh.bounds, axis=0), atol=1e-4)
 
@@ -225,5 +226,63 @@ def test_user_vehicle_can_be_replaced(box_car, asymmetric_car, export):
 def test_replaced_vehicle_is_reloaded(box_car, asymmetric_car, export):
     add_user_vehicle("mycar", export(box_car.mesh, "a.stl"))
     np.testing.assert_allclose(load_vehicle("mycar").mesh.bounds, BOX_BOUNDS, atol=1e-4)
-    add_user_vehicle("mycar", export(asymmetric_car.mesh, "b.stl"))
+    add_user_vehicle("mycar", export(asymmetric_car.mesh, "b.stl"), force=True)
     np.testing.assert_allclose(load_vehicle("mycar").mesh.bounds, asymmetric_car.mesh.bounds, atol=1e-4)
+
+
+def test_zones_file_errors_name_the_users_file(box_stl, tmp_path):
+    zones = tmp_path / "zones.toml"
+    zones.write_text('[[zones]]\nname = "nose"\nmin = [1.9, -1, 0.2]\nnormal = [1, 0, 0]\ncone_deg = 30\n')
+    with pytest.raises(DataError) as caught:
+        add_user_vehicle("zoned", box_stl, zones)
+    assert str(zones) in str(caught.value) and "vehicles" not in str(caught.value)
+
+
+def test_re_adding_a_name_needs_force(box_car, asymmetric_car, export):
+    add_user_vehicle("mycar", export(box_car.mesh, "a.stl"))
+    with pytest.raises(RigoptError, match="--force"):
+        add_user_vehicle("mycar", export(asymmetric_car.mesh, "b.stl"))
+    np.testing.assert_allclose(load_vehicle("mycar").mesh.bounds, BOX_BOUNDS, atol=1e-4)  # unchanged
+
+
+def test_names_are_unique_without_regard_to_case(box_car, asymmetric_car, export, rigopt_home):
+    add_user_vehicle("mycar", export(box_car.mesh, "a.stl"))
+    with pytest.raises(RigoptError, match="'mycar' exists"):
+        add_user_vehicle("MYCAR", export(asymmetric_car.mesh, "b.stl"))
+    assert [n for n in vehicle_names() if n.lower() == "mycar"] == ["mycar"]
+    add_user_vehicle("MYCAR", export(asymmetric_car.mesh, "b.stl"), force=True)  # replaces it, under the new case
+    assert [n for n in vehicle_names() if n.lower() == "mycar"] == ["MYCAR"]
+    assert [p.name for p in (rigopt_home / "vehicles").iterdir()] == ["MYCAR"]
+    np.testing.assert_allclose(load_vehicle("mycar").mesh.bounds, asymmetric_car.mesh.bounds, atol=1e-4)
+
+
+@pytest.fixture
+def broken(rigopt_home):
+    """A user vehicle "wreck" whose vehicle.toml is not TOML."""
+    folder = rigopt_home / "vehicles" / "wreck"
+    folder.mkdir(parents=True)
+    (folder / "vehicle.toml").write_text("name = [unclosed\n")
+    return folder
+
+
+def test_a_broken_user_vehicle_is_skipped(broken, box_stl):
+    add_user_vehicle("mycar", box_stl)
+    assert "wreck" not in vehicle_names()
+    assert {"etron", "mycar"} <= set(vehicle_names())
+    assert find_spec("suv").name == "etron"  # built-ins are still found
+    assert load_vehicle("mycar").name == "mycar"
+    assert set(broken_user_vehicles()) == {"wreck"}
+    assert "not valid TOML" in broken_user_vehicles()["wreck"]
+
+
+def test_a_broken_user_vehicle_is_reported_by_name(broken):
+    with pytest.raises(RigoptError, match=r"user vehicle 'wreck' cannot be read: .*not valid TOML.*--force"):
+        find_spec("WRECK")
+
+
+def test_a_broken_user_vehicle_is_replaced_only_with_force(broken, box_stl):
+    with pytest.raises(RigoptError, match="--force"):
+        add_user_vehicle("wreck", box_stl)
+    add_user_vehicle("wreck", box_stl, force=True)
+    assert broken_user_vehicles() == {}
+    assert load_vehicle("wreck").name == "wreck"

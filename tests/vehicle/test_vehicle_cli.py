@@ -116,3 +116,22 @@ def test_unknown_vehicle_is_a_one_line_error(tmp_path):
     assert "nosuchcar" in lines[0]
     assert "Traceback" not in result.stderr
     assert not (tmp_path / "x.png").exists()
+
+
+def test_re_adding_through_the_cli_needs_force(mycar, tmp_path):
+    path = tmp_path / "again.stl"
+    mycar.mesh.export(path)
+    refused = invoke("vehicle", "add", "MYCAR", "--mesh", path)
+    assert refused.exit_code != 0 and "--force" in str(refused.exception)
+    assert invoke("vehicle", "add", "MYCAR", "--mesh", path, "--force").exit_code == 0
+
+
+def test_check_works_beside_a_broken_user_vehicle(mycar, rigopt_home):
+    (rigopt_home / "vehicles" / "wreck").mkdir()
+    (rigopt_home / "vehicles" / "wreck" / "vehicle.toml").write_bytes(b"\xff\xfe not text")
+    result = invoke("check", "R1", "--json")
+    assert result.exit_code in (0, 1), result.output
+    assert json.loads(result.stdout)["vehicle"] == "etron"
+    listed = invoke("vehicles", "--json")
+    assert "wreck" in listed.stderr and "skipped" in listed.stderr
+    assert "wreck" not in {row["vehicle"] for row in json.loads(listed.stdout)}

@@ -1,0 +1,301 @@
+"""The catalogue of bad inputs: every command with each option or file it takes, given something wrong.
+
+Each case is (class, arguments, fragment): the command line after ``rigopt`` ({tmp} is a scratch folder
+that :func:`make_fixtures` fills, {repo} the checkout), and a piece of the one ``rigopt: error: ...`` line it must print. The
+table in docs/errors.md is written from these by ``run.py`` (through the installed console script), and
+tests/cli/test_bad_inputs.py runs each in-process and checks that the table says what rigopt says.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+NOT_UTF8 = b"\xff\xfe\x00 not text \xe9"
+RIG = '{"vehicle_type": "vehicle.audi.tt", "cameras": [{"id": "C", "location": LOC, "rotation": [0, 0, 0], "fov": 60}]}'
+WEIGHTS = {"K": 1, "alpha": 0.5, "lambda_t": 1, "lambda_r": 1, "lambda_f": 1}
+CSV_HEADER = "model,train_rig,test_rig,mAP\n"
+
+
+def make_fixtures(tmp: Path) -> dict[str, str]:
+    """Write the files the cases refer to under ``tmp``; returns the environment the cases run in."""
+    from rigopt.cli import run
+    from rigopt.vehicle.library import load_vehicle
+
+    tmp.mkdir(parents=True, exist_ok=True)
+    files = {
+        "file.txt": "just a file\n",
+        "rig_not_utf8.json": NOT_UTF8,
+        "rig_malformed.json": '{"vehicle_type": "x", "cameras": [',
+        "rig_nan.json": RIG.replace("LOC", "[0, NaN, 1]"),
+        "rig_far.json": RIG.replace("LOC", "[1e308, 0, 1]"),
+        "rig_no_cameras.json": '{"vehicle_type": "v", "cameras": []}',
+        "rig_fov_200.json": RIG.replace("LOC", "[0, 0, 1]").replace('"fov": 60', '"fov": 200'),
+        "rig_list.json": "[1, 2, 3]",
+        "weights_not_utf8.json": NOT_UTF8,
+        "weights_beta_text.json": json.dumps({**WEIGHTS, "beta": {"t": "abc"}}),
+        "weights_beta_null.json": json.dumps({**WEIGHTS, "beta": {"r": None}}),
+        "weights_beta_list.json": json.dumps({**WEIGHTS, "beta": [1, 2]}),
+        "weights_missing_k.json": json.dumps({k: v for k, v in WEIGHTS.items() if k != "K"}),
+        "weights_alpha_2.json": json.dumps({**WEIGHTS, "alpha": 2}),
+        "weights_negative.json": json.dumps({**WEIGHTS, "lambda_t": -1}),
+        "weights_plus.json": json.dumps({**WEIGHTS, "metric": "rigcd+"}),
+        "weights_bad_json.json": "{",
+        "weights.txt": "K = 1",
+        "diagonal.csv": CSV_HEADER + "M,R1,R1,0.3\nM,R6,R6,0.3\n",
+        "not_utf8.csv": NOT_UTF8,
+        "bad_header.csv": "a,b,c,d\nM,R1,R1,0.3\n",
+        "three_fields.csv": CSV_HEADER + "M,R1,0.3\n",
+        "map_2.csv": CSV_HEADER + "M,R1,R1,2\n",
+        "map_text.csv": CSV_HEADER + "M,R1,R1,abc\n",
+        "twice.csv": CSV_HEADER + "M,R1,R1,0.3\nM,R1,R1,0.3\n",
+        "empty.csv": "",
+        "no_control.csv": CSV_HEADER + "M,R5,R5,0.3\nM,R5,R6,0.2\nM,R6,R6,0.3\n",
+        "zones_not_utf8.toml": NOT_UTF8,
+        "zones_bad.toml": "[[zones]\n",
+        "zones_none.toml": 'name = "nothing"\n',
+        "zones_no_max.toml": '[[zones]]\nname = "nose"\nmin = [1, -1, 0]\nnormal = [1, 0, 0]\ncone_deg = 30\n',
+        "garbage.pt": b"this is not a checkpoint",
+        "nuscenes_not_utf8/sensor.json": NOT_UTF8,
+        "nuscenes_not_utf8/calibrated_sensor.json": NOT_UTF8,
+        "results_bad/M/trained_on_R1.json": "{",
+        "results_no_diagonal/M/trained_on_R1.json": json.dumps({"results": {"R6": {"metrics": {"mAP": 0.2}}}}),
+        "full/x.txt": "occupied folder",
+    }
+    for name, content in files.items():
+        path = tmp / name
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_bytes(content if isinstance(content, bytes) else content.encode())
+    (tmp / "emptydir").mkdir(exist_ok=True)
+    (tmp / "dir.png").mkdir(exist_ok=True)
+    load_vehicle("tt").mesh.export(tmp / "car.stl")
+    env = {"RIGOPT_HOME": str(tmp / "home")}
+    wreck = tmp / "home" / "vehicles" / "wreck"
+    wreck.mkdir(parents=True, exist_ok=True)
+    (wreck / "vehicle.toml").write_text("name = [unclosed\n")
+    if not (tmp / "home" / "vehicles" / "mycar").is_dir():
+        from rigopt.vehicle.user import add_user_vehicle
+        import os
+
+        previous = os.environ.get("RIGOPT_HOME")
+        os.environ["RIGOPT_HOME"] = env["RIGOPT_HOME"]
+        try:
+            add_user_vehicle("mycar", tmp / "car.stl")
+        finally:
+            if previous is None:
+                del os.environ["RIGOPT_HOME"]
+            else:
+                os.environ["RIGOPT_HOME"] = previous
+    if not (tmp / "bench" / "R1" / "mini").is_dir():
+        code = run(["bench", "generate", "--rigs", "R1", "--scenes", "1", "--frames", "1", "--size", "16x9",
+                    "--out", str(tmp / "bench")])
+        assert code == 0, "bench generate of the fixture failed"
+    images = sorted((tmp / "bench" / "R1" / "mini" / "samples").rglob("*.png"))
+    (tmp / "bench_missing").mkdir(exist_ok=True)
+    if not (tmp / "bench_missing" / "R1").is_dir():
+        import shutil
+
+        shutil.copytree(tmp / "bench" / "R1", tmp / "bench_missing" / "R1")
+        (tmp / "bench_missing" / "R1" / "mini" / images[0].relative_to(tmp / "bench" / "R1" / "mini")).unlink()
+    return env
+
+
+T = "{tmp}"
+SHIPPED = "{repo}/metrics/pccr_transfer.csv"
+DESIGN = ["design", "--vehicle", "tt", "--ref", "R1"]
+CAL = ["calibrate", "--results"]
+SHOW = ["vehicle", "show", "tt", "--out"]
+BENCH = ["bench", "generate", "--rigs", "R1", "--out", f"{T}/gen"]
+
+#: (class, arguments, fragment of the error line)
+CASES: list[tuple[str, list[str], str]] = [
+    # --- usage: commands, options, values (click, at parse time) ---
+    ("unknown command", ["desgn"], "Did you mean 'design'"),
+    ("unknown option", ["rigs", "--jsn"], "--json"),
+    ("extra argument", ["rigs", "R1"], "unexpected extra argument"),
+    ("missing argument", ["rigv"], "Missing argument"),
+    ("missing option", ["design", "--ref", "R1"], "--vehicle"),
+    ("option without its value", ["rigcd", "R1", "R5", "--weights"], "requires an argument"),
+    ("not a number", [*DESIGN, "--yaw-step", "abc"], "--yaw-step"),
+    ("not an integer", [*DESIGN, "--min-coverage", "1.5"], "--min-coverage"),
+    # --- rigs given by name or file ---
+    ("unknown rig name", ["rigcd", "R1", "R99"], "valid names"),
+    ("rig file missing", ["rigv", f"{T}/nofile.json"], "no such rig file"),
+    ("rig file is a folder", ["rigv", f"{T}/emptydir"], "emptydir"),
+    ("rig file not UTF-8", ["rigv", f"{T}/rig_not_utf8.json"], "not UTF-8"),
+    ("rig file not JSON", ["rigv", f"{T}/rig_malformed.json"], "not valid JSON"),
+    ("rig file not an object", ["rigv", f"{T}/rig_list.json"], "JSON object"),
+    ("rig with NaN", ["rigv", f"{T}/rig_nan.json"], "NaN"),
+    ("rig coordinates of 1e308", ["rigv", f"{T}/rig_far.json"], "1000 m"),
+    ("rig coordinates of 1e308 (rigcd)", ["rigcd", f"{T}/rig_far.json", "R1"], "1000 m"),
+    ("rig coordinates of 1e308 (coverage)", ["coverage", f"{T}/rig_far.json"], "1000 m"),
+    ("rig without cameras", ["rigcd", f"{T}/rig_no_cameras.json", "R1"], "non-empty list"),
+    ("rig with fov 200", ["rigv", f"{T}/rig_fov_200.json"], "(0, 180)"),
+    ("unknown rank candidate", ["rank", "R5", "R77", "--ref", "R1"], "R77"),
+    ("unknown rank reference", ["rank", "R5", "--ref", "R77"], "R77"),
+    # --- weights and metric ---
+    ("unknown weights name", ["rigcd", "R1", "R6", "--weights", "YOLO"], "joint"),
+    ("weights file missing", ["rigcd", "R1", "R6", "--weights", f"{T}/nothere.json"], "cannot read"),
+    ("weights not UTF-8", ["rigcd", "R1", "R6", "--weights", f"{T}/weights_not_utf8.json"], "not UTF-8"),
+    ("weights not JSON", ["rigv", "R1", "--weights", f"{T}/weights_bad_json.json"], "not valid JSON"),
+    ("weights not a JSON file", ["rigv", "R1", "--weights", f"{T}/weights.txt"], "not valid JSON"),
+    ("weights beta not a number", ["rigcd", "R1", "R6", "--weights", f"{T}/weights_beta_text.json"], "beta.t"),
+    ("weights beta null", ["rank", "R6", "--ref", "R1", "--weights", f"{T}/weights_beta_null.json"], "beta.r"),
+    ("weights beta a list", ["rigcd", "R1", "R6", "--weights", f"{T}/weights_beta_list.json"], "beta must be"),
+    ("weights without K", ["rigcd", "R1", "R6", "--weights", f"{T}/weights_missing_k.json"], "needs the keys"),
+    ("weights alpha 2", ["rigcd", "R1", "R6", "--weights", f"{T}/weights_alpha_2.json"], "alpha"),
+    ("weights negative lambda", ["rigcd", "R1", "R6", "--weights", f"{T}/weights_negative.json"], "lambda_t"),
+    ("weights of the other metric", ["rigcd", "R1", "R6", "--weights", f"{T}/weights_plus.json"], "--metric rigcd+"),
+    ("unknown metric", ["rigcd", "R1", "R6", "--metric", "cd"], "valid names"),
+    ("rigcd+ without weights", ["rigcd", "R1", "R6", "--metric", "rigcd+"], "--weights"),
+    ("unknown metric (rank)", ["rank", "R6", "--ref", "R1", "--metric", "x"], "valid names"),
+    # --- calibrate ---
+    ("results missing", [*CAL, f"{T}/no_results"], "no such results"),
+    ("results only the diagonal", [*CAL, f"{T}/diagonal.csv"], "only the diagonal"),
+    ("results without control pairs", [*CAL, f"{T}/no_control.csv"], "--control"),
+    ("results CSV not UTF-8", [*CAL, f"{T}/not_utf8.csv"], "not UTF-8"),
+    ("results CSV header", [*CAL, f"{T}/bad_header.csv"], "header"),
+    ("results CSV empty", [*CAL, f"{T}/empty.csv"], "header"),
+    ("results CSV field count", [*CAL, f"{T}/three_fields.csv"], "3 fields"),
+    ("results mAP above 1", [*CAL, f"{T}/map_2.csv"], "[0, 1]"),
+    ("results mAP not a number", [*CAL, f"{T}/map_text.csv"], "mAP must be a number"),
+    ("results pair twice", [*CAL, f"{T}/twice.csv"], "twice"),
+    ("results folder not JSON", [*CAL, f"{T}/results_bad"], "not valid JSON"),
+    ("results folder without diagonal", [*CAL, f"{T}/results_no_diagonal"], "diagonal"),
+    ("results folder empty", [*CAL, f"{T}/emptydir"], "no transfer results"),
+    ("calibrate --bootstrap -1", [*CAL, SHIPPED, "--bootstrap", "-1"], "--bootstrap"),
+    ("calibrate --seed -1", [*CAL, SHIPPED, "--seed", "-1"], "--seed"),
+    ("calibrate --metric", [*CAL, SHIPPED, "--metric", "x"], "valid names"),
+    ("calibrate --out is a file", [*CAL, SHIPPED, "--out", f"{T}/file.txt"], "is a file"),
+    ("calibrate --out under a file", [*CAL, SHIPPED, "--out", f"{T}/file.txt/x"],
+     "is a file, not a folder"),
+    ("calibrate --out not empty", [*CAL, SHIPPED, "--out", f"{T}/full"], "--force"),
+    ("calibrate --out empty name", [*CAL, SHIPPED, "--out", ""], "a name of its own"),
+    # --- check, vehicles ---
+    ("check unknown rig", ["check", "R99"], "R99"),
+    ("check unknown vehicle", ["check", "R1", "--vehicle", "nosuchcar"], "nosuchcar"),
+    ("check broken user vehicle", ["check", "R1", "--vehicle", "wreck"], "user vehicle 'wreck' cannot be read"),
+    ("check rig file not UTF-8", ["check", f"{T}/rig_not_utf8.json"], "not UTF-8"),
+    # --- vehicle show / export / add ---
+    ("show unknown vehicle", ["vehicle", "show", "nosuchcar", "--out", f"{T}/x.png"], "nosuchcar"),
+    ("show picture extension .txt", [*SHOW, f"{T}/x.txt"], ".txt is not a format"),
+    ("show without extension", [*SHOW, f"{T}/cov07"], "no extension"),
+    ("show --out is a folder", [*SHOW, f"{T}/emptydir"], "no extension"),
+    ("show --out folder named .png", [*SHOW, f"{T}/dir.png"], "is a folder"),
+    ("show --out under a file", [*SHOW, f"{T}/file.txt/x.png"], "is a file, not a folder"),
+    ("show --out empty", [*SHOW, ""], "no extension"),
+    ("show unknown rig", [*SHOW, f"{T}/x.png", "--rig", "R99"], "R99"),
+    ("export unknown format", ["vehicle", "export", "tt", "--out", f"{T}/x.xyz"], ".ply"),
+    ("export unknown frame", ["vehicle", "export", "tt", "--out", f"{T}/x.ply", "--frame", "enu"], "--frame"),
+    ("export unknown vehicle", ["vehicle", "export", "nosuchcar", "--out", f"{T}/x.ply"], "nosuchcar"),
+    ("export --out under a file", ["vehicle", "export", "tt", "--out", f"{T}/file.txt/x.ply"], "is a file"),
+    ("add name with spaces", ["vehicle", "add", "my car", "--mesh", f"{T}/car.stl"], "letters, digits"),
+    ("add built-in name", ["vehicle", "add", "etron", "--mesh", f"{T}/car.stl"], "built-in"),
+    ("add built-in alias", ["vehicle", "add", "SUV", "--mesh", f"{T}/car.stl"], "built-in"),
+    ("add existing name", ["vehicle", "add", "mycar", "--mesh", f"{T}/car.stl"], "--force"),
+    ("add existing name in capitals", ["vehicle", "add", "MYCAR", "--mesh", f"{T}/car.stl"], "ignore case"),
+    ("add broken name without force", ["vehicle", "add", "wreck", "--mesh", f"{T}/car.stl"], "--force"),
+    ("add mesh missing", ["vehicle", "add", "x", "--mesh", f"{T}/none.stl"], "no such mesh"),
+    ("add mesh not a mesh", ["vehicle", "add", "x", "--mesh", f"{T}/file.txt"], "cannot read"),
+    ("add unknown frame", ["vehicle", "add", "x", "--mesh", f"{T}/car.stl", "--frame", "enu"], "--frame"),
+    ("add zones not UTF-8", ["vehicle", "add", "x", "--mesh", f"{T}/car.stl", "--zones", f"{T}/zones_not_utf8.toml"],
+     "not UTF-8"),
+    ("add zones not TOML", ["vehicle", "add", "x", "--mesh", f"{T}/car.stl", "--zones", f"{T}/zones_bad.toml"],
+     "not valid TOML"),
+    ("add zones without zones", ["vehicle", "add", "x", "--mesh", f"{T}/car.stl", "--zones", f"{T}/zones_none.toml"],
+     "[[zones]]"),
+    ("add zone without max", ["vehicle", "add", "x", "--mesh", f"{T}/car.stl", "--zones", f"{T}/zones_no_max.toml"],
+     "zones_no_max.toml"),
+    ("add zones file missing", ["vehicle", "add", "x", "--mesh", f"{T}/car.stl", "--zones", f"{T}/nozones.toml"],
+     "cannot read"),
+    # --- coverage ---
+    ("coverage unknown rig", ["coverage", "R99"], "R99"),
+    ("coverage unknown vehicle", ["coverage", "R1", "--vehicle", "nosuchcar"], "nosuchcar"),
+    ("coverage unknown --compare", ["coverage", "R1", "--compare", "R99"], "R99"),
+    ("coverage --out is a file", ["coverage", "R1", "--out", f"{T}/file.txt"], "is a file"),
+    ("coverage --out under a file", ["coverage", "R1", "--out", f"{T}/file.txt/sub"], "is a file, not a folder"),
+    ("coverage --out not empty", ["coverage", "R1", "--out", f"{T}/full"], "--force"),
+    ("coverage --out empty name", ["coverage", "R1", "--out", ""], "needs a folder name"),
+    ("coverage --out the current folder", ["coverage", "R1", "--out", "."], "a name of its own"),
+    ("coverage --out unwritable", ["coverage", "R1", "--out", "/proc/rigopt-out"], "/proc/rigopt-out"),
+    # --- design ---
+    ("design unknown vehicle", ["design", "--vehicle", "nosuchcar", "--ref", "R1"], "nosuchcar"),
+    ("design unknown ref", ["design", "--vehicle", "tt", "--ref", "R99"], "R99"),
+    ("design empty ref", ["design", "--vehicle", "tt", "--ref", ","], "--ref"),
+    ("design unknown weights", [*DESIGN, "--weights", "nosuchweights"], "joint"),
+    ("design weights beta text", [*DESIGN, "--weights", f"{T}/weights_beta_text.json"], "beta.t"),
+    ("design unknown metric", [*DESIGN, "--metric", "x"], "valid names"),
+    ("design --cameras 0", [*DESIGN, "--cameras", "0"], "--cameras"),
+    ("design --cameras reversed", [*DESIGN, "--cameras", "9-3"], "--cameras"),
+    ("design --cameras text", [*DESIGN, "--cameras", "many"], "--cameras"),
+    ("design --fov outside (0, 180)", [*DESIGN, "--fov", "0,200"], "(0, 180)"),
+    ("design --fov text", [*DESIGN, "--fov", "wide"], "--fov"),
+    ("design --fov reversed range", [*DESIGN, "--fov", "120-60"], "--fov"),
+    ("design --fov empty", [*DESIGN, "--fov", ","], "--fov"),
+    ("design --pitch text", [*DESIGN, "--pitch", "abc"], "--pitch"),
+    ("design --pitch 200", [*DESIGN, "--pitch", "200"], "[-90, 90]"),
+    ("design --yaw-step 0", [*DESIGN, "--yaw-step", "0"], "--yaw-step"),
+    ("design --yaw-step -5", [*DESIGN, "--yaw-step", "-5"], "--yaw-step"),
+    ("design --yaw-step 400", [*DESIGN, "--yaw-step", "400"], "--yaw-step"),
+    ("design --yaw-step nan", [*DESIGN, "--yaw-step", "nan"], "--yaw-step"),
+    ("design --time-limit -1", [*DESIGN, "--time-limit", "-1"], "--time-limit"),
+    ("design --time-limit 0", [*DESIGN, "--time-limit", "0"], "--time-limit"),
+    ("design --time-limit inf", [*DESIGN, "--time-limit", "inf"], "--time-limit"),
+    ("design --spacing 0", [*DESIGN, "--spacing", "0"], "--spacing"),
+    ("design --spacing -1", [*DESIGN, "--spacing", "-1"], "--spacing"),
+    ("design --min-coverage -1", [*DESIGN, "--min-coverage", "-1"], "--min-coverage"),
+    ("design --min-overlap -1", [*DESIGN, "--min-overlap", "-1"], "--min-overlap"),
+    ("design --out is a file", [*DESIGN, "--out", f"{T}/file.txt"], "is a file"),
+    ("design --out under a file", [*DESIGN, "--out", f"{T}/file.txt/d"], "is a file, not a folder"),
+    ("design --out not empty", [*DESIGN, "--out", f"{T}/full"], "--force"),
+    ("design --out unwritable", [*DESIGN, "--out", "/proc/rigopt-design"], "/proc/rigopt-design"),
+    ("design --pareto --out not empty", [*DESIGN, "--pareto", "--out", f"{T}/full"], "--force"),
+    # --- import nuscenes ---
+    ("import missing folder", ["import", "nuscenes", f"{T}/none", "--out", f"{T}/r.json"], "no such directory"),
+    ("import tables not UTF-8", ["import", "nuscenes", f"{T}/nuscenes_not_utf8", "--out", f"{T}/r.json"],
+     "not UTF-8"),
+    ("import --out not .json", ["import", "nuscenes", f"{T}/none", "--out", f"{T}/r.txt"], ".json"),
+    ("import --out under a file", ["import", "nuscenes", f"{T}/none", "--out", f"{T}/file.txt/r.json"],
+     "is a file"),
+    ("import --image-size text", ["import", "nuscenes", f"{T}/none", "--out", f"{T}/r.json", "--image-size",
+                                  "1280by720"], "1280by720"),
+    ("import --image-size 0x0", ["import", "nuscenes", f"{T}/none", "--out", f"{T}/r.json", "--image-size", "0x0"],
+     "WIDTHxHEIGHT"),
+    # --- bench generate / show ---
+    ("generate --size 100000x100000", [*BENCH, "--size", "100000x100000"], "GiB"),
+    ("generate --size text", [*BENCH, "--size", "big"], "WIDTHxHEIGHT"),
+    ("generate --seed -5", [*BENCH, "--seed", "-5"], "--seed"),
+    ("generate --scenes 0", [*BENCH, "--scenes", "0"], "--scenes"),
+    ("generate --frames 0", [*BENCH, "--frames", "0"], "--frames"),
+    ("generate unknown split", [*BENCH, "--split", "dev"], "dev"),
+    ("generate unknown rig", ["bench", "generate", "--rigs", "R99", "--out", f"{T}/gen"], "R99"),
+    ("generate --out is a file", ["bench", "generate", "--rigs", "R1", "--out", f"{T}/file.txt"], "is a file"),
+    ("generate --out under a file", ["bench", "generate", "--rigs", "R1", "--out", f"{T}/file.txt/g"], "is a file"),
+    ("show missing folder", ["bench", "show", f"{T}/none", "--rig", "R1", "--out", f"{T}/s.png"], "no such rig"),
+    ("show sample out of range", ["bench", "show", f"{T}/bench", "--rig", "R1", "--sample", "99", "--out",
+                                  f"{T}/s.png"], "--sample"),
+    ("show missing image", ["bench", "show", f"{T}/bench_missing", "--rig", "R1", "--out", f"{T}/s.png"],
+     "lacks its image"),
+    ("bench show picture extension .txt", ["bench", "show", f"{T}/bench", "--rig", "R1", "--out", f"{T}/s.txt"],
+     ".txt is not a format"),
+    # --- bench train / evaluate / matrix, validate (torch) ---
+    ("train unknown model", ["bench", "train", "--data", f"{T}/bench", "--rig", "R1", "--model", "yolo"], "yolo"),
+    ("train missing split", ["bench", "train", "--data", f"{T}/bench", "--rig", "R1", "--model", "lss"],
+     "no train split"),
+    ("train unknown size", ["bench", "train", "--data", f"{T}/bench", "--rig", "R1", "--model", "lss", "--size",
+                            "huge"], "huge"),
+    ("train unknown device", ["bench", "train", "--data", f"{T}/bench", "--rig", "R1", "--model", "lss",
+                              "--device", "tpu"], "tpu"),
+    ("evaluate garbage checkpoint", ["bench", "evaluate", "--data", f"{T}/bench", "--rig", "R1", "--model", "lss",
+                                     "--split", "mini", "--checkpoint", f"{T}/garbage.pt"], "not a readable"),
+    ("evaluate missing checkpoint", ["bench", "evaluate", "--data", f"{T}/bench", "--rig", "R1", "--model", "lss",
+                                     "--split", "mini"], "no such checkpoint"),
+    ("matrix --out is a file", ["bench", "matrix", "--data", f"{T}/bench", "--rigs", "R1", "--model", "lss",
+                                "--out", f"{T}/file.txt"], "is a file"),
+    ("matrix unknown model", ["bench", "matrix", "--data", f"{T}/bench", "--rigs", "R1", "--model", "yolo",
+                              "--out", f"{T}/m"], "yolo"),
+    ("validate missing design", ["validate", f"{T}/none.json", "--ref", "R1", "--model", "lss", "--data",
+                                 f"{T}/bench"], "no such design"),
+    ("validate --out not .json", ["validate", f"{T}/rig_nan.json", "--ref", "R1", "--model", "lss", "--data",
+                                  f"{T}/bench", "--out", f"{T}/v.txt"], ".json"),
+]

@@ -1,0 +1,89 @@
+"""Run every bad input of cases.py through the installed ``rigopt`` console script and write docs/errors.md.
+
+Each must exit 2 with exactly one ``rigopt: error: ...`` line on stderr, no traceback and nothing on stdout;
+the script stops with a list of the cases that do not. Usage: ``python studies/bad_inputs/run.py``.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+REPO = HERE.parents[1]
+sys.path.insert(0, str(HERE))
+
+from cases import CASES, make_fixtures  # noqa: E402
+
+DOC = REPO / "docs" / "errors.md"
+INTRO = """# Errors: every bad input, its message
+
+Every input rigopt cannot use ends in one line on stderr, `rigopt: error: ...`, and exit code 2: it names
+the file or option and says how to fix it. Never a traceback. Usage errors (unknown commands or options, values
+of the wrong type or out of range) are found while the command line is parsed, and `--out` before any work.
+
+Outputs are written whole or not at all (`rigopt/output.py`): a folder is built in a hidden temporary sibling
+and renamed into place when complete; a file is written beside its target and renamed over it. A failure or
+Ctrl-C (exit 130, `rigopt: interrupted`) leaves nothing, or the previous complete output. An existing non-empty
+output folder is refused unless `--force`, which replaces it whole. `bench generate` and `bench matrix` are
+resumable instead: their `--out` may exist and is added to; each image is written whole, a scene counts once its
+part file exists, and the split's tables are replaced whole, so they only ever describe complete scenes.
+
+A full disk (ENOSPC) while writing gives `rigopt: error: --out OUT: cannot write the output (no space left on
+the device; free some space or write elsewhere); nothing was changed there` (tested by injecting the error into
+the writers: tests/test_output.py, tests/cli/test_atomic_outputs.py).
+
+The table is written by `studies/bad_inputs/run.py`, which runs each case through the installed console script
+(`{tmp}` is a scratch folder with the files named, `{repo}` the checkout); tests/cli/test_bad_inputs.py runs
+each in-process and checks that the message here is the one rigopt prints.
+
+| class | command | message |
+|---|---|---|
+"""
+
+
+def run_case(args: list[str], tmp: Path, env: dict[str, str]) -> subprocess.CompletedProcess:
+    script = Path(sys.executable).parent / "rigopt"
+    command = [str(script if script.is_file() else shutil.which("rigopt"))]
+    filled = [a.format(tmp=tmp, repo=REPO) for a in args]
+    return subprocess.run(command + filled, capture_output=True, text=True, cwd=tmp, env={**os.environ, **env},
+                          timeout=300)
+
+
+def normalised(text: str, tmp: Path) -> str:
+    return text.replace(str(tmp), "{tmp}").replace(str(REPO), "{repo}")
+
+
+def main() -> None:
+    tmp = Path(tempfile.mkdtemp(prefix="rigopt-bad-inputs-")).resolve()
+    try:
+        env = make_fixtures(tmp)
+        with ThreadPoolExecutor(max_workers=os.cpu_count() or 2) as pool:
+            results = list(pool.map(lambda case: run_case(case[1], tmp, env), CASES))
+        rows, failures = [], []
+        for (name, args, fragment), result in zip(CASES, results):
+            lines = result.stderr.strip().splitlines()
+            line = normalised(lines[-1] if lines else "", tmp)
+            ok = (result.returncode == 2 and len(lines) == 1 and line.startswith("rigopt: error: ")
+                  and "Traceback" not in result.stderr and fragment in line and not result.stdout)
+            if not ok:
+                failures.append(f"{name}: exit {result.returncode}, stdout {result.stdout[:80]!r}, stderr "
+                                f"{normalised(result.stderr, tmp)[-400:]!r}")
+            shown = " ".join(a if a and " " not in a else repr(a) for a in args)
+            rows.append(f"| {name} | `rigopt {shown}` | `{line.replace('|', '/')}` |")
+        DOC.write_text(INTRO + "\n".join(rows) + "\n")
+        print(f"{len(CASES)} cases, {len(CASES) - len(failures)} as they should be; wrote {DOC}")
+        if failures:
+            print("\n".join(failures))
+            sys.exit(1)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,91 @@
+"""Every bad input of the catalogue (studies/bad_inputs/cases.py) exits 2 with one ``rigopt: error:`` line
+that contains its fragment, and docs/errors.md shows exactly that line.
+
+The cases run in-process through ``rigopt.cli.run`` (the console script's ``main`` minus the stdout
+diversion, which tests/cli/test_console_script.py checks in real processes); studies/bad_inputs/run.py runs
+the same table through the installed console script and rewrites the docs page.
+"""
+
+from __future__ import annotations
+
+import errno
+import importlib.util
+import re
+from pathlib import Path
+
+import pytest
+
+from rigopt.cli import INPUT_ERROR, INTERRUPTED, run
+
+REPO = Path(__file__).resolve().parents[2]
+DOC = REPO / "docs" / "errors.md"
+
+
+def _load_cases():
+    spec = importlib.util.spec_from_file_location("bad_input_cases", REPO / "studies" / "bad_inputs" / "cases.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+CASES_MODULE = _load_cases()
+CASES = {name: (args, fragment) for name, args, fragment in CASES_MODULE.CASES}
+
+
+def documented() -> dict[str, str]:
+    """class -> message, from the table in docs/errors.md."""
+    rows = re.findall(r"^\| (.+?) \| `rigopt .*?` \| `(.*)` \|$", DOC.read_text(), flags=re.MULTILINE)
+    return dict(rows)
+
+
+@pytest.fixture(scope="module")
+def scratch(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("bad_inputs").resolve()
+    env = CASES_MODULE.make_fixtures(tmp)
+    return tmp, env
+
+
+def test_the_catalogue_has_no_duplicate_classes():
+    assert len(CASES) == len(CASES_MODULE.CASES)
+
+
+def test_the_docs_table_lists_every_class():
+    assert set(documented()) == set(CASES)
+
+
+@pytest.mark.parametrize("name", list(CASES))
+def test_bad_input(scratch, name, capsys, monkeypatch):
+    tmp, env = scratch
+    for key, value in env.items():
+        monkeypatch.setenv(key, value)
+    monkeypatch.chdir(tmp)
+    args, fragment = CASES[name]
+    capsys.readouterr()
+    code = run([a.format(tmp=tmp, repo=REPO) for a in args])
+    out, err = capsys.readouterr()
+    lines = err.strip().splitlines()
+    assert code == INPUT_ERROR, err
+    assert len(lines) == 1 and lines[0].startswith("rigopt: error: "), err
+    assert fragment in lines[0]
+    assert out == ""
+    shown = lines[0].replace(str(tmp), "{tmp}").replace(str(REPO), "{repo}").replace("|", "/")
+    assert documented()[name] == shown, "docs/errors.md is out of date: python studies/bad_inputs/run.py"
+
+
+def test_an_interrupt_is_one_line_and_exit_130(monkeypatch, capsys):
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr("rigopt.metrics.rigv.rigv", interrupted)
+    assert run(["rigv", "R1"]) == INTERRUPTED
+    assert capsys.readouterr().err.strip() == "rigopt: interrupted"
+
+
+def test_an_os_error_reaching_the_top_is_one_line(monkeypatch, capsys):
+    def full(*args, **kwargs):
+        raise OSError(errno.ENOSPC, "No space left on device", "/somewhere/file")
+
+    monkeypatch.setattr("rigopt.metrics.rigv.rigv", full)
+    assert run(["rigv", "R1"]) == INPUT_ERROR
+    assert capsys.readouterr().err.strip() == ("rigopt: error: /somewhere/file: no space left on the device; free "
+                                               "some space or write elsewhere (--out)")

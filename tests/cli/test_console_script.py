@@ -1,0 +1,113 @@
+"""The installed ``rigopt`` console script in real processes: every ``--json`` command's stdout parses as
+JSON (a banner a C library prints, such as HiGHS's "Running HiGHS ...", fails this), and one process per
+exit path of bad input (a library error, a usage error, an interrupt-free OS error) prints one line.
+
+The commands start together (a module fixture) and run side by side; the design runs on the small tt with
+few candidates. ``bench evaluate --json`` and ``validate --json`` need a trained detector: they are checked
+the same way in tests/baselines/test_commands.py.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[2]
+SHIPPED_CSV = REPO / "metrics" / "pccr_transfer.csv"
+SMALL_DESIGN = ["--vehicle", "tt", "--ref", "R1", "--fov", "120", "--pitch", "0", "--yaw-step", "30",
+                "--time-limit", "5"]
+
+#: name -> (arguments, exit codes that are fine); {tmp} is the run's folder.
+JSON_COMMANDS = {
+    "rigs": (["rigs", "--json"], {0}),
+    "rigv": (["rigv", "R1", "R5", "--json"], {0}),
+    "rigcd": (["rigcd", "R1", "R5", "--weights", "joint", "--json"], {0}),
+    "rank": (["rank", "R5", "R6", "--ref", "R1", "--json"], {0}),
+    "calibrate": (["calibrate", "--results", str(SHIPPED_CSV), "--bootstrap", "5", "--json"], {0}),
+    "calibrate --out": (["calibrate", "--results", str(SHIPPED_CSV), "--bootstrap", "5", "--json", "--out",
+                         "{tmp}/calibration"], {0}),
+    "check": (["check", "R1", "--json"], {0, 1}),  # exit 1 is an invalid rig, still JSON
+    "vehicles": (["vehicles", "--json"], {0}),
+    "coverage": (["coverage", "R1", "--json"], {0}),
+    "coverage --out": (["coverage", "R1", "--json", "--out", "{tmp}/coverage"], {0}),
+    "design": (["design", *SMALL_DESIGN, "--cameras", "6", "--json", "--out", "{tmp}/design"], {0}),
+    "design --pareto": (["design", *SMALL_DESIGN, "--cameras", "6-7", "--pareto", "--json", "--out",
+                         "{tmp}/pareto"], {0}),
+}
+
+
+def console_script() -> Path:
+    """The ``rigopt`` script installed beside this Python (a venv's bin/) or on PATH."""
+    beside = Path(sys.executable).parent / ("rigopt.exe" if os.name == "nt" else "rigopt")
+    found = beside if beside.is_file() else shutil.which("rigopt")
+    if found is None:
+        pytest.fail("the rigopt console script is not installed; pip install -e . first")
+    return Path(found)
+
+
+def start(args, tmp: Path) -> subprocess.Popen:
+    env = {**os.environ, "RIGOPT_HOME": str(tmp / "home")}  # no user vehicles of the machine
+    return subprocess.Popen([str(console_script()), *(a.format(tmp=tmp) for a in args)], cwd=tmp, env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+@pytest.fixture(scope="module")
+def json_runs(tmp_path_factory):
+    """Every JSON_COMMANDS case run to its end: name -> (exit code, stdout, stderr)."""
+    tmp = tmp_path_factory.mktemp("console_script")
+    processes = {name: start(args, tmp) for name, (args, _) in JSON_COMMANDS.items()}
+    results = {}
+    try:
+        for name, process in processes.items():
+            stdout, stderr = process.communicate(timeout=600)
+            results[name] = (process.returncode, stdout, stderr)
+    finally:
+        for process in processes.values():
+            if process.poll() is None:
+                process.kill()
+                process.communicate()
+    return results
+
+
+@pytest.mark.parametrize("name", list(JSON_COMMANDS))
+def test_json_stdout_parses(json_runs, name):
+    code, stdout, stderr = json_runs[name]
+    assert code in JSON_COMMANDS[name][1], stderr
+    json.loads(stdout)  # fails on any banner or progress line before or after the JSON
+
+
+def test_the_solver_banner_goes_to_stderr(json_runs):
+    """The design runs HiGHS; whatever it prints at the C level must not be lost, only moved to stderr."""
+    code, stdout, stderr = json_runs["design"]
+    assert code == 0, stderr
+    assert "HiGHS" not in stdout
+
+
+@pytest.mark.parametrize("args, fragment", [
+    (["rigcd", "R1", "R99"], "R99"),                      # a RigoptError from the library
+    (["design", "--vehicle", "tt", "--ref", "R1", "--yaw-step", "abc"], "--yaw-step"),  # a click usage error
+    (["desgn"], "design"),                                # an unknown command, with a suggestion
+    (["rigs", "--jsn"], "--json"),                        # an unknown option, with the one meant
+])
+def test_bad_input_is_one_line_and_exit_2(tmp_path, args, fragment):
+    process = start(args, tmp_path)
+    stdout, stderr = process.communicate(timeout=120)
+    assert process.returncode == 2, stderr
+    assert "Traceback" not in stderr
+    lines = stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("rigopt: error: "), stderr
+    assert fragment in lines[0]
+    assert stdout == ""
+
+
+def test_help_goes_to_stdout(tmp_path):
+    process = start(["--help"], tmp_path)
+    stdout, stderr = process.communicate(timeout=120)
+    assert process.returncode == 0, stderr
+    assert "design" in stdout and "calibrate" in stdout
