@@ -55,9 +55,8 @@ def parse_lenses(text: str) -> tuple[tuple[float, ...], tuple[float, float] | No
         catalogue, fov_range = parse_numbers(text, "--fov"), None
     try:
         lenses = range_lenses(*fov_range) if fov_range else lens_catalogue(catalogue)
-    except RigoptError as error:
-        raise RigoptError(f"--fov must be lenses or a range (low-high) within (0, 180) degrees, got {text!r} "
-                          f"({error})") from None
+    except RigoptError:
+        raise RigoptError(f"--fov must be lenses or a range (low-high) within (0, 180) degrees, got {text!r}") from None
     return lenses, fov_range
 
 
