@@ -16,7 +16,7 @@ torch = pytest.importorskip("torch")
 from typer.testing import CliRunner  # noqa: E402
 
 from rigopt.baselines.protocol import evaluate_on, write_results  # noqa: E402
-from rigopt.cli import app  # noqa: E402
+from rigopt.cli import INPUT_ERROR, app, run  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[2]
 runner = CliRunner()
@@ -28,9 +28,19 @@ def invoke(*args):
     return result.output
 
 
-def run_cli(*args):
-    return subprocess.run([sys.executable, "-c", "from rigopt.cli import main; main()", *map(str, args)],
-                          capture_output=True, text=True, timeout=300)
+def run_cli(capsys, *args) -> tuple[int, str]:
+    """(exit code, stderr) of ``rigopt ARGS`` run in-process through the console script's error handling."""
+    capsys.readouterr()
+    code = run([str(a) for a in args])
+    return code, capsys.readouterr().err
+
+
+def console_script(*args) -> subprocess.CompletedProcess:
+    """The installed ``rigopt`` script run in a real process (what a user's shell runs)."""
+    script = Path(sys.executable).parent / "rigopt"
+    script = str(script) if script.is_file() else shutil.which("rigopt")
+    assert script, "the rigopt console script is not installed; pip install -e . first"
+    return subprocess.run([script, *map(str, args)], capture_output=True, text=True, timeout=300)
 
 
 @pytest.fixture(scope="module")
@@ -55,9 +65,11 @@ def test_train_writes_a_checkpoint_and_a_log_and_a_rerun_does_nothing(trained):
 
 
 def test_evaluate_prints_the_metrics_of_the_checkpoint_on_another_rig(trained):
-    output = invoke("bench", "evaluate", "--data", trained, "--rig", "R5", "--model", "lss", "--trained-on", "R1",
-                    "--json")
-    metrics = json.loads(output)
+    """--json through the installed console script (stdout JSON only, whatever torch prints); the table in-process."""
+    process = console_script("bench", "evaluate", "--data", trained, "--rig", "R5", "--model", "lss",
+                             "--trained-on", "R1", "--json")
+    assert process.returncode == 0, process.stderr
+    metrics = json.loads(process.stdout)
     expected = evaluate_on(trained / "runs" / "lss" / "R1" / "checkpoint.pt", trained, "R5", family="lss")
     assert metrics == json.loads(json.dumps(expected))
     assert len(metrics["raw"]) == 9 * 4
@@ -92,8 +104,11 @@ def test_calibrate_reads_a_results_folder_the_protocol_writes(tmp_path):
 
 
 def test_validate_renders_the_design_and_reports_measured_beside_predicted(trained):
+    """Through the installed console script: its stdout is JSON only, whatever torch or a C library prints."""
     design = REPO / "studies" / "baselines" / "rigs" / "firetruck_from_R1.json"
-    result = json.loads(invoke("validate", design, "--ref", "R1", "--model", "lss", "--data", trained, "--json"))
+    process = console_script("validate", design, "--ref", "R1", "--model", "lss", "--data", trained, "--json")
+    assert process.returncode == 0, process.stderr
+    result = json.loads(process.stdout)
     roles = {entry["role"]: entry for entry in result["rigs"]}
     assert set(roles) == {"design", "hand-designed", "naive transfer"}
     assert roles["design"]["rig"] == "firetruck_from_R1" and roles["hand-designed"]["rig"] == "R6"
@@ -119,31 +134,18 @@ def test_validate_renders_the_design_and_reports_measured_beside_predicted(train
       "{data}/runs/lss/R1/checkpoint.pt"], "a lss checkpoint, not petr"),
     (["validate", "{design}", "--ref", "R1", "--model", "petr", "--data", "{data}"], "rigopt bench train"),
 ])
-def test_bad_input_exits_2_with_one_line(trained, args, message):
+def test_bad_input_exits_2_with_one_line(trained, args, message, capsys):
     design = REPO / "studies" / "baselines" / "rigs" / "hgv_from_R1.json"
-    result = run_cli(*[a.format(data=trained, design=design) for a in args])
-    assert result.returncode == 2, result.stderr
-    assert message in result.stderr and "Traceback" not in result.stderr
-    assert len(result.stderr.strip().splitlines()) == 1
+    code, stderr = run_cli(capsys, *[a.format(data=trained, design=design) for a in args])
+    assert code == INPUT_ERROR, stderr
+    assert message in stderr and "Traceback" not in stderr
+    lines = stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("rigopt: error: ")
 
 
 @pytest.mark.skipif(torch.cuda.is_available(), reason="this machine has CUDA")
-def test_cuda_without_cuda_exits_2(trained):
-    result = run_cli("bench", "train", "--data", trained, "--rig", "R1", "--model", "lss", "--device", "cuda")
-    assert result.returncode == 2 and "no CUDA device" in result.stderr
+def test_cuda_without_cuda_exits_2(trained, capsys):
+    code, stderr = run_cli(capsys, "bench", "train", "--data", trained, "--rig", "R1", "--model", "lss",
+                           "--device", "cuda")
+    assert code == INPUT_ERROR and "no CUDA device" in stderr
 
-
-@pytest.mark.parametrize("args", [
-    ["bench", "evaluate", "--data", "{data}", "--rig", "R5", "--model", "lss", "--trained-on", "R1", "--json"],
-    ["validate", "{design}", "--ref", "R1", "--model", "lss", "--data", "{data}", "--json"],
-])
-def test_json_of_the_installed_console_script_parses(trained, args):
-    """stdout of the real ``rigopt`` script is JSON only (anything torch or a C library prints goes to stderr)."""
-    script = Path(sys.executable).parent / "rigopt"
-    script = str(script) if script.is_file() else shutil.which("rigopt")
-    assert script, "the rigopt console script is not installed; pip install -e . first"
-    design = REPO / "studies" / "baselines" / "rigs" / "hgv_from_R1.json"
-    result = subprocess.run([script, *(a.format(data=trained, design=design) for a in args)],
-                            capture_output=True, text=True, timeout=300)
-    assert result.returncode == 0, result.stderr
-    json.loads(result.stdout)
