@@ -33,10 +33,28 @@ def fail_with(error):
 
 
 @pytest.fixture(scope="module")
-def coverage_out(tmp_path_factory):
+def r1_report():
+    """R1's coverage report, computed once: the tests are about writing it, not about computing it."""
+    from rigopt.coverage.measures import coverage_report
+    from rigopt.rig.library import load_rig
+    from rigopt.vehicle.library import load_vehicle
+
+    rig = load_rig("R1")
+    return coverage_report(rig, load_vehicle(rig.vehicle))
+
+
+@pytest.fixture(autouse=True)
+def known_report(r1_report, monkeypatch):
+    monkeypatch.setattr("rigopt.coverage.measures.coverage_report", lambda rig, vehicle: r1_report)
+
+
+@pytest.fixture(scope="module")
+def coverage_out(tmp_path_factory, r1_report):
     """A complete ``rigopt coverage R1 --out`` folder (made once; tests copy it)."""
     out = tmp_path_factory.mktemp("coverage") / "out"
-    result = invoke("coverage", "R1", "--out", out)
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr("rigopt.coverage.measures.coverage_report", lambda rig, vehicle: r1_report)
+        result = invoke("coverage", "R1", "--out", out)
     assert result.exit_code == 0, result.output
     return out
 
