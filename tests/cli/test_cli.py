@@ -1,20 +1,19 @@
 """The ``rigopt`` command line: JSON shapes and values, files written, and one-line errors on bad input.
 
-Normal output goes through typer's CliRunner; exit codes and stderr of bad input through a real
-process running ``rigopt.cli.main`` (the console script's entry point).
+Normal output goes through typer's CliRunner; exit codes and stderr of bad input through the console
+script's error handling, in-process (tests/console.py).
 """
 
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 from typer.testing import CliRunner
 
+from in_process import run_rigopt
 from rigopt.cli.app import app
 from rigopt.metrics.reference import rigcd_reference
 from rigopt.metrics.rigcd import rigcd_matrix
@@ -287,8 +286,7 @@ def test_import_nuscenes_round_trip(tmp_path):
 
 
 def run_cli(*args, cwd=None):
-    return subprocess.run([sys.executable, "-c", "from rigopt.cli import main; main()", *map(str, args)],
-                          capture_output=True, text=True, cwd=cwd, timeout=120)
+    return run_rigopt(*args, cwd=cwd)
 
 
 def assert_one_line_error(result, *fragments):

@@ -8,12 +8,11 @@ stays the published RigCD (its predictions equal the rigcd weights' formula on u
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 
 import pytest
 from typer.testing import CliRunner
 
+from in_process import run_rigopt
 from rigopt.cli.app import app
 from rigopt.metrics.calibration import load_weights
 from rigopt.metrics.ranking import predict_transfer
@@ -58,8 +57,7 @@ def test_calibrate_with_rigcd_plus_writes_rigcd_plus_weights(tmp_path):
 
 
 def test_rigcd_command_with_rigcd_plus_needs_weights_and_reports_its_drop():
-    result = subprocess.run([sys.executable, "-c", "from rigopt.cli import main; main()", "rigcd", "R1", "R5",
-                             "--metric", "rigcd+"], capture_output=True, text=True, timeout=120)
+    result = run_rigopt("rigcd", "R1", "R5", "--metric", "rigcd+")
     assert result.returncode == 2 and "Traceback" not in result.stderr
     assert "rigopt: error:" in result.stderr and "--weights" in result.stderr
     data = invoke_json("rigcd", "R1", "R5", "--metric", "rigcd+", "--weights", "PETR", "--json")
@@ -67,8 +65,7 @@ def test_rigcd_command_with_rigcd_plus_needs_weights_and_reports_its_drop():
 
 
 def test_unknown_metric_is_a_one_line_error():
-    result = subprocess.run([sys.executable, "-c", "from rigopt.cli import main; main()", "rank", "R5", "--ref",
-                             "R1", "--metric", "rigcd2"], capture_output=True, text=True, timeout=120)
+    result = run_rigopt("rank", "R5", "--ref", "R1", "--metric", "rigcd2")
     assert result.returncode == 2 and "Traceback" not in result.stderr
     assert "rigcd2" in result.stderr and "rigcd+" in result.stderr
 

@@ -7,15 +7,13 @@ in-process runs; the subprocess run only needs a name that no vehicle has.
 from __future__ import annotations
 
 import json
-import os
-import subprocess
-import sys
 
 import numpy as np
 import pytest
 import trimesh
 from typer.testing import CliRunner
 
+from in_process import run_rigopt
 from rigopt.cli.app import app
 
 pytestmark = pytest.mark.usefixtures("rigopt_home")
@@ -105,10 +103,8 @@ def test_vehicle_show_writes_a_png(mycar, tmp_path):
 
 
 def test_unknown_vehicle_is_a_one_line_error(tmp_path):
-    env = {**os.environ, "RIGOPT_HOME": str(tmp_path / "home")}
-    result = subprocess.run([sys.executable, "-c", "from rigopt.cli import main; main()", "vehicle", "show",
-                             "nosuchcar", "--out", str(tmp_path / "x.png")],
-                            capture_output=True, text=True, env=env, cwd=tmp_path, timeout=120)
+    result = run_rigopt("vehicle", "show", "nosuchcar", "--out", tmp_path / "x.png", cwd=tmp_path,
+                        env={"RIGOPT_HOME": str(tmp_path / "home")})
     assert result.returncode == 2, result.stderr
     lines = result.stderr.strip().splitlines()
     assert len(lines) == 1, result.stderr
