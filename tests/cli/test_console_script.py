@@ -29,12 +29,10 @@ JSON_COMMANDS = {
     "rigv": (["rigv", "R1", "R5", "--json"], {0}),
     "rigcd": (["rigcd", "R1", "R5", "--weights", "joint", "--json"], {0}),
     "rank": (["rank", "R5", "R6", "--ref", "R1", "--json"], {0}),
-    "calibrate": (["calibrate", "--results", str(SHIPPED_CSV), "--bootstrap", "5", "--json"], {0}),
     "calibrate --out": (["calibrate", "--results", str(SHIPPED_CSV), "--bootstrap", "5", "--json", "--out",
                          "{tmp}/calibration"], {0}),
     "check": (["check", "R1", "--json"], {0, 1}),  # exit 1 is an invalid rig, still JSON
     "vehicles": (["vehicles", "--json"], {0}),
-    "coverage": (["coverage", "R1", "--json"], {0}),
     "coverage --out": (["coverage", "R1", "--json", "--out", "{tmp}/coverage"], {0}),
     "design": (["design", *SMALL_DESIGN, "--cameras", "6", "--json", "--out", "{tmp}/design"], {0}),
     "design --pareto": (["design", *SMALL_DESIGN, "--cameras", "6-7", "--pareto", "--json", "--out",
