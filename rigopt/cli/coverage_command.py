@@ -3,7 +3,6 @@ against a second rig, as tables, JSON or a folder with figures and a self-contai
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Optional
 
@@ -57,7 +56,7 @@ def coverage_command(
     if comparison is not None:
         data["compare"] = comparison_dict(comparison)
 
-    written = _write_out(out_dir, force, data, report, loaded, other, comparison) if out_dir is not None else []
+    written = _write_out(out_dir, force, report, loaded, other, comparison) if out_dir is not None else []
     message = f"wrote {', '.join(p.name for p in written)} to {out_dir}"
     if as_json:
         print_json(data)
@@ -69,21 +68,14 @@ def coverage_command(
         console.print(message)
 
 
-def _write_out(out_dir: Path, force: bool, data: dict, report, rig, other, comparison) -> list[Path]:
+def _write_out(out_dir: Path, force: bool, report, rig, other, comparison) -> list[Path]:
     """Write the report folder whole (a temporary sibling renamed into place), or leave ``out_dir`` as it was."""
     from rigopt.output import atomic_folder, published
-    from rigopt.report.coverage_figures import write_bev_figure, write_blind_figure, write_rings_figure
-    from rigopt.report.coverage_html import write_html_report
-    from rigopt.report.json_values import json_ready
+    from rigopt.report.coverage_html import write_coverage_folder
 
     with atomic_folder(out_dir, force=force) as work:
-        json_path = work / "coverage.json"
-        json_path.write_text(json.dumps(json_ready(data), indent=2) + "\n")
-        figures = {"bev": write_bev_figure(report, work / "bev.png", rig),
-                   "rings": write_rings_figure(report, work / "rings.png", other),
-                   "blind": write_blind_figure(report, work / "blind.png")}
-        page = write_html_report(report, work, rig, comparison, other, figures=figures)
-    return published([json_path, *figures.values(), page], work, out_dir)
+        written = write_coverage_folder(work, report, rig, comparison, other)
+    return published(written, work, out_dir)
 
 
 def _print_tables(data: dict, other: dict | None) -> None:

@@ -66,7 +66,8 @@ def write_sample_figure(sample: TrainingSample, path, title: str = "") -> Path:
     bev.set_xlabel("-y (m, right)")
     bev.set_ylabel("x (m, forward)")
     bev.grid(alpha=0.3)
-    bev.legend(fontsize=7, loc="upper right")
+    if len(sample.classes):
+        bev.legend(fontsize=7, loc="upper right")
     bev.set_title("boxes, ego frame (ego at the triangle)", fontsize=9)
     figure.suptitle(title or f"{sample.scene} sample {sample.token[:8]}")
     path = Path(path)

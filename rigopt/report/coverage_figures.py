@@ -161,8 +161,7 @@ def _count_colours(top: int) -> tuple[ListedColormap, BoundaryNorm]:
     """Discrete colours for counts 0 .. top: grey for 0, a sequential palette for 1 .. top; masked cells white."""
     palette = colormaps["YlGnBu"]
     colours = [_UNSEEN_COLOUR] + [palette(0.25 + 0.6 * (k - 1) / max(top - 1, 1)) for k in range(1, top + 1)]
-    cmap = ListedColormap(colours)
-    cmap.set_bad("white")
+    cmap = ListedColormap(colours).with_extremes(bad="white")
     return cmap, BoundaryNorm(np.arange(-0.5, top + 1.0), cmap.N)
 
 

@@ -6,6 +6,7 @@ every figure is a ``data:image/png;base64`` URI. Every piece of text from rigs a
 
 from __future__ import annotations
 
+import json
 from datetime import datetime, timezone
 from pathlib import Path
 
@@ -17,8 +18,12 @@ from rigopt.report.coverage_figures import (
     figure_png,
     report_dict,
     rings_figure,
+    write_bev_figure,
+    write_blind_figure,
+    write_rings_figure,
 )
 from rigopt.report.html_page import escape, image, num, page, pct, table
+from rigopt.report.json_values import json_ready
 from rigopt.rig.model import Rig
 
 REPORT_FILE = "report.html"
@@ -169,3 +174,25 @@ def write_html_report(report: CoverageReport, out_dir, rig: Rig, comparison: Cov
     path = out_dir / REPORT_FILE
     path.write_text(page, encoding="utf-8")
     return path
+
+
+def write_coverage_folder(out_dir, report: CoverageReport, rig: Rig, comparison: CoverageComparison | None = None,
+                          compare_report: CoverageReport | None = None) -> list[Path]:
+    """Write the coverage folder: ``coverage.json``, ``bev.png``, ``rings.png``, ``blind.png``, ``report.html``.
+
+    ``out_dir`` is created if missing and written in place (callers that need the folder whole or not at all
+    write into a temporary sibling, see ``rigopt.output.atomic_folder``). The JSON holds ``report_dict`` and,
+    with a comparison, its ``compare`` block. Returns the written paths in that order.
+    """
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    data = report_dict(report)
+    if comparison is not None:
+        data["compare"] = comparison_dict(comparison)
+    json_path = out_dir / "coverage.json"
+    json_path.write_text(json.dumps(json_ready(data), indent=2) + "\n")
+    figures = {"bev": write_bev_figure(report, out_dir / "bev.png", rig),
+               "rings": write_rings_figure(report, out_dir / "rings.png", compare_report),
+               "blind": write_blind_figure(report, out_dir / "blind.png")}
+    page_path = write_html_report(report, out_dir, rig, comparison, compare_report, figures=figures)
+    return [json_path, *figures.values(), page_path]

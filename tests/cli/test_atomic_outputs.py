@@ -79,7 +79,7 @@ def test_an_existing_folder_is_refused_without_force(previous_coverage):
                                    KeyboardInterrupt()])
 def test_a_failing_writer_keeps_the_previous_output(previous_coverage, monkeypatch, error):
     before = snapshot(previous_coverage)
-    monkeypatch.setattr("rigopt.report.coverage_figures.write_blind_figure", fail_with(error))
+    monkeypatch.setattr("rigopt.report.coverage_html.write_blind_figure", fail_with(error))
     result = invoke("coverage", "R1", "--out", previous_coverage, "--force")
     assert result.exit_code != 0
     assert snapshot(previous_coverage) == before
