@@ -12,7 +12,7 @@ import torch
 from rigopt.baselines.data import RigSplit
 from rigopt.baselines.families import Detector
 from rigopt.baselines.models import resolve_device
-from rigopt.bench.evaluation import (EVAL_RANGE, Detections, Evaluation, GroundTruth, MatchedDetections,
+from rigopt.bench.evaluation import (EVAL_RANGE, Detections, GroundTruth, MatchedDetections,
                                      SamplePrediction, match)
 
 #: Detections per sample evaluated (the highest-scoring).
@@ -41,9 +41,3 @@ def match_split(model: Detector, split: RigSplit, device: str = "cpu", batch_siz
     predictions = predict(model, split, device, batch_size, progress=progress)
     truth = GroundTruth.from_samples(split.samples).within(EVAL_RANGE)
     return match(Detections.from_predictions(predictions), truth, samples=[s.token for s in split.samples])
-
-
-def evaluate_split(model: Detector, split: RigSplit, device: str = "cpu", batch_size: int = 4,
-                   progress=lambda done, total: None) -> Evaluation:
-    """Centre-distance AP and mAP of ``model`` on ``split`` (ground truth within EVAL_RANGE)."""
-    return match_split(model, split, device, batch_size, progress).evaluation()

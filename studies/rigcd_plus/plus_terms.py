@@ -72,8 +72,6 @@ from rigopt.vehicle.model import Vehicle
 
 #: Every term, in a fixed order.
 TERMS = ("t", "r", "f", "count", "dz", "dxy", "focal", "cover", "overlap", "selfocc", "cw_t", "cw_r", "cw_f")
-TERM_UNITS = {"t": "m", "r": "rad", "f": "deg", "count": "-", "dz": "m", "dxy": "m", "focal": "-",
-              "cover": "-", "overlap": "-", "selfocc": "-", "cw_t": "m", "cw_r": "rad", "cw_f": "deg"}
 #: Terms that depend on which rig is the reference (the first).
 ASYMMETRIC_TERMS = ("cw_t", "cw_r", "cw_f")
 #: Terms computed over the matched camera pairs.
@@ -437,15 +435,6 @@ def _pair_matched_terms(rig_a: Rig, rig_b: Rig, rows, cols, keys, settings: Plus
             if key in keys:
                 out[key] = float(w @ values)
     return out
-
-
-def term_matrix(rigs_a, rigs_b, term: str, settings: PlusSettings | None = None,
-                vehicles: Mapping[str, Vehicle] | None = None,
-                vehicle_lookup: Callable[[str], Vehicle] = load_vehicle) -> np.ndarray:
-    """One term for every pair: (len(rigs_a), len(rigs_b)) float; arguments as :func:`term_matrices`."""
-    if not isinstance(term, str):
-        raise RigoptError(f"term must be one term name, got {term!r}")
-    return term_matrices(rigs_a, rigs_b, (term,), settings, vehicles, vehicle_lookup)[term]
 
 
 def pair_terms(rig_a: Rig | RigProfile, rig_b: Rig | RigProfile, terms: Sequence[str] = TERMS,

@@ -20,7 +20,7 @@ import pytest
 torch = pytest.importorskip("torch")
 
 from rigopt.baselines.config import model_config  # noqa: E402
-from rigopt.baselines.families import DETECTORS, Detector  # noqa: E402
+from rigopt.baselines.families import DETECTORS  # noqa: E402
 from rigopt.baselines.data import Batch, BoxTargets, RigSplit  # noqa: E402
 from rigopt.baselines.layers import pixel_rays  # noqa: E402
 from rigopt.baselines.lss import HEIGHT_LIMITS, LSSDetector  # noqa: E402
