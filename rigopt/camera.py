@@ -89,6 +89,201 @@ def pinhole_half_tangents(hfov_deg, width_px, height_px, tan=np.tan):
     return tan_h, tan_h * (height_px / width_px)
 
 
+#: Lens distortion models and their coefficients, in the order calibration files give them.
+DISTORTION_COEFFICIENTS = {
+    "none": (),
+    "radtan": ("k1", "k2", "p1", "p2", "k3"),  # OpenCV / Brown-Conrady radial-tangential
+    "fisheye": ("k1", "k2", "k3", "k4"),  # OpenCV fisheye / Kannala-Brandt, equidistant base
+}
+
+#: Fixed-point and Newton iterations when inverting a distortion (converges to ~1e-12 within real images).
+UNDISTORT_ITERATIONS = 40
+
+
+def radtan_distort(x, y, k) -> tuple[np.ndarray, np.ndarray]:
+    """OpenCV radial-tangential distortion of normalised optical coordinates.
+
+    x, y : (...,) float, undistorted (X / Z, Y / Z); k : (..., 5) float (k1, k2, p1, p2, k3), broadcast.
+    Returns the distorted (x_d, y_d), each (...,) float.
+    """
+    k = np.asarray(k, dtype=float)
+    k1, k2, p1, p2, k3 = (k[..., i] for i in range(5))
+    r2 = x * x + y * y
+    radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3))
+    return (x * radial + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x),
+            y * radial + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y)
+
+
+def radtan_undistort(xd, yd, k) -> tuple[np.ndarray, np.ndarray]:
+    """The inverse of :func:`radtan_distort` by fixed-point iteration (OpenCV's scheme), same shapes."""
+    k = np.asarray(k, dtype=float)
+    k1, k2, p1, p2, k3 = (k[..., i] for i in range(5))
+    x, y = np.array(xd, dtype=float), np.array(yd, dtype=float)
+    for _ in range(UNDISTORT_ITERATIONS):
+        r2 = x * x + y * y
+        radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3))
+        x = (xd - 2.0 * p1 * x * y - p2 * (r2 + 2.0 * x * x)) / radial
+        y = (yd - p1 * (r2 + 2.0 * y * y) - 2.0 * p2 * x * y) / radial
+    return x, y
+
+
+def fisheye_distort(theta, k) -> np.ndarray:
+    """Kannala-Brandt distorted radius: theta_d = theta (1 + k1 theta^2 + k2 theta^4 + k3 theta^6 + k4 theta^8).
+
+    theta : (...,) float, radians from the optical axis (may exceed pi / 2); k : (..., 4) float.
+    Returns (...,) float: the radius in normalised image coordinates.
+    """
+    k = np.asarray(k, dtype=float)
+    t2 = np.asarray(theta, dtype=float) ** 2
+    return theta * (1.0 + t2 * (k[..., 0] + t2 * (k[..., 1] + t2 * (k[..., 2] + t2 * k[..., 3]))))
+
+
+def fisheye_undistort(theta_d, k) -> np.ndarray:
+    """The inverse of :func:`fisheye_distort` by Newton's method from theta = theta_d, same shapes."""
+    k = np.asarray(k, dtype=float)
+    theta_d = np.asarray(theta_d, dtype=float)
+    theta = theta_d.copy()
+    for _ in range(UNDISTORT_ITERATIONS):
+        t2 = theta * theta
+        value = theta * (1.0 + t2 * (k[..., 0] + t2 * (k[..., 1] + t2 * (k[..., 2] + t2 * k[..., 3])))) - theta_d
+        slope = 1.0 + t2 * (3 * k[..., 0] + t2 * (5 * k[..., 1] + t2 * (7 * k[..., 2] + t2 * 9 * k[..., 3])))
+        theta = theta - value / np.where(np.abs(slope) > 1e-12, slope, 1e-12)
+    return theta
+
+
+@dataclass(frozen=True)
+class Lens:
+    """One real camera's intrinsics and lens distortion, as calibration files give them.
+
+    width, height : int, image size in px; fx, fy : float, focal lengths in px; cx, cy : float, principal
+    point in px (pixel coordinates as in the module docstring); distortion : one of
+    :data:`DISTORTION_COEFFICIENTS` ("none", "radtan", "fisheye"); coefficients : tuple of float in that
+    model's order (all zero is the same geometry as "none").
+
+    Distorted normalised coordinates map to pixels through ``K``: u = fx x_d + cx, v = fy y_d + cy. The
+    fisheye model takes the angle theta of a ray from the optical axis and puts it at radius theta_d(theta)
+    in the normalised image, so it covers lenses wider than 180 degrees.
+    """
+
+    width: int
+    height: int
+    fx: float
+    fy: float
+    cx: float
+    cy: float
+    distortion: str = "none"
+    coefficients: tuple[float, ...] = ()
+
+    def __post_init__(self):
+        for name in ("width", "height"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value <= 0:
+                raise RigoptError(f"lens {name} must be a positive whole number of pixels, got {value!r}")
+            object.__setattr__(self, name, int(value))
+        for name in ("fx", "fy", "cx", "cy"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, float, np.number)) or not np.isfinite(value):
+                raise RigoptError(f"lens {name} must be a finite number of pixels, got {value!r}")
+            if name in ("fx", "fy") and value <= 0:
+                raise RigoptError(f"lens {name} must be positive, got {value!r}")
+            object.__setattr__(self, name, float(value))
+        if self.distortion not in DISTORTION_COEFFICIENTS:
+            raise RigoptError(f"unknown lens distortion model {self.distortion!r}; use one of "
+                              f"{', '.join(DISTORTION_COEFFICIENTS)}")
+        names = DISTORTION_COEFFICIENTS[self.distortion]
+        coefficients = tuple(self.coefficients) or (0.0,) * len(names)
+        if len(coefficients) != len(names) or not all(
+                isinstance(c, (int, float, np.number)) and not isinstance(c, bool) and np.isfinite(c)
+                for c in coefficients):
+            raise RigoptError(f"a {self.distortion} lens needs {len(names)} finite coefficients "
+                              f"({', '.join(names) or 'none'}), got {self.coefficients!r}")
+        object.__setattr__(self, "coefficients", tuple(float(c) for c in coefficients))
+        edges = self.edge_angles()
+        if not all(np.isfinite(a) and 0.0 < a for a in edges):
+            raise RigoptError(f"lens {self}: its image edges do not map to rays in front of the lens; check the "
+                              "focal lengths, principal point and distortion coefficients")
+
+    @classmethod
+    def pinhole(cls, hfov_deg: float, image_size=(1280, 720)) -> "Lens":
+        """The benchmark's camera: a centred square-pixel pinhole of horizontal FOV ``hfov_deg`` in (0, 180)."""
+        width, height = image_size
+        model = CameraModel.from_fov(hfov_deg, (width, height))
+        return cls(int(width), int(height), float(model.fx), float(model.fy), float(model.cx), float(model.cy))
+
+    @property
+    def image_size(self) -> tuple[int, int]:
+        """(width, height) in px."""
+        return self.width, self.height
+
+    @property
+    def is_distorted(self) -> bool:
+        """True when the lens has non-zero distortion coefficients."""
+        return any(c != 0.0 for c in self.coefficients)
+
+    @property
+    def is_ideal_pinhole(self) -> bool:
+        """True for the benchmark's camera: no distortion, square pixels, principal point at the centre."""
+        return (not self.is_distorted and abs(self.fx - self.fy) <= 1e-9 * self.fx
+                and abs(self.cx - self.width / 2) <= 1e-9 * self.width
+                and abs(self.cy - self.height / 2) <= 1e-9 * self.height)
+
+    # ------------------------------------------------------------------------------------------ mapping
+
+    def pixel_rays(self, pixels) -> np.ndarray:
+        """(n, 3) float unit optical-frame rays (z along the axis, x right, y down) through pixels (n, 2)."""
+        pixels = np.atleast_2d(np.asarray(pixels, dtype=float))
+        xd = (pixels[:, 0] - self.cx) / self.fx
+        yd = (pixels[:, 1] - self.cy) / self.fy
+        k = np.array(self.coefficients)
+        if self.distortion == "fisheye":
+            radius = np.hypot(xd, yd)
+            theta = fisheye_undistort(radius, k)
+            scale = np.where(radius > 0, np.sin(theta) / np.where(radius > 0, radius, 1.0), 1.0)
+            rays = np.stack([xd * scale, yd * scale, np.cos(theta)], axis=1)
+        else:
+            x, y = radtan_undistort(xd, yd, k) if self.distortion == "radtan" else (xd, yd)
+            rays = np.stack([x, y, np.ones_like(x)], axis=1)
+        return rays / np.linalg.norm(rays, axis=1, keepdims=True)
+
+    def project(self, rays) -> np.ndarray:
+        """(n, 2) float pixels of optical-frame directions ``rays`` (n, 3) (any length). Pinhole and radtan
+        lenses need z > 0; fisheye lenses take any direction but the one straight behind."""
+        rays = np.atleast_2d(np.asarray(rays, dtype=float))
+        x, y, z = rays[:, 0], rays[:, 1], rays[:, 2]
+        k = np.array(self.coefficients)
+        if self.distortion == "fisheye":
+            radius = np.hypot(x, y)
+            theta_d = fisheye_distort(np.arctan2(radius, z), k)
+            scale = np.where(radius > 0, theta_d / np.where(radius > 0, radius, 1.0), 0.0)
+            xd, yd = x * scale, y * scale
+        else:
+            xd, yd = x / z, y / z
+            if self.distortion == "radtan":
+                xd, yd = radtan_distort(xd, yd, k)
+        return np.stack([self.fx * xd + self.cx, self.fy * yd + self.cy], axis=1)
+
+    def edge_angles(self) -> tuple[float, float, float, float]:
+        """(left, right, top, bottom): radians from the optical axis to the rays through the midpoints of the
+        image's edges, taken on the principal point's row and column."""
+        pixels = np.array([[0.0, self.cy], [self.width, self.cy], [self.cx, 0.0], [self.cx, self.height]])
+        rays = self.pixel_rays(pixels)
+        return tuple(float(a) for a in np.arctan2(np.hypot(rays[:, 0], rays[:, 1]), rays[:, 2]))
+
+    @property
+    def hfov(self) -> float:
+        """Horizontal FOV in degrees: the angle from the ray through the left edge to the ray through the
+        right edge (through the optical axis, so it may exceed 180 for a fisheye). For the benchmark's pinhole
+        it is the FOV the lens was built from."""
+        left, right, _, _ = self.edge_angles()
+        return float(np.rad2deg(left + right))
+
+    @property
+    def vfov(self) -> float:
+        """Vertical FOV in degrees, as :attr:`hfov` between the top and bottom edges."""
+        _, _, top, bottom = self.edge_angles()
+        return float(np.rad2deg(top + bottom))
+
+
 def pixel_centres(width: int, height: int) -> np.ndarray:
     """(height * width, 2) float: (u, v) of every pixel's centre, row by row from the top-left pixel."""
     u, v = np.meshgrid(np.arange(width) + 0.5, np.arange(height) + 0.5)

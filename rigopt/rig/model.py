@@ -7,6 +7,7 @@ from functools import cached_property
 
 import numpy as np
 
+from rigopt.camera import Lens
 from rigopt.errors import RigFileError
 from rigopt.geometry import is_rotation, matrix_to_quaternion, sum_of_squares
 
@@ -61,11 +62,17 @@ class Camera:
     rotation : (3, 3) float
         ``R_vehicle_cam``: camera body (x along the optical axis, y left, z up) -> vehicle frame.
     fov : float
-        Horizontal field of view in degrees, in (0, 180).
+        Horizontal field of view in degrees: in (0, 180) for the benchmark's ideal pinhole; with a ``lens``,
+        the lens's :attr:`rigopt.camera.Lens.hfov` (up to 360 for a fisheye), the value RigV and RigCD use.
     image_size : (int, int)
-        ``(width, height)`` in pixels of an ideal centred pinhole.
+        ``(width, height)`` in pixels; with a ``lens``, the lens's.
     zone : str or None
         Name of the mounting zone the camera sits in, when known.
+    lens : Lens or None
+        The camera's real intrinsics and distortion; None for the benchmark's ideal centred pinhole of
+        ``fov`` and ``image_size`` (an ideal pinhole given as a lens is stored as None, so a camera has one
+        form). :attr:`lens_model` gives the lens either way. Build a camera from a real
+        lens with :meth:`Camera.with_lens`, which derives ``fov`` and ``image_size`` from it.
     """
 
     id: str
@@ -74,6 +81,7 @@ class Camera:
     fov: float
     image_size: tuple[int, int] = DEFAULT_IMAGE_SIZE
     zone: str | None = None
+    lens: Lens | None = None
 
     def __post_init__(self):
         if not isinstance(self.id, str) or not self.id:
@@ -87,7 +95,16 @@ class Camera:
         if isinstance(self.fov, (bool, str)) or not isinstance(self.fov, (int, float, np.number)):
             raise RigFileError(f"{what} fov must be a number of degrees, got {self.fov!r}")
         fov = float(self.fov)
-        if not (np.isfinite(fov) and 0.0 < fov < 180.0):
+        if self.lens is not None:
+            if not isinstance(self.lens, Lens):
+                raise RigFileError(f"{what} lens must be a rigopt.camera.Lens, got {type(self.lens).__name__}")
+            if not abs(fov - self.lens.hfov) <= FOV_TOLERANCE_DEG:
+                raise RigFileError(f"{what} fov {fov:g} deg disagrees with its lens's horizontal FOV "
+                                   f"{self.lens.hfov:.6f} deg; build it with Camera.with_lens")
+            object.__setattr__(self, "image_size", self.lens.image_size)
+            if self.lens.is_ideal_pinhole:  # the benchmark's camera: one way to say it
+                object.__setattr__(self, "lens", None)
+        elif not (np.isfinite(fov) and 0.0 < fov < 180.0):
             raise RigFileError(f"{what} fov must be in (0, 180) degrees, got {self.fov!r}")
         object.__setattr__(self, "fov", fov)
         size = tuple(self.image_size) if isinstance(self.image_size, (tuple, list)) else ()
@@ -95,6 +112,16 @@ class Camera:
                                      for v in size):
             raise RigFileError(f"{what} image_size must be two positive integers (width, height), got {self.image_size!r}")
         object.__setattr__(self, "image_size", (int(size[0]), int(size[1])))
+
+    @classmethod
+    def with_lens(cls, id: str, position, rotation, lens: Lens, zone: str | None = None) -> "Camera":
+        """A camera with a real lens: ``fov`` and ``image_size`` derived from it."""
+        return cls(id, position, rotation, lens.hfov, lens.image_size, zone, lens)
+
+    @property
+    def lens_model(self) -> Lens:
+        """The camera's lens: its own, or the benchmark's ideal pinhole of ``fov`` and ``image_size``."""
+        return self.lens if self.lens is not None else Lens.pinhole(self.fov, self.image_size)
 
     @property
     def forward(self) -> np.ndarray:
@@ -110,7 +137,69 @@ class Camera:
             and abs(self.fov - other.fov) <= atol
             and self.image_size == other.image_size
             and self.zone == other.zone
+            and _same_lens(self.lens, other.lens, atol)
         )
+
+
+def _same_lens(a: Lens | None, b: Lens | None, atol: float) -> bool:
+    if a is None or b is None:
+        return a is b
+    return (a.image_size == b.image_size and a.distortion == b.distortion
+            and np.allclose([a.fx, a.fy, a.cx, a.cy, *a.coefficients], [b.fx, b.fy, b.cx, b.cy, *b.coefficients],
+                            atol=atol, rtol=0))
+
+
+#: How far (deg) a camera's ``fov`` may be from its lens's derived horizontal FOV.
+FOV_TOLERANCE_DEG = 1e-6
+
+#: The reference points a rig's positions may be measured from (see :class:`RigOrigin`).
+ORIGIN_KINDS = ("vehicle_centre", "rear_axle", "custom")
+
+
+@dataclass(frozen=True)
+class RigOrigin:
+    """The point a rig's camera positions are measured from (axes always ISO 8855: x forward, y left, z up).
+
+    kind : "vehicle_centre"
+        The benchmark's (CARLA's) vehicle origin: the centre of the vehicle's bounding box in x and y, on
+        the ground (z = 0). Every benchmark rig and every rigopt vehicle mesh uses it.
+    kind : "rear_axle"
+        The point on the ground below the centre of the rear axle, the origin of nuScenes, Argoverse,
+        Waymo and DDAD ego frames.
+    kind : "custom"
+        ``point`` (3,) float m: the origin's position in the vehicle-centre frame.
+
+    Converting between origins needs the vehicle (where its rear axle is); see
+    :func:`rigopt.vehicle.placement.to_vehicle_centre`.
+    """
+
+    kind: str = "vehicle_centre"
+    point: tuple[float, float, float] | None = None
+
+    def __post_init__(self):
+        if self.kind not in ORIGIN_KINDS:
+            raise RigFileError(f"unknown rig origin {self.kind!r}; use one of {', '.join(ORIGIN_KINDS)}")
+        if self.kind == "custom":
+            point = _frozen_array(self.point, (3,), "a custom rig origin's point") if self.point is not None else None
+            if point is None:
+                raise RigFileError("a custom rig origin needs its point [x, y, z] in metres in the vehicle-centre frame")
+            object.__setattr__(self, "point", tuple(float(v) for v in point))
+        elif self.point is not None:
+            raise RigFileError(f"a {self.kind} rig origin takes no point; use kind 'custom' for a point of your own")
+
+    @property
+    def is_benchmark(self) -> bool:
+        """True for the benchmark's vehicle-centre origin."""
+        return self.kind == "vehicle_centre"
+
+    def describe(self) -> str:
+        """Words for messages: 'vehicle centre', 'rear axle', 'custom point (x, y, z) m'."""
+        if self.kind == "custom":
+            return "custom point ({:.3f}, {:.3f}, {:.3f}) m".format(*self.point)
+        return self.kind.replace("_", " ")
+
+
+VEHICLE_CENTRE = RigOrigin()
 
 
 @dataclass(frozen=True, eq=False)
@@ -126,11 +215,14 @@ class Rig:
         ``vehicle.audi.etron``) or a rigopt vehicle name.
     cameras : tuple of Camera
         At least one camera, ids unique.
+    origin : RigOrigin
+        The point the camera positions are measured from: the benchmark's vehicle centre by default.
     """
 
     name: str
     vehicle: str
     cameras: tuple[Camera, ...] = field(default_factory=tuple)
+    origin: RigOrigin = VEHICLE_CENTRE
 
     def __post_init__(self):
         cameras = tuple(self.cameras)
@@ -141,6 +233,8 @@ class Rig:
         if duplicated:
             raise RigFileError(f"rig {self.name!r} repeats camera ids {duplicated}; ids must be unique")
         object.__setattr__(self, "cameras", cameras)
+        if not isinstance(self.origin, RigOrigin):
+            raise RigFileError(f"rig {self.name!r} origin must be a RigOrigin, got {self.origin!r}")
 
     def __len__(self) -> int:
         return len(self.cameras)
@@ -171,6 +265,7 @@ class Rig:
         return (
             self.name == other.name
             and self.vehicle == other.vehicle
+            and self.origin == other.origin
             and len(self) == len(other)
             and all(a.same_as(b, atol) for a, b in zip(self.cameras, other.cameras))
         )

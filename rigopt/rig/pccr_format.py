@@ -8,8 +8,14 @@ File layout::
 
 ``location`` in metres, CARLA frame (x forward, y right, z up); ``rotation`` in degrees, CARLA order,
 any multiple of 360 apart; ``fov`` horizontal, degrees. Other keys (the benchmark's ``lidar``) are
-ignored. rigopt adds two optional keys per camera, written only when they differ from the benchmark's
-defaults: ``image_size`` ``[width, height]`` (default 1280 x 720) and ``zone``.
+ignored. rigopt adds optional keys, written only when they differ from the benchmark's defaults:
+
+- per camera: ``image_size`` ``[width, height]`` (default 1280 x 720), ``zone``, and for a real lens
+  ``"intrinsics": {"fx": .., "fy": .., "cx": .., "cy": ..}`` (px) with
+  ``"distortion": {"model": "radtan" | "fisheye", "coefficients": [...]}`` (OpenCV order: k1, k2, p1, p2,
+  k3; fisheye k1..k4). With intrinsics, ``fov`` is the lens's derived horizontal FOV (checked on reading).
+- per rig: ``"origin": "rear_axle"`` or ``{"custom": [x, y, z]}`` (metres, CARLA frame) when the positions
+  are not measured from the benchmark's vehicle centre.
 """
 
 from __future__ import annotations
@@ -20,9 +26,10 @@ from pathlib import Path
 
 import numpy as np
 
-from rigopt.errors import RigFileError, not_utf8
+from rigopt.camera import DISTORTION_COEFFICIENTS, Lens
+from rigopt.errors import RigFileError, RigoptError, not_utf8
 from rigopt.geometry import carla_to_iso, iso_to_carla
-from rigopt.rig.model import DEFAULT_IMAGE_SIZE, Camera, Rig
+from rigopt.rig.model import DEFAULT_IMAGE_SIZE, VEHICLE_CENTRE, Camera, Rig, RigOrigin
 
 #: Decimals kept when writing angles (degrees) and locations (metres): far below any mounting tolerance,
 #: and enough to give back the numbers of a file that was read.
@@ -43,8 +50,9 @@ def rig_from_dict(data, name: str, source: str = "<rig>") -> Rig:
     if not isinstance(cameras, list) or not cameras:
         raise RigFileError(f"{source}: 'cameras' must be a non-empty list of cameras")
     try:
-        return Rig(name, vehicle, tuple(_camera_from_dict(c, k, source) for k, c in enumerate(cameras)))
-    except RigFileError as error:
+        origin = _origin_from(data.get("origin"), source)
+        return Rig(name, vehicle, tuple(_camera_from_dict(c, k, source) for k, c in enumerate(cameras)), origin)
+    except RigoptError as error:
         message = str(error)
         raise RigFileError(message if message.startswith(source) else f"{source}: {message}") from None
 
@@ -66,7 +74,41 @@ def _camera_from_dict(entry, index: int, source: str) -> Camera:
     if not (isinstance(size, (list, tuple)) and len(size) == 2 and all(isinstance(v, int) and v > 0 for v in size)):
         raise RigFileError(f"{where} ({entry['id']}) 'image_size' must be [width, height] in pixels, got {size!r}")
     position, rotation_matrix = carla_to_iso(location, rotation)
-    return Camera(str(entry["id"]), position, rotation_matrix, fov, tuple(size), entry.get("zone"))
+    lens = _lens_from(entry, size, f"{where} ({entry['id']})")
+    return Camera(str(entry["id"]), position, rotation_matrix, fov, tuple(size), entry.get("zone"), lens)
+
+
+def _lens_from(entry: dict, size, where: str) -> Lens | None:
+    """The camera's real lens from 'intrinsics' and 'distortion', or None for the benchmark's pinhole."""
+    if "intrinsics" not in entry:
+        if "distortion" in entry:
+            raise RigFileError(f"{where} has 'distortion' without 'intrinsics'; give both (fx, fy, cx, cy in px)")
+        return None
+    intrinsics = entry["intrinsics"]
+    if not isinstance(intrinsics, dict) or sorted(intrinsics) != ["cx", "cy", "fx", "fy"]:
+        raise RigFileError(f"{where} 'intrinsics' must be an object with fx, fy, cx, cy in pixels, got {intrinsics!r}")
+    fx, fy, cx, cy = _numbers([intrinsics[k] for k in ("fx", "fy", "cx", "cy")], 4, f"{where} 'intrinsics'")
+    distortion = entry.get("distortion", {"model": "none", "coefficients": []})
+    if not isinstance(distortion, dict) or distortion.get("model") not in DISTORTION_COEFFICIENTS:
+        raise RigFileError(f"{where} 'distortion' must be {{\"model\": one of {', '.join(DISTORTION_COEFFICIENTS)}, "
+                           f"\"coefficients\": [...]}}, got {distortion!r}")
+    names = DISTORTION_COEFFICIENTS[distortion["model"]]
+    coefficients = _numbers(distortion.get("coefficients", []), len(names),
+                            f"{where} 'distortion' coefficients ({', '.join(names) or 'none'})")
+    return Lens(size[0], size[1], fx, fy, cx, cy, distortion["model"], tuple(coefficients))
+
+
+def _origin_from(value, source: str) -> RigOrigin:
+    if value is None or value == "vehicle_centre":
+        return VEHICLE_CENTRE
+    if value == "rear_axle":
+        return RigOrigin("rear_axle")
+    if isinstance(value, dict) and list(value) == ["custom"]:
+        location = _numbers(value["custom"], 3, f"{source}: 'origin' custom point [x, y, z] metres")
+        point, _ = carla_to_iso(location, [0.0, 0.0, 0.0])
+        return RigOrigin("custom", tuple(point))
+    raise RigFileError(f"{source}: 'origin' must be \"vehicle_centre\", \"rear_axle\" or {{\"custom\": [x, y, z]}} "
+                       f"(metres, CARLA frame), got {value!r}")
 
 
 #: Largest camera coordinate a rig file may give (m): a camera is on its vehicle, not kilometres away.
@@ -101,8 +143,21 @@ def rig_to_dict(rig: Rig) -> dict:
             entry["image_size"] = list(camera.image_size)
         if camera.zone is not None:
             entry["zone"] = camera.zone
+        if camera.lens is not None:
+            lens = camera.lens
+            entry["intrinsics"] = dict(zip(("fx", "fy", "cx", "cy"), _rounded([lens.fx, lens.fy, lens.cx, lens.cy])))
+            if lens.distortion != "none":
+                entry["distortion"] = {"model": lens.distortion, "coefficients": [float(c) for c in lens.coefficients]}
         cameras.append(entry)
-    return {"vehicle_type": rig.vehicle, "cameras": cameras}
+    data = {"vehicle_type": rig.vehicle}
+    if not rig.origin.is_benchmark:
+        if rig.origin.kind == "custom":
+            location, _ = iso_to_carla(np.array([rig.origin.point]), np.eye(3)[None])
+            data["origin"] = {"custom": _rounded(location[0])}
+        else:
+            data["origin"] = rig.origin.kind
+    data["cameras"] = cameras
+    return data
 
 
 def _rounded(values) -> list:
