@@ -10,7 +10,7 @@ import trimesh
 
 from rigopt import raycast
 from rigopt.vehicle.build import build_mesh
-from rigopt.vehicle.spec import VehicleSpec, ZoneSpec
+from rigopt.vehicle.spec import VehicleSpec, Wheels, ZoneSpec
 
 
 #: Longest edge (m) of the subdivided mesh used for per-face zone queries.
@@ -92,6 +92,25 @@ class Vehicle:
         """(F,) object: the zone name of each face of ``fine_mesh`` (first matching zone), None outside all."""
         fine = self.fine_mesh
         return np.array(self.zone_names(fine.triangles_center, fine.face_normals), dtype=object)
+
+    @cached_property
+    def axles(self) -> tuple[float, ...]:
+        """x (m) of each axle, front first: the spec's ``axles``, else those of its wheels solids; () when
+        the vehicle has neither."""
+        given = self.spec.axles or tuple(x for s in self.spec.solids if isinstance(s, Wheels) for x in s.axles)
+        return tuple(sorted(given, reverse=True))
+
+    @property
+    def rear_axle(self) -> np.ndarray | None:
+        """(3,) float m: the point on the ground (z = 0) below the centre of the rear axle, the ego origin of
+        nuScenes, Argoverse, Waymo and DDAD; with a rear axle group (a tandem: every axle behind the
+        middle of the wheelbase) the group's midpoint. None when the vehicle's axles are unknown."""
+        axles = self.axles
+        if not axles:
+            return None
+        middle = 0.5 * (axles[0] + axles[-1])
+        rear = [x for x in axles if x < middle] or [axles[-1]]
+        return np.array([0.5 * (max(rear) + min(rear)), 0.0, 0.0])
 
     @cached_property
     def size(self) -> np.ndarray:

@@ -7,6 +7,7 @@ vehicle origin on the ground). A spec file::
     blueprint = "vehicle.audi.etron"       # the CARLA blueprint the benchmark's rigs name
     aliases = ["suv"]
     box = [4.8557, 2.0328, 1.6494]         # CARLA bounding box length, width, height (m), for checks
+    axles = [1.45, -1.48]                  # optional: x of each axle (m); default: the wheels solids' axles
 
     [[solids]]                              # intersection of a side profile extruded across y and a
     name = "body"                           # plan outline extruded along z
@@ -121,6 +122,7 @@ class VehicleSpec:
     solids: tuple[Prism | Wheels | Box | MeshSolid, ...]
     zones: tuple[ZoneSpec, ...]
     source: str = field(default="<spec>", compare=False)
+    axles: tuple[float, ...] = ()
 
 
 def read_toml(path, what: str) -> dict:
@@ -154,7 +156,10 @@ def spec_from_dict(data: dict, source: str = "<spec>") -> VehicleSpec:
     if not isinstance(aliases, list) or not all(isinstance(a, str) for a in aliases):
         raise DataError(f"{source}: 'aliases' must be a list of strings")
     blueprint = reader.text(data, "blueprint") if "blueprint" in data else name
-    return VehicleSpec(name, blueprint, tuple(aliases), box, solids, zones, source)
+    axles = data.get("axles", [])
+    if not isinstance(axles, list) or not all(_is_number(a) for a in axles):
+        raise DataError(f"{source}: 'axles' must be a list of numbers, the x (m) of each axle")
+    return VehicleSpec(name, blueprint, tuple(aliases), box, solids, zones, source, tuple(float(a) for a in axles))
 
 
 class _Reader:
