@@ -35,6 +35,16 @@ def print_json(data) -> None:
     print(json.dumps(json_ready(data), indent=2))
 
 
+def note(message: str) -> None:
+    """One ``rigopt: note: ...`` line on stderr: something the command did that the user should know."""
+    typer.echo(f"rigopt: note: {message}", err=True)
+
+
+#: Help of the commands' ``--vehicle`` for rigs whose own vehicle rigopt does not know.
+PLACE_HELP = ("Vehicle (name, alias or blueprint) to place rigs on whose own vehicle rigopt does not know "
+              "(imported rigs): their positions are converted to its centre.")
+
+
 def print_table(title: str, columns: list[str], rows: list[list]) -> None:
     """Print a rich table; numbers are right-aligned with 3 decimals, text left-aligned."""
     table = Table(title=title)

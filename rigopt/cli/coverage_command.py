@@ -8,31 +8,29 @@ from typing import Optional
 
 import typer
 
-from rigopt.cli.app import FORCE_HELP, app, console, print_json, print_table
-
-
-def _warn_inside(report) -> None:
-    if report.cameras_inside:
-        typer.echo(f"rigopt: warning: {report.rig}: cameras inside the body of {report.vehicle}: "
-                   f"{', '.join(report.cameras_inside)} (still used; the body blocks their view)", err=True)
+from rigopt.cli.app import FORCE_HELP, app, console, note, print_json, print_table
 
 
 def _report(rig_name: str, vehicle: Optional[str]):
+    """The rig on ``vehicle`` (or its own), origin converted to the vehicle's centre (noted), cameras inside
+    the body refused; and its coverage report."""
     from rigopt.coverage.measures import coverage_report
     from rigopt.rig.library import load_rig
-    from rigopt.vehicle.library import load_vehicle
+    from rigopt.vehicle.placement import rig_on_vehicle
 
-    rig = load_rig(rig_name)
-    report = coverage_report(rig, load_vehicle(vehicle or rig.vehicle))
-    _warn_inside(report)
-    return rig, report
+    rig, on, change = rig_on_vehicle(load_rig(rig_name), vehicle)
+    if change is not None:
+        note(change.describe())
+    return rig, coverage_report(rig, on)
 
 
 @app.command("coverage")
 def coverage_command(
     rig: str = typer.Argument(..., help="Library rig name or rig file."),
-    vehicle: Optional[str] = typer.Option(None, help="Vehicle name, alias or blueprint (default: the rig's own, "
-                                                     "its vehicle_type for files)."),
+    vehicle: Optional[str] = typer.Option(None, help="Vehicle name, alias or blueprint to place the rig on (default: "
+                                                     "its own, its vehicle_type for files); the rig's origin is "
+                                                     "converted to the vehicle's centre and a camera inside the "
+                                                     "body is an error."),
     compare: Optional[str] = typer.Option(None, "--compare", help="A second rig (name or file) to compare with, "
                                                                   "on its own vehicle; differences are RIG minus it."),
     out: Optional[str] = typer.Option(None, "--out", help="Folder for coverage.json, bev.png, rings.png, blind.png "

@@ -82,6 +82,10 @@ def design_command(
                                      help="MILP time limit (s); the best design found is returned."),
     pareto: bool = typer.Option(False, "--pareto", help="Sweep camera counts (--cameras, default the reference's "
                                                         "+-2) and coverage levels; write the frontier."),
+    ref_vehicle: Optional[str] = typer.Option(None, "--ref-vehicle",
+                                              help="Vehicle the reference rigs were mounted on, for rigs whose own "
+                                                   "vehicle rigopt does not know (imported rigs) or to override it; "
+                                                   "origins are converted to its centre."),
     out: Optional[Path] = typer.Option(None, help="Output folder (default: design-<vehicle>-<ref>)."),
     force: bool = typer.Option(False, "--force", help=FORCE_HELP),
     as_json: bool = typer.Option(False, "--json", help="Print the JSON summary."),
@@ -90,11 +94,10 @@ def design_command(
     from rich.console import Console
 
     from rigopt.design.designer import design_rig
-    from rigopt.design.problem import ReferenceRig, benchmark_rigs
+    from rigopt.design.problem import benchmark_rigs
     from rigopt.metrics.calibration import load_weights
     from rigopt.output import atomic_folder, check_out_folder, published
     from rigopt.report.design_report import design_dict, write_design_outputs
-    from rigopt.rig.library import load_rig
     from rigopt.vehicle.library import load_vehicle
 
     if out is not None:
@@ -108,7 +111,7 @@ def design_command(
         zones=tuple(z.strip() for z in zones.split(",")) if zones else None,
         pitches_deg=pitches, yaw_step_deg=yaw_step, spacing=spacing,
         min_coverage=min_coverage, min_overlap=min_overlap, time_limit=time_limit)
-    references = [ReferenceRig.on_own_vehicle(load_rig(name.strip())) for name in ref.split(",") if name.strip()]
+    references = [_reference(name.strip(), ref_vehicle) for name in ref.split(",") if name.strip()]
     if not references:
         raise RigoptError("--ref needs at least one rig")
     target, calibration = load_vehicle(vehicle), load_weights(weights, metric)
@@ -141,6 +144,19 @@ def design_command(
           f"{solver['candidates']} candidates; refinement {solver['refine_status']}; {solver['seconds']:.1f} s",
           file=sys.stderr)
     print(f"wrote {', '.join(str(f) for f in files)}")
+
+
+def _reference(name: str, vehicle: Optional[str]):
+    """A --ref rig on its vehicle (``vehicle`` when given), origin converted (noted), cameras inside refused."""
+    from rigopt.cli.app import note
+    from rigopt.design.problem import ReferenceRig
+    from rigopt.rig.library import load_rig
+    from rigopt.vehicle.placement import rig_on_vehicle
+
+    rig, on, change = rig_on_vehicle(load_rig(name), vehicle)
+    if change is not None:
+        note(change.describe())
+    return ReferenceRig(rig, on)
 
 
 def _pareto(target, references, calibration, settings, out: Path, force: bool, as_json: bool,

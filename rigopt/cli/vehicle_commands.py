@@ -15,16 +15,26 @@ from rigopt.errors import RigoptError
 @app.command("check")
 def check_command(
     rig: str = typer.Argument(..., help="Library rig name or rig file."),
-    vehicle: Optional[str] = typer.Option(None, help="Vehicle name, alias or blueprint (default: the rig's own)."),
+    vehicle: Optional[str] = typer.Option(None, help="Vehicle name, alias or blueprint (default: the rig's own); "
+                                                     "the rig's origin is converted to the vehicle's centre."),
     as_json: bool = typer.Option(False, "--json", help="Print JSON instead of a table."),
 ):
     """Check that every camera can be mounted: on the surface, in a zone, housing and view clear of the body."""
+    from rigopt.cli.app import note
     from rigopt.mounting.rules import check_rig
     from rigopt.rig.library import load_rig
     from rigopt.vehicle.library import load_vehicle
+    from rigopt.vehicle.placement import known_vehicle, to_vehicle_centre
 
     loaded = load_rig(rig)
-    result = check_rig(loaded, load_vehicle(vehicle or loaded.vehicle))
+    on = load_vehicle(vehicle) if vehicle is not None else known_vehicle(loaded)
+    if on is None:
+        raise RigoptError(f"rig {loaded.name!r} is on {loaded.vehicle!r}, which is not a rigopt vehicle; add --vehicle "
+                          "NAME to check it on one (see rigopt vehicles)")
+    loaded, change = to_vehicle_centre(loaded, on)
+    if change is not None:
+        note(change.describe())
+    result = check_rig(loaded, on)
     if as_json:
         print_json({"rig": result.rig, "vehicle": result.vehicle,
                     "cameras": [{**asdict(c), "problems": list(c.problems)} for c in result.cameras]})

@@ -154,6 +154,20 @@ def _as_batch(rigs) -> RigBatch:
     return rigs if isinstance(rigs, RigBatch) else RigBatch.from_rigs(rigs)
 
 
+def check_same_origin(*groups) -> None:
+    """Refuse to compare rigs whose positions are measured from different reference points.
+
+    groups : sequences of Rig (a prebuilt RigBatch carries no origins and is skipped). Convert first with
+    :func:`rigopt.vehicle.placement.common_frame`, which knows the vehicles.
+    """
+    origins = {rig.origin for group in groups if not isinstance(group, RigBatch) for rig in group}
+    if len(origins) > 1:
+        named = sorted(o.describe() for o in origins)
+        raise RigoptError(f"the rigs measure camera positions from different origins ({', '.join(named)}); RigCD "
+                          "would mix reference points: convert them to one frame first "
+                          "(rigopt.vehicle.placement.common_frame, or --vehicle on the command line)")
+
+
 def match_pairs(pack_a: RigBatch, index_a, pack_b: RigBatch, index_b, alpha: float, lambdas,
                 keep_assignment: bool = False):
     """RigCD of the pairs (pack_a[index_a[p]], pack_b[index_b[p]]); index_* : (P,) int; alpha and lambdas
@@ -198,6 +212,7 @@ def rigcd_matrix(rigs_a: Sequence[Rig] | RigBatch, rigs_b: Sequence[Rig] | RigBa
     Either side is a sequence of Rig or a prebuilt RigBatch.
     """
     alpha, lambdas = check_weights(alpha, lambdas)
+    check_same_origin(rigs_a, rigs_b)
     pack_a, pack_b = _as_batch(rigs_a), _as_batch(rigs_b)
     ia, ib = np.meshgrid(np.arange(len(rigs_a)), np.arange(len(rigs_b)), indexing="ij")
     out, _ = match_pairs(pack_a, ia.ravel(), pack_b, ib.ravel(), alpha, lambdas)
@@ -211,6 +226,7 @@ def rigcd_pairs(rigs_a: Sequence[Rig] | RigBatch, rigs_b: Sequence[Rig] | RigBat
     if len(rigs_a) != len(rigs_b):
         raise RigoptError(f"rigcd_pairs needs two lists of equal length, got {len(rigs_a)} and {len(rigs_b)}")
     alpha, lambdas = check_weights(alpha, lambdas)
+    check_same_origin(rigs_a, rigs_b)
     index = np.arange(len(rigs_a))
     out, _ = match_pairs(_as_batch(rigs_a), index, _as_batch(rigs_b), index, alpha, lambdas)
     return RigCDMatrix(**out, alpha=alpha, lambdas=lambdas)
@@ -220,6 +236,7 @@ def rigcd(rig_a: Rig, rig_b: Rig, alpha: float = DEFAULT_ALPHA,
           lambdas: Sequence[float] = DEFAULT_LAMBDAS) -> RigCDBreakdown:
     """RigCD of one pair with every component and the matched camera pairs."""
     alpha, lambdas = check_weights(alpha, lambdas)
+    check_same_origin([rig_a], [rig_b])
     zero = np.zeros(1, dtype=int)
     out, assignments = match_pairs(RigBatch.from_rigs([rig_a]), zero, RigBatch.from_rigs([rig_b]), zero, alpha, lambdas, True)
     rows, cols = assignments[0]

@@ -98,9 +98,10 @@ def test_rigv_with_weights_uses_their_lambdas():
 
 def test_rigcd_json_keys_and_null_drop_without_weights():
     data = invoke_json("rigcd", "R1", "R6", "--json")
-    assert set(data) == {"a", "b", "rigcd", "match", "count", "t", "r", "f", "predicted_drop"}
+    assert set(data) == {"a", "b", "rigcd", "match", "count", "t", "r", "f", "predicted_drop", "origin_changes"}
     assert (data["a"], data["b"]) == ("R1", "R6")
     assert data["predicted_drop"] is None
+    assert data["origin_changes"] == []  # both benchmark rigs: measured from the vehicle centre
 
 
 def test_rigcd_json_values_equal_the_reference():
