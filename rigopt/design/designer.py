@@ -190,6 +190,11 @@ def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRi
     references = (references,) if isinstance(references, ReferenceRig) else tuple(references)
     if not references:
         raise RigoptError("a design needs at least one reference rig")
+    off_centre = [r.rig.name for r in references if not r.rig.origin.is_benchmark]
+    if off_centre:
+        raise RigoptError(f"reference rig(s) {', '.join(off_centre)} measure positions from another origin than the "
+                          "vehicle centre the design uses; build them with ReferenceRig.on_own_vehicle (or "
+                          "rigopt.vehicle.placement.place_rig), which converts them")
     rigs = [r.rig for r in references]
     reference = rigs[0]
     prepared = prepare(vehicle, rigs, calibration, settings, progress)

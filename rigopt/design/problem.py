@@ -23,10 +23,21 @@ class ReferenceRig:
 
     @classmethod
     def on_own_vehicle(cls, rig: Rig) -> "ReferenceRig":
-        """``rig`` on the built-in or user vehicle its ``vehicle`` field names (blueprint, name or alias)."""
-        from rigopt.vehicle.library import load_vehicle
+        """``rig`` on the built-in or user vehicle its ``vehicle`` field names (blueprint, name or alias), its
+        positions converted to the vehicle's centre; cameras inside the body are refused."""
+        from rigopt.vehicle.placement import rig_on_vehicle
 
-        return cls(rig, load_vehicle(rig.vehicle))
+        placed, vehicle, _ = rig_on_vehicle(rig, None)
+        return cls(placed, vehicle)
+
+    @classmethod
+    def on_vehicle(cls, rig: Rig, vehicle: Vehicle) -> "ReferenceRig":
+        """``rig`` placed on ``vehicle`` (:func:`rigopt.vehicle.placement.place_rig`): for imported rigs, whose
+        own vehicle rigopt does not know."""
+        from rigopt.vehicle.placement import place_rig
+
+        placed, _ = place_rig(rig, vehicle)
+        return cls(placed, vehicle)
 
 
 def benchmark_rigs(vehicle: Vehicle) -> tuple[Rig, ...]:

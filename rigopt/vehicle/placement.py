@@ -131,7 +131,8 @@ def place_rig(rig: Rig, vehicle: Vehicle) -> tuple[Rig, OriginChange | None]:
     camera and how deep it lies, never a silent loss of coverage.
     """
     placed, change = to_vehicle_centre(rig, vehicle)
-    placed = Rig(placed.name, vehicle.blueprint, placed.cameras, placed.origin)
+    if known_vehicle(placed) is not vehicle:
+        placed = Rig(placed.name, vehicle.blueprint, placed.cameras, placed.origin)
     inside = cameras_inside(placed, vehicle)
     if inside:
         listed = ", ".join(f"{camera.id} ({depth:.2f} m deep)" for camera, depth in inside)
@@ -156,7 +157,7 @@ def rig_on_vehicle(rig: Rig, vehicle_name: str | None) -> tuple[Rig, Vehicle, Or
         raise RigoptError(f"rig {rig.name!r} is on {rig.vehicle!r}, which is not a rigopt vehicle; add --vehicle "
                           "NAME to place it on one (see rigopt vehicles), or import it with --vehicle")
     placed, change = place_rig(rig, vehicle)
-    return Rig(placed.name, rig.vehicle, placed.cameras, placed.origin), vehicle, change
+    return placed, vehicle, change
 
 
 def comparable_rigs(rigs: Sequence[Rig], vehicle: Vehicle | None = None) -> tuple[list[Rig], list[OriginChange]]:
