@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import asdict
+from dataclasses import asdict, replace
 from typing import List, Optional
 
 import typer
@@ -14,6 +14,8 @@ WEIGHTS_HELP = "Calibrated weights: a shipped name (BEVDet, BEVFusion, Fast-BEV,
 METRIC_HELP = ("Rig distance: rigcd (the published RigCD, default) or rigcd+ (RigCD+: matching under the calibrated "
                "weights; see docs/metrics.md for the evidence).")
 JSON_HELP = "Print JSON instead of a table."
+#: The calibration predictions use when none is named.
+DEFAULT_WEIGHTS = "joint"
 
 
 @app.command("rigv")
@@ -41,12 +43,14 @@ def rigv_command(
 def rigcd_command(
     a: str = typer.Argument(..., help="First rig: library name or rig file."),
     b: str = typer.Argument(..., help="Second rig: library name or rig file."),
-    weights: Optional[str] = typer.Option(None, help=WEIGHTS_HELP + " Adds the predicted drop a -> b."),
+    weights: Optional[str] = typer.Option(None, help=WEIGHTS_HELP + " Its lambdas weight rigcd and match; without "
+                                                  "it they have unit weights and the predicted drop a -> b uses the "
+                                                  "joint calibration."),
     metric: str = typer.Option("rigcd", "--metric", help=METRIC_HELP + " Needs --weights for rigcd+."),
     vehicle: Optional[str] = typer.Option(None, "--vehicle", help=PLACE_HELP),
     as_json: bool = typer.Option(False, "--json", help=JSON_HELP),
 ):
-    """Rig Contrastive Distance between two rigs, its components and (with --weights) the predicted drop.
+    """Rig Contrastive Distance between two rigs, its components and the predicted drop, with its interval.
 
     Rigs measured from different origins (the benchmark's vehicle centre, a dataset's rear axle) are
     converted to their vehicles' centres first, and the conversion is reported."""
@@ -56,25 +60,29 @@ def rigcd_command(
     metric = check_metric(metric)
     if metric == "rigcd+" and not weights:
         raise RigoptError("--metric rigcd+ matches cameras under calibrated weights: add --weights (e.g. joint)")
-    calibration = load_weights(weights, metric) if weights else None
+    calibration = load_weights(weights or DEFAULT_WEIGHTS, metric)
     (rig_a, rig_b), changes = _comparable([a, b], vehicle)
     p = predict_transfer(rig_a, [rig_b], calibration)[0]
-    data = {"a": p.reference, "b": p.rig, "rigcd": p.rigcd, "match": p.match, "count": p.count,
-            "t": p.t, "r": p.r, "f": p.f, "predicted_drop": p.predicted_drop,
-            "origin_changes": [c.as_dict() for c in changes]}
+    if weights is None:  # the distance with the definition's unit weights, the drop from the default calibration
+        unit = predict_transfer(rig_a, [rig_b], None)[0]
+        p = replace(p, rigcd=unit.rigcd, match=unit.match)
+    data = {"a": p.reference, "b": p.rig, **{k: v for k, v in p.to_dict().items() if k not in ("reference", "rig")},
+            "weights": weights or f"{DEFAULT_WEIGHTS} (default)", "origin_changes": [c.as_dict() for c in changes]}
     if as_json:
         print_json(data)
         return
-    columns = ["rigcd", "match", "count", "t (m)", "r (rad)", "f (deg)", "predicted drop"]
+    columns = ["rigcd", "match", "count", "t (m)", "r (rad)", "f (deg)", "predicted drop", "interval"]
     drop = "-" if p.predicted_drop is None else p.predicted_drop
-    print_table(f"RigCD {p.reference} -> {p.rig}", columns, [[p.rigcd, p.match, p.count, p.t, p.r, p.f, drop]])
+    print_table(f"RigCD {p.reference} -> {p.rig}", columns,
+                [[p.rigcd, p.match, p.count, p.t, p.r, p.f, drop, _interval(p)]])
+    _warn_prediction([p], weights or DEFAULT_WEIGHTS)
 
 
 @app.command("rank")
 def rank_command(
     candidates: List[str] = typer.Argument(..., help="Candidate rigs: library names or rig files."),
     ref: str = typer.Option(..., "--ref", help="Reference rig the detector was trained on."),
-    weights: str = typer.Option("joint", help=WEIGHTS_HELP),
+    weights: str = typer.Option(DEFAULT_WEIGHTS, help=WEIGHTS_HELP),
     metric: str = typer.Option("rigcd", "--metric", help=METRIC_HELP),
     vehicle: Optional[str] = typer.Option(None, "--vehicle", help=PLACE_HELP),
     as_json: bool = typer.Option(False, "--json", help=JSON_HELP),
@@ -89,12 +97,14 @@ def rank_command(
     (reference, *others), _ = _comparable([ref, *candidates], vehicle)
     ranked = rank_candidates(reference, others, calibration)
     if as_json:
-        print_json([{"rig": p.rig, "predicted_drop": p.predicted_drop, "rigcd": p.rigcd, "t": p.t, "r": p.r,
-                     "f": p.f, "count": p.count} for p in ranked])
+        print_json([p.to_dict() for p in ranked])
         return
     print_table(f"Candidates ranked by predicted drop from {ref} ({calibration.metric}, {weights} weights)",
-                ["rank", "rig", "predicted drop", "rigcd", "t (m)", "r (rad)", "f (deg)", "count"],
-                [[k + 1, p.rig, p.predicted_drop, p.rigcd, p.t, p.r, p.f, p.count] for k, p in enumerate(ranked)])
+                ["rank", "rig", "predicted drop", "interval", "rigcd", "t (m)", "r (rad)", "f (deg)", "count",
+                 "extrapolates"],
+                [[k + 1, p.rig, p.predicted_drop, _interval(p), p.rigcd, p.t, p.r, p.f, p.count,
+                  "yes" if p.extrapolation else "-"] for k, p in enumerate(ranked)])
+    _warn_prediction(ranked, weights)
 
 
 def _comparable(names: List[str], vehicle: Optional[str]):
@@ -109,3 +119,18 @@ def _comparable(names: List[str], vehicle: Optional[str]):
     for change in changes:
         note(change.describe())
     return rigs, changes
+
+
+def _interval(p) -> str:
+    return "-" if p.interval is None else f"{p.interval[0]:.2f}-{p.interval[1]:.2f}"
+
+
+def _warn_prediction(predictions, weights: Optional[str]) -> None:
+    """Warnings under a table: pairs outside the calibration data, a fallback calibration."""
+    for p in predictions:
+        if p.extrapolation is not None:
+            note(f"{p.reference} -> {p.rig} extrapolates beyond the calibration pairs: {p.extrapolation.describe()}; "
+                 "its predicted drop is less certain than the interval says")
+    if predictions and predictions[0].fallback:
+        note(f"the {weights} calibration is a fallback (its fit kept no geometric term): its predictions do not "
+             "weigh camera geometry as a fitted calibration would")

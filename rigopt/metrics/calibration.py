@@ -9,7 +9,9 @@ whose optimum certifies the first (they must agree). The fit is reported as
     delta_hat = K (alpha (lt x_t + lr x_r + lf x_f) + (1 - alpha) x_count)
 
 with the fallback alpha = 0.9, lambdas = 1, K = max(avg + beta_count, 1) when ``avg <= 1e-9``.
-Predictions always come from (K, alpha, lambdas).
+Predictions always come from (K, alpha, lambdas). That linear prediction is unbounded; a calibration may
+also carry a saturating link into [0, 1], a prediction interval and its calibration pairs' domain
+(``prediction.py``), which turn it into the predicted drop users see (:meth:`Calibration.drop`).
 
 Two metrics share this model and differ only in the matching under which the features are measured:
 
@@ -23,13 +25,14 @@ Two metrics share this model and differ only in the matching under which the fea
 from __future__ import annotations
 
 import json
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Sequence
 
 import numpy as np
 
 from rigopt.errors import DataError, RigoptError, not_utf8, unknown_name
+from rigopt.metrics.prediction import LINKS, Domain, Interval, Link
 from rigopt.metrics.rigcd import DEFAULT_ALPHA, rigcd_matrix, tie_broken_lambdas
 from rigopt.resources import data_dir
 from rigopt.rig.model import Rig
@@ -59,7 +62,9 @@ class Calibration:
     ``lambda_f`` (1/deg) relative to their mean; ``beta`` (t, r, f, count) the fitted linear weights;
     ``fallback`` true when no geometric weight survived the fit; ``metric`` (one of METRICS) the matching
     its features are measured under: ``rigcd`` unit weights, ``rigcd+`` its own lambdas
-    (:attr:`match_lambdas`).
+    (:attr:`match_lambdas`); ``link``, ``interval``, ``domain``: the bounded link, the prediction interval
+    and the calibration pairs' features (None in weights files that predate them: the drop is then the
+    linear prediction, unbounded, with no interval).
     """
 
     name: str
@@ -71,6 +76,9 @@ class Calibration:
     beta: tuple[float, float, float, float]
     fallback: bool
     metric: str = "rigcd"
+    link: Link | None = None
+    interval: Interval | None = None
+    domain: Domain | None = None
 
     @property
     def lambdas(self) -> tuple[float, float, float]:
@@ -87,6 +95,12 @@ class Calibration:
         match = self.lambda_t * np.asarray(t) + self.lambda_r * np.asarray(r) + self.lambda_f * np.asarray(f)
         return self.K * (self.alpha * match + (1.0 - self.alpha) * np.asarray(count))
 
+    def drop(self, t, r, f, count) -> np.ndarray:
+        """Predicted relative drop: the linear prediction through the link (in [0, 1]); without a link the
+        linear prediction itself."""
+        linear = self.predict(t, r, f, count)
+        return self.link(linear) if self.link is not None else linear
+
     def knocked_out(self, component: str) -> "Calibration":
         """The same weights with one component removed: lambda_t, lambda_r, lambda_f (set to 0) or count
         (alpha = 1)."""
@@ -97,13 +111,16 @@ class Calibration:
         raise RigoptError(f"unknown knockout component {component!r}; use lambda_t, lambda_r, lambda_f or count")
 
     def to_dict(self) -> dict:
-        data = asdict(self)
+        data = {k: v for k, v in asdict(self).items() if k not in ("link", "interval", "domain")}
         data["beta"] = dict(zip(FEATURES, self.beta))
+        for key in ("link", "interval", "domain"):
+            if getattr(self, key) is not None:
+                data[key] = getattr(self, key).to_dict()
         return data
 
 
 def _replace(calibration: Calibration, **changes) -> Calibration:
-    return Calibration(**{**asdict(calibration), **changes})
+    return replace(calibration, **changes)
 
 
 def reparameterise(beta: Sequence[float], name: str) -> Calibration:
@@ -277,4 +294,33 @@ def _calibration_from_dict(data, path: Path) -> Calibration:
     if metric not in METRICS:
         raise DataError(f"{path}: metric must be one of {', '.join(METRICS)}, got {metric!r}")
     return Calibration(str(data.get("name", path.stem)), **values, beta=beta, fallback=bool(data.get("fallback", False)),
-                       metric=metric)
+                       metric=metric, **_prediction_parts(data, path))
+
+
+def _prediction_parts(data: dict, path: Path) -> dict:
+    """The optional link, interval and domain of a weights file, checked."""
+    parts = {}
+    try:
+        if "link" in data:
+            link = data["link"]
+            kind, parameters = link["kind"], tuple(float(v) for v in link["parameters"])
+            if kind not in LINKS or len(parameters) != (1 if kind == "exp" else 2) or not all(
+                    np.isfinite(v) and v > 0 for v in parameters):
+                raise ValueError
+            parts["link"] = Link(kind, parameters)
+        if "interval" in data:
+            interval = data["interval"]
+            halfwidth, level = float(interval["halfwidth"]), float(interval["level"])
+            if not (np.isfinite(halfwidth) and halfwidth >= 0 and 0 < level < 1):
+                raise ValueError
+            parts["interval"] = Interval(halfwidth, level, str(interval.get("method", "")))
+        if "domain" in data:
+            points = np.array(data["domain"]["points"], dtype=float)
+            if points.ndim != 2 or points.shape[1] != len(FEATURES) or len(points) == 0 or not np.isfinite(points).all():
+                raise ValueError
+            parts["domain"] = Domain(points)
+    except (KeyError, TypeError, ValueError):
+        raise DataError(f"{path}: 'link', 'interval' or 'domain' is malformed; write them as rigopt calibrate does "
+                        "(link {kind: exp|hill, parameters}, interval {halfwidth, level}, domain {points: [[t, r, f, "
+                        "count], ...]}) or leave them out") from None
+    return parts

@@ -21,7 +21,9 @@ from rigopt.errors import DataError
 from rigopt.metrics.calibration import (UNIT_LAMBDAS, Calibration, CalibrationFit, check_metric, fit_calibration,
                                        pair_features)
 from rigopt.metrics.matched_fit import fit_rematched
-from rigopt.metrics.reliability import DEFAULT_BOOTSTRAP, DEFAULT_SEED, Reliability, drop_ranks, reliability, spearman
+from rigopt.metrics.prediction import LinkChoice, choose_link, domain_of
+from rigopt.metrics.reliability import (DEFAULT_BOOTSTRAP, DEFAULT_SEED, Reliability, drop_ranks, finite_or_none,
+                                        reliability, spearman)
 from rigopt.metrics.transfer import TransferDrops, TransferTable
 from rigopt.rig.library import load_rig
 from rigopt.rig.model import Rig
@@ -38,7 +40,8 @@ class PairPredictions:
     ``features`` (P, 4): unit-weight (t m, r rad, f deg, count); ``delta``: observed relative drop;
     ``predicted``: calibrated prediction; ``control``: both rigs are control rigs;
     ``rank_observed`` / ``rank_predicted``: rank of the drop among the test rigs of the same
-    (model, training rig), largest drop = 1, ties averaged.
+    (model, training rig), largest drop = 1, ties averaged; ``drop``, ``low``, ``high``: the bounded
+    predicted drop and its interval (the linear prediction and no interval without a link).
     """
 
     model: np.ndarray
@@ -50,11 +53,36 @@ class PairPredictions:
     control: np.ndarray
     rank_observed: np.ndarray
     rank_predicted: np.ndarray
+    drop: np.ndarray
+    low: np.ndarray
+    high: np.ndarray
 
     @property
     def rank_error(self) -> np.ndarray:
         """(P,) float: predicted rank - observed rank."""
         return self.rank_predicted - self.rank_observed
+
+
+@dataclass(frozen=True)
+class BoundedAccuracy:
+    """The bounded drop's errors on ``n`` pairs: ``mae``, ``rmse`` (relative drop) and ``coverage``, the
+    fraction of pairs whose measured drop lies in the prediction interval (NaN without one)."""
+
+    mae: float
+    rmse: float
+    coverage: float
+    n: int
+
+    def to_dict(self) -> dict:
+        return {"mae": finite_or_none(self.mae), "rmse": finite_or_none(self.rmse),
+                "interval_coverage": finite_or_none(self.coverage), "n": self.n}
+
+
+def bounded_accuracy(pairs: "PairPredictions", mask: np.ndarray) -> BoundedAccuracy:
+    error = pairs.drop[mask] - pairs.delta[mask]
+    inside = (pairs.low[mask] <= pairs.delta[mask]) & (pairs.delta[mask] <= pairs.high[mask])
+    covered = float(inside.mean()) if np.isfinite(pairs.low[mask]).all() and mask.any() else float("nan")
+    return BoundedAccuracy(float(np.mean(np.abs(error))), float(np.sqrt(np.mean(error ** 2))), covered, int(mask.sum()))
 
 
 @dataclass(frozen=True)
@@ -78,6 +106,9 @@ class ModelCalibration:
     heldout: Reliability
     knockout: Knockout
     pairs: PairPredictions
+    bounded_control: BoundedAccuracy
+    bounded_heldout: BoundedAccuracy
+    link_choice: LinkChoice
 
 
 @dataclass(frozen=True)
@@ -87,6 +118,8 @@ class ModelReliability:
     model: str
     control: Reliability
     heldout: Reliability
+    bounded_control: BoundedAccuracy
+    bounded_heldout: BoundedAccuracy
 
 
 @dataclass(frozen=True)
@@ -96,6 +129,7 @@ class JointCalibration:
     fit: CalibrationFit
     models: tuple[ModelReliability, ...]
     pairs: PairPredictions
+    link_choice: LinkChoice
 
 
 @dataclass(frozen=True)
@@ -112,6 +146,8 @@ class CalibrationStudy:
 def _predictions(drops: TransferDrops, features: np.ndarray, calibration: Calibration,
                  control: np.ndarray) -> PairPredictions:
     predicted = calibration.predict(*features.T)
+    drop = calibration.drop(*features.T)
+    low, high = calibration.interval.around(drop) if calibration.interval else (np.full_like(drop, np.nan),) * 2
     rank_observed, rank_predicted = np.zeros(len(predicted)), np.zeros(len(predicted))
     groups = {}
     for k, key in enumerate(zip(drops.model, drops.train)):
@@ -120,7 +156,7 @@ def _predictions(drops: TransferDrops, features: np.ndarray, calibration: Calibr
         rank_observed[rows] = drop_ranks(drops.delta[rows])
         rank_predicted[rows] = drop_ranks(predicted[rows])
     return PairPredictions(drops.model, drops.train, drops.test, features, drops.delta, predicted, control,
-                           rank_observed, rank_predicted)
+                           rank_observed, rank_predicted, drop, low, high)
 
 
 def _split_reliability(pairs: PairPredictions, resamples: int, seed: int) -> tuple[Reliability, Reliability]:
@@ -157,18 +193,24 @@ def calibrate(table: TransferTable, control_rigs: Sequence[str] = CONTROL_RIGS,
     for model in dict.fromkeys(drops.model.tolist()):
         mine = drops.model == model
         fit, features = _fit(features_under, mine & control, drops.delta, model, solver, metric)
+        fit, choice = _with_link(fit, features, mine & control, drops, solver)
         pairs = _predictions(drops.select(mine), features[mine], fit.calibration, control[mine])
         control_rel, heldout_rel = _split_reliability(pairs, resamples, seed)
-        models.append(ModelCalibration(model, fit, control_rel, heldout_rel, _knockout(fit.calibration, pairs), pairs))
+        models.append(ModelCalibration(model, fit, control_rel, heldout_rel, _knockout(fit.calibration, pairs), pairs,
+                                       bounded_accuracy(pairs, pairs.control), bounded_accuracy(pairs, ~pairs.control),
+                                       choice))
 
     joint_fit, features = _fit(features_under, control, drops.delta, JOINT, solver, metric)
+    joint_fit, joint_choice = _with_link(joint_fit, features, control, drops, solver)
     joint_pairs = _predictions(drops, features, joint_fit.calibration, control)
     per_model = []
     for model in dict.fromkeys(drops.model.tolist()):
         mine = joint_pairs.model == model
         subset = PairPredictions(*(getattr(joint_pairs, f)[mine] for f in PairPredictions.__dataclass_fields__))
-        per_model.append(ModelReliability(model, *_split_reliability(subset, resamples, seed)))
-    joint = JointCalibration(joint_fit, tuple(per_model), joint_pairs)
+        per_model.append(ModelReliability(model, *_split_reliability(subset, resamples, seed),
+                                          bounded_accuracy(subset, subset.control),
+                                          bounded_accuracy(subset, ~subset.control)))
+    joint = JointCalibration(joint_fit, tuple(per_model), joint_pairs, joint_choice)
     return CalibrationStudy(control_rigs, tuple(models), joint, drops.skipped, metric)
 
 
@@ -195,6 +237,27 @@ def _fit(features_under, mask: np.ndarray, delta: np.ndarray, name: str, solver:
     fit = fit_calibration(features_under(rematch.lambdas)[mask], delta[mask], name, solver)
     fit = replace(fit, calibration=replace(fit.calibration, metric=metric))
     return fit, features_under(fit.calibration.match_lambdas)
+
+
+def _with_link(fit: CalibrationFit, features: np.ndarray, mask: np.ndarray, drops: TransferDrops,
+               solver: str) -> tuple[CalibrationFit, LinkChoice]:
+    """``fit`` with its calibration given a link, an interval and a domain, all from the pairs in ``mask``.
+
+    Leave-one-rig-out refits refit the linear weights on the features as they are (for rigcd+, those under
+    the final lambdas: the rematching is not repeated per fold)."""
+    x, delta = features[mask], drops.delta[mask]
+    cache: dict[bytes, Calibration] = {}
+
+    def refit(fit_mask: np.ndarray):
+        key = fit_mask.tobytes()
+        if key not in cache:
+            cache[key] = fit_calibration(x[fit_mask], delta[fit_mask], fit.calibration.name, solver).calibration
+        calibration = cache[key]
+        return lambda predict_mask: calibration.predict(*x[predict_mask].T)
+
+    choice = choose_link(drops.train[mask], drops.test[mask], delta, refit)
+    calibration = replace(fit.calibration, link=choice.link, interval=choice.interval, domain=domain_of(x))
+    return replace(fit, calibration=calibration), choice
 
 
 def _named(rig: Rig, name: str) -> Rig:

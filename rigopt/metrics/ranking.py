@@ -8,6 +8,7 @@ from typing import Sequence
 import numpy as np
 
 from rigopt.metrics.calibration import Calibration
+from rigopt.metrics.prediction import Extrapolation
 from rigopt.metrics.rigcd import DEFAULT_ALPHA, DEFAULT_LAMBDAS, rigcd_matrix, tie_broken_lambdas
 from rigopt.rig.model import Rig
 
@@ -19,7 +20,11 @@ class TransferPrediction:
     ``t`` (m), ``r`` (rad), ``f`` (deg), ``count``: the calibration's input features, under the matching of
     its metric (unit weights for rigcd and without a calibration, its own lambdas for rigcd+);
     ``rigcd`` and ``match``: RigCD under the calibration's alpha and lambdas (the defaults without one);
-    ``predicted_drop``: the calibrated relative mAP drop, None without a calibration.
+    ``predicted_drop``: the calibrated relative mAP drop (through the calibration's link, in [0, 1]), None
+    without a calibration; ``linear_drop``: the benchmark's linear prediction K x calibrated RigCD
+    (unbounded); ``interval``: (low, high) prediction interval of the drop, None without one;
+    ``extrapolation``: how the pair lies outside the calibration pairs (None when inside or unknown);
+    ``fallback``: the calibration kept no geometric term (Fast-BEV), its predictions ignore geometry's weights.
     """
 
     reference: str
@@ -31,6 +36,20 @@ class TransferPrediction:
     r: float
     f: float
     predicted_drop: float | None
+    linear_drop: float | None = None
+    interval: tuple[float, float] | None = None
+    extrapolation: Extrapolation | None = None
+    fallback: bool = False
+
+    def to_dict(self) -> dict:
+        """JSON form: rig, reference, predicted_drop, interval, linear_drop, rigcd, match, t, r, f, count,
+        extrapolation (null or {terms: [...], hull_distance}), fallback."""
+        return {"reference": self.reference, "rig": self.rig, "predicted_drop": self.predicted_drop,
+                "interval": list(self.interval) if self.interval is not None else None,
+                "linear_drop": self.linear_drop, "rigcd": self.rigcd, "match": self.match, "t": self.t, "r": self.r,
+                "f": self.f, "count": self.count,
+                "extrapolation": self.extrapolation.to_dict() if self.extrapolation is not None else None,
+                "fallback": self.fallback}
 
 
 def predict_transfer(reference: Rig, candidates: Sequence[Rig],
@@ -38,16 +57,24 @@ def predict_transfer(reference: Rig, candidates: Sequence[Rig],
     """One prediction per candidate, in the candidates' order."""
     match_lambdas = calibration.match_lambdas if calibration is not None else DEFAULT_LAMBDAS
     features = rigcd_matrix([reference], candidates, DEFAULT_ALPHA, tie_broken_lambdas(match_lambdas))
+    n = len(candidates)
+    x = np.stack([features.t[0], features.r[0], features.f[0], features.count[0]], axis=1)  # (n, 4)
+    linear, drops, intervals, flags = [None] * n, [None] * n, [None] * n, [None] * n
     if calibration is None:
         weighted = rigcd_matrix([reference], candidates, DEFAULT_ALPHA, DEFAULT_LAMBDAS)
-        drops = [None] * len(candidates)
     else:
         weighted = rigcd_matrix([reference], candidates, calibration.alpha, calibration.lambdas)
-        drops = calibration.predict(features.t[0], features.r[0], features.f[0], features.count[0]).tolist()
+        linear = calibration.predict(*x.T).tolist()
+        drops = calibration.drop(*x.T).tolist()
+        if calibration.interval is not None:
+            intervals = list(zip(*(v.tolist() for v in calibration.interval.around(drops))))
+        if calibration.domain is not None:
+            flags = [e if e.flagged else None for e in calibration.domain.check(x)]
+    fallback = calibration is not None and calibration.fallback
     return [
         TransferPrediction(reference.name, rig.name, float(weighted.rigcd[0, k]), float(weighted.match[0, k]),
-                           float(features.count[0, k]), float(features.t[0, k]), float(features.r[0, k]),
-                           float(features.f[0, k]), drops[k])
+                           float(x[k, 3]), float(x[k, 0]), float(x[k, 1]), float(x[k, 2]), drops[k], linear[k],
+                           intervals[k], flags[k], fallback)
         for k, rig in enumerate(candidates)
     ]
 

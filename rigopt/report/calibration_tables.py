@@ -6,7 +6,8 @@ import csv
 from pathlib import Path
 
 from rigopt.metrics.calibration import FEATURES, CalibrationFit, write_weights
-from rigopt.metrics.protocol import CalibrationStudy, PairPredictions
+from rigopt.metrics.prediction import LinkChoice
+from rigopt.metrics.protocol import BoundedAccuracy, CalibrationStudy, PairPredictions
 from rigopt.metrics.reliability import finite_or_none
 
 
@@ -28,14 +29,30 @@ def weights_dict(fit: CalibrationFit) -> dict:
     return data
 
 
+def link_dict(fit: CalibrationFit, choice: LinkChoice) -> dict:
+    """The bounded link of a fit: its kind and parameters, the leave-one-control-rig-out MAE of every
+    candidate link (the smallest chosen) and the prediction interval."""
+    return {**choice.link.to_dict(), "loro_mae": choice.loro_mae, "interval": choice.interval.to_dict()}
+
+
+def bounded_dict(control: BoundedAccuracy, heldout: BoundedAccuracy) -> dict:
+    """MAE, RMSE and interval coverage of the bounded drop on control and held-out pairs."""
+    return {"control": control.to_dict(), "heldout": heldout.to_dict()}
+
+
 def study_dict(study: CalibrationStudy) -> dict:
-    """The JSON of ``rigopt calibrate``: ``{"metric", "models": {M: {"weights", "control", "heldout", "knockout"}}, "joint": {"weights", "models": {M:
-    {"control", "heldout"}}}}`` plus the control rigs and the skipped training rigs."""
+    """The JSON of ``rigopt calibrate``: ``{"metric", "models": {M: {"weights", "link", "control", "heldout",
+    "bounded", "knockout"}}, "joint": {"weights", "link", "models": {M: {"control", "heldout", "bounded"}}}}``
+    plus the control rigs and the skipped training rigs. ``control``/``heldout`` judge the linear prediction
+    (the benchmark's figures: rho, CI, MAE, RMSE); ``bounded`` the predicted drop through the link (MAE, RMSE,
+    and the fraction of pairs inside the prediction interval)."""
     models = {
         m.model: {
             "weights": weights_dict(m.fit),
+            "link": link_dict(m.fit, m.link_choice),
             "control": m.control.to_dict(),
             "heldout": m.heldout.to_dict(),
+            "bounded": bounded_dict(m.bounded_control, m.bounded_heldout),
             "knockout": {k: finite_or_none(getattr(m.knockout, k))
                          for k in ("full", "lambda_t", "lambda_r", "lambda_f", "count")},
         }
@@ -43,7 +60,9 @@ def study_dict(study: CalibrationStudy) -> dict:
     }
     joint = {
         "weights": weights_dict(study.joint.fit),
-        "models": {r.model: {"control": r.control.to_dict(), "heldout": r.heldout.to_dict()}
+        "link": link_dict(study.joint.fit, study.joint.link_choice),
+        "models": {r.model: {"control": r.control.to_dict(), "heldout": r.heldout.to_dict(),
+                             "bounded": bounded_dict(r.bounded_control, r.bounded_heldout)}
                    for r in study.joint.models},
     }
     return {"metric": study.metric, "control_rigs": list(study.control_rigs), "models": models, "joint": joint,
@@ -51,15 +70,16 @@ def study_dict(study: CalibrationStudy) -> dict:
 
 
 PAIRS_HEADER = ["fit", "model", "train_rig", "test_rig", "split", *FEATURES, "delta", "predicted",
-                "rank_observed", "rank_predicted", "rank_error"]
+                "rank_observed", "rank_predicted", "rank_error", "drop", "low", "high"]
 
 
 def pair_rows(pairs: PairPredictions, fit_name: str):
-    """Rows of PAIRS_HEADER, one per pair: rigs, split, features, observed and predicted drop, ranks."""
+    """Rows of PAIRS_HEADER, one per pair: rigs, split, features, observed and linear predicted drop, ranks,
+    and the bounded drop with its interval (low, high)."""
     for k in range(len(pairs.delta)):
         split = "control" if pairs.control[k] else "heldout"
         numbers = [*pairs.features[k], pairs.delta[k], pairs.predicted[k], pairs.rank_observed[k],
-                   pairs.rank_predicted[k], pairs.rank_error[k]]
+                   pairs.rank_predicted[k], pairs.rank_error[k], pairs.drop[k], pairs.low[k], pairs.high[k]]
         yield [fit_name, pairs.model[k], pairs.train[k], pairs.test[k], split, *(f"{float(v):.10g}" for v in numbers)]
 
 

@@ -7,6 +7,7 @@ script's error handling, in-process (tests/console.py).
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 
 import numpy as np
@@ -41,6 +42,17 @@ def shipped_weights(name: str) -> dict:
 def formula(w: dict, t, r, f, count) -> float:
     return w["K"] * (w["alpha"] * (w["lambda_t"] * t + w["lambda_r"] * r + w["lambda_f"] * f)
                      + (1 - w["alpha"]) * count)
+
+
+def bounded(w: dict, linear: float) -> float:
+    """The weights file's link applied to a linear prediction, written out here from its definition."""
+    if "link" not in w:
+        return linear
+    kind, parameters = w["link"]["kind"], w["link"]["parameters"]
+    if kind == "exp":
+        return 1.0 - math.exp(-parameters[0] * linear)
+    b, c = parameters
+    return (linear / c) ** b / (1.0 + (linear / c) ** b)
 
 
 # --- rigs, rigv, rigcd, rank ------------------------------------------------------------------------
@@ -96,12 +108,28 @@ def test_rigv_with_weights_uses_their_lambdas():
     assert weighted["rigv"] == pytest.approx(expected, rel=1e-12)
 
 
-def test_rigcd_json_keys_and_null_drop_without_weights():
+def test_rigcd_json_keys_and_the_joint_drop_without_weights():
     data = invoke_json("rigcd", "R1", "R6", "--json")
-    assert set(data) == {"a", "b", "rigcd", "match", "count", "t", "r", "f", "predicted_drop", "origin_changes"}
+    assert set(data) == {"a", "b", "rigcd", "match", "count", "t", "r", "f", "predicted_drop", "interval",
+                         "linear_drop", "extrapolation", "fallback", "weights", "origin_changes"}
     assert (data["a"], data["b"]) == ("R1", "R6")
-    assert data["predicted_drop"] is None
+    w = shipped_weights("joint")
+    assert data["weights"] == "joint (default)" and data["fallback"] is False
+    assert data["linear_drop"] == pytest.approx(formula(w, data["t"], data["r"], data["f"], data["count"]), rel=1e-12)
+    assert 0.0 <= data["predicted_drop"] <= 1.0
     assert data["origin_changes"] == []  # both benchmark rigs: measured from the vehicle centre
+
+
+def test_a_pair_beyond_the_calibration_pairs_is_flagged_with_its_terms_and_one_inside_is_not():
+    far = invoke_json("rigcd", "R1", "R6", "--json")
+    w = shipped_weights("joint")
+    control_t = max(point[0] for point in w["domain"]["points"])
+    assert [t["term"] for t in far["extrapolation"]["terms"]] == ["t"]  # the fire truck's cameras, metres away
+    assert far["extrapolation"]["terms"][0]["beyond"] == pytest.approx(far["t"] - control_t)
+    low, high = far["interval"]
+    assert low <= far["predicted_drop"] <= high and high - low > 0
+    near = invoke_json("rigcd", "R1", "R1-r", "--json")  # both control rigs: a calibration pair itself
+    assert near["extrapolation"] is None
 
 
 def test_rigcd_json_values_equal_the_reference():
@@ -116,8 +144,11 @@ def test_rigcd_json_values_equal_the_reference():
 def test_rigcd_predicted_drop_with_weights(weights):
     data = invoke_json("rigcd", "R1", "R6", "--weights", weights, "--json")
     w = shipped_weights("joint" if weights.lower() == "joint" else weights)
-    assert data["predicted_drop"] == pytest.approx(formula(w, data["t"], data["r"], data["f"], data["count"]),
-                                                   rel=1e-12)
+    linear = formula(w, data["t"], data["r"], data["f"], data["count"])
+    assert data["linear_drop"] == pytest.approx(linear, rel=1e-12)
+    assert data["predicted_drop"] == pytest.approx(bounded(w, linear), rel=1e-9)
+    assert data["interval"] == pytest.approx([max(0.0, data["predicted_drop"] - w["interval"]["halfwidth"]),
+                                              min(1.0, data["predicted_drop"] + w["interval"]["halfwidth"])])
 
 
 def test_rigcd_with_weights_uses_their_alpha_and_lambdas():
@@ -134,8 +165,9 @@ def test_rigcd_with_a_weights_file(tmp_path):
     path = tmp_path / "w.json"
     path.write_text(json.dumps({"K": 2.0, "alpha": 0.5, "lambda_t": 1.0, "lambda_r": 0.0, "lambda_f": 0.0}))
     data = invoke_json("rigcd", "R1", "R1-c6", "--weights", str(path), "--json")
-    # 2 (0.5 t + 0.5 count), count = (8 - 6) / 8
+    # 2 (0.5 t + 0.5 count), count = (8 - 6) / 8; a file without a link predicts linearly, with no interval
     assert data["predicted_drop"] == pytest.approx(2.0 * (0.5 * data["t"] + 0.5 * 0.25), rel=1e-12)
+    assert data["interval"] is None and data["extrapolation"] is None
 
 
 def test_rigcd_of_a_rig_file(tmp_path):
@@ -149,7 +181,8 @@ def test_rigcd_of_a_rig_file(tmp_path):
 
 def test_rank_json_is_sorted_with_documented_keys():
     rows = invoke_json("rank", "--ref", "R1", "R6", "R4", "R1-f", "--json")
-    assert [set(r) for r in rows] == [{"rig", "predicted_drop", "rigcd", "t", "r", "f", "count"}] * 3
+    assert [set(r) for r in rows] == [{"reference", "rig", "predicted_drop", "interval", "linear_drop", "rigcd",
+                                       "match", "t", "r", "f", "count", "extrapolation", "fallback"}] * 3
     assert sorted(r["rig"] for r in rows) == ["R1-f", "R4", "R6"]
     drops = [r["predicted_drop"] for r in rows]
     assert drops == sorted(drops)
@@ -159,7 +192,8 @@ def test_rank_uses_joint_weights_by_default():
     rows = invoke_json("rank", "--ref", "R1", "R6", "R4", "R1-f", "--json")
     w = shipped_weights("joint")
     for r in rows:
-        assert r["predicted_drop"] == pytest.approx(formula(w, r["t"], r["r"], r["f"], r["count"]), rel=1e-12)
+        assert r["linear_drop"] == pytest.approx(formula(w, r["t"], r["r"], r["f"], r["count"]), rel=1e-12)
+        assert r["predicted_drop"] == pytest.approx(bounded(w, r["linear_drop"]), rel=1e-9)
 
 
 def test_rank_table_output():
@@ -181,15 +215,19 @@ def test_calibrate_json_shape(calibrate_report):
     assert set(report) >= {"models", "joint"}
     assert set(report["models"]) == MODELS
     for entry in report["models"].values():
-        assert set(entry) == {"weights", "control", "heldout", "knockout"}
+        assert set(entry) == {"weights", "link", "control", "heldout", "bounded", "knockout"}
+        assert entry["link"]["kind"] in ("exp", "hill") and set(entry["link"]["loro_mae"]) == {"exp", "hill"}
+        assert entry["link"]["loro_mae"][entry["link"]["kind"]] == min(entry["link"]["loro_mae"].values())
+        for split in ("control", "heldout"):
+            assert set(entry["bounded"][split]) == {"mae", "rmse", "interval_coverage", "n"}
+            assert 0.0 <= entry["bounded"][split]["interval_coverage"] <= 1.0
         assert set(entry["knockout"]) == {"full", "lambda_t", "lambda_r", "lambda_f", "count"}
         for split in ("control", "heldout"):
             assert set(entry[split]) == {"rho", "p", "ci", "mae", "rmse", "n"}
             assert len(entry[split]["ci"]) == 2
-    assert set(report["joint"]) == {"weights", "models"}
+    assert set(report["joint"]) == {"weights", "link", "models"}
     assert set(report["joint"]["models"]) == MODELS
-    for entry in report["joint"]["models"].values():
-        assert set(entry) == {"control", "heldout"}
+    assert all(set(entry) == {"control", "heldout", "bounded"} for entry in report["joint"]["models"].values())
 
 
 def test_calibrate_json_split_sizes(calibrate_report):

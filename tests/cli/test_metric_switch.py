@@ -35,7 +35,8 @@ def test_rank_with_rigcd_plus_uses_the_rigcd_plus_weights():
     drops = [p["predicted_drop"] for p in ranked]
     assert drops == sorted(drops)
     for p in ranked:
-        assert p["predicted_drop"] == pytest.approx(plus.K * p["rigcd"], rel=1e-9)
+        assert p["linear_drop"] == pytest.approx(plus.K * p["rigcd"], rel=1e-9)
+        assert p["predicted_drop"] == pytest.approx(float(plus.link(p["linear_drop"])), rel=1e-9)
     default = invoke_json("rank", *CANDIDATES, "--ref", "R1", "--json")
     expected = {p.rig: p.predicted_drop for p in predict_transfer(load_rig("R1"), [load_rig(c) for c in CANDIDATES],
                                                                   load_weights("joint"))}
@@ -61,7 +62,7 @@ def test_rigcd_command_with_rigcd_plus_needs_weights_and_reports_its_drop():
     assert result.returncode == 2 and "Traceback" not in result.stderr
     assert "rigopt: error:" in result.stderr and "--weights" in result.stderr
     data = invoke_json("rigcd", "R1", "R5", "--metric", "rigcd+", "--weights", "PETR", "--json")
-    assert data["predicted_drop"] == pytest.approx(load_weights("PETR", "rigcd+").K * data["rigcd"], rel=1e-9)
+    assert data["linear_drop"] == pytest.approx(load_weights("PETR", "rigcd+").K * data["rigcd"], rel=1e-9)
 
 
 def test_unknown_metric_is_a_one_line_error():
@@ -76,7 +77,7 @@ def test_design_with_rigcd_plus_minimises_and_reports_rigcd_plus(tmp_path):
                           "--pitch", "0", "--fov", "90,120", "--json", "--out", str(out))
     plus = load_weights("joint", "rigcd+")
     assert summary["metric"] == "rigcd+" and summary["weights"] == "joint"
-    assert summary["predicted_drop"] == pytest.approx(plus.K * summary["rigcd"], rel=1e-9)
+    assert summary["predicted_drop"] == pytest.approx(float(plus.link(plus.K * summary["rigcd"])), rel=1e-9)
     design = load_rig(out / "rig.json")
     assert predict_transfer(load_rig("R5"), [design], plus)[0].predicted_drop == pytest.approx(
         summary["predicted_drop"], rel=1e-9)

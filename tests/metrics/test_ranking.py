@@ -63,7 +63,11 @@ def test_ties_keep_the_given_order(reference):
 def test_predicted_drop_equals_the_formula_on_reference_features(reference, candidates, weights):
     c = load_weights(weights)
     for p, rig in zip(predict_transfer(reference, candidates, c), candidates):
-        assert p.predicted_drop == pytest.approx(formula(c, rigcd_reference(reference, rig)), rel=1e-9, abs=1e-9)
+        linear = formula(c, rigcd_reference(reference, rig))
+        assert p.linear_drop == pytest.approx(linear, rel=1e-9, abs=1e-9)
+        assert p.predicted_drop == pytest.approx(float(c.link(linear)), rel=1e-9, abs=1e-9)
+        assert 0.0 <= p.predicted_drop <= 1.0
+        assert p.fallback is c.fallback
 
 
 def test_predict_transfer_without_calibration(reference, candidates):

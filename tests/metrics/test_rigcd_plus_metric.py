@@ -68,11 +68,11 @@ def test_rigcd_plus_predicts_K_times_its_own_rigcd_and_rigcd_never_less():
     candidates = [load_rig(name) for name in rig_names()]
     plus, published = load_weights("joint", "rigcd+"), load_weights("joint")
     for p in predict_transfer(reference, candidates, plus):
-        assert p.predicted_drop == pytest.approx(plus.K * p.rigcd, rel=1e-9, abs=1e-12), p.rig
+        assert p.linear_drop == pytest.approx(plus.K * p.rigcd, rel=1e-9, abs=1e-12), p.rig
     # the same weights under the unit matching: never below the weighted minimum, above it for some rig
     as_published = type(plus)(**{**plus.__dict__, "metric": "rigcd"})
     weighted = [plus.K * p.rigcd for p in predict_transfer(reference, candidates, plus)]
-    unit = [p.predicted_drop for p in predict_transfer(reference, candidates, as_published)]
+    unit = [p.linear_drop for p in predict_transfer(reference, candidates, as_published)]
     assert all(u >= w - 1e-12 for u, w in zip(unit, weighted))
     assert any(u > w + 1e-6 for u, w in zip(unit, weighted))
     assert predict_transfer(reference, [reference], plus)[0].predicted_drop == pytest.approx(0.0, abs=1e-12)
