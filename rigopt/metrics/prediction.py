@@ -82,8 +82,9 @@ def fit_link(s, delta, kind: str = "exp") -> Link:
 
 @dataclass(frozen=True)
 class Interval:
-    """A symmetric prediction interval: drop +- ``halfwidth``, clipped to [0, 1], nominal coverage ``level``;
-    ``method`` says how the half-width was obtained."""
+    """A symmetric prediction interval: drop +- ``halfwidth``, nominal coverage ``level``; ``method`` says how
+    the half-width was obtained. The high end is clipped at 1 (mAP cannot fall below 0); the low end is not
+    clipped at 0, since a rig change can also raise mAP (a negative measured drop)."""
 
     halfwidth: float
     level: float
@@ -92,7 +93,7 @@ class Interval:
     def around(self, drop) -> tuple[np.ndarray, np.ndarray]:
         """(low, high), each shaped like ``drop``."""
         drop = np.asarray(drop, dtype=float)
-        return np.clip(drop - self.halfwidth, 0.0, 1.0), np.clip(drop + self.halfwidth, 0.0, 1.0)
+        return drop - self.halfwidth, np.minimum(drop + self.halfwidth, 1.0)
 
     def to_dict(self) -> dict:
         return {"halfwidth": self.halfwidth, "level": self.level, "method": self.method}

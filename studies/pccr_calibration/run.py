@@ -53,6 +53,20 @@ def main() -> None:
     knockout = write_csv(out / "knockout.csv", ["model", "full", "no_lambda_t", "no_lambda_r", "no_lambda_f", "no_count"],
                          [[m, *(e["knockout"][k] for k in ("full", "lambda_t", "lambda_r", "lambda_f", "count"))]
                           for m, e in report["models"].items()])
+    bounded_header = ["fit", "model", "link", "loro_mae_exp", "loro_mae_hill", "halfwidth_90", "mae_linear",
+                      "rmse_linear", "mae_bounded", "rmse_bounded", "coverage_control", "coverage_heldout"]
+
+    def bounded_row(fit_name, link, model, entry):
+        held, bounded = entry["heldout"], entry["bounded"]
+        return [fit_name, model, link["kind"], link["loro_mae"]["exp"], link["loro_mae"]["hill"],
+                link["interval"]["halfwidth"], held["mae"], held["rmse"], bounded["heldout"]["mae"],
+                bounded["heldout"]["rmse"], bounded["control"]["interval_coverage"],
+                bounded["heldout"]["interval_coverage"]]
+
+    bounded = write_csv(out / "bounded.csv", bounded_header,
+                        [bounded_row(m, e["link"], m, e) for m, e in report["models"].items()]
+                        + [bounded_row("joint", report["joint"]["link"], m, e)
+                           for m, e in report["joint"]["models"].items()])
     fits: list[Calibration] = [m.fit.calibration for m in study.models] + [study.joint.fit.calibration]
     rigv_table = write_csv(out / "rigv.csv", ["rig", "no calibration", *(c.name for c in fits)],
                            [[name, rigv(library_rig(name)).rigv, *(rigv(library_rig(name), c.lambdas).rigv for c in fits)]
@@ -66,6 +80,8 @@ def main() -> None:
         f"## Joint calibration (K {jw['K']:.3f}, alpha {jw['alpha']:.3f}, lambdas {jw['lambda_t']:.3f} / "
         f"{jw['lambda_r']:.3f} / {jw['lambda_f']:.3f})", markdown(joint),
         "## Knockout (held-out rho, no refit)", markdown(knockout),
+        "## The bounded link and 90 % prediction intervals (held-out errors; coverage = share of measured drops "
+        "inside the interval)", markdown(bounded),
         "## RigV (no calibration, and with each fit's lambdas)", markdown(rigv_table),
     ]) + "\n")
     print(f"wrote {out}")
