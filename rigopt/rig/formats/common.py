@@ -150,7 +150,10 @@ def optical_rotation(camera: Camera) -> np.ndarray:
 
 
 def make_lens(where: str, width, height, fx, fy, cx, cy, distortion="none", coefficients=()) -> Lens:
-    """A :class:`Lens`, its complaints (RigoptError) turned into a RigFileError that names ``where``."""
+    """A :class:`Lens`, its complaints (RigoptError) turned into a RigFileError that names ``where``. All-zero
+    coefficients give a "none" lens (the same geometry, one way to say it)."""
+    if all(c == 0 for c in coefficients):
+        distortion, coefficients = "none", ()
     try:
         return Lens(width, height, fx, fy, cx, cy, distortion, tuple(coefficients))
     except RigoptError as error:
