@@ -211,18 +211,20 @@ def format_number(value: float) -> str:
 
 def warn_not_carried(rig: Rig, format_name: str, carries_name: bool, carries_vehicle: bool) -> list[str]:
     """Warnings for the rig-level things ``format_name`` does not carry (name, vehicle, zones)."""
-    lost = []
+    lost, options = [], []
     if not carries_name:
         lost.append(f"the rig's name {rig.name!r}")
+        options.append("--name")
     if not carries_vehicle:
-        lost.append(f"its vehicle {rig.vehicle!r}")
+        lost.append(f"the vehicle {rig.vehicle!r}")
+        options.append("--vehicle")
     zoned = [c.id for c in rig.cameras if c.zone is not None]
     if zoned:
         lost.append(f"the mounting zones of {len(zoned)} camera(s)")
     if not lost:
         return []
-    return [f"{format_name} does not carry {', '.join(lost)}; give them back with --name/--vehicle on import"
-            if (not carries_name or not carries_vehicle) else f"{format_name} does not carry {', '.join(lost)}"]
+    again = f"; give {' and '.join(options)} on import" if options else ""
+    return [f"{format_name} does not carry {', '.join(lost)}{again}"]
 
 
 def warn_origin(rig: Rig, format_name: str, native: str) -> list[str]:
