@@ -309,7 +309,7 @@ CASES: list[tuple[str, list[str], str]] = [
      "'sensors'"),
     ("import carla fov text", ["import", "carla", f"{T}/carla_fov_text.json", "--out", f"{T}/r.json"], "wide"),
     # --- export ---
-    ("export unknown format", ["export", "R1", "--format", "kitti", "--out", f"{T}/x"], "kitti"),
+    ("export --format unknown", ["export", "R1", "--format", "kitti", "--out", f"{T}/x"], "kitti"),
     ("export --out wrong extension", ["export", "R1", "--format", "urdf", "--out", f"{T}/x.json"], ".urdf"),
     ("export --out exists", ["export", "R1", "--format", "carla", "--out", f"{T}/carla_no_sensors.json"],
      "--force"),

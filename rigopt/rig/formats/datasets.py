@@ -78,9 +78,9 @@ def _read_arrow(path: Path, columns: tuple[str, ...], what: str, fix: str, parqu
         raise RigFileError(f"{path}: no such file; {fix}")
     try:
         table = reader.read_table(path)
-    except Exception as error:  # pyarrow raises several kinds for a file that is not its format
-        reason = str(error).splitlines()[0][:120] if str(error) else type(error).__name__
-        raise RigFileError(f"{path}: not a readable {what} ({reason}); {fix}") from None
+    except Exception:  # pyarrow raises several kinds for a file that is not its format
+        kind = "Parquet" if parquet else "Feather"
+        raise RigFileError(f"{path}: not a readable {what} (pyarrow cannot read it as {kind}); {fix}") from None
     missing = [c for c in columns if c not in table.column_names]
     if missing:
         raise RigFileError(f"{path}: the {what} lacks columns {missing}; {fix}")
