@@ -23,7 +23,7 @@ import numpy as np
 from rigopt.bench.scene_model import CLASSES
 from rigopt.errors import DataError, not_utf8
 from rigopt.geometry import matrix_to_quaternion, quaternion_to_matrix, rot_z
-from rigopt.rig.nuscenes_format import nuscenes_token
+from rigopt.rig.formats.nuscenes import nuscenes_token
 
 TABLES = ("log", "scene", "sample", "sample_data", "sensor", "calibrated_sensor", "ego_pose", "sample_annotation",
           "instance", "category", "visibility", "attribute")

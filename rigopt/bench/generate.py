@@ -24,7 +24,7 @@ from rigopt.bench.scene_model import CLASSES, Boxes, Scene
 from rigopt.errors import RigoptError
 from rigopt.output import atomic_file, atomic_folder
 from rigopt.rig.model import Rig
-from rigopt.rig.nuscenes_format import nuscenes_token, write_nuscenes_calibration
+from rigopt.rig.formats.nuscenes import nuscenes_token, write_nuscenes_calibration
 
 ANNOTATION_RANGE = 80.0
 #: Relative depth agreement for a surface point to count as the rendered pixel's surface.

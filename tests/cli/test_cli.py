@@ -307,7 +307,7 @@ def test_calibrate_table_output():
 
 
 def test_import_nuscenes_round_trip(tmp_path):
-    from rigopt.rig.nuscenes_format import write_nuscenes_calibration
+    from rigopt.rig.formats.nuscenes import write_nuscenes_calibration
 
     r1 = load_rig("R1")
     tables = write_nuscenes_calibration(r1, tmp_path / "tables")
@@ -385,7 +385,7 @@ def test_results_folder_without_diagonal(tmp_path):
 
 
 def test_bad_image_size(tmp_path):
-    from rigopt.rig.nuscenes_format import write_nuscenes_calibration
+    from rigopt.rig.formats.nuscenes import write_nuscenes_calibration
 
     tables = write_nuscenes_calibration(load_rig("R1"), tmp_path / "tables")
     result = run_cli("import", "nuscenes", tables, "--out", tmp_path / "x.json", "--image-size", "1280by720")

@@ -1,4 +1,4 @@
-"""nuScenes calibration importer: frames, FOV, record selection, round trip and input errors."""
+"""nuScenes calibration tables: frames, lenses, record selection, round trip and input errors."""
 
 from __future__ import annotations
 
@@ -10,7 +10,11 @@ import pytest
 
 from rigopt.errors import RigFileError
 from rigopt.rig.library import load_rig
-from rigopt.rig.nuscenes_format import read_nuscenes_rig, write_nuscenes_calibration
+from rigopt.rig.formats.nuscenes import read_nuscenes, write_nuscenes_calibration
+
+
+def read_nuscenes_rig(directory, **options):
+    return read_nuscenes(directory, **options).rig
 
 H = math.sqrt(0.5)
 #: R_ego_optical = [[0, 0, 1], [-1, 0, 0], [0, -1, 0]]: optical z along ego +x (a front camera).
@@ -68,14 +72,15 @@ def test_near_unit_quaternion_is_normalised(tmp_path):
     np.testing.assert_allclose(camera.rotation, np.eye(3), atol=1e-12)
 
 
-def test_fov_comes_from_fx_and_the_image_width(tmp_path):
-    directory = front_tables(tmp_path, camera_intrinsic=intrinsic(cx=816.27, cy=491.5))  # off-centre: ignored
+def test_fov_comes_from_the_intrinsics_and_the_image_width(tmp_path):
+    directory = front_tables(tmp_path, camera_intrinsic=intrinsic(cx=816.27, cy=491.5))
     camera = read_nuscenes_rig(directory).cameras[0]
-    assert camera.fov == pytest.approx(math.degrees(2.0 * math.atan(800.0 / 1266.417)), abs=1e-12)
-    assert camera.fov == pytest.approx(64.56, abs=0.01)
-    assert camera.image_size == (1600, 900)
-    narrow = read_nuscenes_rig(directory, image_size=(1280, 720)).cameras[0]
-    assert narrow.fov == pytest.approx(math.degrees(2.0 * math.atan(640.0 / 1266.417)), abs=1e-12)
+    expected = math.degrees(math.atan(816.27 / 1266.417) + math.atan((1600 - 816.27) / 1266.417))
+    assert camera.fov == pytest.approx(expected, abs=1e-9)
+    assert camera.image_size == (1600, 900) and camera.lens.cx == 816.27
+    narrow = read_nuscenes_rig(front_tables(tmp_path), image_size=(1280, 720)).cameras[0]
+    expected = math.degrees(math.atan(800.0 / 1266.417) + math.atan(480.0 / 1266.417))  # cx 800 of 1280
+    assert narrow.fov == pytest.approx(expected, abs=1e-9)
     assert narrow.image_size == (1280, 720)
 
 
@@ -90,6 +95,7 @@ def test_names_default_to_the_folder_and_can_be_given(tmp_path):
 def test_library_rig_round_trips(tmp_path):
     rig = load_rig("R1")
     back = read_nuscenes_rig(write_nuscenes_calibration(rig, tmp_path / "r1"), image_size=rig.cameras[0].image_size)
+    assert back.origin.kind == "rear_axle"
     assert [c.id for c in back.cameras] == [c.id for c in rig.cameras]
     np.testing.assert_allclose(back.positions, rig.positions, atol=1e-9, rtol=0)
     np.testing.assert_allclose(back.rotations, rig.rotations, atol=1e-9, rtol=0)
@@ -137,28 +143,37 @@ def test_identical_records_of_a_channel_are_accepted(tmp_path):
     ids=["translation", "rotation", "focal"],
 )
 def test_records_differing_in_any_field_are_different_calibrations(tmp_path, second):
-    with pytest.raises(RigFileError, match=r"CAM_FRONT has 2 different calibrations in 2 records"):
+    with pytest.raises(RigFileError, match=r"holds 2 distinct calibrations"):
         read_nuscenes_rig(two_logs(tmp_path, **second))
 
 
-def test_differing_records_need_an_index(tmp_path):
+def test_differing_records_need_a_calibration_choice(tmp_path):
     directory = two_logs(tmp_path, translation=(1.6, 0.0, 1.5))
-    with pytest.raises(RigFileError, match=r"CAM_FRONT has 2 different calibrations.*--index"):
+    with pytest.raises(RigFileError, match=r"holds 2 distinct calibrations.*--calibration K"):
         read_nuscenes_rig(directory)
-    np.testing.assert_allclose(read_nuscenes_rig(directory, index=0).cameras[0].position, [1.7, 0.0, 1.5])
-    np.testing.assert_allclose(read_nuscenes_rig(directory, index=1).cameras[0].position, [1.6, 0.0, 1.5])
-    with pytest.raises(RigFileError, match=r"--index 2 is out of range for CAM_FRONT.*0\.\.1"):
-        read_nuscenes_rig(directory, index=2)
-    with pytest.raises(RigFileError, match=r"--index must be a non-negative integer"):
-        read_nuscenes_rig(directory, index=-1)
+    np.testing.assert_allclose(read_nuscenes_rig(directory, calibration=0).cameras[0].position, [1.7, 0.0, 1.5])
+    np.testing.assert_allclose(read_nuscenes_rig(directory, calibration=1).cameras[0].position, [1.6, 0.0, 1.5])
+    with pytest.raises(RigFileError, match=r"--calibration 2 is out of range.*0\.\.1"):
+        read_nuscenes_rig(directory, calibration=2)
+    with pytest.raises(RigFileError, match=r"--calibration -1 is out of range"):
+        read_nuscenes_rig(directory, calibration=-1)
+
+
+def test_repeated_identical_records_pair_with_a_channel_of_two(tmp_path):
+    records = [record("CAM_FRONT", token="c1"), record("CAM_FRONT", token="c2", translation=(1.6, 0.0, 1.5)),
+               record("CAM_BACK", token="b1")]
+    directory = write_tables(tmp_path / "t", [sensor("CAM_FRONT"), sensor("CAM_BACK")], records)
+    rig = read_nuscenes_rig(directory, calibration=1)
+    np.testing.assert_allclose(rig.cameras[0].position, [1.6, 0.0, 1.5])
+    assert rig.cameras[1].id == "CAM_BACK"
 
 
 BAD_RECORDS = [
     ({"translation": [1.0, float("nan"), 1.5]}, r"calibrated_sensor\.json: record 0 \(CAM_FRONT\) 'translation'.*NaN"),
     ({"translation": [1.0, 1.5]}, r"'translation'.*shape \(3,\)"),
     ({"translation": [1.0, "0", 1.5]}, r"'translation'.*expected numbers"),
-    ({"rotation": [0.0, 0.0, 0.0, 0.0]}, r"'rotation' must be a unit quaternion.*norm is 0"),
-    ({"rotation": [1.1, 0.0, 0.0, 0.0]}, r"'rotation' must be a unit quaternion.*norm is 1\.1"),
+    ({"rotation": [0.0, 0.0, 0.0, 0.0]}, r"'rotation'.*must be a unit quaternion.*norm is 0"),
+    ({"rotation": [1.1, 0.0, 0.0, 0.0]}, r"'rotation'.*must be a unit quaternion.*norm is 1\.1"),
     ({"rotation": [1.0, 0.0, float("inf"), 0.0]}, r"'rotation'.*NaN or inf"),
     ({"camera_intrinsic": []}, r"'camera_intrinsic' 3x3 matrix.*shape \(3, 3\)"),
     ({"camera_intrinsic": [[1266.4, 0.0, 800.0], [0.0, 1266.4, 450.0]]}, r"'camera_intrinsic'.*shape \(3, 3\)"),
@@ -198,7 +213,7 @@ def test_missing_and_invalid_tables_are_rejected(tmp_path, table):
     with pytest.raises(RigFileError, match=rf"{table}: a nuScenes table must be a JSON list"):
         read_nuscenes_rig(directory)
     (directory / table).unlink()
-    with pytest.raises(RigFileError, match=rf"{table}: cannot read"):
+    with pytest.raises(RigFileError, match=rf"{table}: no such file"):
         read_nuscenes_rig(directory)
 
 

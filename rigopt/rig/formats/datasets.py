@@ -1,0 +1,330 @@
+"""Calibration files of Argoverse 2, DGP (DDAD) and Waymo Open Dataset v2 read into :class:`Rig` (import only).
+
+Argoverse 2 (a log folder, or its ``calibration/`` folder; Apache Feather tables)::
+
+    egovehicle_SE3_sensor.feather: sensor_name, qw, qx, qy, qz, tx_m, ty_m, tz_m   (R_ego_sensor, sensor in ego)
+    intrinsics.feather:            sensor_name, fx_px, fy_px, cx_px, cy_px, k1, k2, k3, height_px, width_px
+
+  Camera (sensor) frames are optical (z forward, x right, y down); distortion is radial k1, k2, k3 only:
+  rigopt's radtan with p1 = p2 = 0. Only sensors listed in intrinsics.feather are cameras (lidars skipped).
+
+DGP / DDAD (a scene folder holding ``calibration/<key>.json`` and ``scene*.json``, or one calibration JSON)::
+
+    {"names": ["CAMERA_01", ..., "LIDAR"],
+     "intrinsics": [{"fx", "fy", "cx", "cy", "skew", "fov", "fisheye", "k1".."k6", "p1", "p2"}, ...],
+     "extrinsics": [{"translation": {"x", "y", "z"}, "rotation": {"qx", "qy", "qz", "qw"}}, ...]}
+
+  Protobuf JSON leaves out zero values (a missing number is 0). Datums with fx = 0 (lidars) are skipped.
+  Extrinsics are sensor poses in the ego frame; camera frames are optical. ``fisheye`` 0 is OpenCV's
+  radtan (k4..k6, the rational terms, must be 0); 1 is OpenCV's fisheye (k1..k4). Image sizes come from
+  the scene JSON's ``data[].datum.image.{width, height}`` of each camera, else a default (1936 x 1216).
+
+Waymo Open Dataset v2 (a ``camera_calibration`` Parquet file or a folder of them)::
+
+    key.segment_context_name, key.camera_name (1 FRONT, 2 FRONT_LEFT, 3 FRONT_RIGHT, 4 SIDE_LEFT, 5 SIDE_RIGHT),
+    [CameraCalibrationComponent].intrinsic.{f_u, f_v, c_u, c_v, k1, k2, p1, p2, k3},
+    [CameraCalibrationComponent].extrinsic.transform (16 numbers, row-major camera -> vehicle),
+    [CameraCalibrationComponent].{width, height, rolling_shutter_direction}
+
+  Waymo's camera frame is x forward along the optical axis, y left, z up: rigopt's body frame, so the
+  extrinsic's rotation is ``R_vehicle_cam`` as it stands. Rolling shutter is not modelled.
+
+All three ego frames are ISO 8855 axes with their origin at the rear axle on the ground.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from rigopt.errors import RigFileError
+from rigopt.rig.formats.common import (Imported, body_rotation, choose_calibration, make_camera, make_lens,
+                                       make_rig, numbers, origin_note, quaternion_rotation, read_json, rotation_matrix,
+                                       same_cameras, unit_quaternion, whole_number)
+from rigopt.rig.model import RigOrigin
+
+REAR_AXLE = RigOrigin("rear_axle")
+
+AV2_POSES = "egovehicle_SE3_sensor.feather"
+AV2_INTRINSICS = "intrinsics.feather"
+AV2_POSE_COLUMNS = ("sensor_name", "qw", "qx", "qy", "qz", "tx_m", "ty_m", "tz_m")
+AV2_INTRINSIC_COLUMNS = ("sensor_name", "fx_px", "fy_px", "cx_px", "cy_px", "k1", "k2", "k3", "height_px", "width_px")
+
+DGP_IMAGE_SIZE = (1936, 1216)
+
+WAYMO_CAMERAS = {1: "FRONT", 2: "FRONT_LEFT", 3: "FRONT_RIGHT", 4: "SIDE_LEFT", 5: "SIDE_RIGHT"}
+WAYMO = "[CameraCalibrationComponent]."
+WAYMO_COLUMNS = ("key.segment_context_name", "key.camera_name",
+                 *(f"{WAYMO}intrinsic.{k}" for k in ("f_u", "f_v", "c_u", "c_v", "k1", "k2", "p1", "p2", "k3")),
+                 f"{WAYMO}extrinsic.transform", f"{WAYMO}width", f"{WAYMO}height")
+
+
+def _origin(origin: RigOrigin | None, frame: str) -> tuple[RigOrigin, str]:
+    origin = origin or REAR_AXLE
+    return origin, origin_note(origin, frame if origin == REAR_AXLE else "--origin")
+
+
+def _read_arrow(path: Path, columns: tuple[str, ...], what: str, fix: str, parquet: bool = False) -> dict:
+    """Columns of a Feather or Parquet table as Python lists; errors name the file and the missing columns."""
+    try:
+        if parquet:
+            import pyarrow.parquet as reader
+        else:
+            import pyarrow.feather as reader
+    except ImportError:  # pragma: no cover - pyarrow is a core dependency
+        raise RigFileError(f"{path}: reading {what} needs pyarrow; pip install pyarrow") from None
+    if not path.is_file():
+        raise RigFileError(f"{path}: no such file; {fix}")
+    try:
+        table = reader.read_table(path)
+    except Exception:  # pyarrow raises several kinds for a file that is not its format
+        kind = "Parquet" if parquet else "Feather"
+        raise RigFileError(f"{path}: not a readable {what} (pyarrow cannot read it as {kind}); {fix}") from None
+    missing = [c for c in columns if c not in table.column_names]
+    if missing:
+        raise RigFileError(f"{path}: the {what} lacks columns {missing}; {fix}")
+    return {c: table.column(c).to_pylist() for c in columns}
+
+
+# --------------------------------------------------------------------------------------------- Argoverse 2
+
+
+def read_argoverse2(path, name: str | None = None, vehicle: str = "argoverse2",
+                    origin: RigOrigin | None = None) -> Imported:
+    """Read the cameras of an Argoverse 2 log (its folder or its calibration/ folder)."""
+    path = Path(path)
+    if not path.is_dir():
+        raise RigFileError(f"{path}: no such directory; pass an Argoverse 2 log folder (holding calibration/) "
+                           f"or its calibration/ folder")
+    folder = path / "calibration" if (path / "calibration").is_dir() else path
+    fix = f"an Argoverse 2 calibration folder holds {AV2_POSES} and {AV2_INTRINSICS}"
+    poses = _read_arrow(folder / AV2_POSES, AV2_POSE_COLUMNS, "Argoverse 2 sensor pose table", fix)
+    intrinsics = _read_arrow(folder / AV2_INTRINSICS, AV2_INTRINSIC_COLUMNS, "Argoverse 2 intrinsics table", fix)
+    pose_rows = {n: k for k, n in enumerate(poses["sensor_name"])}
+    cameras = []
+    for k, sensor in enumerate(intrinsics["sensor_name"]):
+        where = f"{folder / AV2_INTRINSICS}: row {k} ({sensor})"
+        if not isinstance(sensor, str) or not sensor:
+            raise RigFileError(f"{where}: sensor_name must be a non-empty string")
+        if sensor not in pose_rows:
+            raise RigFileError(f"{where}: {AV2_POSES} has no pose for {sensor}; use the two tables of one log")
+        row = pose_rows[sensor]
+        pose_where = f"{folder / AV2_POSES}: row {row} ({sensor})"
+        q = unit_quaternion([poses[c][row] for c in ("qw", "qx", "qy", "qz")], f"{pose_where} qw, qx, qy, qz")
+        t = numbers([poses[c][row] for c in ("tx_m", "ty_m", "tz_m")], (3,), f"{pose_where} tx_m, ty_m, tz_m")
+        fx, fy, cx, cy, k1, k2, k3 = numbers([intrinsics[c][k] for c in AV2_INTRINSIC_COLUMNS[1:8]], (7,), where)
+        width = whole_number(intrinsics["width_px"][k], f"{where} width_px")
+        height = whole_number(intrinsics["height_px"][k], f"{where} height_px")
+        lens = make_lens(where, width, height, fx, fy, cx, cy, "radtan", (k1, k2, 0.0, 0.0, k3))
+        cameras.append(make_camera(where, sensor, t, body_rotation(quaternion_rotation(q)), lens))
+    origin, note = _origin(origin, "Argoverse 2 ego-vehicle frame")
+    default_name = path.name if folder != path else path.resolve().parent.name
+    rig = make_rig(str(folder / AV2_INTRINSICS), name or default_name, vehicle, cameras, origin)
+    return Imported(rig, (note,))
+
+
+# ----------------------------------------------------------------------------------------------------- DGP
+
+
+def dgp_calibration_files(path: Path) -> list[Path]:
+    """The calibration JSON files of a DGP scene folder (sorted), or [path] for a file."""
+    if path.is_file():
+        return [path]
+    if not path.is_dir():
+        raise RigFileError(f"{path}: no such file or directory; pass a DGP scene folder (holding calibration/) "
+                           "or a calibration JSON file")
+    folder = path / "calibration" if (path / "calibration").is_dir() else path
+    files = sorted(folder.glob("*.json"))
+    if not files:
+        raise RigFileError(f"{folder}: holds no calibration JSON; pass a DGP scene folder (holding calibration/) "
+                           "or a calibration JSON file")
+    return files
+
+
+def read_dgp(path, image_size=DGP_IMAGE_SIZE, calibration: int | None = None, name: str | None = None,
+             vehicle: str = "dgp", origin: RigOrigin | None = None) -> Imported:
+    """Read the cameras of a DGP (DDAD) scene: its one distinct calibration, or the ``calibration``-th."""
+    path = Path(path)
+    files = dgp_calibration_files(path)
+    scene_folder = path if path.is_dir() else path.parent.parent
+    sizes = _dgp_image_sizes(scene_folder)
+    rigs = []
+    for file in files:
+        cameras, defaulted = _dgp_cameras(file, sizes, image_size)
+        if not any(same_cameras(cameras, other[0]) for other in rigs):
+            rigs.append((cameras, defaulted, file))
+    cameras, defaulted, file = choose_calibration(rigs, calibration, str(path), "--calibration K")
+    origin, note = _origin(origin, "DDAD ego frame")
+    default_name = scene_folder.resolve().name
+    rig = make_rig(str(file), name or default_name, vehicle, cameras, origin)
+    notes = [note]
+    if defaulted:
+        notes.append(f"image size {image_size[0]}x{image_size[1]} assumed for {', '.join(defaulted)} (no scene JSON "
+                     "gives it; set it with --image-size)")
+    return Imported(rig, tuple(notes))
+
+
+def dgp_calibrations(path, image_size=DGP_IMAGE_SIZE) -> list[dict]:
+    """Rows for ``--list``: each distinct calibration with its files."""
+    path = Path(path)
+    files = dgp_calibration_files(path)
+    sizes = _dgp_image_sizes(path if path.is_dir() else path.parent.parent)
+    rows: list[dict] = []
+    for file in files:
+        cameras, _ = _dgp_cameras(file, sizes, image_size)
+        for row in rows:
+            if same_cameras(cameras, row["_cameras"]):
+                row["files"].append(file.name)
+                break
+        else:
+            rows.append({"_cameras": cameras, "files": [file.name]})
+    return [{"calibration": k, "cameras": [c.id for c in r["_cameras"]], "files": r["files"]}
+            for k, r in enumerate(rows)]
+
+
+def _dgp_image_sizes(folder: Path) -> dict[str, tuple[int, int]]:
+    """Camera name -> (width, height) from the scene JSON files of ``folder`` (first found wins)."""
+    sizes: dict[str, tuple[int, int]] = {}
+    for scene in sorted(folder.glob("scene*.json")) if folder.is_dir() else ():
+        data = read_json(scene, "DGP scene JSON", "use the scene JSON of a DGP dataset")
+        for k, datum in enumerate(data.get("data", []) if isinstance(data, dict) else []):
+            image = (datum.get("datum") or {}).get("image") if isinstance(datum, dict) else None
+            camera = (datum.get("id") or {}).get("name") if isinstance(datum, dict) else None
+            if not isinstance(image, dict) or not isinstance(camera, str) or camera in sizes:
+                continue
+            where = f"{scene}: data {k} ({camera}) image"
+            sizes[camera] = (whole_number(image.get("width"), f"{where} width"),
+                             whole_number(image.get("height"), f"{where} height"))
+    return sizes
+
+
+def _dgp_number(entry: dict, key: str, where: str) -> float:
+    value = entry.get(key, 0.0)
+    return float(numbers([value], (1,), f"{where} {key}")[0])
+
+
+def _dgp_cameras(file: Path, sizes: dict, image_size) -> tuple[tuple, list[str]]:
+    data = read_json(file, "DGP calibration JSON", "use a calibration/<key>.json of a DGP scene")
+    if not isinstance(data, dict) or not all(isinstance(data.get(k), list) for k in ("names", "intrinsics", "extrinsics")):
+        raise RigFileError(f"{file}: a DGP calibration is a JSON object with lists 'names', 'intrinsics' and "
+                           "'extrinsics'")
+    names, intrinsics, extrinsics = data["names"], data["intrinsics"], data["extrinsics"]
+    if not len(names) == len(intrinsics) == len(extrinsics):
+        raise RigFileError(f"{file}: 'names', 'intrinsics' and 'extrinsics' must be as long as each other, got "
+                           f"{len(names)}, {len(intrinsics)} and {len(extrinsics)}")
+    cameras, defaulted = [], []
+    for k, (sensor, intrinsic, extrinsic) in enumerate(zip(names, intrinsics, extrinsics)):
+        where = f"{file}: datum {k} ({sensor})"
+        if not isinstance(sensor, str) or not isinstance(intrinsic, dict) or not isinstance(extrinsic, dict):
+            raise RigFileError(f"{where}: names are strings, intrinsics and extrinsics objects")
+        if _dgp_number(intrinsic, "fx", where) == 0.0:
+            continue  # a lidar or other datum without a camera model
+        fx, fy, cx, cy, skew = (_dgp_number(intrinsic, key, where) for key in ("fx", "fy", "cx", "cy", "skew"))
+        if skew != 0.0:
+            raise RigFileError(f"{where}: skew {skew:g} is not supported; rigopt's lenses have no skew")
+        coefficient = {key: _dgp_number(intrinsic, key, where) for key in
+                       ("k1", "k2", "k3", "k4", "k5", "k6", "p1", "p2")}
+        fisheye = intrinsic.get("fisheye", 0)
+        if fisheye == 0:
+            rational = [key for key in ("k4", "k5", "k6") if coefficient[key] != 0.0]
+            if rational:
+                raise RigFileError(f"{where}: the rational terms {rational} are not supported (rigopt's radtan has "
+                                   "k1, k2, p1, p2, k3)")
+            model, values = "radtan", [coefficient[key] for key in ("k1", "k2", "p1", "p2", "k3")]
+        elif fisheye == 1:
+            model, values = "fisheye", [coefficient[key] for key in ("k1", "k2", "k3", "k4")]
+        else:
+            raise RigFileError(f"{where}: fisheye {fisheye!r} is not supported; 0 (radtan) and 1 (OpenCV fisheye) are")
+        translation, rotation = extrinsic.get("translation", {}), extrinsic.get("rotation", {})
+        if not isinstance(translation, dict) or not isinstance(rotation, dict):
+            raise RigFileError(f"{where}: extrinsics need 'translation' {{x, y, z}} and 'rotation' {{qx, qy, qz, qw}}")
+        position = [_dgp_number(translation, key, f"{where} translation") for key in "xyz"]
+        q = unit_quaternion([_dgp_number(rotation, key, f"{where} rotation") for key in ("qw", "qx", "qy", "qz")],
+                            f"{where} rotation quaternion")
+        size = sizes.get(sensor)
+        if size is None:
+            size = tuple(image_size)
+            defaulted.append(sensor)
+        lens = make_lens(where, size[0], size[1], fx, fy, cx, cy, model, values)
+        cameras.append(make_camera(where, sensor, position, body_rotation(quaternion_rotation(q)), lens))
+    return tuple(cameras), defaulted
+
+
+# --------------------------------------------------------------------------------------------------- Waymo
+
+
+def _waymo_files(path: Path) -> list[Path]:
+    if path.is_file():
+        return [path]
+    if path.is_dir():
+        folder = path / "camera_calibration" if (path / "camera_calibration").is_dir() else path
+        files = sorted(folder.glob("*.parquet"))
+        if files:
+            return files
+        raise RigFileError(f"{folder}: holds no .parquet file; pass a Waymo v2 camera_calibration file or folder")
+    raise RigFileError(f"{path}: no such file or directory; pass a Waymo v2 camera_calibration file or folder")
+
+
+def waymo_segments(path) -> list[tuple[str, tuple]]:
+    """(segment name, cameras) of every segment in a camera_calibration file or folder, in file order."""
+    segments: dict[str, list] = {}
+    for file in _waymo_files(Path(path)):
+        fix = "use the camera_calibration component of the Waymo Open Dataset v2"
+        table = _read_arrow(file, WAYMO_COLUMNS, "Waymo v2 camera_calibration table", fix, parquet=True)
+        for k in range(len(table["key.camera_name"])):
+            segment = table["key.segment_context_name"][k]
+            number = table["key.camera_name"][k]
+            where = f"{file}: row {k}"
+            if not isinstance(segment, str) or number not in WAYMO_CAMERAS:
+                raise RigFileError(f"{where}: key.segment_context_name must be text and key.camera_name one of "
+                                   f"{sorted(WAYMO_CAMERAS)}, got {segment!r}, {number!r}")
+            camera_id = WAYMO_CAMERAS[number]
+            where = f"{where} ({camera_id})"
+            values = numbers([table[f"{WAYMO}intrinsic.{key}"][k] for key in
+                              ("f_u", "f_v", "c_u", "c_v", "k1", "k2", "p1", "p2", "k3")], (9,), f"{where} intrinsic")
+            transform = table[f"{WAYMO}extrinsic.transform"][k]
+            t = numbers(transform, (16,), f"{where} extrinsic.transform (16 numbers, row-major)").reshape(4, 4)
+            if not np.allclose(t[3], [0.0, 0.0, 0.0, 1.0], atol=1e-9):
+                raise RigFileError(f"{where}: extrinsic.transform's last row must be [0, 0, 0, 1]")
+            rotation = rotation_matrix(t[:3, :3], f"{where} extrinsic.transform rotation")
+            width = whole_number(table[f"{WAYMO}width"][k], f"{where} width")
+            height = whole_number(table[f"{WAYMO}height"][k], f"{where} height")
+            lens = make_lens(where, width, height, *values[:4], "radtan", values[4:])
+            camera = make_camera(where, camera_id, t[:3, 3], rotation, lens)
+            cameras = segments.setdefault(segment, [])
+            if any(c.id == camera_id for c in cameras):
+                raise RigFileError(f"{where}: segment {segment} lists {camera_id} twice")
+            cameras.append(camera)
+    order = {name: k for k, name in WAYMO_CAMERAS.items()}
+    return [(segment, tuple(sorted(cameras, key=lambda c: order[c.id]))) for segment, cameras in segments.items()]
+
+
+def waymo_calibrations(path) -> list[dict]:
+    """The distinct calibrations of the segments, each with its segments (for ``--list`` and choosing)."""
+    groups: list[dict] = []
+    for segment, cameras in waymo_segments(path):
+        for group in groups:
+            if same_cameras(group["cameras"], cameras):
+                group["segments"].append(segment)
+                break
+        else:
+            groups.append({"cameras": cameras, "segments": [segment]})
+    return groups
+
+
+def read_waymo(path, calibration: int | None = None, segment: str | None = None, name: str | None = None,
+               vehicle: str = "waymo", origin: RigOrigin | None = None) -> Imported:
+    """Read the cameras of Waymo v2 camera_calibration: one segment's, or the K-th distinct calibration."""
+    groups = waymo_calibrations(path)
+    if segment is not None:
+        chosen = next((g for g in groups if segment in g["segments"]), None)
+        if chosen is None:
+            known = [s for g in groups for s in g["segments"]]
+            raise RigFileError(f"{path}: --segment {segment!r} is not in the table; segments: "
+                               f"{', '.join(known[:6])}{', ...' if len(known) > 6 else ''}")
+    else:
+        chosen = choose_calibration(groups, calibration, str(path), "--calibration K or --segment NAME")
+    origin, note = _origin(origin, "Waymo vehicle frame")
+    rig = make_rig(str(path), name or (segment or chosen["segments"][0]), vehicle, chosen["cameras"], origin)
+    return Imported(rig, (note, "rolling shutter is not modelled: cameras are taken as global shutter"))
