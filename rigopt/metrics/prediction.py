@@ -153,8 +153,8 @@ class Extrapolation:
 
     def describe(self) -> str:
         """'t 1.37 m > 0.555; hull distance 2.1' (empty when not flagged)."""
-        parts = [f"{t} {v:.3g} {TERM_UNITS[t]} {'>' if v > hi else '<'} {hi if v > hi else lo:.3g}"
-                 for t, (v, lo, hi) in self.terms.items()]
+        parts = [f"{t} {v:.3g}{'' if TERM_UNITS[t] == '-' else ' ' + TERM_UNITS[t]} {'>' if v > hi else '<'} "
+                 f"{hi if v > hi else lo:.3g}" for t, (v, lo, hi) in self.terms.items()]
         if self.hull_distance > HULL_TOLERANCE:
             parts.append(f"{self.hull_distance:.2f} control ranges from the calibration pairs")
         return "; ".join(parts)

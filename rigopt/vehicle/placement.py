@@ -124,16 +124,17 @@ def cameras_inside(rig: Rig, vehicle: Vehicle) -> list[tuple[Camera, float]]:
     return [(camera, float(-d)) for camera, d in zip(rig.cameras, distance) if d < -INSIDE_TOLERANCE_M]
 
 
-def place_rig(rig: Rig, vehicle: Vehicle) -> tuple[Rig, OriginChange | None]:
+def place_rig(rig: Rig, vehicle: Vehicle, refuse_inside: bool = True) -> tuple[Rig, OriginChange | None]:
     """``rig`` on ``vehicle``: positions converted to the vehicle's centre and the rig's vehicle set to it.
 
-    A camera that lands inside the body would see nothing through it, so it is an error naming each such
-    camera and how deep it lies, never a silent loss of coverage.
+    A camera that lands inside the body would see nothing through it, so where the body matters (coverage,
+    design) it is an error naming each such camera and how deep it lies, never a silent loss of coverage;
+    ``refuse_inside=False`` is for the metrics, which use the vehicle only for its reference points.
     """
     placed, change = to_vehicle_centre(rig, vehicle)
     if known_vehicle(placed) is not vehicle:
         placed = Rig(placed.name, vehicle.blueprint, placed.cameras, placed.origin)
-    inside = cameras_inside(placed, vehicle)
+    inside = cameras_inside(placed, vehicle) if refuse_inside else []
     if inside:
         listed = ", ".join(f"{camera.id} ({depth:.2f} m deep)" for camera, depth in inside)
         moved = f" after {change.describe()}" if change is not None else ""
@@ -164,12 +165,13 @@ def comparable_rigs(rigs: Sequence[Rig], vehicle: Vehicle | None = None) -> tupl
     """``rigs`` ready to compare (RigCD, ranking), and every origin change made.
 
     With ``vehicle``, rigs whose own vehicle rigopt does not know (imported rigs) are first placed on it
-    (:func:`place_rig`); then all are brought to one origin (:func:`common_frame`).
+    (:func:`place_rig`; only its reference points matter here, so cameras inside its body are allowed);
+    then all are brought to one origin (:func:`common_frame`).
     """
     placed, changes = [], []
     for rig in rigs:
         if vehicle is not None and known_vehicle(rig) is None:
-            rig, change = place_rig(rig, vehicle)
+            rig, change = place_rig(rig, vehicle, refuse_inside=False)
             changes += [change] if change is not None else []
         placed.append(rig)
     same, more = common_frame(placed)
