@@ -23,7 +23,7 @@ from rigopt.coverage.footprint import Footprint
 from rigopt.errors import RigoptError
 from rigopt.raycast import first_hit_distance
 from rigopt.camera import CameraModel
-from rigopt.coverage.visibility import DEFAULT_MAX_RANGE, visible
+from rigopt.coverage.visibility import DEFAULT_MAX_RANGE, visible_by
 from rigopt.rig.model import Rig
 from rigopt.vehicle.model import Vehicle
 
@@ -130,12 +130,9 @@ class RingReport:
     rings: tuple[RingCoverage, ...]
 
 
-def _camera_arrays(rig: Rig):
-    return rig.positions, rig.rotations, rig.fovs, np.array([c.image_size for c in rig.cameras])
-
-
 def _seen(vehicle: Vehicle, rig: Rig, points: np.ndarray, settings: CoverageSettings) -> np.ndarray:
-    return visible(vehicle.mesh, *_camera_arrays(rig), points, settings.max_range, settings.backend)
+    return visible_by(vehicle.mesh, CameraModel.of_cameras(rig.cameras), rig.positions, rig.rotations, points,
+                      settings.max_range, settings.backend)
 
 
 def ring_coverage(vehicle: Vehicle, rig: Rig, settings: CoverageSettings, footprint: Footprint):
