@@ -378,6 +378,18 @@ class Lens:
         _, _, top, bottom = self.edge_angles()
         return float(np.rad2deg(top + bottom))
 
+    def summary(self) -> dict:
+        """The lens as plain JSON values, for reports: size and intrinsics (px), distortion model and
+        coefficients, and the derived ``hfov_deg`` and ``vfov_deg``."""
+        return {"width": self.width, "height": self.height, "fx": self.fx, "fy": self.fy, "cx": self.cx,
+                "cy": self.cy, "distortion": self.distortion, "coefficients": list(self.coefficients),
+                "hfov_deg": self.hfov, "vfov_deg": self.vfov}
+
+    def label(self) -> str:
+        """One line for tables, e.g. ``1280x720 fx 640 pinhole 90.0x58.7 deg``."""
+        model = "pinhole" if self.distortion == "none" else self.distortion
+        return f"{self.width}x{self.height} fx {self.fx:.0f} {model} {self.hfov:.1f}x{self.vfov:.1f} deg"
+
 
 def pixel_centres(width: int, height: int) -> np.ndarray:
     """(height * width, 2) float: (u, v) of every pixel's centre, row by row from the top-left pixel."""
