@@ -73,7 +73,7 @@ def test_a_design_from_a_catalogue_keeps_each_cameras_lens(tmp_path):
     (tmp_path / "cameras.toml").write_text(TOML)
     out = tmp_path / "design"
     result = run_rigopt("design", "--vehicle", "tt", "--ref", "R1", "--cameras-file", tmp_path / "cameras.toml",
-                        "--pitch", "0", "--yaw-step", "30", "--time-limit", "5", "--json",
+                        "--pitch", "0", "--yaw-step", "30", "--spacing", "0.3", "--time-limit", "30", "--json",
                         "--out", out)
     assert result.returncode == 0, result.stderr
     summary = json.loads(result.stdout)
@@ -85,6 +85,7 @@ def test_a_design_from_a_catalogue_keeps_each_cameras_lens(tmp_path):
         assert entry["lens"]["width"] == camera.image_size[0] and entry["lens"]["fx"] == camera.lens_model.fx
         assert entry["lens"]["hfov_deg"] == pytest.approx(camera.fov, abs=1e-6)
     assert any(c.lens is not None for c in design.cameras)  # the radtan lens travels in the rig file
+    assert summary["solver"]["milp_status"] == "optimal"  # (the refinement, accepted or not, kept the lenses)
     assert "radtan" in (out / "report.html").read_text()
 
 
