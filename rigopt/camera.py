@@ -514,12 +514,16 @@ class CameraModel:
         """The models of rig cameras (batch shape (c,)) from each camera's :attr:`~rigopt.rig.model.Camera.lens_model`:
         its real lens, or the benchmark's pinhole of its FOV and image size. The one place that reads a camera's
         lens, so real lenses reach coverage, mount checks, refinement and the renderer."""
+        if all(c.lens is None for c in cameras):  # benchmark pinholes: the same values, without building lenses
+            return cls.from_fov([c.fov for c in cameras], [c.image_size for c in cameras])
         return cls.of_lenses([c.lens_model for c in cameras])
 
     @classmethod
     def of_camera(cls, camera: "Camera") -> "CameraModel":
         """The model of one rig camera (batch shape ())."""
-        return cls.of_lens(camera.lens_model)
+        if camera.lens is None:
+            return cls.from_fov(camera.fov, camera.image_size)
+        return cls.of_lens(camera.lens)
 
     def lens(self, index=()) -> Lens:
         """The :class:`Lens` of the camera at ``index`` of the batch (``()`` for a single camera); image sizes
