@@ -318,3 +318,17 @@ def test_a_radtan_camera_renders_the_ground_where_its_lens_puts_it():
         np.arctan(1024 / 1773)), (2048, 1550)), None, size)
     assert not np.array_equal(np.isinf(pinhole.depth), np.isinf(out.depth)) or \
         not np.allclose(pinhole.depth[ground], out.depth[ground])
+
+
+def test_a_fisheye_rig_sees_a_box_beside_it_and_a_pinhole_does_not():
+    from rigopt.bench.generate import visible_fractions
+    from rigopt.camera import Lens
+
+    lens = Lens(1280, 960, 380.0, 380.0, 640.0, 480.0, "fisheye", (-0.02, 0.003, 0.0, 0.0))
+    beside = boxes([[0.0, 6.0, 1.0]], [[3.0, 2.0, 2.0]])  # left of the lens, 90 degrees off a forward axis
+    fisheye = Rig("fish", "v", (Camera.with_lens("F", np.array([0.0, 0.0, 1.5]), np.eye(3), lens),))
+    pinhole = Rig("pin", "v", (camera(fov=120.0, cam_id="F"),))
+    the_scene = scene(static=beside)
+    fractions = [visible_fractions(beside, rig, np.eye(4), render_rig(the_scene, 0, rig, None, (W, H)))[0]
+                 for rig in (fisheye, pinhole)]
+    assert 0.2 < fractions[0] <= 1.0 and fractions[1] == 0.0
