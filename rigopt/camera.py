@@ -721,8 +721,7 @@ class CameraModel:
         taken with depths clamped to MIN_DEPTH (pinhole and radtan) so it stays finite."""
         x, y, z = local[..., 0], local[..., 1], local[..., 2]
         angle = np.arctan2(np.hypot(y, z), x)
-        fisheye = self.distortion[..., None] == "fisheye"
-        depth = np.where(fisheye, x, np.maximum(x, MIN_DEPTH))
+        depth = np.where(self.distortion[..., None] == "fisheye", x, np.maximum(x, MIN_DEPTH))
         xd, yd = distorted_coordinates(-y, -z, depth, self.distortion[..., None], self.coefficients[..., None, :])
         return angle, self.cx[..., None] + self.fx[..., None] * xd, self.cy[..., None] + self.fy[..., None] * yd
 
@@ -733,14 +732,16 @@ class CameraModel:
         its range, does not count). A pinhole's test is the exact edge-tangent one: in front, between the
         edges."""
         local = np.asarray(points, dtype=float)
-        left, right, up, down = (t[..., None] for t in self.edge_tangents())
-        x, y, z = local[..., 0], local[..., 1], local[..., 2]
-        inside = (x > 0) & (-(x * right) <= y) & (y <= x * left) & (-(x * down) <= z) & (z <= x * up)
+        inside = None
+        if not np.all(self.distorted):
+            left, right, up, down = (t[..., None] for t in self.edge_tangents())
+            x, y, z = local[..., 0], local[..., 1], local[..., 2]
+            inside = (x > 0) & (-(x * right) <= y) & (y <= x * left) & (-(x * down) <= z) & (z <= x * up)
         if np.any(self.distorted):
             angle, u, v = self._distorted_view(local)
             real = ((angle < self.valid_angles[..., None]) & (0 <= u) & (u <= self.width[..., None])
                     & (0 <= v) & (v <= self.height[..., None]))
-            inside = np.where(self.distorted[..., None], real, inside)
+            inside = real if inside is None else np.where(self.distorted[..., None], real, inside)
         return inside & (np.einsum("...i,...i->...", local, local) <= max_range**2)
 
     def view_margin(self, points) -> np.ndarray:
