@@ -558,7 +558,8 @@ class CameraModel:
     def valid_angles(self) -> np.ndarray:
         """(...,) float rad: each lens's largest angle from the optical axis it maps one to one
         (:func:`valid_angle`: pi / 2 for a pinhole)."""
-        flat = [valid_angle(d, k) for d, k in zip(self.distortion.ravel(), self.coefficients.reshape(-1, MAX_COEFFICIENTS))]
+        flat = [valid_angle(d, k)
+                for d, k in zip(self.distortion.ravel(), self.coefficients.reshape(-1, MAX_COEFFICIENTS))]
         return _read_only(np.reshape(flat, self.shape))
 
     def intrinsic_matrix(self) -> np.ndarray:

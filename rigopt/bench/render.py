@@ -2,9 +2,10 @@
 
 Every pixel casts one ray through its centre, through the camera's lens (:class:`rigopt.camera.CameraModel`:
 the benchmark's centred square-pixel pinhole, or a real lens with its intrinsics and radtan or fisheye
-distortion, resampled to the rendered size) and takes the nearest of: the ground plane z = 0, the scene's oriented boxes (slab test in each
-box's frame, screen tile by screen tile so that a tile meets only the boxes whose projection covers it),
-and the ego body mesh (trimesh / embree, ego frame). Nothing within ``max_range`` metres is sky.
+distortion, resampled to the rendered size) and takes the nearest of: the ground plane z = 0, the scene's
+oriented boxes (slab test in each box's frame, screen tile by screen tile so that a tile meets only the boxes
+whose projection covers it; every box in every tile through a distorted lens), and the ego body mesh
+(trimesh / embree, ego frame). Nothing within ``max_range`` metres is sky.
 
 Frames and units: world x east, y north, z up; ego and camera body frames as in :mod:`rigopt.rig.model`;
 optical frame z forward, x right, y down; metres. Pixel (row v, column u) has its centre at

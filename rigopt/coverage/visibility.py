@@ -4,8 +4,8 @@ A point p is *seen* by a camera (t, R, lens) when, in the camera body frame ``d 
 the optical axis), the camera model has it in view (:meth:`rigopt.camera.CameraModel.in_view`: for the
 benchmark's pinhole ``d_x > 0``, ``|d_y| <= d_x tan(hfov / 2)``, ``|d_z| <= d_x tan(vfov / 2)``; for a
 distorted lens, its projection inside the image within the lens's valid angle), ``|d| <= max_range``, and
-the segment from the lens to p meets no body triangle. Segments are tested by :func:`rigopt.raycast.segments_clear` (embree or trimesh's triangle
-intersector, ``backend``).
+the segment from the lens to p meets no body triangle. Segments are tested by
+:func:`rigopt.raycast.segments_clear` (embree or trimesh's triangle intersector, ``backend``).
 """
 
 from __future__ import annotations

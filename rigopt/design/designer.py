@@ -37,7 +37,7 @@ from rigopt.errors import RigoptError
 from rigopt.metrics.calibration import Calibration
 from rigopt.metrics.ranking import predict_transfer
 from rigopt.metrics.rigcd import camera_costs
-from rigopt.rig.model import Camera, Rig
+from rigopt.rig.model import Rig
 from rigopt.vehicle.model import Vehicle
 
 #: Mount points closer than this (m) may not both hold a camera (8 cm housings plus a margin).

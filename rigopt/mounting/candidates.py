@@ -75,4 +75,5 @@ def mount_candidates(vehicle: Vehicle, spacing: float = DEFAULT_SPACING, fov: fl
     points, normals, names = sample_zone_points(vehicle, spacing, zones, rules=rules)
     yaws, pitches = np.deg2rad(np.asarray(yaws_deg, dtype=float)), np.deg2rad(np.asarray(pitches_deg, dtype=float))
     clear = clear_directions(vehicle, points, yaws, pitches, fov, rules)
-    return MountCandidates(points, normals, names, yaws, pitches, clear, float(fov.hfov if isinstance(fov, Lens) else fov))
+    hfov = fov.hfov if isinstance(fov, Lens) else fov
+    return MountCandidates(points, normals, names, yaws, pitches, clear, float(hfov))
