@@ -21,15 +21,24 @@ Units: FOVs in degrees (the unit users type), image sizes ``(width, height)`` an
 
 The model
 ---------
-:class:`CameraModel` holds the intrinsics of a batch of cameras (every field an array of one batch shape,
-``()`` for one camera or ``(c,)`` for c cameras); its methods broadcast over that batch. Today every
-rigopt camera is an ideal pinhole with square pixels and its principal point at the image centre, built
-from a horizontal FOV and an image size (:meth:`CameraModel.from_fov`, :meth:`CameraModel.of_cameras`).
-The methods read only the intrinsics (fx, fy, cx, cy, width, height), so real per-camera intrinsics change
-only the constructors. Lens distortion has one place to go: the map between normalised optical
-coordinates and pixels, used by :meth:`CameraModel.pixel_rays` (undistort) and :meth:`CameraModel.project`
-(distort); the frustum methods (:meth:`CameraModel.in_view`, :meth:`CameraModel.view_margin`, probe and
-corner rays) describe the image by the tangents of its edges, exact for a distortion-free pinhole.
+:class:`Lens` is one real camera as calibration files give it: image size, fx, fy, cx, cy and a distortion
+model with its coefficients (:data:`DISTORTION_COEFFICIENTS`): "none" (pinhole), "radtan" (OpenCV
+radial-tangential k1, k2, p1, p2, k3, on the normalised coordinates (x / z, y / z)) or "fisheye" (OpenCV
+fisheye / Kannala-Brandt k1..k4: a ray theta radians off the axis lands at normalised radius
+theta (1 + k1 theta^2 + k2 theta^4 + k3 theta^6 + k4 theta^8), so lenses wider than 180 degrees work).
+Distorted normalised coordinates map to pixels through ``K``. A lens's FOV is the angle between the rays
+through the left and right (top and bottom) edge midpoints, through the axis.
+
+:class:`CameraModel` holds a batch of lenses (every field an array of one batch shape, ``()`` for one camera
+or ``(c,)`` for c cameras, the distortion model and coefficients included); its methods broadcast over that
+batch. :meth:`CameraModel.of_cameras` builds it from rig cameras' lenses (a camera without one is the
+benchmark's centred square-pixel pinhole of its FOV and image size, :meth:`CameraModel.from_fov`). The maths
+of the distortion models is in one place, :func:`undistorted_directions` and :func:`distorted_coordinates`,
+used by both classes. Pinhole cameras take the exact edge-tangent formulas everywhere (bit-identical to
+before distortion existed); distorted ones take their projection: a point is in view when it projects
+inside the image and lies less than the lens's valid angle (:func:`valid_angle`) off the axis. The checked
+view frustum of the mount rules (probe rays, frustum corners) bounds the image's edge rays, its half-angles
+capped at ``MAX_FRUSTUM_HALF_ANGLE_DEG`` so that it stays a convex solid.
 
 >>> round(float(focal_from_fov(60.0, 320)), 3)
 277.128
@@ -43,6 +52,7 @@ corner rays) describe the image by the tangents of its edges, exact for a distor
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 from typing import TYPE_CHECKING, Sequence
 
 import numpy as np
@@ -151,6 +161,86 @@ def fisheye_undistort(theta_d, k) -> np.ndarray:
     return theta
 
 
+#: Largest number of distortion coefficients of any model (radtan's five); :class:`CameraModel` pads to it.
+MAX_COEFFICIENTS = 5
+
+
+def _first_fold(slope_coefficients) -> float:
+    """Smallest positive root t of the polynomial ``1 + c1 t + c2 t^2 + ...`` (``slope_coefficients`` =
+    (c1, c2, ...)), i.e. where a distortion curve written in t = r^2 (or theta^2) stops rising; inf if none."""
+    coefficients = np.trim_zeros(np.array([1.0, *slope_coefficients])[::-1], "f")
+    if len(coefficients) < 2:
+        return np.inf
+    roots = np.roots(coefficients)
+    real = roots[(np.abs(roots.imag) <= 1e-9 * np.maximum(1.0, np.abs(roots.real))) & (roots.real > 0)].real
+    return float(real.min()) if len(real) else np.inf
+
+
+def valid_angle(distortion: str, coefficients) -> float:
+    """Radians: the largest angle from the optical axis a lens maps one to one into its image plane.
+
+    none: pi / 2 (a pinhole sees only in front). radtan: the angle where the radial distortion
+    r (1 + k1 r^2 + k2 r^4 + k3 r^6) of the undistorted radius r = tan(angle) stops growing (beyond it the
+    image folds back; tangential terms are left out of this bound), at most pi / 2. fisheye: where
+    theta (1 + k1 theta^2 + ... + k4 theta^8) stops growing, at most pi. A point is seen only at a smaller
+    angle (:meth:`CameraModel.in_view`)."""
+    k = tuple(float(c) for c in coefficients)
+    if distortion == "radtan":
+        fold = _first_fold((3 * k[0], 5 * k[1], 7 * k[4]))
+        return float(min(np.arctan(np.sqrt(fold)), np.pi / 2))
+    if distortion == "fisheye":
+        fold = _first_fold((3 * k[0], 5 * k[1], 7 * k[2], 9 * k[3]))
+        return float(min(np.sqrt(fold), np.pi))
+    return float(np.pi / 2)
+
+
+def undistorted_directions(xd, yd, distortion, k) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Optical-frame directions (x, y, z), not normalised, of distorted normalised image points.
+
+    xd, yd : (...,) float, ((u - cx) / fx, (v - cy) / fy); distortion : (...,) str, broadcast (one of
+    :data:`DISTORTION_COEFFICIENTS`); k : (..., 5) float coefficients in the model's order, zero-padded.
+    Pinhole and radtan points come back at unit depth (z = 1); fisheye ones as unit vectors (z may be <= 0
+    beyond 90 degrees). The one implementation of the lens models' inverse, shared by :class:`Lens` and
+    :class:`CameraModel`.
+    """
+    xd, yd = np.asarray(xd, dtype=float), np.asarray(yd, dtype=float)
+    distortion, k = np.asarray(distortion), np.asarray(k, dtype=float)
+    x, y, z = xd, yd, np.ones_like(xd)
+    radtan, fisheye = distortion == "radtan", distortion == "fisheye"
+    if np.any(radtan):
+        xr, yr = radtan_undistort(xd, yd, k)
+        x, y = np.where(radtan, xr, x), np.where(radtan, yr, y)
+    if np.any(fisheye):
+        radius = np.hypot(xd, yd)
+        theta = fisheye_undistort(radius, k[..., :4])
+        scale = np.where(radius > 0, np.sin(theta) / np.where(radius > 0, radius, 1.0), 1.0)
+        x, y, z = (np.where(fisheye, xd * scale, x), np.where(fisheye, yd * scale, y),
+                   np.where(fisheye, np.cos(theta), z))
+    return x, y, z
+
+
+def distorted_coordinates(x, y, z, distortion, k) -> tuple[np.ndarray, np.ndarray]:
+    """Distorted normalised image coordinates (x_d, y_d) of optical-frame directions (x, y, z) (any length).
+
+    Shapes as :func:`undistorted_directions`. Pinhole and radtan need z > 0 (others give inf or nan, to be
+    masked by the caller); fisheye takes any direction but straight behind.
+    """
+    x, y, z = (np.asarray(a, dtype=float) for a in (x, y, z))
+    distortion, k = np.asarray(distortion), np.asarray(k, dtype=float)
+    radtan, fisheye = distortion == "radtan", distortion == "fisheye"
+    with np.errstate(divide="ignore", invalid="ignore"):
+        xd, yd = x / z, y / z
+        if np.any(radtan):
+            xr, yr = radtan_distort(xd, yd, k)
+            xd, yd = np.where(radtan, xr, xd), np.where(radtan, yr, yd)
+    if np.any(fisheye):
+        radius = np.hypot(x, y)
+        theta_d = fisheye_distort(np.arctan2(radius, z), k[..., :4])
+        scale = np.where(radius > 0, theta_d / np.where(radius > 0, radius, 1.0), 0.0)
+        xd, yd = np.where(fisheye, x * scale, xd), np.where(fisheye, y * scale, yd)
+    return xd, yd
+
+
 @dataclass(frozen=True)
 class Lens:
     """One real camera's intrinsics and lens distortion, as calibration files give them.
@@ -158,7 +248,8 @@ class Lens:
     width, height : int, image size in px; fx, fy : float, focal lengths in px; cx, cy : float, principal
     point in px (pixel coordinates as in the module docstring); distortion : one of
     :data:`DISTORTION_COEFFICIENTS` ("none", "radtan", "fisheye"); coefficients : tuple of float in that
-    model's order (all zero is the same geometry as "none").
+    model's order (all zero is the same geometry as "none" for radtan; a fisheye with all zero
+    coefficients is the equidistant lens).
 
     Distorted normalised coordinates map to pixels through ``K``: u = fx x_d + cx, v = fy y_d + cy. The
     fisheye model takes the angle theta of a ray from the optical axis and puts it at radius theta_d(theta)
@@ -202,6 +293,16 @@ class Lens:
         if not all(np.isfinite(a) and 0.0 < a for a in edges):
             raise RigoptError(f"lens {self}: its image edges do not map to rays in front of the lens; check the "
                               "focal lengths, principal point and distortion coefficients")
+        if self.is_distorted:  # every pixel needs a ray: the corners (farthest out) must invert exactly
+            corners = np.array([[0.0, 0.0], [self.width, 0.0], [0.0, self.height], [self.width, self.height]])
+            rays = self.pixel_rays(corners)
+            angles = np.arctan2(np.hypot(rays[:, 0], rays[:, 1]), rays[:, 2])
+            error = np.abs(self.project(rays) - corners).max()
+            if not (np.isfinite(error) and error <= 1e-6 * max(self.width, self.height)
+                    and np.all(angles <= self.valid_angle)):
+                raise RigoptError(f"lens {self}: its image corners lie beyond what the {self.distortion} distortion "
+                                  "reaches before it folds back, so some pixels have no ray; check the distortion "
+                                  "coefficients and focal lengths")
 
     @classmethod
     def pinhole(cls, hfov_deg: float, image_size=(1280, 720)) -> "Lens":
@@ -217,8 +318,19 @@ class Lens:
 
     @property
     def is_distorted(self) -> bool:
-        """True when the lens has non-zero distortion coefficients."""
-        return any(c != 0.0 for c in self.coefficients)
+        """True when the lens is not a plain pinhole: a fisheye (whatever its coefficients: even all zero,
+        it is the equidistant lens, not a pinhole), or a radtan lens with a non-zero coefficient."""
+        return self.distortion == "fisheye" or any(c != 0.0 for c in self.coefficients)
+
+    @property
+    def padded_coefficients(self) -> tuple[float, ...]:
+        """The coefficients padded with zeros to :data:`MAX_COEFFICIENTS` (the form the shared maths take)."""
+        return self.coefficients + (0.0,) * (MAX_COEFFICIENTS - len(self.coefficients))
+
+    @property
+    def valid_angle(self) -> float:
+        """Radians: the largest angle from the optical axis the lens maps one to one (:func:`valid_angle`)."""
+        return valid_angle(self.distortion, self.padded_coefficients)
 
     @property
     def is_ideal_pinhole(self) -> bool:
@@ -232,34 +344,17 @@ class Lens:
     def pixel_rays(self, pixels) -> np.ndarray:
         """(n, 3) float unit optical-frame rays (z along the axis, x right, y down) through pixels (n, 2)."""
         pixels = np.atleast_2d(np.asarray(pixels, dtype=float))
-        xd = (pixels[:, 0] - self.cx) / self.fx
-        yd = (pixels[:, 1] - self.cy) / self.fy
-        k = np.array(self.coefficients)
-        if self.distortion == "fisheye":
-            radius = np.hypot(xd, yd)
-            theta = fisheye_undistort(radius, k)
-            scale = np.where(radius > 0, np.sin(theta) / np.where(radius > 0, radius, 1.0), 1.0)
-            rays = np.stack([xd * scale, yd * scale, np.cos(theta)], axis=1)
-        else:
-            x, y = radtan_undistort(xd, yd, k) if self.distortion == "radtan" else (xd, yd)
-            rays = np.stack([x, y, np.ones_like(x)], axis=1)
+        x, y, z = undistorted_directions((pixels[:, 0] - self.cx) / self.fx, (pixels[:, 1] - self.cy) / self.fy,
+                                         self.distortion, self.padded_coefficients)
+        rays = np.stack([x, y, z], axis=1)
         return rays / np.linalg.norm(rays, axis=1, keepdims=True)
 
     def project(self, rays) -> np.ndarray:
         """(n, 2) float pixels of optical-frame directions ``rays`` (n, 3) (any length). Pinhole and radtan
         lenses need z > 0; fisheye lenses take any direction but the one straight behind."""
         rays = np.atleast_2d(np.asarray(rays, dtype=float))
-        x, y, z = rays[:, 0], rays[:, 1], rays[:, 2]
-        k = np.array(self.coefficients)
-        if self.distortion == "fisheye":
-            radius = np.hypot(x, y)
-            theta_d = fisheye_distort(np.arctan2(radius, z), k)
-            scale = np.where(radius > 0, theta_d / np.where(radius > 0, radius, 1.0), 0.0)
-            xd, yd = x * scale, y * scale
-        else:
-            xd, yd = x / z, y / z
-            if self.distortion == "radtan":
-                xd, yd = radtan_distort(xd, yd, k)
+        xd, yd = distorted_coordinates(rays[:, 0], rays[:, 1], rays[:, 2], self.distortion,
+                                       self.padded_coefficients)
         return np.stack([self.fx * xd + self.cx, self.fy * yd + self.cy], axis=1)
 
     def edge_angles(self) -> tuple[float, float, float, float]:
@@ -283,6 +378,18 @@ class Lens:
         _, _, top, bottom = self.edge_angles()
         return float(np.rad2deg(top + bottom))
 
+    def summary(self) -> dict:
+        """The lens as plain JSON values, for reports: size and intrinsics (px), distortion model and
+        coefficients, and the derived ``hfov_deg`` and ``vfov_deg``."""
+        return {"width": self.width, "height": self.height, "fx": self.fx, "fy": self.fy, "cx": self.cx,
+                "cy": self.cy, "distortion": self.distortion, "coefficients": list(self.coefficients),
+                "hfov_deg": self.hfov, "vfov_deg": self.vfov}
+
+    def label(self) -> str:
+        """One line for tables, e.g. ``1280x720 fx 640 pinhole 90.0x58.7 deg``."""
+        model = "pinhole" if self.distortion == "none" else self.distortion
+        return f"{self.width}x{self.height} fx {self.fx:.0f} {model} {self.hfov:.1f}x{self.vfov:.1f} deg"
+
 
 def pixel_centres(width: int, height: int) -> np.ndarray:
     """(height * width, 2) float: (u, v) of every pixel's centre, row by row from the top-left pixel."""
@@ -303,15 +410,25 @@ def _read_only(values) -> np.ndarray:
     return array
 
 
+#: Half-angles (deg) of the checked view frustum (:meth:`CameraModel.frustum_corners`, probe rays) are capped
+#: here so that it stays a convex solid of finite size for lenses near or beyond 180 degrees.
+MAX_FRUSTUM_HALF_ANGLE_DEG = 80.0
+#: Points per image edge whose rays bound the frustum of a distorted lens (:meth:`CameraModel.side_angles`).
+EDGE_SAMPLES = 33
+
+
 @dataclass(frozen=True, eq=False)
 class CameraModel:
-    """Intrinsics of a batch of cameras; see the module docstring for frames and units.
+    """Intrinsics and lens distortion of a batch of cameras; see the module docstring for frames and units.
 
-    Attributes (each a read-only float array of the batch shape, ``()`` or ``(c,)``)
+    Attributes (each a read-only array of the batch shape, ``()`` or ``(c,)``)
     ----------
-    width, height : image size, px.
-    fx, fy : focal lengths, px.
-    cx, cy : principal point, px (pixel coordinates, (0, 0) the image's top-left corner).
+    width, height : float, image size, px.
+    fx, fy : float, focal lengths, px.
+    cx, cy : float, principal point, px (pixel coordinates, (0, 0) the image's top-left corner).
+    distortion : str, each camera's model, one of :data:`DISTORTION_COEFFICIENTS` (default "none").
+    coefficients : (..., 5) float, each camera's coefficients in its model's order, zero-padded
+        (default zeros).
     """
 
     width: np.ndarray
@@ -320,6 +437,8 @@ class CameraModel:
     fy: np.ndarray
     cx: np.ndarray
     cy: np.ndarray
+    distortion: np.ndarray | str = "none"
+    coefficients: np.ndarray | None = None
 
     def __post_init__(self):
         names = ("width", "height", "fx", "fy", "cx", "cy")
@@ -334,6 +453,28 @@ class CameraModel:
                                   f"{' and positive' if name in ('width', 'height', 'fx', 'fy') else ''}, "
                                   f"got {value.tolist()}")
             object.__setattr__(self, name, _read_only(value))
+        shape = values[0].shape
+        try:
+            distortion = np.array(np.broadcast_to(np.asarray(self.distortion, dtype=str), shape))
+            coefficients = np.zeros((*shape, MAX_COEFFICIENTS)) if self.coefficients is None else \
+                np.asarray(self.coefficients, dtype=float)
+            if coefficients.ndim == 0 or coefficients.shape[-1] > MAX_COEFFICIENTS:
+                raise ValueError
+            coefficients = np.concatenate([coefficients, np.zeros((*coefficients.shape[:-1],
+                                                                   MAX_COEFFICIENTS - coefficients.shape[-1]))], -1)
+            coefficients = np.array(np.broadcast_to(coefficients, (*shape, MAX_COEFFICIENTS)))
+        except ValueError:
+            raise RigoptError(f"camera distortion must be one model name per camera and up to {MAX_COEFFICIENTS} "
+                              f"coefficients per camera, for batch shape {shape}") from None
+        unknown = sorted(set(distortion.ravel().tolist()) - set(DISTORTION_COEFFICIENTS))
+        if unknown:
+            raise RigoptError(f"unknown lens distortion model(s) {', '.join(map(repr, unknown))}; use one of "
+                              f"{', '.join(DISTORTION_COEFFICIENTS)}")
+        if not np.all(np.isfinite(coefficients)):
+            raise RigoptError(f"camera distortion coefficients must be finite, got {coefficients.tolist()}")
+        distortion.flags.writeable = False
+        object.__setattr__(self, "distortion", distortion)
+        object.__setattr__(self, "coefficients", _read_only(coefficients))
 
     # ------------------------------------------------------------------------------------------ building
 
@@ -355,17 +496,50 @@ class CameraModel:
         return cls(width, height, focal, focal, width / 2.0, height / 2.0)
 
     @classmethod
-    def of_cameras(cls, cameras: Sequence["Camera"]) -> "CameraModel":
-        """The models of rig cameras (batch shape (c,)), from each camera's FOV and image size.
+    def of_lenses(cls, lenses: Sequence[Lens]) -> "CameraModel":
+        """The batch (c,) of ``lenses``: their sizes, intrinsics and distortion."""
+        columns = [[getattr(lens, n) for lens in lenses] for n in ("width", "height", "fx", "fy", "cx", "cy")]
+        return cls(*columns, np.array([lens.distortion for lens in lenses], dtype=str).reshape(len(lenses)),
+                   np.array([lens.padded_coefficients for lens in lenses], dtype=float).reshape(len(lenses),
+                                                                                              MAX_COEFFICIENTS))
 
-        The one place that reads a :class:`rigopt.rig.model.Camera`'s lens: when cameras carry their own
-        intrinsics and distortion, only this changes."""
-        return cls.from_fov([c.fov for c in cameras], [c.image_size for c in cameras])
+    @classmethod
+    def of_lens(cls, lens: Lens) -> "CameraModel":
+        """The model of one lens (batch shape ())."""
+        return cls(lens.width, lens.height, lens.fx, lens.fy, lens.cx, lens.cy, lens.distortion,
+                   lens.padded_coefficients)
+
+    @classmethod
+    def of_cameras(cls, cameras: Sequence["Camera"]) -> "CameraModel":
+        """The models of rig cameras (batch shape (c,)) from each camera's :attr:`~rigopt.rig.model.Camera.lens_model`:
+        its real lens, or the benchmark's pinhole of its FOV and image size. The one place that reads a camera's
+        lens, so real lenses reach coverage, mount checks, refinement and the renderer."""
+        if all(c.lens is None for c in cameras):  # benchmark pinholes: the same values, without building lenses
+            return cls.from_fov([c.fov for c in cameras], [c.image_size for c in cameras])
+        return cls.of_lenses([c.lens_model for c in cameras])
 
     @classmethod
     def of_camera(cls, camera: "Camera") -> "CameraModel":
         """The model of one rig camera (batch shape ())."""
-        return cls.from_fov(camera.fov, camera.image_size)
+        if camera.lens is None:
+            return cls.from_fov(camera.fov, camera.image_size)
+        return cls.of_lens(camera.lens)
+
+    def lens(self, index=()) -> Lens:
+        """The :class:`Lens` of the camera at ``index`` of the batch (``()`` for a single camera); image sizes
+        are rounded to whole pixels."""
+        return Lens(int(round(float(self.width[index]))), int(round(float(self.height[index]))),
+                    float(self.fx[index]), float(self.fy[index]), float(self.cx[index]), float(self.cy[index]),
+                    str(self.distortion[index]),
+                    tuple(self.coefficients[index][:len(DISTORTION_COEFFICIENTS[str(self.distortion[index])])]))
+
+    def resized(self, image_size) -> "CameraModel":
+        """The same lenses seeing images resized to ``image_size`` (..., 2) px (width, height): focal lengths and
+        principal points scale with the size; distortion, in normalised coordinates, is unchanged."""
+        sizes = np.asarray(image_size, dtype=float)
+        sx, sy = sizes[..., 0] / self.width, sizes[..., 1] / self.height
+        return CameraModel(sizes[..., 0], sizes[..., 1], self.fx * sx, self.fy * sy, self.cx * sx, self.cy * sy,
+                           self.distortion, self.coefficients)
 
     # -------------------------------------------------------------------------------------------- reading
 
@@ -374,44 +548,76 @@ class CameraModel:
         """The batch shape."""
         return self.fx.shape
 
+    @cached_property
+    def distorted(self) -> np.ndarray:
+        """(...,) bool: cameras that are not plain pinholes (fisheye, or radtan with a non-zero coefficient);
+        the others take the pinhole formulas, exact and unchanged."""
+        return (self.distortion == "fisheye") | ((self.distortion == "radtan") & np.any(self.coefficients != 0, -1))
+
+    @cached_property
+    def valid_angles(self) -> np.ndarray:
+        """(...,) float rad: each lens's largest angle from the optical axis it maps one to one
+        (:func:`valid_angle`: pi / 2 for a pinhole)."""
+        flat = [valid_angle(d, k)
+                for d, k in zip(self.distortion.ravel(), self.coefficients.reshape(-1, MAX_COEFFICIENTS))]
+        return _read_only(np.reshape(flat, self.shape))
+
     def intrinsic_matrix(self) -> np.ndarray:
-        """(..., 3, 3) float ``K``: optical-frame rays (x / z, y / z, 1) -> homogeneous pixels."""
+        """(..., 3, 3) float ``K``: optical-frame rays (x / z, y / z, 1) -> homogeneous pixels (of the distorted
+        normalised coordinates for a distorted lens)."""
         zero, one = np.zeros(self.shape), np.ones(self.shape)
         return np.stack([np.stack([self.fx, zero, self.cx], -1), np.stack([zero, self.fy, self.cy], -1),
                          np.stack([zero, zero, one], -1)], -2)
 
     def edge_tangents(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """(left, right, up, down), each (...,) float: tangents of the angles from the optical axis to the
-        image's left, right, top and bottom edges. A body-frame direction (1, a, b) is in view when
-        ``-right <= a <= left`` and ``-down <= b <= up``."""
+        image's left, right, top and bottom edges of a distortion-free lens (``cx / fx`` ...). A body-frame
+        direction (1, a, b) is in a pinhole's view when ``-right <= a <= left`` and ``-down <= b <= up``.
+        For a distorted lens use :meth:`edge_angles`."""
         return (self.cx / self.fx, (self.width - self.cx) / self.fx, self.cy / self.fy,
                 (self.height - self.cy) / self.fy)
 
     def half_tangents(self) -> tuple[np.ndarray, np.ndarray]:
-        """(tan_h, tan_v), each (...,) float: tangents of the horizontal and vertical half-angles (half the
-        image's extent in normalised coordinates; left and right agree for a centred principal point)."""
+        """(tan_h, tan_v), each (...,) float: tangents of the horizontal and vertical half-angles of a
+        distortion-free lens (half the image's extent in normalised coordinates)."""
         return (self.width / 2.0) / self.fx, (self.height / 2.0) / self.fy
+
+    def edge_angles(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """(left, right, up, down), each (...,) float rad: angles from the optical axis to the rays through
+        the midpoints of the image's edges (on the principal point's row and column); up to pi for a fisheye.
+        """
+        angles = tuple(np.arctan(t) for t in self.edge_tangents())
+        if not np.any(self.distorted):
+            return angles
+        zero = np.zeros(self.shape)
+        pixels = np.stack([np.stack([zero, self.cy], -1), np.stack([self.width, self.cy], -1),
+                           np.stack([self.cx, zero], -1), np.stack([self.cx, self.height], -1)], -2)
+        rays = self.pixel_rays(pixels)
+        real = np.arctan2(np.hypot(rays[..., 1], rays[..., 2]), rays[..., 0])
+        return tuple(np.where(self.distorted, real[..., i], angles[i]) for i in range(4))
 
     @property
     def hfov(self) -> np.ndarray:
-        """(...,) float: horizontal FOV, degrees."""
-        left, right, _, _ = self.edge_tangents()
-        return np.rad2deg(np.arctan(left) + np.arctan(right))
+        """(...,) float: horizontal FOV, degrees: from the left-edge ray to the right-edge ray through the axis
+        (as :attr:`Lens.hfov`; more than 180 for a wide fisheye)."""
+        left, right, _, _ = self.edge_angles()
+        return np.rad2deg(left + right)
 
     @property
     def vfov(self) -> np.ndarray:
-        """(...,) float: vertical FOV, degrees."""
-        _, _, up, down = self.edge_tangents()
-        return np.rad2deg(np.arctan(up) + np.arctan(down))
+        """(...,) float: vertical FOV, degrees, between the top-edge and bottom-edge rays."""
+        _, _, up, down = self.edge_angles()
+        return np.rad2deg(up + down)
 
     # --------------------------------------------------------------------------------------------- rays
 
     def pixel_rays(self, pixels, unit: bool = True, frame: str = "body") -> np.ndarray:
-        """Rays from the lens through image points.
+        """Rays from the lens through image points, through the lens's distortion.
 
         pixels : (..., n, 2) float (u, v) px, broadcast against the batch (a leading axis per batch axis).
         unit : True for unit rays; False for rays scaled to unit depth (optical-axis component 1), so that
-            the point at depth d is ``d * ray``.
+            the point at depth d is ``d * ray`` (a fisheye pixel 90 degrees or more off the axis has no such
+            ray: RigoptError).
         frame : "body" (x forward, y left, z up) or "optical" (z forward, x right, y down).
         Returns (..., n, 3) float.
         """
@@ -421,6 +627,13 @@ class CameraModel:
         x = (pixels[..., 0] - self.cx[..., None]) / self.fx[..., None]  # normalised optical coordinates
         y = (pixels[..., 1] - self.cy[..., None]) / self.fy[..., None]
         one = np.ones_like(x)
+        if np.any(self.distorted):
+            x, y, one = undistorted_directions(x, y, self.distortion[..., None], self.coefficients[..., None, :])
+            if not unit:
+                if np.any(one <= MIN_DEPTH):
+                    raise RigoptError("a fisheye pixel 90 degrees or more off the optical axis has no ray at unit "
+                                      "depth; ask for unit rays")
+                x, y, one = x / one, y / one, one / one
         rays = np.stack([one, -x, -y], axis=-1) if frame == "body" else np.stack([x, y, one], axis=-1)
         return rays / np.linalg.norm(rays, axis=-1, keepdims=True) if unit else rays
 
@@ -434,14 +647,39 @@ class CameraModel:
         pixels = np.stack([cols.ravel() * self.width[..., None], rows.ravel() * self.height[..., None]], axis=-1)
         return self.pixel_rays(pixels)
 
+    def side_angles(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """(left, right, up, down), each (...,) float rad: the half-angles of the smallest frustum (a box in
+        the tangents y / x and z / x) that holds the whole image, capped at MAX_FRUSTUM_HALF_ANGLE_DEG.
+
+        A pinhole's are its edge angles. A distorted lens's come from rays through EDGE_SAMPLES points along
+        each image edge: the largest horizontal angle atan2(y, x) to each side and vertical angle
+        atan2(z, x) up and down (barrel distortion puts the corners' rays outside the edge midpoints'). The
+        cap keeps the frustum a convex solid of finite size for lenses near or beyond 180 degrees: such a
+        frustum is narrower than the lens sees.
+        """
+        cap = np.deg2rad(MAX_FRUSTUM_HALF_ANGLE_DEG)
+        angles = [np.arctan(t) for t in self.edge_tangents()]
+        if np.any(self.distorted):
+            s = np.linspace(0.0, 1.0, EDGE_SAMPLES)
+            w, h = self.width[..., None], self.height[..., None]
+            zero, one = np.zeros_like(w * s), np.ones_like(w * s)
+            u = np.concatenate([w * s, w * s, zero, w * one], -1)
+            v = np.concatenate([zero, h * one, h * s, h * s], -1)
+            rays = self.pixel_rays(np.stack([u, v], -1))
+            horizontal = np.arctan2(rays[..., 1], rays[..., 0])
+            vertical = np.arctan2(rays[..., 2], rays[..., 0])
+            real = (horizontal.max(-1), -horizontal.min(-1), vertical.max(-1), -vertical.min(-1))
+            angles = [np.where(self.distorted, r, a) for r, a in zip(real, angles)]
+        return tuple(np.minimum(a, cap) for a in angles)
+
     def _shrunk_tangents(self, angle_scale: float):
-        """edge_tangents with each edge's angle from the optical axis multiplied by ``angle_scale``."""
-        return tuple(np.tan(np.arctan(t) * angle_scale) for t in self.edge_tangents())
+        """Tangents of :meth:`side_angles`, each multiplied by ``angle_scale``."""
+        return tuple(np.tan(a * angle_scale) for a in self.side_angles())
 
     def probe_rays(self, angle_scale: float = 1.0) -> np.ndarray:
-        """(..., 9, 3) float: unit body-frame rays along the optical axis and towards the image's edge
-        midpoints and corners, each edge's angle from the axis scaled by ``angle_scale`` (in (0, 1]); ordered
-        by (horizontal, vertical) side in (right, centre, left) x (down, centre, up)."""
+        """(..., 9, 3) float: unit body-frame rays along the optical axis and towards the edge midpoints and
+        corners of the checked frustum (:meth:`side_angles`, each angle scaled by ``angle_scale`` in (0, 1]);
+        ordered by (horizontal, vertical) side in (right, centre, left) x (down, centre, up)."""
         left, right, up, down = self._shrunk_tangents(angle_scale)
         zero = np.zeros(self.shape)
         sides_y, sides_z = (-right, zero, left), (-down, zero, up)
@@ -449,9 +687,9 @@ class CameraModel:
         return rays / np.linalg.norm(rays, axis=-1, keepdims=True)
 
     def frustum_corners(self, near: float, far: float, angle_scale: float = 1.0) -> np.ndarray:
-        """(..., 8, 3) float, m, body frame: the corners of the view frustum between depths ``near`` and ``far``
-        (each edge's angle scaled by ``angle_scale``), near plane first, each plane ordered
-        (left, up), (left, down), (right, up), (right, down)."""
+        """(..., 8, 3) float, m, body frame: the corners of the checked view frustum (:meth:`side_angles`, each
+        angle scaled by ``angle_scale``) between depths ``near`` and ``far``, near plane first, each plane
+        ordered (left, up), (left, down), (right, up), (right, down). Always a convex hexahedron."""
         left, right, up, down = self._shrunk_tangents(angle_scale)
         one = np.ones(self.shape)
         corners = np.stack([np.stack([one, a, b], -1) for a in (left, -right) for b in (up, -down)], -2)
@@ -459,34 +697,77 @@ class CameraModel:
 
     # ------------------------------------------------------------------------------------ what it sees
 
-    def project(self, points) -> np.ndarray:
-        """(..., p, 2) float pixels (u, v) of body-frame ``points`` (..., p, 3) m; meaningful only in front of
-        the lens (x > 0): mask or clamp the depth first."""
+    def project(self, points, frame: str = "body") -> np.ndarray:
+        """(..., p, 2) float pixels (u, v) of ``points`` (..., p, 3) m (body frame, or optical with
+        ``frame="optical"``), through the lens's distortion. Pinhole and radtan projections are meaningful
+        only in front of the lens (x > 0: mask or clamp the depth first); a fisheye's for any point but one
+        straight behind (mask with :meth:`in_view`)."""
+        if frame not in ("body", "optical"):
+            raise RigoptError(f"unknown camera frame {frame!r}; use 'body' or 'optical'")
         points = np.asarray(points, dtype=float)
+        if frame == "optical":
+            points = np.stack([points[..., 2], -points[..., 0], -points[..., 1]], axis=-1)
         depth = points[..., 0]
+        if np.any(self.distorted):
+            xd, yd = distorted_coordinates(-points[..., 1], -points[..., 2], depth, self.distortion[..., None],
+                                           self.coefficients[..., None, :])
+            return np.stack([self.cx[..., None] + self.fx[..., None] * xd,
+                             self.cy[..., None] + self.fy[..., None] * yd], axis=-1)
         u = self.cx[..., None] + self.fx[..., None] * -points[..., 1] / depth
         v = self.cy[..., None] + self.fy[..., None] * -points[..., 2] / depth
         return np.stack([u, v], axis=-1)
 
-    def in_view(self, points, max_range: float = np.inf) -> np.ndarray:
-        """(..., p) bool: body-frame ``points`` (..., p, 3) m in front of the lens, inside the image (edges
-        included) and at most ``max_range`` m (Euclidean) from the lens."""
-        local = np.asarray(points, dtype=float)
-        left, right, up, down = (t[..., None] for t in self.edge_tangents())
+    def _distorted_view(self, local) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(angle from the axis (..., p) rad, u (..., p), v (..., p) px) of body-frame points, the projection
+        taken with depths clamped to MIN_DEPTH (pinhole and radtan) so it stays finite."""
         x, y, z = local[..., 0], local[..., 1], local[..., 2]
-        inside = (x > 0) & (-(x * right) <= y) & (y <= x * left) & (-(x * down) <= z) & (z <= x * up)
+        angle = np.arctan2(np.hypot(y, z), x)
+        depth = np.where(self.distortion[..., None] == "fisheye", x, np.maximum(x, MIN_DEPTH))
+        xd, yd = distorted_coordinates(-y, -z, depth, self.distortion[..., None], self.coefficients[..., None, :])
+        return angle, self.cx[..., None] + self.fx[..., None] * xd, self.cy[..., None] + self.fy[..., None] * yd
+
+    def in_view(self, points, max_range: float = np.inf) -> np.ndarray:
+        """(..., p) bool: body-frame ``points`` (..., p, 3) m inside the image (edges included), at most
+        ``max_range`` m (Euclidean) from the lens, and, for a distorted lens, less than its
+        :attr:`valid_angles` off the optical axis (so a radtan image folding back, or a fisheye ray beyond
+        its range, does not count). A pinhole's test is the exact edge-tangent one: in front, between the
+        edges."""
+        local = np.asarray(points, dtype=float)
+        inside = None
+        if not np.all(self.distorted):
+            left, right, up, down = (t[..., None] for t in self.edge_tangents())
+            x, y, z = local[..., 0], local[..., 1], local[..., 2]
+            inside = (x > 0) & (-(x * right) <= y) & (y <= x * left) & (-(x * down) <= z) & (z <= x * up)
+        if np.any(self.distorted):
+            angle, u, v = self._distorted_view(local)
+            real = ((angle < self.valid_angles[..., None]) & (0 <= u) & (u <= self.width[..., None])
+                    & (0 <= v) & (v <= self.height[..., None]))
+            inside = real if inside is None else np.where(self.distorted[..., None], real, inside)
         return inside & (np.einsum("...i,...i->...", local, local) <= max_range**2)
 
     def view_margin(self, points) -> np.ndarray:
-        """(..., p) float: how deep body-frame ``points`` (..., p, 3) lie inside the image, as the smaller of
-        the horizontal and vertical ``1 - |a| / edge`` (a the point's tangent, edge that of the image edge on
-        its side): 1 on the optical axis, 0 on an edge, negative outside."""
+        """(..., p) float: how deep body-frame ``points`` (..., p, 3) lie inside the image: the smaller of the
+        horizontal and vertical ``1 - |u - cx| / e`` (e the principal point's distance to the image edge on
+        the point's side, in px), 1 on the optical axis, 0 on an edge, negative outside. For a pinhole this is
+        the tangent form ``1 - |a| / edge``; a distorted lens takes its projection, and a point beyond its
+        valid angle gets ``min(margin, 0) - (angle - valid angle)``."""
         local = np.asarray(points, dtype=float)
         left, right, up, down = (t[..., None] for t in self.edge_tangents())
         x = np.maximum(local[..., 0], MIN_DEPTH)
         y, z = local[..., 1], local[..., 2]
         edge_y, edge_z = np.where(y >= 0, left, right), np.where(z >= 0, up, down)
-        return np.minimum(1 - np.abs(y) / (x * edge_y), 1 - np.abs(z) / (x * edge_z))
+        margin = np.minimum(1 - np.abs(y) / (x * edge_y), 1 - np.abs(z) / (x * edge_z))
+        if np.any(self.distorted):
+            angle, u, v = self._distorted_view(local)
+            cx, cy = self.cx[..., None], self.cy[..., None]
+            with np.errstate(divide="ignore", invalid="ignore"):
+                side_u = np.where(u <= cx, cx, self.width[..., None] - cx)
+                side_v = np.where(v <= cy, cy, self.height[..., None] - cy)
+                real = np.minimum(1 - np.abs(u - cx) / side_u, 1 - np.abs(v - cy) / side_v)
+            beyond = angle - self.valid_angles[..., None]
+            real = np.where(beyond >= 0, np.minimum(np.nan_to_num(real, nan=-1.0), 0.0) - beyond, real)
+            margin = np.where(self.distorted[..., None], real, margin)
+        return margin
 
 
 def in_frustum(model: CameraModel, positions, rotations, points, max_range: float = np.inf) -> np.ndarray:

@@ -56,16 +56,24 @@ def visible_fractions(boxes: Boxes, rig: Rig, T_world_ego: np.ndarray, rendered:
         rotation, origin = T_world_cam
         local = np.einsum("ji,npj->npi", rotation, points - origin)  # camera body frame
         facing = np.einsum("npk,npk->np", outward, origin - points) > 0
-        seeable |= facing & (local[..., 0] > 0)
         depth = local[..., 0]
         k = image.intrinsics
         h, w = image.object_id.shape
-        u = k[0, 0] * (-local[..., 1]) / np.maximum(depth, 1e-9) + k[0, 2]
-        v = k[1, 1] * (-local[..., 2]) / np.maximum(depth, 1e-9) + k[1, 2]
-        inside = facing & (depth > 0) & (u >= 0) & (u < w) & (v >= 0) & (v < h)
+        model = getattr(image, "model", None)  # render_rig is injectable: older renders carry no model
+        if model is not None and bool(model.distorted):  # a real lens (a fisheye sees behind its lens plane)
+            angle = np.arctan2(np.hypot(local[..., 1], local[..., 2]), depth)
+            seeable |= facing & (angle < model.valid_angles)
+            in_view = model.in_view(local)
+            u, v = np.moveaxis(model.project(np.where(in_view[..., None], local, [1.0, 0.0, 0.0])), -1, 0)
+            inside = facing & in_view & (u < w) & (v < h)
+        else:
+            seeable |= facing & (local[..., 0] > 0)
+            u = k[0, 0] * (-local[..., 1]) / np.maximum(depth, 1e-9) + k[0, 2]
+            v = k[1, 1] * (-local[..., 2]) / np.maximum(depth, 1e-9) + k[1, 2]
+            inside = facing & (depth > 0) & (u >= 0) & (u < w) & (v >= 0) & (v < h)
         col, row = np.clip(u.astype(int), 0, w - 1), np.clip(v.astype(int), 0, h - 1)
         shows_box = image.object_id[row, col] == boxes.instance[:, None]
-        near = np.abs(image.depth[row, col] - depth) <= DEPTH_TOLERANCE * depth + 0.1
+        near = np.abs(image.depth[row, col] - depth) <= DEPTH_TOLERANCE * np.abs(depth) + 0.1
         seen |= inside & shows_box & near
     return np.where(seeable.sum(axis=1) > 0, seen.sum(axis=1) / np.maximum(seeable.sum(axis=1), 1), 0.0)
 

@@ -1,9 +1,11 @@
 """Rendering the benchmark's images: a CPU ray caster giving a camera's RGB, depth and object ids of a frame.
 
-Every pixel casts one ray through its centre (pinhole, square pixels, principal point at the image
-centre) and takes the nearest of: the ground plane z = 0, the scene's oriented boxes (slab test in each
-box's frame, screen tile by screen tile so that a tile meets only the boxes whose projection covers it),
-and the ego body mesh (trimesh / embree, ego frame). Nothing within ``max_range`` metres is sky.
+Every pixel casts one ray through its centre, through the camera's lens (:class:`rigopt.camera.CameraModel`:
+the benchmark's centred square-pixel pinhole, or a real lens with its intrinsics and radtan or fisheye
+distortion, resampled to the rendered size) and takes the nearest of: the ground plane z = 0, the scene's
+oriented boxes (slab test in each box's frame, screen tile by screen tile so that a tile meets only the boxes
+whose projection covers it; every box in every tile through a distorted lens), and the ego body mesh
+(trimesh / embree, ego frame). Nothing within ``max_range`` metres is sky.
 
 Frames and units: world x east, y north, z up; ego and camera body frames as in :mod:`rigopt.rig.model`;
 optical frame z forward, x right, y down; metres. Pixel (row v, column u) has its centre at
@@ -65,15 +67,17 @@ PAVEMENT_WIDTH, KERB_HALF_WIDTH = 4.0, 0.15
 class Rendered:
     """One camera's image of one frame.
 
-    rgb : (h, w, 3) uint8; depth : (h, w) float32 m along the optical axis, inf for sky; intrinsics : (3, 3)
-    float pinhole K at this size; object_id : (h, w) int32 instance id of the box each pixel shows, -1 for
-    ground, sky and the ego body.
+    rgb : (h, w, 3) uint8; depth : (h, w) float32 m along the optical axis (negative behind the lens's
+    plane, which only a fisheye beyond 180 degrees sees), inf for sky; intrinsics : (3, 3) float K at this
+    size; object_id : (h, w) int32 instance id of the box each pixel shows, -1 for ground, sky and the ego
+    body; model : the camera model at this size (its distortion too).
     """
 
     rgb: np.ndarray
     depth: np.ndarray
     intrinsics: np.ndarray
     object_id: np.ndarray
+    model: CameraModel | None = None
 
 
 def render_rig(scene: Scene, frame_index: int, rig: Rig, ego_mesh: trimesh.Trimesh | None,
@@ -93,7 +97,8 @@ def render_camera(scene: Scene, frame_index: int, camera: Camera, ego_mesh: trim
     frame_index : int
         Which frame of ``scene.frames``.
     camera : Camera
-        Pose in the ego frame and horizontal FOV; its own ``image_size`` is ignored in favour of ``size``.
+        Pose in the ego frame and lens (a benchmark pinhole of its horizontal FOV, or its real lens); its own
+        ``image_size`` is ignored in favour of ``size``: a real lens's intrinsics are scaled to it.
     ego_mesh : trimesh.Trimesh or None
         The ego vehicle body in the ego frame (m), or None for no body.
     size : (int, int)
@@ -104,7 +109,11 @@ def render_camera(scene: Scene, frame_index: int, camera: Camera, ego_mesh: trim
     w, h = (int(v) for v in size)
     if w <= 0 or h <= 0:
         raise ValueError(f"image size must be two positive integers (width, height), got {size!r}")
-    model = CameraModel.from_fov(camera.fov, (w, h))
+    if camera.lens is None:
+        model = CameraModel.from_fov(camera.fov, (w, h))
+    else:
+        model = CameraModel.of_lens(camera.lens).resized((w, h))
+    distorted = bool(model.distorted)
     K = model.intrinsic_matrix()
     f = K[0, 0]
     T_world_ego = np.asarray(scene.frames[frame_index].T_world_ego, dtype=float)
@@ -112,8 +121,10 @@ def render_camera(scene: Scene, frame_index: int, camera: Camera, ego_mesh: trim
     origin = T_world_ego[:3, :3] @ camera.position + T_world_ego[:3, 3]
 
     # Rays through pixel centres, body frame, scaled so that their optical-axis component is 1: then the
-    # ray parameter t of a hit is its depth, and t * |d| its range.
-    body = model.pixel_rays(pixel_centres(w, h), unit=False)
+    # ray parameter t of a hit is its depth, and t * |d| its range. A distorted lens's are unit rays (a
+    # fisheye sees beyond 90 degrees): t is the range and t * axial the depth.
+    body = model.pixel_rays(pixel_centres(w, h), unit=distorted)
+    axial = body[:, 0]
     dirs = body @ R_world_cam.T  # (h*w, 3) world
     norm = np.linalg.norm(dirs, axis=1)
 
@@ -122,7 +133,7 @@ def render_camera(scene: Scene, frame_index: int, camera: Camera, ego_mesh: trim
         down = dirs[:, 2] < 0
         t_ground[down] = -origin[2] / dirs[down, 2]
     boxes = scene.boxes_at(frame_index)
-    t_box, box_index = _box_hits(boxes, origin, dirs.reshape(h, w, 3), R_world_cam, model, max_range)
+    t_box, box_index = _box_hits(boxes, origin, dirs.reshape(h, w, 3), R_world_cam, model, max_range, distorted)
     t_box, box_index = t_box.ravel(), box_index.ravel()
     t_ego, normal_ego = np.full(h * w, np.inf), np.zeros((h * w, 3))
     if ego_mesh is not None and len(ego_mesh.faces):
@@ -155,9 +166,9 @@ def render_camera(scene: Scene, frame_index: int, camera: Camera, ego_mesh: trim
             shade = EGO * _lambert(normal_ego[sel] @ T_world_ego[:3, :3].T)[:, None]
         fog = (1.0 - np.exp(-distance[sel] / FOG_DISTANCE))[:, None]
         colour[sel] = shade * (1 - fog) + SKY_HORIZON * fog
-    depth = np.where(kind < 3, t, np.inf).astype(np.float32)
+    depth = np.where(kind < 3, t * axial if distorted else t, np.inf).astype(np.float32)
     rgb = np.clip(np.round(colour * 255.0), 0, 255).astype(np.uint8).reshape(h, w, 3)
-    return Rendered(rgb, depth.reshape(h, w), K, object_id.reshape(h, w))
+    return Rendered(rgb, depth.reshape(h, w), K, object_id.reshape(h, w), model)
 
 
 # ---------------------------------------------------------------------------------------------------- geometry
@@ -216,9 +227,12 @@ def _screen_rects(boxes: Boxes, origin, R_world_cam, model: CameraModel, w: int,
     return rects.astype(int)
 
 
-def _box_hits(boxes: Boxes, origin, dirs: np.ndarray, R_world_cam, model: CameraModel, max_range: float):
-    """Nearest box along each ray: dirs (h, w, 3) world rays from ``origin`` (3,) -> depth (h, w) float
-    (inf: no box) and index (h, w) int into ``boxes`` (-1: none). Boxes containing the lens are skipped."""
+def _box_hits(boxes: Boxes, origin, dirs: np.ndarray, R_world_cam, model: CameraModel, max_range: float,
+              distorted: bool = False):
+    """Nearest box along each ray: dirs (h, w, 3) world rays from ``origin`` (3,) -> ray parameter (h, w) float
+    (inf: no box) and index (h, w) int into ``boxes`` (-1: none). Boxes containing the lens are skipped.
+    Through a distorted lens a box's projected corners do not bound its image, so every tile tests every box
+    in range."""
     h, w = dirs.shape[:2]
     depth, index = np.full((h, w), np.inf), np.full((h, w), -1)
     if not len(boxes):
@@ -226,7 +240,10 @@ def _box_hits(boxes: Boxes, origin, dirs: np.ndarray, R_world_cam, model: Camera
     half = boxes.sizes / 2.0
     local_origin = _to_box_frames(boxes, origin - boxes.centers)  # (n, 3)
     gap = np.linalg.norm(np.maximum(np.abs(local_origin) - half, 0.0), axis=1)
-    rects = _screen_rects(boxes, origin, R_world_cam, model, w, h)
+    if distorted:
+        rects = np.tile([0, w - 1, 0, h - 1], (len(boxes), 1))
+    else:
+        rects = _screen_rects(boxes, origin, R_world_cam, model, w, h)
     keep = (gap > 0) & (gap <= max_range) & (rects[:, 0] <= rects[:, 1]) & (rects[:, 2] <= rects[:, 3])
     if not keep.any():
         return depth, index

@@ -76,6 +76,15 @@ def _write_out(out_dir: Path, force: bool, report, rig, other, comparison) -> li
     return published(written, work, out_dir)
 
 
+def _lens_text(lens: dict | None) -> str:
+    """A report's lens entry in one line: size, fx, distortion model, hFOV x vFOV."""
+    if lens is None:
+        return "-"
+    model = "pinhole" if lens["distortion"] == "none" else lens["distortion"]
+    return (f"{lens['width']}x{lens['height']} fx {lens['fx']:.0f} {model} "
+            f"{lens['hfov_deg']:.1f}x{lens['vfov_deg']:.1f} deg")
+
+
 def _print_tables(data: dict, other: dict | None) -> None:
     others = {(r["distance_m"], r["height_m"]): r for r in other["rings"]} if other is not None else {}
     columns = ["distance (m)", "height (m)", "covered", "overlap >= 2"]
@@ -94,8 +103,9 @@ def _print_tables(data: dict, other: dict | None) -> None:
     ring = data["overlap_ring"]
     print_table(f"cameras (overlap: degrees of the {ring['distance_m']:g} m ring at {ring['height_m']:g} m "
                 "seen by both)",
-                ["camera", "self-occluded", "overlaps (deg)"],
-                [[c["id"] + (" (INSIDE BODY)" if c["id"] in inside else ""), c["self_occluded_frac"],
+                ["camera", "lens", "self-occluded", "overlaps (deg)"],
+                [[c["id"] + (" (INSIDE BODY)" if c["id"] in inside else ""), _lens_text(c["lens"]),
+                  c["self_occluded_frac"],
                   ", ".join(f"{k} {v:.1f}" for k, v in c["overlap_deg"].items()) or "-"] for c in data["cameras"]])
 
     blind, bev = data["blind_distance_m"], data["bev"]

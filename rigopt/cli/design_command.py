@@ -11,7 +11,8 @@ import typer
 from rigopt.cli.app import FORCE_HELP, app, more_than, print_json, print_table
 from rigopt.cli.metric_commands import METRIC_HELP
 from rigopt.design.settings import (DEFAULT_LENSES, DEFAULT_PITCHES_DEG, DEFAULT_YAW_STEP_DEG, DesignSettings,
-                                    lens_catalogue, range_lenses)
+                                    lens_catalogue, pinhole_catalogue, range_lenses, read_catalogue)
+from rigopt.rig.model import DEFAULT_IMAGE_SIZE
 from rigopt.errors import RigoptError
 
 
@@ -60,6 +61,18 @@ def parse_lenses(text: str) -> tuple[tuple[float, ...], tuple[float, float] | No
     return lenses, fov_range
 
 
+def parse_image_size(text: str) -> tuple[int, int]:
+    """``"1280x720"`` -> (1280, 720): an image size in pixels, width by height."""
+    width, sep, height = text.lower().partition("x")
+    try:
+        size = (int(width), int(height))
+    except ValueError:
+        size = None
+    if not sep or size is None or min(size) < 1:
+        raise RigoptError(f"--image-size must be WIDTHxHEIGHT in whole pixels, e.g. 1920x1080, got {text!r}")
+    return size
+
+
 @app.command("design")
 def design_command(
     vehicle: str = typer.Option(..., help="Vehicle to design for: name, alias or CARLA blueprint."),
@@ -68,8 +81,15 @@ def design_command(
     weights: str = typer.Option("joint", help="Calibrated weights: BEVDet, BEVFusion, Fast-BEV, PETR, joint, or a file."),
     metric: str = typer.Option("rigcd", "--metric", help=METRIC_HELP),
     cameras: Optional[str] = typer.Option(None, help="Camera count or range (e.g. 6-10); default: the reference's."),
-    fov: str = typer.Option(numbers_text(DEFAULT_LENSES), help="Lens catalogue: horizontal FOVs in degrees, or a "
-                                                                "continuous range such as 60-120."),
+    fov: str = typer.Option(numbers_text(DEFAULT_LENSES), help="Lens catalogue: horizontal FOVs in degrees of "
+                                                                "pinholes at --image-size, or a continuous range "
+                                                                "such as 60-120."),
+    image_size: str = typer.Option(f"{DEFAULT_IMAGE_SIZE[0]}x{DEFAULT_IMAGE_SIZE[1]}", "--image-size",
+                                   help="Image size WIDTHxHEIGHT (px) of the --fov pinholes."),
+    cameras_file: Optional[Path] = typer.Option(None, "--cameras-file",
+                                                help="Camera catalogue file (TOML or JSON): real cameras with "
+                                                     "name, width, height, fx, fy, cx, cy, distortion, "
+                                                     "coefficients; replaces --fov."),
     zones: Optional[str] = typer.Option(None, help="Allowed zones, comma-separated (default: all of the vehicle's)."),
     pitch: str = typer.Option(numbers_text(DEFAULT_PITCHES_DEG), help="Pitch angles to consider, degrees (> 0 up)."),
     yaw_step: float = typer.Option(DEFAULT_YAW_STEP_DEG, callback=more_than(0, " degrees", 180), help="Yaw grid step, degrees."),
@@ -102,7 +122,14 @@ def design_command(
 
     if out is not None:
         check_out_folder(out, force=force)
-    lenses, fov_range = parse_lenses(fov)
+    fovs, fov_range = parse_lenses(fov)
+    size = parse_image_size(image_size)
+    if cameras_file is not None:
+        if fov_range is not None or fov != numbers_text(DEFAULT_LENSES) or size != DEFAULT_IMAGE_SIZE:
+            raise RigoptError("--cameras-file gives the whole catalogue: leave out --fov and --image-size")
+        lenses = read_catalogue(cameras_file)
+    else:
+        lenses = pinhole_catalogue(fovs, size)
     pitches = parse_numbers(pitch, "--pitch")
     if not all(-90 <= p <= 90 for p in pitches):
         raise RigoptError(f"--pitch angles must be within [-90, 90] degrees (> 0 up), got {pitch!r}")

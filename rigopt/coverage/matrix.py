@@ -14,7 +14,8 @@ import numpy as np
 
 from rigopt.coverage.footprint import Footprint
 from rigopt.coverage.measures import CoverageSettings
-from rigopt.coverage.visibility import visible
+from rigopt.camera import CameraModel
+from rigopt.coverage.visibility import visible_by
 from rigopt.rig.model import DEFAULT_IMAGE_SIZE, Rig
 from rigopt.vehicle.model import Vehicle
 
@@ -45,19 +46,23 @@ def sector_points(footprint: Footprint, settings: CoverageSettings):
     return points, distance, height, sector, np.tile(azimuths, len(rows))
 
 
-def coverage_matrix(vehicle: Vehicle, positions, rotations, fovs, image_sizes=None,
-                    settings: CoverageSettings = CoverageSettings()) -> CoverageMatrix:
-    """Coverage of candidate cameras: positions (n, 3) m, rotations (n, 3, 3) R_vehicle_cam, fovs (n,) deg,
+def coverage_matrix(vehicle: Vehicle, positions, rotations, fovs=None, image_sizes=None,
+                    settings: CoverageSettings = CoverageSettings(), model: CameraModel | None = None
+                    ) -> CoverageMatrix:
+    """Coverage of candidate cameras: positions (n, 3) m, rotations (n, 3, 3) R_vehicle_cam, and either their
+    lenses as a CameraModel ``model`` of batch shape (n,), or the benchmark's pinholes of fovs (n,) deg at
     image_sizes (n, 2) px (default the benchmark's 1280 x 720)."""
     positions = np.atleast_2d(np.asarray(positions, dtype=float))
-    if image_sizes is None:
-        image_sizes = np.tile(DEFAULT_IMAGE_SIZE, (len(positions), 1))
+    if model is None:
+        if image_sizes is None:
+            image_sizes = np.tile(DEFAULT_IMAGE_SIZE, (len(positions), 1))
+        model = CameraModel.from_fov(fovs, image_sizes)
     points, distance, height, sector, azimuth = sector_points(Footprint.of_mesh(vehicle.mesh), settings)
-    sees = visible(vehicle.mesh, positions, rotations, fovs, image_sizes, points, settings.max_range, settings.backend)
+    sees = visible_by(vehicle.mesh, model, positions, rotations, points, settings.max_range, settings.backend)
     return CoverageMatrix(sees, distance, height, sector, azimuth, points)
 
 
 def rig_coverage_matrix(rig: Rig, vehicle: Vehicle, settings: CoverageSettings = CoverageSettings()) -> CoverageMatrix:
-    """The coverage matrix of a rig's cameras (one row per camera, in order)."""
-    sizes = np.array([c.image_size for c in rig.cameras])
-    return coverage_matrix(vehicle, rig.positions, rig.rotations, rig.fovs, sizes, settings)
+    """The coverage matrix of a rig's cameras (one row per camera, in order), through their lenses."""
+    return coverage_matrix(vehicle, rig.positions, rig.rotations, settings=settings,
+                           model=CameraModel.of_cameras(rig.cameras))

@@ -22,8 +22,8 @@ import numpy as np
 from rigopt.coverage.footprint import Footprint
 from rigopt.errors import RigoptError
 from rigopt.raycast import first_hit_distance
-from rigopt.camera import CameraModel
-from rigopt.coverage.visibility import DEFAULT_MAX_RANGE, visible
+from rigopt.camera import CameraModel, Lens
+from rigopt.coverage.visibility import DEFAULT_MAX_RANGE, visible_by
 from rigopt.rig.model import Rig
 from rigopt.vehicle.model import Vehicle
 
@@ -97,11 +97,13 @@ class BlindZone:
 
 @dataclass(frozen=True)
 class CameraCoverage:
-    """Per camera: image fraction showing the body; degrees of the overlap ring shared with each other camera."""
+    """Per camera: image fraction showing the body; degrees of the overlap ring shared with each other camera;
+    the camera's lens (size, intrinsics, distortion), for the reports."""
 
     id: str
     self_occluded_frac: float
     overlap_deg: dict[str, float] = field(default_factory=dict)
+    lens: Lens | None = None
 
 
 @dataclass(frozen=True)
@@ -130,12 +132,9 @@ class RingReport:
     rings: tuple[RingCoverage, ...]
 
 
-def _camera_arrays(rig: Rig):
-    return rig.positions, rig.rotations, rig.fovs, np.array([c.image_size for c in rig.cameras])
-
-
 def _seen(vehicle: Vehicle, rig: Rig, points: np.ndarray, settings: CoverageSettings) -> np.ndarray:
-    return visible(vehicle.mesh, *_camera_arrays(rig), points, settings.max_range, settings.backend)
+    return visible_by(vehicle.mesh, CameraModel.of_cameras(rig.cameras), rig.positions, rig.rotations, points,
+                      settings.max_range, settings.backend)
 
 
 def ring_coverage(vehicle: Vehicle, rig: Rig, settings: CoverageSettings, footprint: Footprint):
@@ -190,7 +189,7 @@ def camera_coverage(vehicle: Vehicle, rig: Rig, settings: CoverageSettings, foot
                                   settings.backend)
         overlap = {other.id: float((ring[k] & ring[j]).sum() * degrees)
                    for j, other in enumerate(rig.cameras) if j != k and (ring[k] & ring[j]).any()}
-        out.append(CameraCoverage(camera.id, float(np.mean(hits <= settings.max_range)), overlap))
+        out.append(CameraCoverage(camera.id, float(np.mean(hits <= settings.max_range)), overlap, camera.lens_model))
     return tuple(out)
 
 

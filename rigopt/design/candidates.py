@@ -1,8 +1,9 @@
-"""The designer's discrete candidate cameras: valid mount points x clear orientations x catalogue lenses.
+"""The designer's discrete candidate cameras: valid mount points x clear orientations x catalogue cameras.
 
-Mount points come from :func:`rigopt.mounting.sampling.sample_zone_points`; for every lens of the
-catalogue, the (pitch, yaw) grid directions whose checked frustum is clear of the body
-(:func:`rigopt.mounting.candidates.clear_directions`) become candidates. Angles in radians, ISO frame.
+Mount points come from :func:`rigopt.mounting.sampling.sample_zone_points`; for every camera of the
+catalogue (:class:`rigopt.design.settings.CatalogueCamera`: its real lens), the (pitch, yaw) grid
+directions whose checked frustum is clear of the body (:func:`rigopt.mounting.candidates.clear_directions`)
+become candidates. Angles in radians, ISO frame.
 """
 
 from __future__ import annotations
@@ -11,6 +12,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rigopt.camera import CameraModel
+from rigopt.design.settings import CatalogueCamera, catalogue_of
 from rigopt.mounting.rules import MountRules
 from rigopt.errors import RigoptError
 from rigopt.geometry import rotation_from_yaw_pitch_roll
@@ -23,8 +26,9 @@ from rigopt.vehicle.model import Vehicle
 class CandidateSet:
     """n candidate cameras on m mount points.
 
-    positions (n, 3) m lens positions; rotations (n, 3, 3) R_vehicle_cam; fovs (n,) deg; yaws, pitches (n,)
-    rad; mount (n,) int index into mount_points (m, 3) m, mount_normals (m, 3) and mount_zones (m,) str.
+    positions (n, 3) m lens positions; rotations (n, 3, 3) R_vehicle_cam; fovs (n,) deg (the catalogue
+    cameras' FOVs); yaws, pitches (n,) rad; mount (n,) int index into mount_points (m, 3) m, mount_normals
+    (m, 3) and mount_zones (m,) str; lens (n,) int index into catalogue, the cameras they use.
     """
 
     positions: np.ndarray
@@ -36,6 +40,8 @@ class CandidateSet:
     mount_points: np.ndarray
     mount_normals: np.ndarray
     mount_zones: np.ndarray
+    lens: np.ndarray
+    catalogue: tuple[CatalogueCamera, ...]
 
     def __len__(self) -> int:
         return len(self.fovs)
@@ -45,26 +51,42 @@ class CandidateSet:
         index = np.asarray(index, dtype=int)
         return CandidateSet(self.positions[index], self.rotations[index], self.fovs[index], self.yaws[index],
                             self.pitches[index], self.mount[index], self.mount_points, self.mount_normals,
-                            self.mount_zones)
+                            self.mount_zones, self.lens[index], self.catalogue)
+
+    def model(self, index=slice(None)) -> CameraModel:
+        """The CameraModel (batch (k,)) of the candidates ``index`` (default all): their lenses."""
+        catalogue = CameraModel.of_lenses([c.lens for c in self.catalogue])
+        chosen = self.lens[index]
+        return CameraModel(*(getattr(catalogue, n)[chosen] for n in ("width", "height", "fx", "fy", "cx", "cy",
+                                                                      "distortion", "coefficients")))
+
+    def camera(self, k: int, id: str, with_zone: bool = True):
+        """Candidate ``k`` as a rig camera named ``id``, with its catalogue camera's lens (and its mount
+        point's zone unless ``with_zone`` is False)."""
+        zone = str(self.mount_zones[self.mount[k]]) if with_zone else None
+        return self.catalogue[self.lens[k]].camera(id, self.positions[k], self.rotations[k], zone)
 
 
 def build_candidates(vehicle: Vehicle, lenses, spacing: float, yaws_deg, pitches_deg, zones=None,
                      rules: MountRules = MountRules()) -> CandidateSet:
-    """Every clear (mount point, pitch, yaw, lens) combination as a candidate camera."""
-    lenses = np.asarray(sorted(set(float(f) for f in lenses)), dtype=float)
-    if len(lenses) == 0 or np.any(lenses <= 0) or np.any(lenses >= 180):
-        raise RigoptError(f"lens FOVs must be in (0, 180) degrees, got {lenses.tolist()}")
+    """Every clear (mount point, pitch, yaw, catalogue camera) combination as a candidate camera.
+
+    lenses : the catalogue: CatalogueCameras, Lenses or FOVs (deg, benchmark pinholes), taken once each in
+    the order of their FOVs (cameras of equal FOV in the given order)."""
+    unique = list(dict.fromkeys(catalogue_of(lenses)))
+    catalogue = tuple(sorted(unique, key=lambda c: c.fov))
     points, normals, names = sample_zone_points(vehicle, spacing, zones, rules=rules)
     yaws = np.deg2rad(np.asarray(yaws_deg, dtype=float))
     pitches = np.deg2rad(np.asarray(pitches_deg, dtype=float))
     parts = []
-    for fov in lenses:
-        clear = clear_directions(vehicle, points, yaws, pitches, fov, rules)  # (m, k, j)
+    for index, entry in enumerate(catalogue):
+        clear = clear_directions(vehicle, points, yaws, pitches, entry.lens, rules)  # (m, k, j)
         mount, pitch_index, yaw_index = np.nonzero(clear)
-        parts.append((mount, pitches[pitch_index], yaws[yaw_index], np.full(len(mount), fov)))
-    mount, pitch, yaw, fov = (np.concatenate(column) for column in zip(*parts))
+        parts.append((mount, pitches[pitch_index], yaws[yaw_index], np.full(len(mount), entry.fov),
+                      np.full(len(mount), index)))
+    mount, pitch, yaw, fov, lens = (np.concatenate(column) for column in zip(*parts))
     if len(mount) == 0:
         raise RigoptError(f"no mount point of {vehicle.name} has a clear view in any direction of the grid; "
                           "allow more zones or pitch angles")
     rotations = rotation_from_yaw_pitch_roll(yaw, pitch, np.zeros_like(yaw))
-    return CandidateSet(points[mount], rotations, fov, yaw, pitch, mount, points, normals, names)
+    return CandidateSet(points[mount], rotations, fov, yaw, pitch, mount, points, normals, names, lens, catalogue)

@@ -26,7 +26,7 @@ from scipy.spatial import cKDTree
 from rigopt.mounting.rules import RigCheck, check_rig
 from rigopt.coverage.footprint import Footprint
 from rigopt.coverage.matrix import rig_coverage_matrix, sector_points
-from rigopt.coverage.visibility import visible
+from rigopt.coverage.visibility import visible_by
 from rigopt.design.candidates import CandidateSet, build_candidates
 from rigopt.design.problem import ReferenceRig
 from rigopt.design.refine import RefineProblem, duty_points, frustum_margins, project_to_surface, refine
@@ -37,7 +37,7 @@ from rigopt.errors import RigoptError
 from rigopt.metrics.calibration import Calibration
 from rigopt.metrics.ranking import predict_transfer
 from rigopt.metrics.rigcd import camera_costs
-from rigopt.rig.model import Camera, Rig
+from rigopt.rig.model import Rig
 from rigopt.vehicle.model import Vehicle
 
 #: Mount points closer than this (m) may not both hold a camera (8 cm housings plus a margin).
@@ -123,9 +123,8 @@ def prepare(vehicle: Vehicle, references: Sequence[Rig], calibration: Calibratio
     pool = reduce(np.union1d, [prune(c, no_sees, no_needs, settings.keep_per_reference, 0) for c in costs],
                   _coverage_pool(candidates, list(references), settings))
     progress(f"coverage of {len(pool)} of {len(candidates)} candidates")
-    sees_pool = visible(vehicle.mesh, candidates.positions[pool], candidates.rotations[pool], candidates.fovs[pool],
-                        np.tile([1280, 720], (len(pool), 1)), points, settings.coverage.max_range,
-                        settings.coverage.backend)
+    sees_pool = visible_by(vehicle.mesh, candidates.model(pool), candidates.positions[pool],
+                           candidates.rotations[pool], points, settings.coverage.max_range, settings.coverage.backend)
     return Prepared(tuple(references), candidates, costs, points, distance, height, azimuth, pool, sees_pool, spacing)
 
 
@@ -285,8 +284,7 @@ def _rig_from(chosen: CandidateSet, matched: np.ndarray, reference: Rig, vehicle
     cameras = []
     for k in range(len(chosen)):
         ident = reference.cameras[matched[k]].id if matched[k] >= 0 else f"CAM_EXTRA_{k}"
-        cameras.append(Camera(ident, chosen.positions[k], chosen.rotations[k], float(chosen.fovs[k]),
-                              zone=str(chosen.mount_zones[chosen.mount[k]])))
+        cameras.append(chosen.camera(k, ident))
     order = np.argsort([m if m >= 0 else len(reference) + k for k, m in enumerate(matched)])
     return Rig(f"design_{vehicle.name}_from_{reference.name}", vehicle.blueprint, tuple(cameras[k] for k in order))
 
@@ -326,6 +324,5 @@ def naive_transfer(vehicle: Vehicle, reference: Rig, candidates: CandidateSet, s
             return None
         best = options[np.argmin(np.linalg.norm(candidates.positions[options] - camera.position, axis=1))]
         used.add(int(candidates.mount[best]))
-        cameras.append(Camera(camera.id, candidates.positions[best], candidates.rotations[best],
-                              float(candidates.fovs[best])))
+        cameras.append(candidates.camera(best, camera.id, with_zone=False))
     return Rig(f"naive_{vehicle.name}_from_{reference.name}", vehicle.blueprint, tuple(cameras))

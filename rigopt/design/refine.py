@@ -2,7 +2,8 @@
 
 With the matching to the reference and the sector duties fixed, each camera k may slide in the tangent
 plane of its mount point (offsets u, v within ``radius`` m), turn (yaw, pitch within the pitch limits) and,
-for a continuous lens range, change its FOV. The objective is the calibrated matching cost of the fixed
+for a continuous lens range, change its FOV (a benchmark pinhole only: a catalogue camera with a real lens
+keeps its lens, intrinsics and distortion). The objective is the calibrated matching cost of the fixed
 matching, smoothed (``sqrt(. + eps)``) where the distances have kinks. Each sector point a camera is on
 duty for must stay inside its frustum by a margin (a smooth stand-in for coverage; the body's occlusion is
 not modelled here). The result is projected back onto the body's surface and kept only when it passes the
@@ -28,6 +29,19 @@ from rigopt.vehicle.model import Vehicle
 SMOOTHING = 1e-6
 #: Duty points must stay this fraction of the half-angle tangent inside the frustum.
 FRUSTUM_INSET = 0.03
+#: Half-angle cap (deg) of the tangent box that stands in for a real lens's view (tangents grow without
+#: bound towards 90 degrees, and a fisheye sees beyond).
+MAX_DUTY_HALF_ANGLE_DEG = 75.0
+
+
+def lens_half_tangents(camera: Camera) -> tuple[float, float]:
+    """(tan_h, tan_v) of the box of directions (1, a, b), |a| <= tan_h, |b| <= tan_v, that a camera with a real
+    lens keeps its duty points in: the smaller of its left/right and top/bottom edge-midpoint angles
+    (:meth:`rigopt.camera.CameraModel.edge_angles`), capped at MAX_DUTY_HALF_ANGLE_DEG. A stand-in for the
+    lens's view like the pinhole's; the refined rig's coverage is recomputed exactly."""
+    left, right, up, down = (float(a) for a in CameraModel.of_camera(camera).edge_angles())
+    cap = np.deg2rad(MAX_DUTY_HALF_ANGLE_DEG)
+    return float(np.tan(min(left, right, cap))), float(np.tan(min(up, down, cap)))
 
 
 @dataclass(frozen=True)
@@ -89,7 +103,7 @@ def refine(problem: RefineProblem, max_iter: int = 200) -> RefineOutcome:
         frame = ca.DM(surface_frame(problem.normals[k], camera.forward))
         position = ca.DM(camera.position) + frame[:, 0] * u[k] + frame[:, 1] * v[k]
         rotation = _rotation(ca, yaw[k], pitch[k])
-        lens = fov[k] if fov is not None else camera.fov
+        lens = fov[k] if fov is not None and camera.lens is None else camera.fov
         r = problem.matched[k]
         if r >= 0:
             target = reference.cameras[r]
@@ -99,7 +113,9 @@ def refine(problem: RefineProblem, max_iter: int = 200) -> RefineOutcome:
             angle = ca.atan2(ca.sqrt(ca.sumsqr(skew) / 8 + SMOOTHING), (ca.trace(m) - 1) / 2)
             cost += lt * ca.sqrt(ca.sumsqr(offset) + SMOOTHING) + lr * angle + lf * ca.sqrt((lens - target.fov) ** 2
                                                                                            + SMOOTHING)
-        tan_h, tan_v = (t * (1 - FRUSTUM_INSET) for t in pinhole_half_tangents(lens, *camera.image_size, tan=ca.tan))
+        tangents = (pinhole_half_tangents(lens, *camera.image_size, tan=ca.tan) if camera.lens is None
+                    else lens_half_tangents(camera))
+        tan_h, tan_v = (t * (1 - FRUSTUM_INSET) for t in tangents)
         for q in np.flatnonzero(problem.duties[k]):
             local = ca.mtimes(rotation.T, ca.DM(problem.points[q]) - position)
             opti.subject_to(local[0] >= 0.1)
@@ -136,8 +152,15 @@ def refine(problem: RefineProblem, max_iter: int = 200) -> RefineOutcome:
         frame = surface_frame(problem.normals[k], camera.forward)
         position = camera.position + frame[:, 0] * values[0][k] + frame[:, 1] * values[1][k]
         rotation = rotation_from_yaw_pitch_roll(values[2][k], values[3][k], 0.0)
-        cameras.append(Camera(camera.id, position, rotation, float(lenses[k]), camera.image_size, camera.zone))
+        cameras.append(_moved(camera, position, rotation, float(lenses[k])))
     return RefineOutcome(status, Rig(design.name, design.vehicle, tuple(cameras)))
+
+
+def _moved(camera: Camera, position, rotation, fov: float) -> Camera:
+    """``camera`` at a new pose: a benchmark pinhole with FOV ``fov`` (deg), a real lens unchanged."""
+    if camera.lens is not None:
+        return Camera.with_lens(camera.id, position, rotation, camera.lens, camera.zone)
+    return Camera(camera.id, position, rotation, fov, camera.image_size, camera.zone)
 
 
 def project_to_surface(rig: Rig, vehicle: Vehicle, rules: MountRules = MountRules()) -> Rig:
@@ -145,7 +168,7 @@ def project_to_surface(rig: Rig, vehicle: Vehicle, rules: MountRules = MountRule
     refinement leave it slightly off a curved surface)."""
     surface = vehicle.surface(rig.positions)
     offset = rules.housing[2] / 2.0
-    cameras = [Camera(c.id, surface.foot[k] + surface.normal[k] * offset, c.rotation, c.fov, c.image_size, c.zone)
+    cameras = [_moved(c, surface.foot[k] + surface.normal[k] * offset, c.rotation, c.fov)
                for k, c in enumerate(rig.cameras)]
     return Rig(rig.name, rig.vehicle, tuple(cameras))
 
@@ -162,6 +185,6 @@ def duty_points(sees: np.ndarray, needed: np.ndarray, margins: np.ndarray) -> np
 
 
 def frustum_margins(rig: Rig, points: np.ndarray) -> np.ndarray:
-    """(k, q) float: how deep each point lies inside each camera's frustum, as the smallest of
-    1 - |y| / (x tan h) and 1 - |z| / (x tan v) (negative outside)."""
+    """(k, q) float: how deep each point lies inside each camera's view (:meth:`CameraModel.view_margin`: for
+    a pinhole the smallest of 1 - |y| / (x tan h) and 1 - |z| / (x tan v); negative outside)."""
     return CameraModel.of_cameras(rig.cameras).view_margin(camera_frame_points(rig.positions, rig.rotations, points))

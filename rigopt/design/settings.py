@@ -1,5 +1,10 @@
 """What the designer may choose from and what it must achieve: ``DesignSettings`` and its defaults.
 
+The lens catalogue is a tuple of real cameras (:class:`CatalogueCamera`: a name and a
+:class:`rigopt.camera.Lens`, i.e. image size, intrinsics and distortion). The default is the benchmark's
+camera, a 1280 x 720 centred pinhole, at the FOVs of ``DEFAULT_LENSES``; a user catalogue file
+(:func:`read_catalogue`, TOML or JSON) lists real cameras.
+
 Light to import (numpy only at import time): the command line shows these defaults in its help. The
 coverage ring settings and the mount rules, whose modules pull in the geometry libraries, are built on
 first use.
@@ -7,18 +12,23 @@ first use.
 
 from __future__ import annotations
 
+import json
+import tomllib
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import TYPE_CHECKING, Sequence
 
 import numpy as np
 
-from rigopt.errors import RigoptError
+from rigopt.camera import DISTORTION_COEFFICIENTS, Lens
+from rigopt.errors import DataError, RigoptError, not_utf8
+from rigopt.rig.model import DEFAULT_IMAGE_SIZE, Camera
 
 if TYPE_CHECKING:
     from rigopt.mounting.rules import MountRules
     from rigopt.coverage.measures import CoverageSettings
 
-#: The lens catalogue: horizontal FOVs (deg) of the lenses a design may use.
+#: The default lens catalogue: horizontal FOVs (deg) of the benchmark's pinholes a design may use.
 DEFAULT_LENSES = (60.0, 65.0, 70.0, 75.0, 80.0, 90.0, 100.0, 110.0, 120.0)
 #: Pitch angles (deg, > 0 up) of the orientation grid.
 DEFAULT_PITCHES_DEG = (-20.0, -10.0, 0.0, 10.0)
@@ -66,13 +76,129 @@ def range_lenses(low: float, high: float) -> tuple[float, ...]:
 
 
 @dataclass(frozen=True)
+class CatalogueCamera:
+    """One camera of the lens catalogue: ``name``, its ``lens`` (image size, intrinsics, distortion) and
+    ``fov``, the horizontal FOV (deg) the metrics compare it by: the lens's
+    :attr:`~rigopt.camera.Lens.hfov`, or the exact FOV a benchmark pinhole was asked for."""
+
+    name: str
+    lens: Lens
+    fov: float
+
+    @classmethod
+    def pinhole(cls, fov: float, image_size=DEFAULT_IMAGE_SIZE) -> "CatalogueCamera":
+        """The benchmark's camera: a centred square-pixel pinhole of horizontal FOV ``fov`` (deg) at
+        ``image_size`` (width, height) px."""
+        _check_fovs((fov,))
+        width, height = image_size
+        return cls(f"pinhole {fov:g} deg {width}x{height}", Lens.pinhole(float(fov), (width, height)), float(fov))
+
+    @classmethod
+    def of_lens(cls, name: str, lens: Lens) -> "CatalogueCamera":
+        """A real camera: its FOV is the lens's horizontal FOV."""
+        return cls(name, lens, lens.hfov)
+
+    def camera(self, id: str, position, rotation, zone: str | None = None) -> Camera:
+        """A rig camera of this catalogue camera at ``position`` (3,) m with ``rotation`` R_vehicle_cam: a
+        benchmark pinhole by its FOV and image size, any other lens carried whole."""
+        if self.lens.is_ideal_pinhole:
+            return Camera(id, position, rotation, self.fov, self.lens.image_size, zone)
+        return Camera.with_lens(id, position, rotation, self.lens, zone)
+
+
+def pinhole_catalogue(fovs: Sequence[float], image_size=DEFAULT_IMAGE_SIZE) -> tuple[CatalogueCamera, ...]:
+    """Benchmark pinholes of horizontal FOVs ``fovs`` (deg, within (0, 180)) at ``image_size`` (w, h) px."""
+    return tuple(CatalogueCamera.pinhole(f, image_size) for f in lens_catalogue(fovs))
+
+
+def catalogue_of(lenses) -> tuple[CatalogueCamera, ...]:
+    """A catalogue from CatalogueCameras, Lenses (named by their size and model) or FOVs (deg: benchmark
+    pinholes at the default image size), in the given order."""
+    out = []
+    for entry in lenses:
+        if isinstance(entry, CatalogueCamera):
+            out.append(entry)
+        elif isinstance(entry, Lens):
+            out.append(CatalogueCamera.of_lens(f"{entry.distortion} {entry.width}x{entry.height} "
+                                               f"fx {entry.fx:g}", entry))
+        else:
+            out.append(CatalogueCamera.pinhole(entry))
+    if not out:
+        raise RigoptError("a lens catalogue needs at least one camera")
+    return tuple(out)
+
+
+#: The keys of one camera in a catalogue file; ``distortion`` and ``coefficients`` may be left out (pinhole).
+CATALOGUE_KEYS = ("name", "width", "height", "fx", "fy", "cx", "cy", "distortion", "coefficients")
+
+
+def parse_catalogue(data, where: str) -> tuple[CatalogueCamera, ...]:
+    """The cameras of a parsed catalogue file (``{"cameras": [{name, width, height, fx, fy, cx, cy,
+    distortion, coefficients}, ...]}``); ``where`` names the file in errors (DataError)."""
+    entries = data.get("cameras") if isinstance(data, dict) else None
+    if not isinstance(entries, list) or not entries:
+        raise DataError(f"{where}: a camera catalogue needs a non-empty list 'cameras' of cameras "
+                        f"({', '.join(CATALOGUE_KEYS)}), e.g. [[cameras]] tables in TOML")
+    cameras, names = [], set()
+    for i, entry in enumerate(entries):
+        what = f"{where}: camera {i + 1}"
+        if not isinstance(entry, dict):
+            raise DataError(f"{what} must be a table of {', '.join(CATALOGUE_KEYS)}, got {entry!r}")
+        unknown = sorted(set(entry) - set(CATALOGUE_KEYS))
+        missing = [k for k in CATALOGUE_KEYS[:7] if k not in entry]
+        if unknown or missing:
+            raise DataError(f"{what} has {'unknown keys ' + ', '.join(unknown) if unknown else ''}"
+                            f"{' and ' if unknown and missing else ''}"
+                            f"{'no ' + ', '.join(missing) if missing else ''}; a camera has "
+                            f"{', '.join(CATALOGUE_KEYS)} (the last two optional)")
+        name = entry["name"]
+        if not isinstance(name, str) or not name.strip():
+            raise DataError(f"{what}: 'name' must be a non-empty string, got {name!r}")
+        if name in names:
+            raise DataError(f"{what}: the name {name!r} is used twice; give each camera its own name")
+        names.add(name)
+        distortion = entry.get("distortion", "none")
+        coefficients = entry.get("coefficients", [])
+        if distortion not in DISTORTION_COEFFICIENTS or not isinstance(coefficients, list):
+            raise DataError(f"{what} ({name}): 'distortion' must be one of {', '.join(DISTORTION_COEFFICIENTS)} "
+                            f"and 'coefficients' a list of numbers, got {distortion!r}, {coefficients!r}")
+        try:
+            lens = Lens(entry["width"], entry["height"], entry["fx"], entry["fy"], entry["cx"], entry["cy"],
+                        distortion, tuple(coefficients))
+        except RigoptError as error:
+            raise DataError(f"{what} ({name}): {error}") from None
+        cameras.append(CatalogueCamera.of_lens(name, lens))
+    return tuple(cameras)
+
+
+def read_catalogue(path) -> tuple[CatalogueCamera, ...]:
+    """The cameras of a catalogue file: TOML (``.toml``) or JSON (any other name); see
+    :func:`parse_catalogue` and docs/design.md. Raises DataError for an unreadable or malformed file."""
+    path = Path(path)
+    try:
+        text = path.read_bytes().decode("utf-8")
+    except OSError as error:
+        raise DataError(f"{path}: cannot read the camera catalogue ({error.strerror}); check the path") from None
+    except UnicodeDecodeError as error:
+        raise not_utf8(path, "camera catalogue", error) from None
+    try:
+        data = tomllib.loads(text) if path.suffix.lower() == ".toml" else json.loads(text)
+    except (tomllib.TOMLDecodeError, json.JSONDecodeError) as error:
+        kind = "TOML" if path.suffix.lower() == ".toml" else "JSON"
+        raise DataError(f"{path}: the camera catalogue is not valid {kind} ({error}); fix the file") from None
+    return parse_catalogue(data, str(path))
+
+
+@dataclass(frozen=True)
 class DesignSettings:
     """What the designer may choose from and what it must achieve."""
 
     cameras: tuple[int, int] | None = None
     """(min, max) camera count, inclusive; None for the (first) reference's count."""
-    lenses: tuple[float, ...] = DEFAULT_LENSES
-    """The lens catalogue: horizontal FOVs (deg)."""
+    lenses: tuple[CatalogueCamera, ...] = DEFAULT_LENSES
+    """The lens catalogue: real cameras (CatalogueCamera). Lenses or FOVs (deg; benchmark pinholes at
+    1280 x 720) are turned into catalogue cameras, so the default is the benchmark's pinholes at
+    ``DEFAULT_LENSES``."""
     zones: tuple[str, ...] | None = None
     """The zone names cameras may be mounted on; None for every zone of the vehicle."""
     pitches_deg: tuple[float, ...] = DEFAULT_PITCHES_DEG
@@ -105,3 +231,11 @@ class DesignSettings:
     """The rings and sectors of the coverage requirements (rings at 2, 5, 10, 20 m, 36 sectors)."""
     rules: MountRules = field(default_factory=_mount_rules)
     """The mount checks every camera of a design passes."""
+
+    def __post_init__(self):
+        object.__setattr__(self, "lenses", catalogue_of(self.lenses))
+
+    @property
+    def fovs(self) -> tuple[float, ...]:
+        """The catalogue cameras' horizontal FOVs (deg), in catalogue order."""
+        return tuple(c.fov for c in self.lenses)

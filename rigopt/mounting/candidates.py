@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rigopt.camera import CameraModel
+from rigopt.camera import CameraModel, Lens
 from rigopt.geometry import rotation_from_yaw_pitch_roll
 from rigopt.mounting.rules import MountRules
 from rigopt.mounting.sampling import DEFAULT_SPACING, sample_zone_points
@@ -31,7 +31,7 @@ class MountCandidates:
 
     points : (n, 3) float, metres, vehicle frame (lens positions); normals : (n, 3) outward unit normals;
     zones : (n,) str; yaws : (m,) float rad; pitches : (k,) float rad; clear : (n, k, m) bool;
-    fov : the horizontal FOV (deg) the directions were checked with.
+    fov : the horizontal FOV (deg) of the lens the directions were checked with.
     """
 
     points: np.ndarray
@@ -43,18 +43,22 @@ class MountCandidates:
     fov: float
 
 
-def probe_directions(fov: float, rules: MountRules = MountRules(), image_size=DEFAULT_IMAGE_SIZE) -> np.ndarray:
-    """(9, 3) unit rays in the camera body frame: centre, edge midpoints and corners of the checked frustum."""
-    return CameraModel.from_fov(fov, image_size).probe_rays(1.0 - rules.frustum_margin)
+def probe_directions(lens: float | Lens, rules: MountRules = MountRules(), image_size=DEFAULT_IMAGE_SIZE) -> np.ndarray:
+    """(9, 3) unit rays in the camera body frame: centre, edge midpoints and corners of the checked frustum of
+    ``lens`` (a Lens, or a pinhole's horizontal FOV in deg at ``image_size``)."""
+    if isinstance(lens, Lens):
+        return CameraModel.of_lens(lens).probe_rays(1.0 - rules.frustum_margin)
+    return CameraModel.from_fov(lens, image_size).probe_rays(1.0 - rules.frustum_margin)
 
 
-def clear_directions(vehicle: Vehicle, points, yaws, pitches, fov: float, rules: MountRules = MountRules()):
-    """(n, k, m) bool: the checked frustum of a camera at ``points`` (n, 3) facing (pitches[k], yaws[m])
-    meets no body surface between ``rules.near`` and ``rules.frustum_range``."""
+def clear_directions(vehicle: Vehicle, points, yaws, pitches, lens: float | Lens, rules: MountRules = MountRules()):
+    """(n, k, m) bool: the checked frustum of a camera with ``lens`` (a Lens, or a 1280 x 720 pinhole's FOV in
+    deg) at ``points`` (n, 3) facing (pitches[k], yaws[m]) meets no body surface between ``rules.near`` and
+    ``rules.frustum_range``."""
     points = np.atleast_2d(points)
     yaw_grid, pitch_grid = np.meshgrid(yaws, pitches)  # (k, m)
     rotations = rotation_from_yaw_pitch_roll(yaw_grid, pitch_grid, np.zeros_like(yaw_grid))  # (k, m, 3, 3)
-    rays = np.einsum("kmij,rj->kmri", rotations, probe_directions(fov, rules))  # (k, m, r, 3)
+    rays = np.einsum("kmij,rj->kmri", rotations, probe_directions(lens, rules))  # (k, m, r, 3)
     n, shape = len(points), rays.shape[:3]
     origins = points[:, None, None, None, :] + rules.near * rays[None]  # (n, k, m, r, 3)
     directions = np.broadcast_to(rays[None], origins.shape)
@@ -63,11 +67,13 @@ def clear_directions(vehicle: Vehicle, points, yaws, pitches, fov: float, rules:
     return ~hit.reshape(n, *shape).any(axis=-1)
 
 
-def mount_candidates(vehicle: Vehicle, spacing: float = DEFAULT_SPACING, fov: float = 65.0, zones=None,
+def mount_candidates(vehicle: Vehicle, spacing: float = DEFAULT_SPACING, fov: float | Lens = 65.0, zones=None,
                      yaws_deg=DEFAULT_YAWS_DEG, pitches_deg=DEFAULT_PITCHES_DEG,
                      rules: MountRules = MountRules()) -> MountCandidates:
-    """Sample the zones and check every (point, pitch, yaw) for a clear view with a ``fov`` lens."""
+    """Sample the zones and check every (point, pitch, yaw) for a clear view with a lens: ``fov`` a Lens, or
+    the horizontal FOV (deg) of a 1280 x 720 pinhole."""
     points, normals, names = sample_zone_points(vehicle, spacing, zones, rules=rules)
     yaws, pitches = np.deg2rad(np.asarray(yaws_deg, dtype=float)), np.deg2rad(np.asarray(pitches_deg, dtype=float))
     clear = clear_directions(vehicle, points, yaws, pitches, fov, rules)
-    return MountCandidates(points, normals, names, yaws, pitches, clear, float(fov))
+    hfov = fov.hfov if isinstance(fov, Lens) else fov
+    return MountCandidates(points, normals, names, yaws, pitches, clear, float(hfov))

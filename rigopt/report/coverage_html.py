@@ -125,9 +125,10 @@ def render_html(report: CoverageReport, rig: Rig, comparison: CoverageComparison
         position = ", ".join(f"{v:.2f}" for v in spec.position) if spec is not None else "-"
         overlaps = ", ".join(f"{k} {v:.1f}°" for k, v in camera["overlap_deg"].items()) or "none"
         rows.append([escape(camera["id"] + (" (inside the body)" if camera["id"] in inside else "")), escape(position),
-                     num(spec.fov, 1, "°") if spec is not None else "-", pct(camera["self_occluded_frac"]),
+                     num(spec.fov, 1, "°") if spec is not None else "-",
+                     escape(spec.lens_model.label()) if spec is not None else "-", pct(camera["self_occluded_frac"]),
                      f"<td>{escape(overlaps)}</td>"])
-    parts.append(table(["camera", "position (m)", "hfov", "self-occluded", "overlaps"], rows))
+    parts.append(table(["camera", "position (m)", "hfov", "lens", "self-occluded", "overlaps"], rows))
 
     if comparison is not None:
         diff = comparison_dict(comparison)

@@ -17,6 +17,13 @@ _CAPTIONS = {
 }
 
 
+def _distortion_text(lens: dict) -> str:
+    """``none``, or the model and its coefficients, e.g. ``radtan -0.26, 0.07, 0, 0, 0``."""
+    if lens["distortion"] == "none":
+        return "none"
+    return f"{lens['distortion']} " + ", ".join(f"{k:.4g}" for k in lens["coefficients"])
+
+
 def render_design_html(summary: dict, figures: dict[str, bytes]) -> str:
     """The page for ``summary`` (the ``design_dict`` of a result) and PNG ``figures`` by name."""
     comparisons = summary["comparisons"]
@@ -55,9 +62,13 @@ def render_design_html(summary: dict, figures: dict[str, bytes]) -> str:
             ["continuous refinement", escape(solver["refine_status"])], ["total time", num(solver["seconds"], 1, " s")],
         ]),
         "<h2>Cameras</h2>",
-        table(["camera", "zone", "position x, y, z (m, ISO)", "hfov"],
+        table(["camera", "zone", "position x, y, z (m, ISO)", "hfov", "image (px)", "fx (px)", "distortion",
+               "lens hFOV x vFOV"],
               [[escape(c["id"]), escape(c["zone"] or "-"), escape(", ".join(f"{v:.2f}" for v in c["position"])),
-                num(c["fov"], 1, "°")] for c in summary["cameras"]], numeric_from=3),
+                num(c["fov"], 1, "°"), escape(f"{c['lens']['width']}x{c['lens']['height']}"),
+                num(c["lens"]["fx"], 1, ""), escape(_distortion_text(c["lens"])),
+                escape(f"{c['lens']['hfov_deg']:.1f}° x {c['lens']['vfov_deg']:.1f}°")]
+               for c in summary["cameras"]], numeric_from=3),
         f'<p class="note">Rig file: {escape(summary["rig_file"])} (the benchmark\'s JSON format, CARLA frame).</p>',
     ]
     if figures:

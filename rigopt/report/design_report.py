@@ -38,8 +38,8 @@ def design_dict(result: DesignResult, rig_file: Path | None) -> dict:
         "solver": {"milp_status": milp.status, "milp_gap": milp.gap, "milp_seconds": milp.selection.seconds,
                    "refine_status": result.refinement.status, "candidates": milp.n_candidates,
                    "offered_to_milp": milp.n_offered, "repairs": milp.repairs, "seconds": result.seconds},
-        "cameras": [{"id": c.id, "zone": c.zone, "fov": c.fov, "position": c.position.tolist()}
-                    for c in design.rig.cameras],
+        "cameras": [{"id": c.id, "zone": c.zone, "fov": c.fov, "position": c.position.tolist(),
+                     "lens": c.lens_model.summary()} for c in design.rig.cameras],
         "comparisons": {
             "naive_transfer": summary_dict(comparisons.naive_transfer) if comparisons.naive_transfer else None,
             "benchmark_rig": summary_dict(comparisons.best_rig) if comparisons.best_rig else None,

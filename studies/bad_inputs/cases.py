@@ -15,6 +15,7 @@ NOT_UTF8 = b"\xff\xfe\x00 not text \xe9"
 RIG = '{"vehicle_type": "vehicle.audi.tt", "cameras": [{"id": "C", "location": LOC, "rotation": [0, 0, 0], "fov": 60}]}'
 WEIGHTS = {"K": 1, "alpha": 0.5, "lambda_t": 1, "lambda_r": 1, "lambda_f": 1}
 CSV_HEADER = "model,train_rig,test_rig,mAP\n"
+CAMERA = '[[cameras]]\nname = "cam"\nwidth = 1280\nheight = 960\nfx = 1000\nfy = 1000\ncx = 640\ncy = 480\n'
 
 
 def make_fixtures(tmp: Path) -> dict[str, str]:
@@ -79,6 +80,15 @@ def make_fixtures(tmp: Path) -> dict[str, str]:
         "results_bad/M/trained_on_R1.json": "{",
         "results_no_diagonal/M/trained_on_R1.json": json.dumps({"results": {"R6": {"metrics": {"mAP": 0.2}}}}),
         "full/x.txt": "occupied folder",
+        "cameras_not_utf8.toml": NOT_UTF8,
+        "cameras_bad.toml": "[[cameras]\n",
+        "cameras_empty.json": '{"cameras": []}',
+        "cameras_no_fx.toml": CAMERA.replace("fx = 1000\n", ""),
+        "cameras_bad_model.toml": CAMERA + 'distortion = "kb8"\ncoefficients = [0.1]\n',
+        "cameras_coefficients.toml": CAMERA + 'distortion = "radtan"\ncoefficients = [0.1]\n',
+        "cameras_folding.toml": CAMERA.replace("fx = 1000", "fx = 300").replace("fy = 1000", "fy = 300")
+        + 'distortion = "fisheye"\ncoefficients = [0.05, -0.01, 0, 0]\n',
+        "cameras_twice.toml": CAMERA + CAMERA,
     }
     for name, content in files.items():
         path = tmp / name
@@ -250,6 +260,22 @@ CASES: list[tuple[str, list[str], str]] = [
     ("design --fov text", [*DESIGN, "--fov", "wide"], "--fov"),
     ("design --fov reversed range", [*DESIGN, "--fov", "120-60"], "--fov"),
     ("design --fov empty", [*DESIGN, "--fov", ","], "--fov"),
+    ("design --image-size text", [*DESIGN, "--image-size", "big"], "--image-size"),
+    ("design --image-size 0x720", [*DESIGN, "--image-size", "0x720"], "--image-size"),
+    ("design --cameras-file missing", [*DESIGN, "--cameras-file", f"{T}/nosuch.toml"], "cannot read"),
+    ("design --cameras-file not UTF-8", [*DESIGN, "--cameras-file", f"{T}/cameras_not_utf8.toml"], "UTF-8"),
+    ("design --cameras-file bad TOML", [*DESIGN, "--cameras-file", f"{T}/cameras_bad.toml"], "not valid TOML"),
+    ("design --cameras-file no cameras", [*DESIGN, "--cameras-file", f"{T}/cameras_empty.json"], "'cameras'"),
+    ("design --cameras-file camera without fx", [*DESIGN, "--cameras-file", f"{T}/cameras_no_fx.toml"], "no fx"),
+    ("design --cameras-file unknown distortion", [*DESIGN, "--cameras-file", f"{T}/cameras_bad_model.toml"],
+     "'distortion' must be one of"),
+    ("design --cameras-file too few coefficients", [*DESIGN, "--cameras-file",
+                                                    f"{T}/cameras_coefficients.toml"], "needs 5"),
+    ("design --cameras-file lens folding back", [*DESIGN, "--cameras-file", f"{T}/cameras_folding.toml"],
+     "folds back"),
+    ("design --cameras-file name twice", [*DESIGN, "--cameras-file", f"{T}/cameras_twice.toml"], "used twice"),
+    ("design --cameras-file with --fov", [*DESIGN, "--cameras-file", f"{T}/cameras_twice.toml", "--fov", "90"],
+     "leave out --fov"),
     ("design --pitch text", [*DESIGN, "--pitch", "abc"], "--pitch"),
     ("design --pitch 200", [*DESIGN, "--pitch", "200"], "[-90, 90]"),
     ("design --yaw-step 0", [*DESIGN, "--yaw-step", "0"], "--yaw-step"),

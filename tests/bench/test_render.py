@@ -279,3 +279,56 @@ def test_shading_and_ego_rays_in_chunks_give_the_same_image(monkeypatch):
         np.testing.assert_array_equal(getattr(whole, name), getattr(chunked, name))
     bare = render_camera(s, 0, cam, None, (W, H))
     assert (whole.depth < bare.depth).sum() > 5 * 97  # the body is in view
+
+
+# --- real lenses ------------------------------------------------------------------------------------------
+
+def test_a_fisheye_camera_renders_at_the_asked_size_and_sees_below_its_lens_plane():
+    from rigopt.camera import Lens
+
+    lens = Lens(1280, 960, 380.0, 380.0, 640.0, 480.0, "fisheye", (-0.02, 0.003, 0.0, 0.0))  # ~200 degrees
+    fisheye = Camera.with_lens("FISH", np.array([0.0, 0.0, 1.5]), np.eye(3), lens)
+    out = render_camera(scene(), 0, fisheye, None, (W, H))
+    assert out.rgb.shape == (H, W, 3) and out.rgb.dtype == np.uint8
+    assert out.depth.shape == (H, W) and out.object_id.shape == (H, W)
+    assert out.model is not None and float(out.model.width) == W and out.model.distortion == "fisheye"
+    # ground below the horizon row, sky above; at the image's left and right edges the lens looks ~100 deg
+    # off the axis, behind its own plane: the ground there has negative depth along the axis.
+    sky = np.isinf(out.depth)
+    assert sky[: H // 2 - 1].all() and not sky[H // 2 + 1:].any()
+    assert out.depth[-1, 0] < 0 < out.depth[-1, W // 2]
+
+
+def test_a_radtan_camera_renders_the_ground_where_its_lens_puts_it():
+    from rigopt.camera import CameraModel, Lens, pixel_centres
+
+    lens = Lens(2048, 1550, 1773.0, 1773.0, 1024.0, 775.0, "radtan", (-0.26, 0.07, 0.0, 0.0, 0.0))
+    level = Camera.with_lens("ARGO", np.array([0.0, 0.0, 1.5]), np.eye(3), lens)
+    size = (128, 97)
+    out = render_camera(scene(), 0, level, None, size)
+    assert out.rgb.shape == (97, 128, 3)
+    # depth along the axis of the ground point each pixel's (distorted) ray meets: 1.5 / (-z) of its unit ray
+    rays = CameraModel.of_lens(lens).resized(size).pixel_rays(pixel_centres(*size))
+    down = rays[:, 2] < 0
+    expected = np.where(down, 1.5 * rays[:, 0] / np.where(down, -rays[:, 2], 1.0), np.inf).reshape(97, 128)
+    ground = np.isfinite(out.depth) & np.isfinite(expected) & (expected < 100)
+    assert ground.sum() > 1000
+    np.testing.assert_allclose(out.depth[ground], expected[ground], rtol=1e-5)
+    pinhole = render_camera(scene(), 0, Camera("P", level.position, level.rotation, 2 * np.degrees(
+        np.arctan(1024 / 1773)), (2048, 1550)), None, size)
+    assert not np.array_equal(np.isinf(pinhole.depth), np.isinf(out.depth)) or \
+        not np.allclose(pinhole.depth[ground], out.depth[ground])
+
+
+def test_a_fisheye_rig_sees_a_box_beside_it_and_a_pinhole_does_not():
+    from rigopt.bench.generate import visible_fractions
+    from rigopt.camera import Lens
+
+    lens = Lens(1280, 960, 380.0, 380.0, 640.0, 480.0, "fisheye", (-0.02, 0.003, 0.0, 0.0))
+    beside = boxes([[0.0, 6.0, 1.0]], [[3.0, 2.0, 2.0]])  # left of the lens, 90 degrees off a forward axis
+    fisheye = Rig("fish", "v", (Camera.with_lens("F", np.array([0.0, 0.0, 1.5]), np.eye(3), lens),))
+    pinhole = Rig("pin", "v", (camera(fov=120.0, cam_id="F"),))
+    the_scene = scene(static=beside)
+    fractions = [visible_fractions(beside, rig, np.eye(4), render_rig(the_scene, 0, rig, None, (W, H)))[0]
+                 for rig in (fisheye, pinhole)]
+    assert 0.2 < fractions[0] <= 1.0 and fractions[1] == 0.0

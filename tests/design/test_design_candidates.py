@@ -200,10 +200,15 @@ def test_single_lens_catalogue(box_car):
     assert np.all(single.fovs == 75.0)
 
 
-@pytest.mark.parametrize("lenses", [(0.0, 90.0), (60.0, 180.0), (-30.0,), (200.0,), ()])
+@pytest.mark.parametrize("lenses", [(0.0, 90.0), (60.0, 180.0), (-30.0,), (200.0,)])
 def test_lens_catalogue_outside_0_180_is_an_error(box_car, lenses):
     with pytest.raises(RigoptError, match=r"\(0, 180\)"):
         build_candidates(box_car, lenses, SPACING, YAWS_DEG, PITCHES_DEG)
+
+
+def test_an_empty_lens_catalogue_is_an_error(box_car):
+    with pytest.raises(RigoptError, match="at least one camera"):
+        build_candidates(box_car, (), SPACING, YAWS_DEG, PITCHES_DEG)
 
 
 def test_no_clear_direction_anywhere_is_an_error(box_car):

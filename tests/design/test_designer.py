@@ -138,7 +138,7 @@ def test_naive_transfer_has_one_camera_per_reference_camera(firetruck):
 
 
 def test_naive_transfer_keeps_each_reference_lens_on_the_catalogue(firetruck):
-    lenses = np.asarray(firetruck.settings.lenses)
+    lenses = np.asarray(firetruck.settings.fovs)
     for moved, original in zip(firetruck.result.comparisons.naive_transfer.rig.cameras, firetruck.reference.cameras):
         assert moved.fov == lenses[np.argmin(np.abs(lenses - original.fov))]
 

@@ -12,7 +12,9 @@ from rigopt.errors import RigoptError
 
 def test_the_settings_defaults_are_the_named_defaults():
     settings = DesignSettings()
-    assert settings.lenses == DEFAULT_LENSES
+    assert settings.fovs == DEFAULT_LENSES
+    # the published design's cameras: the benchmark's 1280 x 720 centred pinholes at those FOVs
+    assert all(c.lens.image_size == (1280, 720) and c.lens.is_ideal_pinhole for c in settings.lenses)
     assert settings.pitches_deg == DEFAULT_PITCHES_DEG
     assert settings.yaw_step_deg == DEFAULT_YAW_STEP_DEG
 
