@@ -21,7 +21,7 @@ import pytest
 REPO = Path(__file__).resolve().parents[2]
 SHIPPED_CSV = REPO / "metrics" / "pccr_transfer.csv"
 SMALL_DESIGN = ["--vehicle", "tt", "--ref", "R1", "--fov", "120", "--pitch", "0", "--yaw-step", "30",
-                "--time-limit", "5"]
+                "--time-limit", "60"]
 
 #: name -> (arguments, exit codes that are fine); {tmp} is the run's folder.
 JSON_COMMANDS = {

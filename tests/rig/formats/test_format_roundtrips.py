@@ -24,7 +24,7 @@ def lens_rig(distortions=("radtan", "fisheye"), origin=RigOrigin()) -> Rig:
     lenses = {
         "none": Lens(1600, 900, 1266.4, 1266.9, 816.27, 491.5),
         "radtan": Lens(1920, 1280, 2059.6, 2061.2, 944.5, 638.9, "radtan", (0.0436, -0.3373, 0.0011, -0.0008, 0.012)),
-        "fisheye": Lens(1280, 960, 330.2, 330.9, 641.3, 479.4, "fisheye", (0.0348, 0.0071, -0.0205, 0.0020)),
+        "fisheye": Lens(1280, 960, 330.2, 330.9, 641.3, 479.4, "fisheye", (0.0348, 0.0071, -0.0021, 0.0002)),
     }
     cameras = [Camera.with_lens(c.id, c.position, c.rotation, lenses[d]) for c, d in zip(r1.cameras, ("none", *distortions))]
     return Rig("lensy", "vehicle.audi.etron", tuple(cameras), origin)
