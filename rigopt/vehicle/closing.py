@@ -1,7 +1,7 @@
 """Closing a vehicle mesh as it comes from a simulator or a CAD export: open, multi-part, non-manifold.
 
-A mesh that manifold3d accepts as it is (each part a closed 2-manifold) is kept exactly, its parts joined
-by a boolean union. Any other mesh is closed on a voxel grid:
+A mesh that manifold3d accepts as it is (each part a closed 2-manifold), or after trimesh has filled
+its small holes, is kept exactly, its parts joined by a boolean union. Any other mesh is closed on a voxel grid:
 
 1. Grid: points ``pitch`` m apart over the mesh's box plus a margin; ``pitch`` = length / 200 clamped to
    [1, 4] cm (:func:`closing_pitch`).
@@ -78,6 +78,12 @@ def close_mesh(mesh: trimesh.Trimesh, source: str = "<mesh>") -> tuple[trimesh.T
     """The closed 2-manifold body of ``mesh`` and the report of how it was closed (see the module doc)."""
     start = time.perf_counter()
     exact = _exact_union(mesh)
+    if exact is None:  # a few missing triangles: fill the holes and try again
+        repaired = mesh.copy()
+        repaired.merge_vertices()
+        trimesh.repair.fill_holes(repaired)
+        trimesh.repair.fix_normals(repaired)
+        exact = _exact_union(repaired)
     if exact is not None:
         closed, method, pitch = exact, "exact", 0.0
     else:

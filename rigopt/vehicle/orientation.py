@@ -71,18 +71,32 @@ def _end_areas(mesh: trimesh.Trimesh, axis: int) -> tuple[float, float]:
     return float(projected[centre <= low + band].sum()), float(projected[centre >= high - band].sum())
 
 
+def mirror_asymmetry(mesh: trimesh.Trimesh, axis: int, samples: int = 3000) -> float:
+    """Mean distance (m) from surface samples reflected about their median plane across ``axis`` to the nearest
+    unreflected sample: near 0 across a vehicle's width, large across its height."""
+    from scipy.spatial import cKDTree
+
+    points, _ = trimesh.sample.sample_surface(mesh, samples, seed=1)
+    reflected = points.copy()
+    reflected[:, axis] = 2 * np.median(points[:, axis]) - reflected[:, axis]  # a protrusion leaves the median
+    return float(cKDTree(points).query(reflected)[0].mean())
+
+
 def guess_up(mesh: trimesh.Trimesh) -> np.ndarray | None:
-    """(3,) unit axis (mesh frame) that seems to point up, or None when the shape does not tell: of the two
-    axes other than the longest, the one whose ends differ most in area near them (roof vs tyres), pointing
-    to the broader end."""
-    long_axis = int(np.argmax(np.ptp(mesh.bounds, axis=0)))
-    best, best_ratio = None, UP_RATIO
-    for axis in (a for a in range(3) if a != long_axis):
-        low, high = _end_areas(mesh, axis)
-        ratio = max(low, high) / max(min(low, high), 1e-9)
-        if ratio > best_ratio:
-            best, best_ratio = np.eye(3)[axis] * (1 if high > low else -1), ratio
-    return best
+    """(3,) unit axis (mesh frame) that seems to point up, or None when the shape does not tell. Of the two
+    axes other than the longest, the width is mirror-symmetric and the height is not (by twice as much);
+    up points to the height's end that is broader near it (roof vs tyres, by UP_RATIO)."""
+    extents = np.ptp(mesh.bounds, axis=0)
+    short = [a for a in range(3) if a != int(np.argmax(extents))]
+    asymmetry = [mirror_asymmetry(mesh, a) for a in short]
+    width_k = int(np.argmin(asymmetry))
+    height_axis = short[1 - width_k]
+    if asymmetry[1 - width_k] < max(2 * asymmetry[width_k], 0.005 * np.linalg.norm(extents)):
+        return None
+    low, high = _end_areas(mesh, height_axis)
+    if max(low, high) < UP_RATIO * min(low, high):
+        return None
+    return np.eye(3)[height_axis] * (1 if high > low else -1)
 
 
 def front_sign(mesh: trimesh.Trimesh, axles=()) -> tuple[int, str]:
