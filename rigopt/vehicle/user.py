@@ -68,7 +68,8 @@ def read_mesh_file(path) -> trimesh.Trimesh:
     if not path.is_file():
         raise DataError(f"{path}: no such mesh file")
     if path.suffix.lower() not in MESH_FORMATS:
-        raise DataError(f"{path}: unknown mesh format {path.suffix!r}; use one of {', '.join(MESH_FORMATS)}")
+        raise DataError(f"{path}: cannot read {path.suffix or 'extension-less'} files: not a mesh format rigopt "
+                        f"reads; use one of {', '.join(MESH_FORMATS)}")
     if path.suffix.lower() == ".dae":
         try:
             import collada  # noqa: F401  (trimesh reads COLLADA through it)
