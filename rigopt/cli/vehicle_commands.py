@@ -113,16 +113,49 @@ def vehicle_export_command(
     console.print(f"wrote {out} ({len(mesh.faces)} triangles, {frame} frame)")
 
 
+def _parse_axles(text: str | None):
+    if text is None:
+        return None
+    try:
+        return [float(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        raise RigoptError(f"--axles takes the x (m) of each axle separated by commas, e.g. 1.5,-1.4; got {text!r}") \
+            from None
+
+
 @vehicle_app.command("add")
 def vehicle_add_command(
     name: str = typer.Argument(..., help="Name to give the vehicle."),
-    mesh: Path = typer.Option(..., "--mesh", help="Mesh file (OBJ, STL, PLY, GLB, ...), metres, wheels on z = 0."),
+    mesh: Path = typer.Option(..., "--mesh", help="Mesh file: OBJ, STL, PLY, GLB/GLTF, DAE (COLLADA) or OFF; the "
+                              "parts of a scene are merged; open or multi-part meshes are closed."),
     zones: Optional[Path] = typer.Option(None, "--zones", help="TOML file of [[zones]]; default: zones from the box."),
     frame: str = typer.Option("iso", help=FRAME_HELP),
+    scale: float = typer.Option(1.0, "--scale", help="Multiply coordinates by this: 0.01 for centimetres, 0.001 "
+                                "for millimetres, 0.0254 for inches."),
+    forward: Optional[str] = typer.Option(None, "--forward", help="The file's axis that points to the front: +x "
+                                          "-x +y -y (+z -z); default +x, checked against the shape."),
+    up: Optional[str] = typer.Option(None, "--up", help="The file's axis that points up: +z or +y (-z -y +x -x); "
+                                     "default +z, checked against the shape."),
+    allow_size: bool = typer.Option(False, "--allow-size", help="Accept a size outside road-vehicle limits "
+                                    "(length 2.5-25 m, width 1.4-3.0 m, height 1.0-4.5 m) with a warning."),
+    axles: Optional[str] = typer.Option(None, "--axles", help="x (m, ISO frame) of each axle, e.g. 1.5,-1.4; "
+                                        "default: found from the tyres' ground contacts."),
+    roof_rack: Optional[float] = typer.Option(None, "--roof-rack", help="Add a raised zone 'roof_rack' over the "
+                                              "roof: cameras up to this many metres above it."),
     force: bool = typer.Option(False, "--force", help="Replace a stored vehicle of the same name (any case)."),
 ):
     """Check a mesh and store it as a vehicle so that --vehicle NAME works everywhere."""
     from rigopt.vehicle.user import add_user_vehicle
 
-    path = add_user_vehicle(name, mesh, zones, frame, force=force)
-    console.print(f"added vehicle {name!r}: {path}")
+    added = add_user_vehicle(name, mesh, zones, frame, force=force, scale=scale, forward=forward, up=up,
+                             allow_size=allow_size, axles=_parse_axles(axles), roof_rack=roof_rack)
+    for warning in added.warnings:
+        typer.echo(f"rigopt: warning: {warning}", err=True)
+    console.print(f"mesh: {added.closing.describe()}")
+    if added.wheels:
+        console.print("wheels: " + "; ".join(f"axle x {w.x:.2f} m, radius {w.radius:.2f} m, track {w.track:.2f} m, "
+                                             f"width {w.width:.2f} m" for w in added.wheels))
+    else:
+        console.print("wheels: none found (give --axles X1,X2 to set the axles)" if not added.axles else
+                      f"axles: {', '.join(f'{x:.2f}' for x in added.axles)} m (given)")
+    console.print(f"added vehicle {name!r}: {added.path}")

@@ -11,6 +11,15 @@ A camera is valid on a vehicle when
   4. its foot point and surface normal lie in one of the vehicle's zones;
   5. its housing does not collide with another camera's housing.
 The lens sits at the housing's centre, so a well-mounted camera is ``housing[2] / 2`` off the surface.
+
+Raised mounts: a zone with ``raised_max`` > 0 (a roof rack, sensor pod or mast) lets a camera sit up to
+that far above the surface. A camera further than ``max_distance`` from the surface is on a raised mount
+when the line from its lens against the zone's ``normal`` (the post's axis) meets the surface within
+``raised_max`` at a point of that zone. Its housing is then centred on the lens, oriented by the post's
+axis, and a *post* stands under it: a box of the housing's footprint (width x height) from the surface to
+the housing's back face. Rules 2-5 apply with the housing where the camera is; the post counts as part of
+the body for every camera's view frustum (its own included) and housing (rules 3 and 5); it is not tested
+against the body it stands on.
 """
 
 from __future__ import annotations
@@ -19,9 +28,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from rigopt.mounting.shapes import body_object, collides, frustum_object, housing_object
+from rigopt import raycast
+from rigopt.mounting.shapes import body_object, collides, frustum_object, housing_object, surface_frame
 from rigopt.rig.model import Rig
-from rigopt.vehicle.model import Vehicle
+from rigopt.vehicle.model import Vehicle, Zone
 
 
 @dataclass(frozen=True)
@@ -71,31 +81,91 @@ def housing_fits(vehicle: Vehicle, feet, normals, rules: MountRules = MountRules
                                    body) for foot, normal in zip(feet, normals)], dtype=bool)
 
 
+@dataclass(frozen=True)
+class RaisedMount:
+    """A camera on a raised zone's post: ``zone``, ``foot`` (3,) m where the post meets the surface,
+    ``axis`` (3,) the post's unit direction (the zone's normal), ``height`` m from the foot to the lens."""
+
+    zone: Zone
+    foot: np.ndarray
+    axis: np.ndarray
+    height: float
+
+
+def raised_mounts(vehicle: Vehicle, positions) -> list[RaisedMount | None]:
+    """For each lens position (n, 3) m: the raised zone whose post can carry it (first in zone order), or
+    None: the line against the zone's normal meets the body within ``raised_max`` in that zone."""
+    positions = np.atleast_2d(positions)
+    found: list[RaisedMount | None] = [None] * len(positions)
+    for zone in (z for z in vehicle.zones if z.raised):
+        hits = raycast.first_hits(vehicle.mesh, positions, np.broadcast_to(-zone.normal, positions.shape))
+        normals = vehicle.mesh.face_normals[np.maximum(hits.face, 0)]
+        ok = (hits.distance <= zone.raised_max) & (hits.face >= 0)
+        for k in np.flatnonzero(ok):
+            if found[k] is None and zone.contains(hits.location[k], normals[k])[0]:
+                found[k] = RaisedMount(zone, hits.location[k], zone.normal, float(hits.distance[k]))
+    return found
+
+
+def post_object(mount: RaisedMount, forward, rules: MountRules = MountRules()):
+    """fcl box of a raised camera's post: the housing's footprint from the foot to the housing's back face;
+    None when the housing sits on the surface."""
+    import fcl
+
+    w, h, d = rules.housing
+    length = mount.height - d / 2.0
+    if length <= 1e-3:
+        return None
+    frame = surface_frame(mount.axis, np.asarray(forward, float))
+    return fcl.CollisionObject(fcl.Box(w, h, length), fcl.Transform(frame, mount.foot + mount.axis * length / 2.0))
+
+
 def check_rig(rig: Rig, vehicle: Vehicle, rules: MountRules = MountRules()) -> RigCheck:
-    """Apply every mount rule to every camera of ``rig`` on ``vehicle``."""
+    """Apply every mount rule to every camera of ``rig`` on ``vehicle`` (raised mounts: see the module doc)."""
     body = body_object(vehicle)
     surface = vehicle.surface(rig.positions)
     zones = vehicle.zone_names(surface.foot, surface.normal)
-    housings = [housing_object(surface.foot[k], surface.normal[k], c.forward, rules.housing)
-                for k, c in enumerate(rig.cameras)]
+    far = surface.distance > rules.max_distance
+    raised = raised_mounts(vehicle, rig.positions[far]) if far.any() and any(z.raised for z in vehicle.zones) else []
+    mounts: list[RaisedMount | None] = [None] * len(rig.cameras)
+    for k, mount in zip(np.flatnonzero(far), raised):
+        mounts[k] = mount
+    # where each housing sits: back face on the surface, or centred on a raised camera's lens along its post
+    feet = [surface.foot[k] if m is None else rig.positions[k] - m.axis * rules.housing[2] / 2.0
+            for k, m in enumerate(mounts)]
+    axes = [surface.normal[k] if m is None else m.axis for k, m in enumerate(mounts)]
+    housings = [housing_object(feet[k], axes[k], c.forward, rules.housing) for k, c in enumerate(rig.cameras)]
+    posts = {k: post_object(m, c.forward, rules) for k, (m, c) in enumerate(zip(mounts, rig.cameras))
+             if m is not None}
+    posts = {k: p for k, p in posts.items() if p is not None}
     checks = []
     for k, camera in enumerate(rig.cameras):
         problems = []
         distance = float(surface.distance[k])
+        mount = mounts[k]
         if distance < 0:
             problems.append(f"inside the body ({-distance * 100:.1f} cm deep)")
-        elif distance > rules.max_distance:
-            problems.append(f"{distance * 100:.1f} cm off the surface (at most {rules.max_distance * 100:.0f} cm)")
-        sunk = housing_object(surface.foot[k], surface.normal[k], camera.forward, rules.housing,
-                              rules.penetration_tolerance)
+        elif distance > rules.max_distance and mount is None:
+            raised_zones = ", ".join(f"{z.name} {z.raised_max * 100:.0f} cm" for z in
+                                     {z.name: z for z in vehicle.zones if z.raised}.values())
+            problems.append(f"{distance * 100:.1f} cm off the surface (at most {rules.max_distance * 100:.0f} cm"
+                            + (f"; on a post over a raised zone: {raised_zones}" if raised_zones else "") + ")")
+        sunk = housing_object(feet[k], axes[k], camera.forward, rules.housing, rules.penetration_tolerance)
         if distance >= 0 and collides(sunk, body):
             problems.append(f"housing penetrates the body by more than {rules.penetration_tolerance * 100:.0f} cm")
-        if collides(frustum_object(camera, rules), body):
+        frustum = frustum_object(camera, rules)
+        if collides(frustum, body):
             problems.append(f"the body is in its view within {rules.frustum_range:g} m")
-        if zones[k] is None:
+        seen_posts = [j for j, post in posts.items() if collides(frustum, post)]
+        if seen_posts:
+            problems.append(f"the post of {', '.join(rig.cameras[j].id for j in seen_posts)} is in its view within "
+                            f"{rules.frustum_range:g} m")
+        zone = mount.zone.name if mount is not None else zones[k]
+        if zone is None:
             problems.append("outside every mounting zone")
-        clashes = [other.id for j, other in enumerate(rig.cameras) if j != k and collides(housings[k], housings[j])]
+        clashes = [other.id for j, other in enumerate(rig.cameras) if j != k and
+                   (collides(housings[k], housings[j]) or (j in posts and collides(housings[k], posts[j])))]
         if clashes:
             problems.append(f"housing collides with {', '.join(clashes)}")
-        checks.append(CameraCheck(camera.id, not problems, distance, zones[k], tuple(problems)))
+        checks.append(CameraCheck(camera.id, not problems, distance, zone, tuple(problems)))
     return RigCheck(rig.name, vehicle.name, tuple(checks))

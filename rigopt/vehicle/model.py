@@ -19,13 +19,20 @@ ZONE_QUERY_EDGE = 0.05
 
 @dataclass(frozen=True)
 class Zone:
-    """One mounting region: box [``min``, ``max``] (3,) m and outward-normal cone around ``normal`` (3,)."""
+    """One mounting region: box [``min``, ``max``] (3,) m and outward-normal cone around ``normal`` (3,);
+    ``raised_max`` m > 0 makes it a raised zone (a camera may sit that far above it on a post along
+    ``normal``)."""
 
     name: str
     min: np.ndarray
     max: np.ndarray
     normal: np.ndarray
     cone_deg: float
+    raised_max: float = 0.0
+
+    @property
+    def raised(self) -> bool:
+        return self.raised_max > 0
 
     def contains(self, points, normals) -> np.ndarray:
         """(n,) bool: surface points (n, 3) m with outward normals (n, 3) inside the zone."""
@@ -38,10 +45,11 @@ def expand_zones(specs: tuple[ZoneSpec, ...]) -> tuple[Zone, ...]:
     zones = []
     flip = np.array([1.0, -1.0, 1.0])
     for z in specs:
-        zones.append(Zone(z.name, z.min, z.max, z.normal, z.cone_deg))
+        zones.append(Zone(z.name, z.min, z.max, z.normal, z.cone_deg, z.raised_max))
         if z.mirrored:
             low, high = z.min * flip, z.max * flip
-            zones.append(Zone(z.name, np.minimum(low, high), np.maximum(low, high), z.normal * flip, z.cone_deg))
+            zones.append(Zone(z.name, np.minimum(low, high), np.maximum(low, high), z.normal * flip, z.cone_deg,
+                              z.raised_max))
     return tuple(zones)
 
 
@@ -95,10 +103,26 @@ class Vehicle:
 
     @cached_property
     def axles(self) -> tuple[float, ...]:
-        """x (m) of each axle, front first: the spec's ``axles``, else those of its wheels solids; () when
-        the vehicle has neither."""
-        given = self.spec.axles or tuple(x for s in self.spec.solids if isinstance(s, Wheels) for x in s.axles)
+        """x (m) of each axle, front first: the spec's ``axles``, else those of its wheels (solids or
+        ``[[wheels]]`` tables); () when the vehicle has none."""
+        given = self.spec.axles or tuple(x for s in self.wheel_sets for x in s.axles)
         return tuple(sorted(given, reverse=True))
+
+    @cached_property
+    def wheel_sets(self) -> tuple[Wheels, ...]:
+        """The vehicle's wheels as ``Wheels`` (axles x, radius, width, track; m): its wheels solids, and the
+        ``[[wheels]]`` tables of a user vehicle whose mesh holds them; () when unknown."""
+        return tuple(s for s in self.spec.solids if isinstance(s, Wheels)) + tuple(self.spec.wheels)
+
+    @cached_property
+    def wheels(self) -> tuple[tuple[np.ndarray, float, float], ...]:
+        """Each wheel as (centre (3,) m, radius m, width m): one per axle and side, front first, left first."""
+        out = []
+        for wheel_set in self.wheel_sets:
+            for x in wheel_set.axles:
+                for y in (wheel_set.track / 2, -wheel_set.track / 2):
+                    out.append((np.array([x, y, wheel_set.radius]), wheel_set.radius, wheel_set.width))
+        return tuple(sorted(out, key=lambda w: (-w[0][0], -w[0][1])))
 
     @property
     def rear_axle(self) -> np.ndarray | None:

@@ -40,6 +40,15 @@ vehicle origin on the ground). A spec file::
     normal = [1, 0, 0]
     cone_deg = 80
     mirrored = false                        # true adds the zone reflected to -y under the same name
+    raised_max = 0.0                        # optional: a raised zone (roof rack, pod, mast): a camera may
+                                            # sit up to this far (m) above the surface, on a post along
+                                            # `normal` (see rigopt.mounting.rules)
+
+    [[wheels]]                              # optional, user vehicles: wheels the mesh already holds,
+    axles = [1.45]                          # described for the checks (same keys as a wheels solid);
+    radius = 0.37                           # one table per axle
+    width = 0.24
+    track = 1.66
 """
 
 from __future__ import annotations
@@ -108,12 +117,14 @@ class ZoneSpec:
     normal: np.ndarray
     cone_deg: float
     mirrored: bool = False
+    raised_max: float = 0.0
 
 
 @dataclass(frozen=True)
 class VehicleSpec:
     """A vehicle: ``name``, CARLA ``blueprint``, ``aliases``, ``box`` (length, width, height) m, solids,
-    zones, and the file it came from."""
+    zones, the file it came from, ``axles`` (x m) and ``wheels``: wheel descriptions that are not solids
+    (the ``[[wheels]]`` tables of a user vehicle, whose mesh holds the wheels already)."""
 
     name: str
     blueprint: str
@@ -123,6 +134,7 @@ class VehicleSpec:
     zones: tuple[ZoneSpec, ...]
     source: str = field(default="<spec>", compare=False)
     axles: tuple[float, ...] = ()
+    wheels: tuple[Wheels, ...] = ()
 
 
 def read_toml(path, what: str) -> dict:
@@ -159,7 +171,9 @@ def spec_from_dict(data: dict, source: str = "<spec>") -> VehicleSpec:
     axles = data.get("axles", [])
     if not isinstance(axles, list) or not all(_is_number(a) for a in axles):
         raise DataError(f"{source}: 'axles' must be a list of numbers, the x (m) of each axle")
-    return VehicleSpec(name, blueprint, tuple(aliases), box, solids, zones, source, tuple(float(a) for a in axles))
+    wheels = tuple(reader.wheels(w, f"wheels {k}", f"wheels{k}") for k, w in enumerate(reader.table_list(data, "wheels")))
+    return VehicleSpec(name, blueprint, tuple(aliases), box, solids, zones, source, tuple(float(a) for a in axles),
+                       wheels)
 
 
 class _Reader:
@@ -222,11 +236,7 @@ class _Reader:
             taper = tuple(self.numbers(table, "taper", 2, where, positive=True)) if "taper" in table else (1.0, 1.0)
             return Prism(name, self.polygon(table, "side", where), plan, taper)
         if kind == "wheels":
-            axles = table.get("axles")
-            if not isinstance(axles, list) or not axles or not all(_is_number(a) for a in axles):
-                raise self.fail(where, "'axles' must be a list of axle x positions (m)")
-            return Wheels(name, tuple(float(a) for a in axles), self.number(table, "radius", where),
-                          self.number(table, "width", where), self.number(table, "track", where))
+            return self.wheels(table, where, name)
         if kind == "box":
             return Box(name, np.array(self.numbers(table, "center", 3, where)),
                        np.array(self.numbers(table, "size", 3, where, positive=True)), self.flag(table, "mirrored", where))
@@ -234,6 +244,13 @@ class _Reader:
             file = Path(self.text(table, "file", where))
             return MeshSolid(name, file if file.is_absolute() else Path(self.source).parent / file)
         raise self.fail(where, f"unknown solid type {kind!r}; use one of {', '.join(SOLID_TYPES)}")
+
+    def wheels(self, table: dict, where: str, name: str) -> Wheels:
+        axles = table.get("axles")
+        if not isinstance(axles, list) or not axles or not all(_is_number(a) for a in axles):
+            raise self.fail(where, "'axles' must be a list of axle x positions (m)")
+        return Wheels(name, tuple(float(a) for a in axles), self.number(table, "radius", where),
+                      self.number(table, "width", where), self.number(table, "track", where))
 
     def zone(self, table: dict, index: int) -> ZoneSpec:
         where = f"zone {index} ({table.get('name', '?')})"
@@ -247,7 +264,11 @@ class _Reader:
         cone = self.number(table, "cone_deg", where)
         if cone > 180:
             raise self.fail(where, f"'cone_deg' must be in (0, 180], got {cone}")
-        return ZoneSpec(name, low, high, normal / np.linalg.norm(normal), cone, self.flag(table, "mirrored", where))
+        raised = self.number(table, "raised_max", where, positive=False) if "raised_max" in table else 0.0
+        if raised < 0:
+            raise self.fail(where, f"'raised_max' is a height above the surface in metres, >= 0, got {raised}")
+        return ZoneSpec(name, low, high, normal / np.linalg.norm(normal), cone, self.flag(table, "mirrored", where),
+                        raised)
 
 
 def _is_number(value) -> bool:

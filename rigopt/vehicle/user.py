@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import re
 import shutil
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -19,14 +20,40 @@ from rigopt.errors import DataError, RigoptError
 from rigopt.output import atomic_folder
 from rigopt.vehicle.library import SPEC_FILE, broken_user_vehicles, find_spec, user_vehicles_dir
 from rigopt.vehicle.model import ZONE_QUERY_EDGE, expand_zones
+from rigopt.vehicle.closing import ClosingReport, close_mesh
+from rigopt.vehicle.orientation import check_pose, frame_rotation
 from rigopt.vehicle.spec import read_toml, spec_from_dict
+from rigopt.vehicle.wheels import FoundWheels, find_wheels
 
 FRAMES = ("carla", "iso")
-#: Plausible road-vehicle extents in metres: (length, width, height) lower and upper bounds.
-SIZE_LOW = np.array([2.0, 1.0, 0.8])
-SIZE_HIGH = np.array([25.0, 3.5, 5.0])
+#: Mesh formats read (trimesh; COLLADA through pycollada); scenes of several parts are merged.
+MESH_FORMATS = (".obj", ".stl", ".ply", ".glb", ".gltf", ".dae", ".off")
 #: The lowest point of the body must lie within this distance of the ground plane z = 0 (m).
 GROUND_TOLERANCE = 0.5
+
+
+@dataclass(frozen=True)
+class PreparedMesh:
+    """A user's mesh ready to store: ``mesh`` closed, ISO frame, metres; ``raw`` the input in the ISO frame
+    before closing; ``closing`` how it was closed; ``wheels`` found (front first); ``warnings``."""
+
+    mesh: trimesh.Trimesh
+    raw: trimesh.Trimesh
+    closing: ClosingReport
+    wheels: tuple[FoundWheels, ...]
+    warnings: tuple[str, ...]
+
+
+@dataclass(frozen=True)
+class AddedVehicle:
+    """What ``add_user_vehicle`` stored: the spec ``path``, the ``axles`` (x m, front first), the
+    ``wheels`` found, the ``closing`` report and ``warnings``."""
+
+    path: Path
+    axles: tuple[float, ...]
+    wheels: tuple[FoundWheels, ...]
+    closing: ClosingReport
+    warnings: tuple[str, ...]
 
 
 def carla_mesh_to_iso(mesh: trimesh.Trimesh) -> trimesh.Trimesh:
@@ -34,75 +61,61 @@ def carla_mesh_to_iso(mesh: trimesh.Trimesh) -> trimesh.Trimesh:
     return trimesh.Trimesh(mesh.vertices * np.array([1.0, -1.0, 1.0]), mesh.faces[:, ::-1], process=False)
 
 
-def load_user_mesh(path, frame: str = "iso") -> trimesh.Trimesh:
-    """Load a mesh file (OBJ, STL, PLY, GLB, ...) as one watertight mesh in the ISO frame, checked."""
+def read_mesh_file(path) -> trimesh.Trimesh:
+    """Every triangle of a mesh file as one mesh, as stored (the parts of a scene merged with their
+    transforms applied); no repair."""
     path = Path(path)
-    if frame not in FRAMES:
-        raise RigoptError(f"--frame must be one of {', '.join(FRAMES)}, got {frame!r}")
     if not path.is_file():
         raise DataError(f"{path}: no such mesh file")
+    if path.suffix.lower() not in MESH_FORMATS:
+        raise DataError(f"{path}: cannot read {path.suffix or 'extension-less'} files: not a mesh format rigopt "
+                        f"reads; use one of {', '.join(MESH_FORMATS)}")
+    if path.suffix.lower() == ".dae":
+        try:
+            import collada  # noqa: F401  (trimesh reads COLLADA through it)
+        except ImportError:
+            raise DataError(f"{path}: reading COLLADA needs the pycollada package: pip install pycollada") from None
     try:
         loaded = trimesh.load(path, force="mesh", process=False)
     except Exception as error:  # trimesh raises many kinds for unreadable files
         raise DataError(f"{path}: trimesh cannot read this mesh ({type(error).__name__}: {error})") from None
     if not isinstance(loaded, trimesh.Trimesh) or len(loaded.faces) == 0:
         raise DataError(f"{path}: the file holds no triangles")
-    mesh = _as_solid(loaded, path)
+    if not np.all(np.isfinite(loaded.vertices)):
+        raise DataError(f"{path}: the mesh has vertices that are not finite numbers")
+    return trimesh.Trimesh(np.asarray(loaded.vertices, float), np.asarray(loaded.faces), process=False)
+
+
+def prepare_user_mesh(path, frame: str = "iso", *, scale: float = 1.0, forward: str | None = None,
+                      up: str | None = None, allow_size: bool = False, axles=None) -> PreparedMesh:
+    """Read a mesh file, bring it into the ISO frame (frame reflection, then ``--forward``/``--up``
+    rotation, then ``scale``), check units, orientation and size (fast, before closing; see
+    :mod:`rigopt.vehicle.orientation`), find its wheels, and close it (:mod:`rigopt.vehicle.closing`)."""
+    path = Path(path)
+    if frame not in FRAMES:
+        raise RigoptError(f"--frame must be one of {', '.join(FRAMES)}, got {frame!r}")
+    if not (np.isfinite(scale) and scale > 0):
+        raise RigoptError(f"--scale must be a positive number, got {scale}")
+    rotation = frame_rotation(forward or "+x", up or "+z")
+    loaded = read_mesh_file(path)
     if frame == "carla":
-        mesh = carla_mesh_to_iso(mesh)
-    _check_scale_and_pose(mesh, path)
-    return mesh
-
-
-def _as_solid(mesh: trimesh.Trimesh, path: Path) -> trimesh.Trimesh:
-    """The mesh as a closed 2-manifold: manifold3d merges coincident open edges (STL files keep no shared
-    vertices); failing that, trimesh fills holes and fixes normals first."""
-    import manifold3d
-
-    def solid(candidate: trimesh.Trimesh):
-        raw = manifold3d.Mesh(np.asarray(candidate.vertices, dtype=np.float32),
-                              np.asarray(candidate.faces, dtype=np.uint32))
-        raw.merge()
-        result = manifold3d.Manifold(raw)
-        return result if result.status() == manifold3d.Error.NoError and not result.is_empty() else None
-
-    result = solid(mesh)
-    if result is None:
-        repaired = mesh.copy()
-        repaired.merge_vertices()
-        trimesh.repair.fill_holes(repaired)
-        trimesh.repair.fix_normals(repaired)
-        result = solid(repaired)
-    if result is None:
-        raise DataError(f"{path}: the mesh is not watertight and could not be repaired (open edges, holes or "
-                        "self-touching parts); export a closed surface")
-    out = result.to_mesh()
-    closed = trimesh.Trimesh(np.asarray(out.vert_properties[:, :3], dtype=float), np.asarray(out.tri_verts),
-                             process=False)
-    if closed.volume <= 0:
-        raise DataError(f"{path}: the mesh encloses no volume (are its faces turned inside out?)")
-    return closed
-
-
-def _check_scale_and_pose(mesh: trimesh.Trimesh, path: Path) -> None:
-    size = np.ptp(mesh.bounds, axis=0)
-    described = f"{size[0]:.3g} x {size[1]:.3g} x {size[2]:.3g}"
-    if np.all(size / 1000.0 >= SIZE_LOW * 0.5) and np.all(size / 1000.0 <= SIZE_HIGH):
-        raise DataError(f"{path}: the mesh is {described} units, which looks like millimetres; "
-                        "scale it to metres (x 0.001) before adding it")
-    if np.all(size / 100.0 >= SIZE_LOW * 0.5) and np.all(size / 100.0 <= SIZE_HIGH) and size.max() > 40:
-        raise DataError(f"{path}: the mesh is {described} units, which looks like centimetres; scale it to metres")
-    if size[2] > size[0] or size[1] > size[0]:
-        axis = "z (up)" if size[2] >= size[1] else "y (sideways)"
-        raise DataError(f"{path}: the mesh is longest along {axis} ({described} m for x, y, z): it is lying on its "
-                        "side or turned; rotate it so that x is forward and z up (or use --frame carla for "
-                        "CARLA's y-right frame)")
-    if np.any(size < SIZE_LOW) or np.any(size > SIZE_HIGH):
-        raise DataError(f"{path}: {described} m (length x width x height) is not a road vehicle's size "
-                        f"(expected between {SIZE_LOW.tolist()} and {SIZE_HIGH.tolist()} m); check its units")
-    if abs(mesh.bounds[0, 2]) > GROUND_TOLERANCE:
-        raise DataError(f"{path}: the lowest point is at z = {mesh.bounds[0, 2]:.2f} m; move the mesh so that "
+        loaded = carla_mesh_to_iso(loaded)
+    raw = trimesh.Trimesh(loaded.vertices @ rotation.T * scale, loaded.faces, process=False)
+    raw.remove_unreferenced_vertices()
+    wheels_guess = find_wheels(raw) if np.ptp(raw.bounds, axis=0).max() > 0 else ()
+    warnings = check_pose(raw, str(path), scale=scale, forward=forward, up=up, allow_size=allow_size,
+                          axles=[w.x for w in wheels_guess])
+    if abs(raw.bounds[0, 2]) > GROUND_TOLERANCE:
+        raise DataError(f"{path}: the lowest point is at z = {raw.bounds[0, 2]:.2f} m; move the mesh so that "
                         "its wheels stand on z = 0")
+    wheels = find_wheels(raw, axles) if axles is not None else wheels_guess
+    closed, report = close_mesh(raw, str(path))
+    return PreparedMesh(closed, raw, report, wheels, tuple(warnings))
+
+
+def load_user_mesh(path, frame: str = "iso", **flags) -> trimesh.Trimesh:
+    """Load a mesh file as one closed mesh in the ISO frame, checked (see :func:`prepare_user_mesh`)."""
+    return prepare_user_mesh(path, frame, **flags).mesh
 
 
 def default_zones(bounds: np.ndarray) -> list[dict]:
@@ -134,20 +147,55 @@ def default_zones(bounds: np.ndarray) -> list[dict]:
     ]
 
 
-def add_user_vehicle(name: str, mesh_path, zones_path=None, frame: str = "iso", *, force: bool = False) -> Path:
-    """Check ``mesh_path``, store it as vehicle ``name`` with the zones of ``zones_path`` (a TOML file of
-    ``[[zones]]``) or defaults from its box, and return the stored spec's path.
+def roof_rack_zone(bounds: np.ndarray, height: float) -> dict:
+    """A raised zone over the top 20 % of the body's box (2, 3), upward normals within 30 degrees: a roof
+    rack whose cameras may sit up to ``height`` m above the roof."""
+    (x0, y0, z0), (x1, y1, z1) = bounds
+    return {"name": "roof_rack", "min": [float(x0 - 0.1), float(y0 - 0.1), float(z0 + 0.8 * (z1 - z0))],
+            "max": [float(x1 + 0.1), float(y1 + 0.1), float(z1 + 0.1)], "normal": [0, 0, 1], "cone_deg": 30,
+            "mirrored": False, "raised_max": float(height)}
 
-    A user vehicle of the same name (any case) is replaced only with ``force``; built-in names and aliases
+
+def add_user_vehicle(name: str, mesh_path, zones_path=None, frame: str = "iso", *, force: bool = False,
+                     scale: float = 1.0, forward: str | None = None, up: str | None = None,
+                     allow_size: bool = False, axles=None, roof_rack: float | None = None) -> AddedVehicle:
+    """Check ``mesh_path``, store it as vehicle ``name`` with the zones of ``zones_path`` (a TOML file of
+    ``[[zones]]``) or defaults from its box (plus a ``roof_rack`` raised zone of height ``roof_rack`` m),
+    its axles and wheels (found, or at ``axles`` x m), and return what was stored.
+
+    ``scale``, ``forward``, ``up`` and ``allow_size`` are the mesh flags of :func:`prepare_user_mesh`. A
+    user vehicle of the same name (any case) is replaced only with ``force``; built-in names and aliases
     are never taken.
     """
     if not re.fullmatch(r"[A-Za-z0-9][A-Za-z0-9_.-]*", name):
         raise RigoptError(f"vehicle name {name!r} must be letters, digits, '_', '.' or '-'")
+    if roof_rack is not None and not (np.isfinite(roof_rack) and 0 < roof_rack <= 3.0):
+        raise RigoptError(f"--roof-rack is the rack's height above the roof in metres, in (0, 3], got {roof_rack}")
+    if axles is not None:
+        axles = sorted((float(x) for x in axles), reverse=True)
+        if not axles or not all(np.isfinite(axles)):
+            raise RigoptError("--axles needs the x (m, ISO frame) of each axle, e.g. --axles 1.5,-1.4")
     folder = _store_folder(name, force)
-    mesh = load_user_mesh(mesh_path, frame)
+    prepared = prepare_user_mesh(mesh_path, frame, scale=scale, forward=forward, up=up, allow_size=allow_size,
+                                 axles=axles)
+    mesh = prepared.mesh
+    if axles is not None:
+        low, high = mesh.bounds[:, 0]
+        outside = [x for x in axles if not low <= x <= high]
+        if outside:
+            raise RigoptError(f"--axles {outside} lie outside the mesh's length (x from {low:.2f} to {high:.2f} m)")
     zones = _read_zones(zones_path) if zones_path else default_zones(mesh.bounds)
+    if roof_rack is not None:
+        zones = [z for z in zones if z.get("name") != "roof_rack"] + [roof_rack_zone(mesh.bounds, roof_rack)]
+    found_axles = tuple(axles) if axles is not None else tuple(w.x for w in prepared.wheels)
     data = {"name": name, "blueprint": name, "aliases": [], "box": np.ptp(mesh.bounds, axis=0).tolist(),
-            "solids": [{"name": "body", "type": "mesh", "file": "body.ply"}], "zones": zones}
+            "axles": [round(x, 4) for x in found_axles],
+            "solids": [{"name": "body", "type": "mesh", "file": "body.ply"}],
+            "wheels": [{"axles": [round(w.x, 4)], "radius": round(w.radius, 4), "width": round(w.width, 4),
+                        "track": round(w.track, 4)} for w in prepared.wheels],
+            "zones": zones}
+    if not data["wheels"]:
+        del data["wheels"]
     # validated before anything is written; problems name the user's zones file (or the mesh for default zones)
     spec = spec_from_dict(data, str(zones_path or mesh_path))
     _check_zones_select_surface(spec, mesh)
@@ -156,7 +204,7 @@ def add_user_vehicle(name: str, mesh_path, zones_path=None, frame: str = "iso", 
         (work / SPEC_FILE).write_text(_to_toml(data))
     for old in [p for p in folder.parent.iterdir() if p.name.lower() == name.lower() and p.name != name]:
         shutil.rmtree(old, ignore_errors=True)  # the same name in another case, replaced (force was given)
-    return folder / SPEC_FILE
+    return AddedVehicle(folder / SPEC_FILE, found_axles, prepared.wheels, prepared.closing, prepared.warnings)
 
 
 def _store_folder(name: str, force: bool) -> Path:

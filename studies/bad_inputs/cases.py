@@ -97,6 +97,7 @@ def make_fixtures(tmp: Path) -> dict[str, str]:
     (tmp / "emptydir").mkdir(exist_ok=True)
     (tmp / "dir.png").mkdir(exist_ok=True)
     load_vehicle("tt").mesh.export(tmp / "car.stl")
+    _write_posed_meshes(load_vehicle("tt").mesh, tmp)
     env = {"RIGOPT_HOME": str(tmp / "home")}
     wreck = tmp / "home" / "vehicles" / "wreck"
     wreck.mkdir(parents=True, exist_ok=True)
@@ -126,6 +127,22 @@ def make_fixtures(tmp: Path) -> dict[str, str]:
         shutil.copytree(tmp / "bench" / "R1", tmp / "bench_missing" / "R1")
         (tmp / "bench_missing" / "R1" / "mini" / images[0].relative_to(tmp / "bench" / "R1" / "mini")).unlink()
     return env
+
+
+def _write_posed_meshes(mesh, tmp: Path) -> None:
+    """The tt's mesh in centimetres, turned by 90 degrees, facing backwards and with y up (for vehicle add)."""
+    import numpy as np
+    import trimesh
+
+    def write(name, matrix):
+        posed = mesh.copy()
+        posed.apply_transform(matrix)
+        posed.export(tmp / name)
+
+    write("car_cm.stl", np.diag([100.0, 100.0, 100.0, 1.0]))
+    write("car_turned.stl", trimesh.transformations.rotation_matrix(np.pi / 2, [0, 0, 1]))
+    write("car_backwards.stl", trimesh.transformations.rotation_matrix(np.pi, [0, 0, 1]))
+    write("car_y_up.stl", trimesh.transformations.rotation_matrix(-np.pi / 2, [1, 0, 0]))
 
 
 T = "{tmp}"
@@ -236,6 +253,21 @@ CASES: list[tuple[str, list[str], str]] = [
      "zones_no_max.toml"),
     ("add zones file missing", ["vehicle", "add", "x", "--mesh", f"{T}/car.stl", "--zones", f"{T}/nozones.toml"],
      "cannot read"),
+    ("add mesh in centimetres", ["vehicle", "add", "x", "--mesh", f"{T}/car_cm.stl"], "add --scale 0.01"),
+    ("add mesh turned by 90 degrees", ["vehicle", "add", "x", "--mesh", f"{T}/car_turned.stl"], "add --forward +y"),
+    ("add mesh facing backwards", ["vehicle", "add", "x", "--mesh", f"{T}/car_backwards.stl"], "add --forward -x"),
+    ("add mesh with y up", ["vehicle", "add", "x", "--mesh", f"{T}/car_y_up.stl"], "add --up +y"),
+    ("add unknown --forward", ["vehicle", "add", "x", "--mesh", f"{T}/car.stl", "--forward", "ahead"], "--forward"),
+    ("add --forward along --up", ["vehicle", "add", "x", "--mesh", f"{T}/car.stl", "--forward", "+z"],
+     "different axes"),
+    ("add --scale zero", ["vehicle", "add", "x", "--mesh", f"{T}/car.stl", "--scale", "0"], "--scale"),
+    ("add --axles not numbers", ["vehicle", "add", "x", "--mesh", f"{T}/car.stl", "--axles", "front,rear"],
+     "--axles"),
+    ("add --axles off the mesh", ["vehicle", "add", "x", "--mesh", f"{T}/car.stl", "--axles", "9,-1"],
+     "outside the mesh"),
+    ("add --roof-rack negative", ["vehicle", "add", "x", "--mesh", f"{T}/car.stl", "--roof-rack", "-1"],
+     "--roof-rack"),
+    ("add mesh of unknown format", ["vehicle", "add", "x", "--mesh", f"{T}/file.txt"], "not a mesh format"),
     # --- coverage ---
     ("coverage unknown rig", ["coverage", "R99"], "R99"),
     ("coverage unknown vehicle", ["coverage", "R1", "--vehicle", "nosuchcar"], "nosuchcar"),

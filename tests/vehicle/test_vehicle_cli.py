@@ -30,7 +30,7 @@ def mycar(asymmetric_car, tmp_path):
     """The asymmetric box car added as user vehicle "mycar" through the CLI."""
     path = tmp_path / "mycar.stl"
     asymmetric_car.mesh.export(path)
-    result = invoke("vehicle", "add", "mycar", "--mesh", path)
+    result = invoke("vehicle", "add", "mycar", "--mesh", path, "--forward", "+x")
     assert result.exit_code == 0, (result.output, result.exception)
     return asymmetric_car
 
@@ -38,7 +38,7 @@ def mycar(asymmetric_car, tmp_path):
 def test_vehicle_add_reports_the_stored_spec(asymmetric_car, tmp_path, rigopt_home):
     path = tmp_path / "mycar.stl"
     asymmetric_car.mesh.export(path)
-    result = invoke("vehicle", "add", "mycar", "--mesh", path)
+    result = invoke("vehicle", "add", "mycar", "--mesh", path, "--forward", "+x")
     assert result.exit_code == 0, result.output
     assert "mycar" in result.output
     assert (rigopt_home / "vehicles" / "mycar" / "vehicle.toml").is_file()
@@ -117,9 +117,9 @@ def test_unknown_vehicle_is_a_one_line_error(tmp_path):
 def test_re_adding_through_the_cli_needs_force(mycar, tmp_path):
     path = tmp_path / "again.stl"
     mycar.mesh.export(path)
-    refused = invoke("vehicle", "add", "MYCAR", "--mesh", path)
+    refused = invoke("vehicle", "add", "MYCAR", "--mesh", path, "--forward", "+x")
     assert refused.exit_code != 0 and "--force" in str(refused.exception)
-    assert invoke("vehicle", "add", "MYCAR", "--mesh", path, "--force").exit_code == 0
+    assert invoke("vehicle", "add", "MYCAR", "--mesh", path, "--forward", "+x", "--force").exit_code == 0
 
 
 def test_check_works_beside_a_broken_user_vehicle(mycar, rigopt_home):
