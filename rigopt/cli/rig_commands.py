@@ -282,11 +282,17 @@ def export_command(
     out: Path = typer.Option(..., "--out", help="Folder (nuscenes) or file (.urdf, .yaml, .json) to write."),
     force: bool = typer.Option(False, "--force", help="Replace an existing --out."),
 ):
-    """Write a rig in another format; what the format cannot carry is said on stderr (docs/formats.md)."""
-    from rigopt.cli.app import status_console
+    """Write a rig in another format; what the format cannot carry is said on stderr (docs/formats.md).
+
+    Positions are converted to the origin the format assumes (nuScenes: the rear axle; the others: the vehicle
+    centre) when rigopt knows the rig's vehicle, and the conversion is noted; otherwise they are written
+    unchanged, with a warning."""
+    from rigopt.cli.app import note, status_console
     from rigopt.output import atomic_file, atomic_folder, check_out_file, check_out_folder
-    from rigopt.rig.formats import EXPORT_FORMATS, EXPORT_SUFFIXES, export_rig
+    from rigopt.rig.formats import EXPORT_FORMATS, EXPORT_ORIGINS, EXPORT_SUFFIXES, export_rig
     from rigopt.rig.library import load_rig
+    from rigopt.rig.model import RigOrigin
+    from rigopt.vehicle.placement import convert_origin, known_vehicle
 
     if format_name not in EXPORT_FORMATS:
         raise RigoptError(f"--format {format_name!r} is not one rigopt writes; use one of {', '.join(EXPORT_FORMATS)}")
@@ -298,6 +304,11 @@ def export_command(
         if out.exists() and not force:
             raise RigoptError(f"--out {out}: the file exists; add --force to replace it, or choose another --out")
     loaded = load_rig(rig)
+    vehicle = known_vehicle(loaded)
+    if vehicle is not None:
+        loaded, change = convert_origin(loaded, vehicle, RigOrigin(EXPORT_ORIGINS[format_name]))
+        if change is not None:
+            note(change.describe())
     exported = export_rig(loaded, format_name)
     if suffixes is None:
         with atomic_folder(out, force=force) as work:

@@ -67,14 +67,19 @@ def origin_point(origin: RigOrigin, vehicle: Vehicle) -> np.ndarray:
     return rear_axle
 
 
+def convert_origin(rig: Rig, vehicle: Vehicle, target: RigOrigin) -> tuple[Rig, OriginChange | None]:
+    """``rig`` with its positions measured from ``target`` on ``vehicle``, and the change made (None if none)."""
+    if rig.origin == target:
+        return rig, None
+    offset = origin_point(rig.origin, vehicle) - origin_point(target, vehicle)
+    cameras = tuple(replace(camera, position=camera.position + offset) for camera in rig.cameras)
+    change = OriginChange(rig.name, vehicle.name, rig.origin, target, offset)
+    return Rig(rig.name, rig.vehicle, cameras, target), change
+
+
 def to_vehicle_centre(rig: Rig, vehicle: Vehicle) -> tuple[Rig, OriginChange | None]:
     """``rig`` with its positions measured from ``vehicle``'s centre, and the change made (None if none)."""
-    if rig.origin.is_benchmark:
-        return rig, None
-    offset = origin_point(rig.origin, vehicle)
-    cameras = tuple(replace(camera, position=camera.position + offset) for camera in rig.cameras)
-    change = OriginChange(rig.name, vehicle.name, rig.origin, VEHICLE_CENTRE, offset)
-    return Rig(rig.name, rig.vehicle, cameras, VEHICLE_CENTRE), change
+    return convert_origin(rig, vehicle, VEHICLE_CENTRE)
 
 
 def known_vehicle(rig: Rig) -> Vehicle | None:

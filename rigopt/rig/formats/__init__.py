@@ -10,6 +10,9 @@ IMPORT_FORMATS = ("nuscenes", "argoverse2", "dgp", "waymo", "opencv", "urdf", "c
 EXPORT_FORMATS = ("nuscenes", "urdf", "opencv", "carla")
 #: What ``rigopt export --out`` is for each format: a folder, or a file with one of these extensions.
 EXPORT_SUFFIXES = {"nuscenes": None, "urdf": (".urdf", ".xml"), "opencv": (".yaml", ".yml"), "carla": (".json",)}
+#: The origin each format's readers assume (``rigopt export`` converts to it when it knows the rig's vehicle).
+EXPORT_ORIGINS = {"nuscenes": "rear_axle", "urdf": "vehicle_centre", "opencv": "vehicle_centre",
+                  "carla": "vehicle_centre"}
 
 
 def export_rig(rig, format_name: str):

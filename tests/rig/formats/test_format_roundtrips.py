@@ -50,9 +50,15 @@ def save(tmp_path, rig):
 
 @pytest.mark.parametrize("format_name", list(FILES))
 def test_r1_round_trips_exactly(tmp_path, format_name):
-    r1 = load_rig("R1")
-    extra = ("--origin", "vehicle_centre") if format_name == "nuscenes" else ()
-    back, _ = round_trip(tmp_path, r1, format_name, *extra)
+    from rigopt.vehicle.library import load_vehicle
+    from rigopt.vehicle.placement import to_vehicle_centre
+
+    r1, etron = load_rig("R1"), load_vehicle("etron")
+    back, result = round_trip(tmp_path, r1, format_name)
+    if format_name == "nuscenes":  # written from the etron's rear axle, as nuScenes readers expect
+        assert back.origin.kind == "rear_axle"
+        assert back.positions[:, 0] == pytest.approx(r1.positions[:, 0] - etron.rear_axle[0])
+    back, _ = to_vehicle_centre(back, etron)
     assert back.same_as(r1, atol=1e-9)
 
 
