@@ -188,10 +188,12 @@ def validate_command(
         print_json(result)
         return
     rows = [[e["role"], e["rig"], e["n_cameras"], _number(e["mAP"]), _number(e["measured_drop"]),
-             _interval(e["measured_drop_ci"]), _number(e["predicted_drop"]), e["rigcd"]] for e in result["rigs"]]
+             _interval(e["measured_drop_ci"]), _number(e["predicted_drop"]), _interval(e["predicted_interval"]),
+             "yes" if e["extrapolation"] else "-", e["rigcd"]] for e in result["rigs"]]
     print_table(f"{family} trained on {result['reference']} (own mAP {_number(result['reference_mAP'])}), "
                 f"{result['test_scenes']} test scenes; predicted with {calibration.metric}, {weights} weights",
-                ["role", "rig", "cameras", "mAP", "measured drop", "95 % interval", "predicted drop", "RigCD"], rows)
+                ["role", "rig", "cameras", "mAP", "measured drop", "95 % interval", "predicted drop",
+                 "90 % prediction interval", "extrapolates", "RigCD"], rows)
     rows = [[f"design - {e['rig']}", e["role"], _number(e["difference"]), _interval(e["ci"])]
             for e in result["design_minus"]]
     print_table(f"measured drop of the design minus the others (below 0: the design loses less); intervals from "
@@ -204,4 +206,4 @@ def _number(value) -> str:
 
 
 def _interval(bounds) -> str:
-    return "-" if None in bounds else f"[{bounds[0]:.3f}, {bounds[1]:.3f}]"
+    return "-" if bounds is None or None in bounds else f"[{bounds[0]:.3f}, {bounds[1]:.3f}]"

@@ -157,15 +157,22 @@ def design_command(
     if as_json:
         print_json(summary)
         return
-    rows = [["design", summary["predicted_drop"], summary["rigcd"], summary["n_cameras"], summary["coverage"], "yes"]]
-    for name, entry in (("naive transfer", summary["comparisons"]["naive_transfer"]),
-                         *((f"benchmark {s['name']}", s) for s in summary["comparisons"]["benchmark_rigs"])):
+    rows, flagged = [], []
+    for name, entry in (("design", {**summary, "meets_coverage_requirements": True}),
+                        ("naive transfer", summary["comparisons"]["naive_transfer"]),
+                        *((f"benchmark {s['name']}", s) for s in summary["comparisons"]["benchmark_rigs"])):
         if entry:
-            rows.append([name, entry["predicted_drop"], entry["rigcd"], entry["n_cameras"], entry["coverage"],
-                         "yes" if entry["meets_coverage_requirements"] else "no"])
+            interval = "-" if entry["interval"] is None else "{:.2f}-{:.2f}".format(*entry["interval"])
+            rows.append([name, entry["predicted_drop"], interval, entry["rigcd"], entry["n_cameras"],
+                         entry["coverage"], "yes" if entry["meets_coverage_requirements"] else "no",
+                         "yes" if entry["extrapolation"] else "-"])
+            flagged += [name] if entry["extrapolation"] else []
     print_table(f"{label} -> {target.name} ({calibration.metric}, {weights} weights); reference coverage "
-                f"{summary['reference_coverage']:.3f}", ["rig", "predicted drop", "rigcd", "cameras", "coverage",
-                                                           "meets coverage"], rows)
+                f"{summary['reference_coverage']:.3f}", ["rig", "predicted drop", "interval", "rigcd", "cameras",
+                                                           "coverage", "meets coverage", "extrapolates"], rows)
+    if flagged:
+        print(f"rigopt: note: {', '.join(flagged)}: beyond the calibration pairs (see report.json 'extrapolation'); "
+              "their predicted drops are less certain than the intervals say", file=sys.stderr)
     solver = summary["solver"]
     print(f"MILP {solver['milp_status']} (gap {solver['milp_gap']:.2e}) on {solver['offered_to_milp']} of "
           f"{solver['candidates']} candidates; refinement {solver['refine_status']}; {solver['seconds']:.1f} s",

@@ -10,11 +10,18 @@ from rigopt.report.json_values import json_ready
 from rigopt.rig.pccr_format import write_rig
 
 
+def prediction_extras(p) -> dict:
+    """What qualifies a predicted drop: its interval, the linear prediction, the extrapolation flags (null
+    when the pair lies within the calibration pairs) and whether the calibration is a fallback."""
+    return {key: value for key, value in p.to_dict().items()
+            if key in ("interval", "linear_drop", "extrapolation", "fallback")}
+
+
 def summary_dict(summary: RigSummary) -> dict:
     """A rig's worst predicted transfer over the references, its coverage, and each reference's prediction."""
     p = summary.prediction
-    return {"name": summary.rig.name, "predicted_drop": p.predicted_drop, "rigcd": p.rigcd, "t": p.t, "r": p.r,
-            "f": p.f, "count": p.count, "n_cameras": len(summary.rig), "coverage": summary.coverage,
+    return {"name": summary.rig.name, "predicted_drop": p.predicted_drop, **prediction_extras(p), "rigcd": p.rigcd,
+            "t": p.t, "r": p.r, "f": p.f, "count": p.count, "n_cameras": len(summary.rig), "coverage": summary.coverage,
             "meets_coverage_requirements": summary.meets_requirements,
             "per_reference": [{"reference": q.reference, "predicted_drop": q.predicted_drop, "rigcd": q.rigcd}
                               for q in summary.predictions]}
@@ -30,6 +37,7 @@ def design_dict(result: DesignResult, rig_file: Path | None) -> dict:
         "metric": result.calibration.metric,
         "weights": result.calibration.name,
         "predicted_drop": design.prediction.predicted_drop,
+        **prediction_extras(design.prediction),
         "rigcd": design.prediction.rigcd,
         "n_cameras": len(design.rig),
         "per_reference": summary_dict(design)["per_reference"],
