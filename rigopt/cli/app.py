@@ -40,6 +40,13 @@ def note(message: str) -> None:
     typer.echo(f"rigopt: note: {message}", err=True)
 
 
+def note_fallback(calibration) -> None:
+    """Say so when a calibration is a fallback (its fit kept no geometric term, e.g. Fast-BEV's)."""
+    if calibration.fallback:
+        note(f"the {calibration.name} calibration is a fallback (its fit kept no geometric term): its predictions "
+             "do not weigh camera geometry as a fitted calibration would")
+
+
 #: Help of the commands' ``--vehicle`` for rigs whose own vehicle rigopt does not know.
 PLACE_HELP = ("Vehicle (name, alias or blueprint) to place rigs on whose own vehicle rigopt does not know "
               "(imported rigs): their positions are converted to its centre.")

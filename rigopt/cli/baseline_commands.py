@@ -171,6 +171,7 @@ def validate_command(
     from rigopt.baselines.config import model_config
     from rigopt.baselines.models import resolve_device
     from rigopt.baselines.validation import load_design, validate_design
+    from rigopt.cli.app import note_fallback
     from rigopt.metrics.calibration import load_weights
     from rigopt.report.json_values import json_ready
 
@@ -179,6 +180,7 @@ def validate_command(
     if out is not None:
         check_out_file(out, suffixes=(".json",))
     family, calibration, rig = model_config(model).family, load_weights(weights, metric), load_design(design)
+    note_fallback(calibration)
     resolve_device(device)
     with status_console.status("validating") as status:
         result = validate_design(rig, ref, family, data, calibration, runs, device, status.update)

@@ -115,6 +115,7 @@ def design_command(
 
     from rigopt.design.designer import design_rig
     from rigopt.design.problem import benchmark_rigs
+    from rigopt.cli.app import note_fallback
     from rigopt.metrics.calibration import load_weights
     from rigopt.output import atomic_folder, check_out_folder, published
     from rigopt.report.design_report import design_dict, write_design_outputs
@@ -142,6 +143,7 @@ def design_command(
     if not references:
         raise RigoptError("--ref needs at least one rig")
     target, calibration = load_vehicle(vehicle), load_weights(weights, metric)
+    note_fallback(calibration)
     label = "+".join(r.rig.name for r in references)
     out = check_out_folder(out or Path(f"design-{target.name}-{label}"), force=force)
     status = Console(stderr=True)

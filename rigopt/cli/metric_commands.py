@@ -7,7 +7,7 @@ from typing import List, Optional
 
 import typer
 
-from rigopt.cli.app import PLACE_HELP, app, note, print_json, print_table
+from rigopt.cli.app import PLACE_HELP, app, note, note_fallback, print_json, print_table
 from rigopt.errors import RigoptError
 
 WEIGHTS_HELP = "Calibrated weights: a shipped name (BEVDet, BEVFusion, Fast-BEV, PETR, joint) or a weights JSON file."
@@ -75,7 +75,7 @@ def rigcd_command(
     drop = "-" if p.predicted_drop is None else p.predicted_drop
     print_table(f"RigCD {p.reference} -> {p.rig}", columns,
                 [[p.rigcd, p.match, p.count, p.t, p.r, p.f, drop, _interval(p)]])
-    _warn_prediction([p], weights or DEFAULT_WEIGHTS)
+    _warn_prediction([p], calibration)
 
 
 @app.command("rank")
@@ -104,7 +104,7 @@ def rank_command(
                  "extrapolates"],
                 [[k + 1, p.rig, p.predicted_drop, _interval(p), p.rigcd, p.t, p.r, p.f, p.count,
                   "yes" if p.extrapolation else "-"] for k, p in enumerate(ranked)])
-    _warn_prediction(ranked, weights)
+    _warn_prediction(ranked, calibration)
 
 
 def _comparable(names: List[str], vehicle: Optional[str]):
@@ -125,12 +125,10 @@ def _interval(p) -> str:
     return "-" if p.interval is None else f"{p.interval[0]:.2f}-{p.interval[1]:.2f}"
 
 
-def _warn_prediction(predictions, weights: Optional[str]) -> None:
-    """Warnings under a table: pairs outside the calibration data, a fallback calibration."""
+def _warn_prediction(predictions, calibration) -> None:
+    """Notes under a table: pairs outside the calibration data, a fallback calibration."""
     for p in predictions:
         if p.extrapolation is not None:
             note(f"{p.reference} -> {p.rig} extrapolates beyond the calibration pairs: {p.extrapolation.describe()}; "
                  "its predicted drop is less certain than the interval says")
-    if predictions and predictions[0].fallback:
-        note(f"the {weights} calibration is a fallback (its fit kept no geometric term): its predictions do not "
-             "weigh camera geometry as a fitted calibration would")
+    note_fallback(calibration)

@@ -391,3 +391,13 @@ def test_bad_image_size(tmp_path):
     result = run_cli("import", "nuscenes", tables, "--out", tmp_path / "x.json", "--image-size", "1280by720")
     assert_one_line_error(result, "1280by720")
     assert not (tmp_path / "x.json").exists()
+
+
+def test_a_fallback_calibration_is_marked_where_it_is_used():
+    from tests.in_process import run_rigopt
+
+    for args in (("rank", "--ref", "R1", "R4", "--weights", "Fast-BEV"), ("rigcd", "R1", "R4", "--weights", "Fast-BEV")):
+        outcome = run_rigopt(*args)
+        assert outcome.returncode == 0 and "Fast-BEV calibration is a fallback" in outcome.stderr
+    assert "fallback" not in run_rigopt("rank", "--ref", "R1", "R4").stderr
+    assert invoke_json("rigcd", "R1", "R4", "--weights", "Fast-BEV", "--json")["fallback"] is True

@@ -84,6 +84,21 @@ def test_json_has_the_documented_keys(design_run):
     assert {"naive_transfer", "benchmark_rig"} <= summary["comparisons"].keys()
     assert {"predicted_drop", "coverage"} <= summary["comparisons"]["naive_transfer"].keys()
     assert {"name", "predicted_drop", "coverage"} <= summary["comparisons"]["benchmark_rig"].keys()
+    assert {"interval", "linear_drop", "extrapolation", "fallback"} <= summary.keys()
+
+
+def test_each_predicted_drop_has_its_interval_and_the_far_benchmark_rig_is_flagged(design_run):
+    from rigopt.metrics.calibration import load_weights
+
+    summary, _, _ = design_run
+    joint = load_weights("joint")
+    for entry in (summary, summary["comparisons"]["naive_transfer"], *summary["comparisons"]["benchmark_rigs"]):
+        low, high = entry["interval"]
+        assert low == pytest.approx(entry["predicted_drop"] - joint.interval.halfwidth)
+        assert high == pytest.approx(min(1.0, entry["predicted_drop"] + joint.interval.halfwidth))
+        assert entry["predicted_drop"] == pytest.approx(float(joint.link(entry["linear_drop"])))
+    r6 = summary["comparisons"]["benchmark_rig"]  # R6 on the fire truck, metres from R1's cameras
+    assert r6["name"] == "R6" and "t" in [term["term"] for term in r6["extrapolation"]["terms"]]
 
 
 def test_json_values_are_plausible(design_run):
