@@ -47,6 +47,19 @@ def note_fallback(calibration) -> None:
              "do not weigh camera geometry as a fitted calibration would")
 
 
+MIN_HEIGHT_HELP = ("Lowest lens height above the ground (m); default: the vehicle's min_lens_height, else 0.5 "
+                   "(tyre spray, kerbs).")
+NO_TRAILER_HELP = "Lift the vehicle's optional trailer keep-out (a tractor unit driven without its semi-trailer)."
+
+
+def mount_rules(min_height, no_trailer: bool):
+    """The mount rules of the command line's --min-height and --no-trailer."""
+    from rigopt.mounting.practice import MountPractice
+    from rigopt.mounting.rules import MountRules
+
+    return MountRules(practice=MountPractice(min_height=min_height, lifted=("trailer",) if no_trailer else ()))
+
+
 #: Help of the commands' ``--vehicle`` for rigs whose own vehicle rigopt does not know.
 PLACE_HELP = ("Vehicle (name, alias or blueprint) to place rigs on whose own vehicle rigopt does not know "
               "(imported rigs): their positions are converted to its centre.")

@@ -8,7 +8,8 @@ from typing import Optional
 
 import typer
 
-from rigopt.cli.app import FORCE_HELP, app, more_than, print_json, print_table
+from rigopt.cli.app import (FORCE_HELP, MIN_HEIGHT_HELP, NO_TRAILER_HELP, app, more_than, mount_rules, print_json,
+                            print_table)
 from rigopt.cli.metric_commands import METRIC_HELP
 from rigopt.design.settings import (DEFAULT_LENSES, DEFAULT_PITCHES_DEG, DEFAULT_YAW_STEP_DEG, DesignSettings,
                                     lens_catalogue, pinhole_catalogue, range_lenses, read_catalogue)
@@ -100,6 +101,9 @@ def design_command(
     min_overlap: int = typer.Option(0, min=0, help="Cameras needed where the reference sees a sector twice (e.g. 2)."),
     time_limit: float = typer.Option(60.0, callback=more_than(0, " s"),
                                      help="MILP time limit (s); the best design found is returned."),
+    min_height: Optional[float] = typer.Option(None, "--min-height", min=0.0, max=5.0,
+                                               help=MIN_HEIGHT_HELP),
+    no_trailer: bool = typer.Option(False, "--no-trailer", help=NO_TRAILER_HELP),
     pareto: bool = typer.Option(False, "--pareto", help="Sweep camera counts (--cameras, default the reference's "
                                                         "+-2) and coverage levels; write the frontier."),
     ref_vehicle: Optional[str] = typer.Option(None, "--ref-vehicle",
@@ -138,7 +142,8 @@ def design_command(
         cameras=parse_camera_count(cameras), lenses=lenses, fov_range=fov_range,
         zones=tuple(z.strip() for z in zones.split(",")) if zones else None,
         pitches_deg=pitches, yaw_step_deg=yaw_step, spacing=spacing,
-        min_coverage=min_coverage, min_overlap=min_overlap, time_limit=time_limit)
+        min_coverage=min_coverage, min_overlap=min_overlap, time_limit=time_limit,
+        rules=mount_rules(min_height, no_trailer))
     references = [_reference(name.strip(), ref_vehicle) for name in ref.split(",") if name.strip()]
     if not references:
         raise RigoptError("--ref needs at least one rig")

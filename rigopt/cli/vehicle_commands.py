@@ -8,7 +8,8 @@ from typing import Optional
 
 import typer
 
-from rigopt.cli.app import PICTURE_SUFFIXES, app, console, print_json, print_table, vehicle_app
+from rigopt.cli.app import (MIN_HEIGHT_HELP, NO_TRAILER_HELP, PICTURE_SUFFIXES, app, console, mount_rules, print_json,
+                            print_table, vehicle_app)
 from rigopt.errors import RigoptError
 
 
@@ -17,6 +18,8 @@ def check_command(
     rig: str = typer.Argument(..., help="Library rig name or rig file."),
     vehicle: Optional[str] = typer.Option(None, help="Vehicle name, alias or blueprint (default: the rig's own); "
                                                      "the rig's origin is converted to the vehicle's centre."),
+    min_height: Optional[float] = typer.Option(None, "--min-height", min=0.0, max=5.0, help=MIN_HEIGHT_HELP),
+    no_trailer: bool = typer.Option(False, "--no-trailer", help=NO_TRAILER_HELP),
     as_json: bool = typer.Option(False, "--json", help="Print JSON instead of a table."),
 ):
     """Check that every camera can be mounted: on the surface, in a zone, housing and view clear of the body."""
@@ -34,7 +37,7 @@ def check_command(
     loaded, change = to_vehicle_centre(loaded, on)
     if change is not None:
         note(change.describe())
-    result = check_rig(loaded, on)
+    result = check_rig(loaded, on, mount_rules(min_height, no_trailer))
     if as_json:
         print_json({"rig": result.rig, "vehicle": result.vehicle,
                     "cameras": [{**asdict(c), "problems": list(c.problems)} for c in result.cameras]})

@@ -23,6 +23,7 @@ from typing import Callable, Sequence
 import numpy as np
 from scipy.spatial import cKDTree
 
+from rigopt.mounting.practice import in_keep_outs
 from rigopt.mounting.rules import RigCheck, check_rig
 from rigopt.coverage.footprint import Footprint
 from rigopt.coverage.matrix import rig_coverage_matrix, sector_points
@@ -137,9 +138,17 @@ def mount_candidates(vehicle: Vehicle, settings: DesignSettings, spacing: float 
                             settings.rules)
 
 
-def fleet_requirements(references: Sequence[ReferenceRig], settings: DesignSettings) -> np.ndarray:
-    """(q,) int: the largest requirement of any reference (on its own vehicle) at each sector point."""
-    return np.max([requirements(r.rig, r.vehicle, settings) for r in references], axis=0)
+def fleet_requirements(references: Sequence[ReferenceRig], settings: DesignSettings,
+                       target: Vehicle | None = None) -> np.ndarray:
+    """(q,) int: the largest requirement of any reference (on its own vehicle) at each sector point; with the
+    ``target`` vehicle, none at its sector points that lie inside its keep-outs in force (a coupled trailer
+    fills the space behind a tractor: there is nothing there to see)."""
+    needed = np.max([requirements(r.rig, r.vehicle, settings) for r in references], axis=0)
+    if target is not None:
+        points = sector_points(Footprint.of_mesh(target.mesh), settings.coverage)[0]
+        inside = np.array([bool(b) for b in in_keep_outs(target, points, settings.rules.practice.lifted)])
+        needed = np.where(inside, 0, needed)
+    return needed
 
 
 def select_valid(prepared: Prepared, vehicle: Vehicle, calibration: Calibration, needed: np.ndarray,
@@ -198,7 +207,7 @@ def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRi
     reference = rigs[0]
     prepared = prepare(vehicle, rigs, calibration, settings, progress)
     progress(f"coverage requirements from {', '.join(r.name for r in rigs)}")
-    needed = fleet_requirements(references, settings)
+    needed = fleet_requirements(references, settings, vehicle)
     counts = settings.cameras or (len(reference), len(reference))
     milp = select_valid(prepared, vehicle, calibration, needed, counts, settings, progress)
 

@@ -3,7 +3,8 @@
 Mount points are lens positions sampled on the zones (:mod:`rigopt.mounting.sampling`). For a grid of yaw
 and pitch angles (ISO: yaw > 0 left of forward, pitch > 0 up, radians) a direction is *clear* when every
 probe ray of the checked frustum (centre, edge midpoints and corners of the image with each half-angle shrunk by
-``MountRules.frustum_margin``) travels from ``near`` to ``frustum_range`` without meeting the body: the
+``MountRules.frustum_margin``) travels from ``near`` to ``frustum_range`` without meeting the body (nor a
+keep-out that blocks views, such as a coupled trailer): the
 ray-cast counterpart of the fcl frustum rule, vectorised over all candidates at once.
 """
 
@@ -15,6 +16,7 @@ import numpy as np
 
 from rigopt.camera import CameraModel, Lens
 from rigopt.geometry import rotation_from_yaw_pitch_roll
+from rigopt.mounting.practice import keep_out_boxes, segments_hit_boxes
 from rigopt.mounting.rules import MountRules
 from rigopt.mounting.sampling import DEFAULT_SPACING, sample_zone_points
 from rigopt.raycast import first_hit_distance
@@ -64,6 +66,10 @@ def clear_directions(vehicle: Vehicle, points, yaws, pitches, lens: float | Lens
     directions = np.broadcast_to(rays[None], origins.shape)
     distance = first_hit_distance(vehicle.mesh, origins.reshape(-1, 3), directions.reshape(-1, 3))
     hit = distance <= rules.frustum_range - rules.near
+    blockers = keep_out_boxes(vehicle, rules.practice.lifted, occluding_only=True)  # e.g. a coupled trailer
+    if blockers:
+        hit |= segments_hit_boxes(origins.reshape(-1, 3), directions.reshape(-1, 3), rules.frustum_range - rules.near,
+                                  blockers)
     return ~hit.reshape(n, *shape).any(axis=-1)
 
 

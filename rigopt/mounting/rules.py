@@ -9,7 +9,9 @@ A camera is valid on a vehicle when
   3. its near view frustum (from ``near`` to ``frustum_range`` metres, the image shrunk by
      ``frustum_margin`` of each half-angle) does not intersect the body;
   4. its foot point and surface normal lie in one of the vehicle's zones;
-  5. its housing does not collide with another camera's housing.
+  5. its housing does not collide with another camera's housing;
+  6. mounting practice allows its lens position (:mod:`rigopt.mounting.practice`: not on a wheel, tyre or
+     arch, not below the minimum lens height, not in a keep-out such as locker doors or a coupled trailer).
 The lens sits at the housing's centre, so a well-mounted camera is ``housing[2] / 2`` off the surface.
 
 Raised mounts: a zone with ``raised_max`` > 0 (a roof rack, sensor pod or mast) lets a camera sit up to
@@ -29,6 +31,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from rigopt import raycast
+from rigopt.mounting.practice import MountPractice, keep_out_boxes, practice_problems
 from rigopt.mounting.shapes import body_object, collides, frustum_object, housing_object, surface_frame
 from rigopt.rig.model import Rig
 from rigopt.vehicle.model import Vehicle, Zone
@@ -44,6 +47,7 @@ class MountRules:
     near: float = 0.02
     frustum_range: float = 1.0
     frustum_margin: float = 0.5
+    practice: MountPractice = MountPractice()
 
 
 @dataclass(frozen=True)
@@ -120,6 +124,15 @@ def post_object(mount: RaisedMount, forward, rules: MountRules = MountRules()):
     return fcl.CollisionObject(fcl.Box(w, h, length), fcl.Transform(frame, mount.foot + mount.axis * length / 2.0))
 
 
+def box_object(low, high):
+    """An fcl box filling [low, high] (3,) m."""
+    from rigopt.mounting.shapes import _fcl
+
+    fcl = _fcl()
+    low, high = np.asarray(low, dtype=float), np.asarray(high, dtype=float)
+    return fcl.CollisionObject(fcl.Box(*(high - low)), fcl.Transform(np.eye(3), (low + high) / 2.0))
+
+
 def check_rig(rig: Rig, vehicle: Vehicle, rules: MountRules = MountRules()) -> RigCheck:
     """Apply every mount rule to every camera of ``rig`` on ``vehicle`` (raised mounts: see the module doc)."""
     body = body_object(vehicle)
@@ -138,9 +151,12 @@ def check_rig(rig: Rig, vehicle: Vehicle, rules: MountRules = MountRules()) -> R
     posts = {k: post_object(m, c.forward, rules) for k, (m, c) in enumerate(zip(mounts, rig.cameras))
              if m is not None}
     posts = {k: p for k, p in posts.items() if p is not None}
+    practice = practice_problems(vehicle, rig.positions, rules.practice)
+    blockers = [(box_object(low, high), label) for low, high, label in
+                keep_out_boxes(vehicle, rules.practice.lifted, occluding_only=True)]
     checks = []
     for k, camera in enumerate(rig.cameras):
-        problems = []
+        problems = list(practice[k])
         distance = float(surface.distance[k])
         mount = mounts[k]
         if distance < 0:
@@ -156,6 +172,9 @@ def check_rig(rig: Rig, vehicle: Vehicle, rules: MountRules = MountRules()) -> R
         frustum = frustum_object(camera, rules)
         if collides(frustum, body):
             problems.append(f"the body is in its view within {rules.frustum_range:g} m")
+        blocked = sorted({label for box, label in blockers if collides(frustum, box)})
+        if blocked:
+            problems.append(f"the keep-out {', '.join(blocked)} is in its view within {rules.frustum_range:g} m")
         seen_posts = [j for j, post in posts.items() if collides(frustum, post)]
         if seen_posts:
             problems.append(f"the post of {', '.join(rig.cameras[j].id for j in seen_posts)} is in its view within "

@@ -13,6 +13,7 @@ import numpy as np
 import trimesh
 
 from rigopt.errors import RigoptError
+from rigopt.mounting.practice import practical
 from rigopt.mounting.rules import MountRules, housing_fits
 from rigopt.vehicle.model import Vehicle
 
@@ -68,6 +69,7 @@ def sample_zone_points(vehicle: Vehicle, spacing: float = DEFAULT_SPACING, zones
     agrees &= np.abs(surface.distance - rules.housing[2] / 2.0) < 1e-3
     agrees &= housing_fits(vehicle, surface.foot, surface.normal, rules)
     agrees = np.where(on_surface, agrees, _raised_ok(vehicle, points, names, normals, surface, rules))
+    agrees &= practical(vehicle, points, rules.practice)  # off wheels, high enough, out of the keep-outs
     if not agrees.any():
         raise RigoptError(f"the zones {sorted(wanted) if wanted else sorted(known)} of {vehicle.name} hold no surface "
                           "a camera can be mounted on")

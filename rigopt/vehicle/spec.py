@@ -121,6 +121,21 @@ class ZoneSpec:
 
 
 @dataclass(frozen=True)
+class KeepOutSpec:
+    """A box [``min``, ``max``] (3,) m no lens may be in, and why (``reason``); ``mirrored`` adds its -y
+    reflection; ``optional`` keep-outs may be lifted by name (a trailer that is not always coupled);
+    ``occludes``: a solid that blocks views too (a trailer), checked like the body in the near-view rule."""
+
+    name: str
+    min: np.ndarray
+    max: np.ndarray
+    reason: str
+    mirrored: bool = False
+    optional: bool = False
+    occludes: bool = False
+
+
+@dataclass(frozen=True)
 class VehicleSpec:
     """A vehicle: ``name``, CARLA ``blueprint``, ``aliases``, ``box`` (length, width, height) m, solids,
     zones, the file it came from, ``axles`` (x m) and ``wheels``: wheel descriptions that are not solids
@@ -135,6 +150,8 @@ class VehicleSpec:
     source: str = field(default="<spec>", compare=False)
     axles: tuple[float, ...] = ()
     wheels: tuple[Wheels, ...] = ()
+    keep_outs: tuple[KeepOutSpec, ...] = ()
+    min_lens_height: float | None = None
 
 
 def read_toml(path, what: str) -> dict:
@@ -172,8 +189,12 @@ def spec_from_dict(data: dict, source: str = "<spec>") -> VehicleSpec:
     if not isinstance(axles, list) or not all(_is_number(a) for a in axles):
         raise DataError(f"{source}: 'axles' must be a list of numbers, the x (m) of each axle")
     wheels = tuple(reader.wheels(w, f"wheels {k}", f"wheels{k}") for k, w in enumerate(reader.table_list(data, "wheels")))
+    keep_outs = tuple(reader.keep_out(t, k) for k, t in enumerate(reader.table_list(data, "keep_out")))
+    min_height = reader.number(data, "min_lens_height", "top level", positive=False) if "min_lens_height" in data else None
+    if min_height is not None and min_height < 0:
+        raise DataError(f"{source}: 'min_lens_height' is a height above the ground in metres, >= 0, got {min_height}")
     return VehicleSpec(name, blueprint, tuple(aliases), box, solids, zones, source, tuple(float(a) for a in axles),
-                       wheels)
+                       wheels, keep_outs, min_height)
 
 
 class _Reader:
@@ -269,6 +290,17 @@ class _Reader:
             raise self.fail(where, f"'raised_max' is a height above the surface in metres, >= 0, got {raised}")
         return ZoneSpec(name, low, high, normal / np.linalg.norm(normal), cone, self.flag(table, "mirrored", where),
                         raised)
+
+
+    def keep_out(self, table: dict, index: int) -> KeepOutSpec:
+        where = f"keep_out {index} ({table.get('name', '?')})"
+        name = self.text(table, "name", where)
+        low, high = np.array(self.numbers(table, "min", 3, where)), np.array(self.numbers(table, "max", 3, where))
+        if np.any(low >= high):
+            raise self.fail(where, f"'min' must be below 'max' on every axis, got {low.tolist()} and {high.tolist()}")
+        reason = self.text(table, "reason", where) if "reason" in table else name
+        return KeepOutSpec(name, low, high, reason, self.flag(table, "mirrored", where),
+                           self.flag(table, "optional", where), self.flag(table, "occludes", where))
 
 
 def _is_number(value) -> bool:

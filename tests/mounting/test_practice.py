@@ -1,0 +1,97 @@
+"""Mounting practice: no lens on a wheel, tyre or arch, below the minimum height, or in a keep-out (locker
+doors, a coupled semi-trailer); the mount checks and the mount points both obey it."""
+
+import numpy as np
+import pytest
+
+from rigopt.errors import DataError
+from rigopt.mounting.practice import (MountPractice, in_keep_outs, on_wheels, practical, practice_problems,
+                                      segments_hit_boxes)
+from rigopt.mounting.rules import MountRules, check_rig
+from rigopt.mounting.sampling import sample_zone_points
+from rigopt.rig.library import load_rig, rig_names
+from rigopt.rig.model import Camera, Rig
+from rigopt.vehicle.library import load_vehicle
+from rigopt.vehicle.spec import spec_from_dict
+
+
+@pytest.fixture(scope="module")
+def firetruck():
+    return load_vehicle("firetruck")
+
+
+@pytest.fixture(scope="module")
+def hgv():
+    return load_vehicle("hgv")
+
+
+def test_a_camera_on_the_rear_tyre_sidewall_is_refused(firetruck):
+    # the issue's example: accepted before, on the tyre's sidewall
+    rig = Rig("tyre", firetruck.blueprint, (Camera("CAM_TYRE", [-2.75, -1.28, 0.55], np.eye(3), 90.0),))
+    (check,) = check_rig(rig, firetruck).cameras
+    assert not check.valid and any("rear-right wheel: tyre or wheel arch" in p for p in check.problems)
+
+
+def test_wheel_keep_outs_cover_tyre_and_arch_lip_but_not_a_fender_camera_above(firetruck):
+    centre, radius, _ = next(w for w in firetruck.wheels if w[0][0] < 0 and w[0][1] < 0)
+    lip = centre + [0.0, -0.5, radius + 0.04]  # 4 cm over the tread, outboard
+    above = centre + [0.0, -0.5, radius + 0.10]
+    inboard = centre + [0.0, 0.6, 0.0]  # under the chassis, inside the wheel's inner face
+    found = on_wheels(firetruck, [lip, above, inboard], clearance=0.05)
+    assert found[0] == ["rear-right wheel"] and found[1] == [] and found[2] == []
+
+
+def test_every_benchmark_rig_stays_valid_on_its_own_vehicle():
+    for name in rig_names():
+        rig = load_rig(name)
+        assert check_rig(rig, load_vehicle(rig.vehicle)).valid, name
+
+
+def test_the_minimum_lens_height_comes_from_the_rules_else_the_vehicle_else_half_a_metre(firetruck):
+    low = [[3.0, 0.0, 0.45]]
+    assert "0.45 m above the ground (at least 0.50 m" in practice_problems(firetruck, low)[0][0]
+    assert practice_problems(firetruck, low, MountPractice(min_height=0.4)) == [[]]
+    data = {"name": "v", "min_lens_height": 0.8, "solids": [{"name": "b", "type": "box", "center": [0, 0, 1],
+                                                              "size": [4, 2, 1]}]}
+    vehicle = type(firetruck).from_spec(spec_from_dict(data))
+    assert MountPractice().height_floor(vehicle) == 0.8 and MountPractice(min_height=0.6).height_floor(vehicle) == 0.6
+
+
+def test_locker_doors_are_kept_out_and_the_frames_between_them_are_not(firetruck):
+    door, frame = [0.0, -1.45, 1.5], [-2.07, -1.47, 1.2]  # R6's rear fender camera sits on the frame
+    found = in_keep_outs(firetruck, [door, frame])
+    assert found[0] == ["locker_doors_front (roll-up locker doors)"] and found[1] == []
+
+
+def test_the_trailer_keep_out_holds_by_default_and_lifts_by_name(hgv):
+    mudguard = [[-2.5, 0.96, 1.25]]
+    assert in_keep_outs(hgv, mudguard) == [["trailer (a coupled semi-trailer)"]]
+    assert in_keep_outs(hgv, mudguard, lifted=("trailer",)) == [[]]
+    rig = Rig("behind", hgv.blueprint, (Camera("CAM_MUDGUARD", mudguard[0], np.eye(3), 90.0),))
+    assert not check_rig(rig, hgv).valid
+    solo = MountRules(practice=MountPractice(lifted=("trailer",)))
+    assert not any("trailer" in p for p in check_rig(rig, hgv, solo).cameras[0].problems)
+
+
+@pytest.mark.parametrize("name", ["firetruck", "hgv"])
+def test_no_mount_point_breaks_practice(name):
+    vehicle = load_vehicle(name)
+    points, _, _ = sample_zone_points(vehicle, spacing=0.2)
+    assert len(points) > 0 and practical(vehicle, points).all()
+    assert (points[:, 2] >= 0.5 - 1e-9).all()
+
+
+def test_segments_hit_boxes_by_the_slab_test():
+    box = [(np.array([1.0, -1.0, -1.0]), np.array([2.0, 1.0, 1.0]), "box")]
+    starts = np.zeros((4, 3))
+    directions = np.array([[1.0, 0, 0], [-1.0, 0, 0], [1.0, 0.0, 1.0], [0.0, 1.0, 0.0]])
+    directions /= np.linalg.norm(directions, axis=1, keepdims=True)
+    assert segments_hit_boxes(starts, directions, 1.5, box).tolist() == [True, False, True, False]
+    assert segments_hit_boxes(starts, directions, 0.5, box).tolist() == [False, False, False, False]
+
+
+def test_a_keep_out_with_min_not_below_max_names_the_file():
+    data = {"name": "v", "solids": [{"name": "b", "type": "box", "center": [0, 0, 1], "size": [4, 2, 1]}],
+            "keep_out": [{"name": "k", "min": [0, 0, 0], "max": [0, 1, 1]}]}
+    with pytest.raises(DataError, match="keep_out 0 .k.*'min' must be below 'max'"):
+        spec_from_dict(data, "v.toml")
