@@ -317,6 +317,8 @@ CASES: list[tuple[str, list[str], str]] = [
     ("design --time-limit -1", [*DESIGN, "--time-limit", "-1"], "--time-limit"),
     ("design --time-limit 0", [*DESIGN, "--time-limit", "0"], "--time-limit"),
     ("design --time-limit inf", [*DESIGN, "--time-limit", "inf"], "--time-limit"),
+    ("design --min-height negative", [*DESIGN, "--min-height", "-0.5"], "--min-height"),
+    ("check --min-height too high", ["check", "R1", "--min-height", "12"], "--min-height"),
     ("design --spacing 0", [*DESIGN, "--spacing", "0"], "--spacing"),
     ("design --spacing -1", [*DESIGN, "--spacing", "-1"], "--spacing"),
     ("design --min-coverage -1", [*DESIGN, "--min-coverage", "-1"], "--min-coverage"),
