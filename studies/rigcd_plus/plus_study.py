@@ -1,12 +1,12 @@
-"""The RigCD+ study's machinery: its variants and their fits (the non-negative fit and the V6 rematch loop
-are the package's, ``rigopt.metrics.matched_fit``), leave-one-rig-out cross-validation over control rigs,
-the choice rule and a paired bootstrap of a difference of Spearman rhos. Protocol: ``README.md`` beside
-this file; imported by ``run.py`` from this folder (run it as ``python studies/rigcd_plus/run.py``).
+"""The RigCD+ study's machinery (protocol 2 of ``README.md`` beside this file): variants, origin frames, one
+solver for every fit, leave-one-control-rig-out cross-validation, the score over detectors, the rig bootstrap
+and jackknife, and origin moves. Imported by ``run.py`` (run it as ``python studies/rigcd_plus/run.py``).
 
-Shapes: P pairs of one study (ordered (training rig, test rig) per detector), k features of a variant.
-A variant's model is ``delta_hat = beta . x`` with ``beta >= 0``, except V0, which is the published pipeline
-(:func:`rigopt.metrics.calibration.fit_calibration`: L-BFGS-B, predictions from the reported
-(K, alpha, lambdas), fallback included).
+Shapes: R rigs of a study, D groups (detectors or families); a study's drops are (D, R, R) (training rig,
+test rig), NaN where a pair is missing; every term is an (R, R) matrix. A set of pairs is given by rig
+indices ``rows``, ``cols`` (n,) (a rig may appear several times: the bootstrap draws with replacement) and is
+expanded over the groups, missing pairs dropped. A variant's model is ``delta_hat = beta . x``, ``beta >= 0``,
+fitted jointly (every group's pairs stacked, one beta) by one solver ("qp" or "lbfgsb").
 """
 
 from __future__ import annotations
@@ -17,13 +17,19 @@ from typing import Callable, Mapping, Sequence
 import numpy as np
 from scipy.stats import rankdata
 
-from plus_terms import PlusSettings, term_matrices
+from plus_terms import RigProfile, term_matrices
 from rigopt.errors import RigoptError
-from rigopt.metrics.calibration import UNIT_LAMBDAS, Calibration, fit_calibration
-from rigopt.metrics.matched_fit import SOLVERS, NonnegFit, RematchFit, fit_nonneg, fit_rematched
-from rigopt.metrics.reliability import DEFAULT_BOOTSTRAP, DEFAULT_SEED, _pearson_rows, spearman
+from rigopt.metrics.calibration import UNIT_LAMBDAS, fit_lbfgsb, fit_qp
+from rigopt.metrics.matched_fit import SOLVERS, fit_rematched
+from rigopt.rig.model import Rig
+from rigopt.vehicle.model import Vehicle
 
-#: Every variant of the study and its features, in the order of the protocol's table.
+#: Frames of the origin-invariant variants (README, protocol 2).
+FRAMES = ("box", "extent", "axle")
+#: Terms recomputed in every frame (a framed term is named "term@frame").
+FRAMED_TERMS = ("t", "r", "f", "count", "dz", "dxy")
+
+#: Every variant and its features, in the order of the protocol's tables.
 VARIANTS: dict[str, tuple[str, ...]] = {
     "V0": ("t", "r", "f", "count"),
     "V1": ("dz", "dxy", "r", "f", "count"),
@@ -33,331 +39,336 @@ VARIANTS: dict[str, tuple[str, ...]] = {
     "V5": ("t", "r", "f", "count", "selfocc"),
     "V6": ("t", "r", "f", "count"),  # under the calibrated matching
     "V7": ("cw_t", "cw_r", "cw_f", "count"),
+    "V8": ("r@box", "f@box", "count@box"),
+    "V9": ("t@box", "r@box", "f@box", "count@box"),
+    "V10": ("t@extent", "r@extent", "f@extent", "count@extent"),
+    "V11": ("t@axle", "r@axle", "f@axle", "count@axle"),
+    "V12": ("dz@box", "dxy@box", "r@box", "f@box", "count@box"),
     "C1": ("dz", "dxy", "r", "focal", "count"),
     "C2": ("t", "r", "f", "count", "cover", "overlap"),
     "C3": ("dz", "dxy", "r", "focal", "count", "cover", "overlap", "selfocc"),
 }
 BASELINE = "V0"
 REMATCH = "V6"
-CHOICE_MARGIN = 0.01
+PRIMARY_SOLVER = "qp"
 
 
-# --- Pairs of a study ---------------------------------------------------------------------------------------
+# --- Frames and origin moves ---------------------------------------------------------------------------------
 
-@dataclass(frozen=True)
-class StudyPairs:
-    """Every pair of one study; arrays (P,) unless stated.
+def frame_of(vehicle: Vehicle, frame: str, origin_shift=(0.0, 0.0, 0.0)) -> tuple[np.ndarray, np.ndarray]:
+    """(reference (3,) m, scale (3,)) of ``frame`` on ``vehicle``: framed positions = (p - reference) / scale.
 
-    ``model``, ``train``, ``test`` (str); ``delta`` (float) observed relative drop; ``terms``
-    {term: (P,) float} under the unit-weight matching; ``published`` (P, 4) float: V0's features
-    (t, r, f, count) as the published pipeline computes them; ``rematch``: match lambdas (3,) ->
-    (P, 4) float (t, r, f, count) under that matching (V6).
-    """
-
-    model: np.ndarray
-    train: np.ndarray
-    test: np.ndarray
-    delta: np.ndarray
-    terms: Mapping[str, np.ndarray]
-    published: np.ndarray
-    rematch: Callable[[tuple[float, float, float]], np.ndarray]
-
-    def features(self, names: Sequence[str]) -> np.ndarray:
-        """(P, k) float: the unit-matching terms ``names`` as columns."""
-        return np.stack([self.terms[name] for name in names], axis=1)
-
-    @property
-    def groups(self) -> tuple[str, ...]:
-        """The detectors (or families) in order of first appearance."""
-        return tuple(dict.fromkeys(self.model.tolist()))
-
-    def both_in(self, rigs: Sequence[str]) -> np.ndarray:
-        """(P,) bool: pairs whose training and test rigs are both among ``rigs`` (the calibration set)."""
-        return np.isin(self.train, rigs) & np.isin(self.test, rigs)
+    box: the footprint centre on the ground (bounding-box x, y centre, bounding-box bottom z), scale 1;
+    extent: the same reference, scale = the vehicle's (length, width, height) m; axle: ``vehicle.rear_axle``,
+    scale 1. ``origin_shift`` (3,) m: the vehicle's origin moved by this (its points' coordinates all
+    decrease by it), so framed positions do not change."""
+    low, high = np.asarray(vehicle.mesh.bounds, dtype=float)
+    shift = np.asarray(origin_shift, dtype=float)
+    if frame in ("box", "extent"):
+        reference = np.array([(low[0] + high[0]) / 2, (low[1] + high[1]) / 2, low[2]])
+        scale = np.asarray(vehicle.size, dtype=float) if frame == "extent" else np.ones(3)
+    elif frame == "axle":
+        if vehicle.rear_axle is None:
+            raise RigoptError(f"vehicle {vehicle.name!r} has no rear axle for the axle frame")
+        reference, scale = np.asarray(vehicle.rear_axle, dtype=float), np.ones(3)
+    else:
+        raise RigoptError(f"unknown frame {frame!r}; use one of {', '.join(FRAMES)}")
+    return reference - shift, scale
 
 
-def pair_index(names: Sequence[str], train, test) -> tuple[np.ndarray, np.ndarray]:
-    """Row and column (P,) int of the pairs (train[p], test[p]) in matrices over the rigs ``names``."""
-    index = {name: k for k, name in enumerate(names)}
-    missing = sorted(set(train) - set(index) | set(test) - set(index))
-    if missing:
-        raise RigoptError(f"no rig for {', '.join(missing)} among {', '.join(names)}")
-    return np.array([index[a] for a in train], dtype=int), np.array([index[b] for b in test], dtype=int)
+def repositioned(rig: Rig, reference, scale=(1.0, 1.0, 1.0)) -> Rig:
+    """``rig`` with every camera position p replaced by (p - reference) / scale (rotations, FOVs kept)."""
+    reference, scale = np.asarray(reference, dtype=float), np.asarray(scale, dtype=float)
+    cameras = [replace(c, position=(np.asarray(c.position, dtype=float) - reference) / scale) for c in rig.cameras]
+    return replace(rig, cameras=cameras)
 
 
-def pair_terms_table(entries: Sequence, names: Sequence[str], train, test, terms: Sequence[str],
-                     settings: PlusSettings | None = None) -> dict[str, np.ndarray]:
-    """{term: (P,) float} of the pairs (train[p] -> test[p]); ``entries`` the rigs or RigProfiles named
-    ``names`` (each computed once, all pairs in one :func:`term_matrices` call)."""
-    rows, cols = pair_index(names, train, test)
-    matrices = term_matrices(entries, entries, terms, settings)
-    return {term: matrices[term][rows, cols] for term in terms}
+def moved(entry, shift) -> Rig | RigProfile:
+    """A rig (or profile) whose vehicle origin moved by ``shift`` (3,) m: positions p -> p - shift. A profile
+    keeps its coverage and self-occlusion (the body moves with the cameras)."""
+    if isinstance(entry, RigProfile):
+        return replace(entry, rig=repositioned(entry.rig, shift))
+    return repositioned(entry, shift)
 
 
-def rematcher(rigs: Sequence, names: Sequence[str], train, test,
-              settings: PlusSettings | None = None) -> Callable[[tuple[float, float, float]], np.ndarray]:
-    """A cached function: match lambdas (3,) -> (P, 4) float (t, r, f, count) of the pairs
-    (train[p] -> test[p]) under the matching with those lambdas (RigCD+ term 6)."""
-    settings = PlusSettings() if settings is None else settings
+def framed_terms(entries: Sequence, vehicles: Sequence[Vehicle], shifts=None) -> dict[str, np.ndarray]:
+    """{"term@frame": (R, R)} for every FRAMES x FRAMED_TERMS; ``entries`` (R,) rigs or profiles, ``vehicles``
+    (R,) each one's vehicle, ``shifts`` (R, 3) m the origin moves already applied to the entries (default 0)."""
+    shifts = np.zeros((len(entries), 3)) if shifts is None else np.asarray(shifts, dtype=float)
+    rigs = [e.rig if isinstance(e, RigProfile) else e for e in entries]
+    out = {}
+    for frame in FRAMES:
+        framed = [repositioned(rig, *frame_of(vehicle, frame, shift))
+                  for rig, vehicle, shift in zip(rigs, vehicles, shifts)]
+        for term, matrix in term_matrices(framed, framed, FRAMED_TERMS).items():
+            out[f"{term}@{frame}"] = matrix
+    return out
+
+
+def rematcher(entries: Sequence) -> Callable[[tuple[float, float, float]], np.ndarray]:
+    """Cached: match lambdas (3,) -> (R, R, 4) float (t, r, f, count) under the matching with those lambdas."""
+    from plus_terms import PlusSettings
+
+    rigs = [e.rig if isinstance(e, RigProfile) else e for e in entries]
     cache: dict[tuple[float, ...], np.ndarray] = {}
 
     def features(lambdas) -> np.ndarray:
         key = tuple(float(v) for v in lambdas)
         if key not in cache:
-            table = pair_terms_table(rigs, names, train, test, ("t", "r", "f", "count"),
-                                     replace(settings, match_lambdas=key))
-            cache[key] = np.stack([table[t] for t in ("t", "r", "f", "count")], axis=1)
-            cache[key].flags.writeable = False
+            m = term_matrices(rigs, rigs, ("t", "r", "f", "count"), PlusSettings(match_lambdas=key))
+            cache[key] = np.stack([m[t] for t in ("t", "r", "f", "count")], axis=-1)
         return cache[key]
 
     return features
 
 
-# --- Fits ---------------------------------------------------------------------------------------------------
+# --- A study -------------------------------------------------------------------------------------------------
 
 @dataclass(frozen=True)
-class VariantFit:
-    """A variant fitted on one training set.
+class Study:
+    """``rigs`` (R,) names; ``groups`` (D,) detectors or families; ``delta`` (D, R, R) float, NaN missing;
+    ``terms`` {name: (R, R) float}; ``control`` (R,) bool; ``rematch`` lambdas -> (R, R, 4) (V6)."""
 
-    ``fit``: both solvers' betas (k,); ``solver``: whose betas predict ("qp", the protocol's for candidates);
-    ``beta`` (k,) the weights predictions use; ``calibration``: V0's reported weights, which then predict
-    (the published pipeline, L-BFGS-B; None otherwise); ``rematch``: V6's loop (None otherwise).
-    """
+    rigs: tuple[str, ...]
+    groups: tuple[str, ...]
+    delta: np.ndarray
+    terms: Mapping[str, np.ndarray]
+    control: np.ndarray
+    rematch: Callable[[tuple[float, float, float]], np.ndarray]
+
+    @property
+    def control_index(self) -> np.ndarray:
+        return np.flatnonzero(self.control)
+
+    @property
+    def other_index(self) -> np.ndarray:
+        return np.flatnonzero(~self.control)
+
+    def subset(self, names: Sequence[str], groups: Sequence[str] | None = None, delta=None) -> "Study":
+        """The study restricted to the rigs ``names`` (and, with ``delta`` (D', R', R'), other groups)."""
+        index = np.array([self.rigs.index(n) for n in names])
+        grid = np.ix_(index, index)
+        full = self.rematch
+        return Study(tuple(names), tuple(groups or self.groups),
+                     self.delta[:, index][:, :, index] if delta is None else np.asarray(delta, dtype=float),
+                     {k: v[grid] for k, v in self.terms.items()}, self.control[index],
+                     lambda lambdas: full(lambdas)[grid])
+
+
+def delta_matrix(model, train, test, delta, rigs: Sequence[str], groups: Sequence[str]) -> np.ndarray:
+    """(D, R, R) float from long-form drops (P,) each; NaN where a pair is absent."""
+    out = np.full((len(groups), len(rigs), len(rigs)), np.nan)
+    g, r = {x: k for k, x in enumerate(groups)}, {x: k for k, x in enumerate(rigs)}
+    for m, a, b, d in zip(model, train, test, delta):
+        if m in g and a in r and b in r:
+            out[g[m], r[a], r[b]] = d
+    return out
+
+
+@dataclass(frozen=True)
+class Pairs:
+    """Pairs expanded over the groups, missing dropped; (m,) each: ``group``, ``row``, ``col`` indices and
+    ``delta``."""
+
+    group: np.ndarray
+    row: np.ndarray
+    col: np.ndarray
+    delta: np.ndarray
+
+
+def expand(study: Study, rows, cols) -> Pairs:
+    """The pairs (rows[p], cols[p]) (n,) of every group, missing ones dropped."""
+    rows, cols = np.asarray(rows, dtype=int), np.asarray(cols, dtype=int)
+    groups = np.repeat(np.arange(len(study.groups)), len(rows))
+    r, c = np.tile(rows, len(study.groups)), np.tile(cols, len(study.groups))
+    delta = study.delta[groups, r, c]
+    keep = ~np.isnan(delta)
+    return Pairs(groups[keep], r[keep], c[keep], delta[keep])
+
+
+def all_pairs(draws, draws_b=None) -> tuple[np.ndarray, np.ndarray]:
+    """Every ordered pair (i, j) of the draws (n,) (and ``draws_b``): rows, cols (n * n_b,) rig indices."""
+    a = np.asarray(draws, dtype=int)
+    b = a if draws_b is None else np.asarray(draws_b, dtype=int)
+    return np.repeat(a, len(b)), np.tile(b, len(a))
+
+
+def calibration_pairs(study: Study, draws=None) -> tuple[np.ndarray, np.ndarray]:
+    """Pairs among the control rigs (default: each once; ``draws`` a multiset of control rig indices)."""
+    return all_pairs(study.control_index if draws is None else draws)
+
+
+def heldout_pairs(study: Study, draws=None) -> tuple[np.ndarray, np.ndarray]:
+    """Every ordered pair of ``draws`` (default: each rig once) with at least one non-control rig."""
+    rows, cols = all_pairs(np.arange(len(study.rigs)) if draws is None else draws)
+    keep = ~(study.control[rows] & study.control[cols])
+    return rows[keep], cols[keep]
+
+
+# --- One solver ------------------------------------------------------------------------------------------
+
+def solve(x, delta, solver: str) -> np.ndarray:
+    """(k,) beta >= 0 of least squares of delta (n,) on x (n, k), by ``solver`` alone."""
+    if solver == "qp":
+        return fit_qp(x, delta)
+    if solver == "lbfgsb":
+        return np.asarray(fit_lbfgsb(x, delta), dtype=float)
+    raise RigoptError(f"unknown solver {solver!r}; use one of {', '.join(SOLVERS)}")
+
+
+@dataclass(frozen=True)
+class Model:
+    """A fitted variant: ``beta`` (k,), ``lambdas`` the matching (V6's calibrated one, else unit)."""
 
     variant: str
-    features: tuple[str, ...]
-    fit: NonnegFit
-    solver: str = "qp"
-    calibration: Calibration | None = None
-    rematch: RematchFit | None = None
+    beta: np.ndarray
+    lambdas: tuple[float, float, float] = UNIT_LAMBDAS
 
-    @property
-    def beta(self) -> np.ndarray:
-        return np.asarray(self.calibration.beta) if self.calibration is not None else self.fit.beta(self.solver)
+    def features(self, study: Study, pairs: Pairs) -> np.ndarray:
+        """(m, k) features of ``pairs``."""
+        if self.variant == REMATCH:
+            return study.rematch(self.lambdas)[pairs.row, pairs.col]
+        return np.stack([study.terms[name][pairs.row, pairs.col] for name in VARIANTS[self.variant]], axis=1)
 
-    @property
-    def match_lambdas(self) -> tuple[float, float, float]:
-        return self.rematch.lambdas if self.rematch is not None else UNIT_LAMBDAS
-
-    def to_dict(self) -> dict:
-        """JSON-ready: features, betas by name, solvers' agreement, the matching's lambdas; V0's (K, alpha,
-        lambdas); V6's loop."""
-        named = lambda beta: {name: float(b) for name, b in zip(self.features, beta)}  # noqa: E731
-        out = {"variant": self.variant, "features": list(self.features), "beta": named(self.beta),
-               "solver": self.solver, "beta_qp": named(self.fit.beta_qp), "beta_lbfgsb": named(self.fit.beta_lbfgsb),
-               "objective_qp": self.fit.objective_qp, "objective_lbfgsb": self.fit.objective_lbfgsb,
-               "solvers_agree": self.fit.agrees, "n": self.fit.n, "match_lambdas": list(self.match_lambdas)}
-        if self.calibration is not None:
-            out["calibration"] = self.calibration.to_dict()
-        if self.rematch is not None:
-            out.update(rematch_rounds=self.rematch.rounds, rematch_converged=self.rematch.converged)
-        return out
+    def predict(self, study: Study, pairs: Pairs) -> np.ndarray:
+        """(m,) linear predicted drops of ``pairs``."""
+        return self.features(study, pairs) @ self.beta
 
 
-def fit_variant(variant: str, pairs: StudyPairs, mask, name: str = "fit", solver: str | None = None) -> VariantFit:
-    """Fit ``variant`` on the pairs where ``mask`` (P,) bool is true.
-
-    ``solver`` None: the protocol (V0 the published pipeline, candidates the QP betas); "qp" or "lbfgsb":
-    every variant, V0 included, predicts with that solver's betas (a diagnostic; V0 under "lbfgsb" stays
-    the published pipeline, whose reported weights equal its L-BFGS-B betas but for the fallback).
-    """
+def fit(variant: str, study: Study, pairs: Pairs, solver: str) -> Model:
+    """``variant`` fitted jointly on ``pairs`` by ``solver`` (V6: the fit -> rematch loop with it)."""
     if variant not in VARIANTS:
         raise RigoptError(f"unknown variant {variant!r}; use one of {', '.join(VARIANTS)}")
-    if solver is not None and solver not in SOLVERS:
-        raise RigoptError(f"unknown solver {solver!r}; use one of {', '.join(SOLVERS)}")
-    mask = np.asarray(mask, dtype=bool)
-    delta, features = pairs.delta[mask], VARIANTS[variant]
-    if variant == BASELINE:
-        published = fit_calibration(pairs.published[mask], delta, name)
-        fit = NonnegFit(np.array(published.beta_qp), np.array(published.beta_lbfgsb), published.objective_qp,
-                        published.objective_lbfgsb, published.qp_agrees, published.n)
-        if solver == "qp":
-            return VariantFit(variant, features, fit, "qp")
-        return VariantFit(variant, features, fit, "lbfgsb", calibration=published.calibration)
-    solver = solver or "qp"
     if variant == REMATCH:
-        loop = fit_rematched(lambda lambdas: pairs.rematch(lambdas)[mask], delta, solver=solver)
-        return VariantFit(variant, features, loop.fit, solver, rematch=loop)
-    return VariantFit(variant, features, fit_nonneg(pairs.features(features)[mask], delta), solver)
+        loop = fit_rematched(lambda lambdas: study.rematch(lambdas)[pairs.row, pairs.col], pairs.delta,
+                             solver=solver)
+        return Model(variant, loop.fit.beta(solver), loop.lambdas)
+    x = Model(variant, np.zeros(len(VARIANTS[variant]))).features(study, pairs)
+    return Model(variant, solve(x, pairs.delta, solver))
 
 
-def predict_variant(fitted: VariantFit, pairs: StudyPairs, mask) -> np.ndarray:
-    """(m,) float predicted drops of the pairs where ``mask`` (P,) bool is true (m of them)."""
-    mask = np.asarray(mask, dtype=bool)
-    if fitted.calibration is not None:
-        return fitted.calibration.predict(*pairs.published[mask].T)
-    if fitted.rematch is not None:
-        return pairs.rematch(fitted.rematch.lambdas)[mask] @ fitted.beta
-    x = pairs.published if fitted.variant == BASELINE else pairs.features(fitted.features)
-    return x[mask] @ fitted.beta
+# --- The score -------------------------------------------------------------------------------------------
+
+def rank_rho(a, b) -> float:
+    """Spearman rho of a, b (n,) (average ranks for ties); NaN when a side is constant or n < 3."""
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    if len(a) < 3 or np.ptp(a) == 0 or np.ptp(b) == 0:
+        return float("nan")
+    ra, rb = rankdata(a) - (len(a) + 1) / 2, rankdata(b) - (len(b) + 1) / 2
+    return float(ra @ rb / np.sqrt((ra @ ra) * (rb @ rb)))
 
 
-# --- Leave-one-rig-out cross-validation over the control rigs ----------------------------------------------
-
-@dataclass(frozen=True)
-class Fold:
-    """One fold: ``left_out`` control rig; ``fit`` (P,) bool: calibration pairs with neither rig left out;
-    ``predict`` (P,) bool: calibration pairs trained on the left-out rig."""
-
-    left_out: str
-    fit: np.ndarray
-    predict: np.ndarray
+def group_rhos(predicted, pairs: Pairs, groups: int) -> np.ndarray:
+    """(D,) Spearman rho of ``predicted`` (m,) against ``pairs.delta`` within each group (NaN if undefined)."""
+    return np.array([rank_rho(predicted[pairs.group == g], pairs.delta[pairs.group == g]) for g in range(groups)])
 
 
-def loro_folds(train, test, control_rigs: Sequence[str], within=None) -> list[Fold]:
-    """One fold per control rig over the calibration pairs (both rigs control) of train, test (P,) str,
-    restricted to ``within`` (P,) bool (default all pairs). Every calibration pair is predicted by exactly
-    one fold, whose fit never sees its training rig."""
-    train, test = np.asarray(train), np.asarray(test)
-    within = np.ones(len(train), dtype=bool) if within is None else np.asarray(within, dtype=bool)
-    calibration = within & np.isin(train, control_rigs) & np.isin(test, control_rigs)
-    return [Fold(rig, calibration & (train != rig) & (test != rig), calibration & (train == rig))
-            for rig in control_rigs]
+def score(predicted, pairs: Pairs, groups: int) -> float:
+    """S: the mean over the groups of Spearman rho (NaN when any group's rho is undefined)."""
+    return float(np.mean(group_rhos(predicted, pairs, groups)))
 
 
-def out_of_fold(folds: Sequence[Fold], fit_predict: Callable[[np.ndarray, np.ndarray], np.ndarray],
-                n: int) -> np.ndarray:
-    """(n,) float out-of-fold predictions, NaN for pairs no fold predicts.
+# --- Cross-validation --------------------------------------------------------------------------------------
 
-    ``fit_predict(fit_mask, predict_mask)`` fits on the first (n,) bool mask and returns the predictions
-    (m,) of the second's m pairs. Raises RigoptError when a pair is predicted twice."""
-    predicted = np.full(n, np.nan)
-    for fold in folds:
-        if np.any(~np.isnan(predicted[fold.predict])):
-            raise RigoptError(f"fold {fold.left_out!r} predicts a pair another fold predicts")
-        predicted[fold.predict] = fit_predict(fold.fit, fold.predict)
-    return predicted
-
-
-def cv_predictions(variant: str, pairs: StudyPairs, control_rigs: Sequence[str], solver: str | None = None,
-                   fits: list | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Out-of-fold predictions (P,) of ``variant`` over the calibration pairs (NaN elsewhere): (joint, own).
-
-    joint: each fold fitted on every group's training pairs stacked; own: each group fitted on its own.
-    ``solver`` as in :func:`fit_variant`; every fold's :class:`NonnegFit` is appended to ``fits`` if given.
-    """
-    def fit_predict(fit_mask, predict_mask):
-        fitted = fit_variant(variant, pairs, fit_mask, solver=solver)
-        if fits is not None:
-            fits.append(fitted.fit)
-        return predict_variant(fitted, pairs, predict_mask)
-
-    n = len(pairs.delta)
-    joint = out_of_fold(loro_folds(pairs.train, pairs.test, control_rigs), fit_predict, n)
-    own = np.full(n, np.nan)
-    for group in pairs.groups:
-        mine = pairs.model == group
-        own[mine] = out_of_fold(loro_folds(pairs.train, pairs.test, control_rigs, mine), fit_predict, n)[mine]
-    calibration = pairs.both_in(control_rigs)
-    if np.any(np.isnan(joint[calibration])) or np.any(np.isnan(own[calibration])):
+def cv_predictions(variant: str, study: Study, solver: str) -> tuple[Pairs, np.ndarray]:
+    """Leave-one-control-rig-out out-of-fold predictions of the calibration pairs: (pairs, predicted (m,))."""
+    rows, cols = calibration_pairs(study)
+    pairs = expand(study, rows, cols)
+    predicted = np.full(len(pairs.delta), np.nan)
+    for left_out in study.control_index:
+        keep = (pairs.row != left_out) & (pairs.col != left_out)
+        model = fit(variant, study, _take(pairs, keep), solver)
+        mine = pairs.row == left_out
+        predicted[mine] = model.predict(study, _take(pairs, mine))
+    if np.any(np.isnan(predicted)):
         raise RigoptError(f"{variant}: a calibration pair was not predicted out of fold")
-    return joint, own
+    return pairs, predicted
 
 
-@dataclass(frozen=True)
-class FullFits:
-    """A variant fitted on all calibration pairs: ``joint`` (every group stacked) and ``own`` {group: fit};
-    ``joint_predicted`` and ``own_predicted`` (P,) float: every pair under them."""
-
-    joint: VariantFit
-    own: dict[str, VariantFit]
-    joint_predicted: np.ndarray
-    own_predicted: np.ndarray
+def _take(pairs: Pairs, mask) -> Pairs:
+    return Pairs(pairs.group[mask], pairs.row[mask], pairs.col[mask], pairs.delta[mask])
 
 
-def fit_full(variant: str, pairs: StudyPairs, calibration) -> FullFits:
-    """Fit ``variant`` on the pairs where ``calibration`` (P,) bool is true, jointly and per group."""
-    calibration = np.asarray(calibration, dtype=bool)
-    every = np.ones(len(pairs.delta), dtype=bool)
-    joint = fit_variant(variant, pairs, calibration, "joint")
-    own, own_predicted = {}, np.full(len(pairs.delta), np.nan)
-    for group in pairs.groups:
-        mine = pairs.model == group
-        own[group] = fit_variant(variant, pairs, calibration & mine, group)
-        own_predicted[mine] = predict_variant(own[group], pairs, mine)
-    return FullFits(joint, own, predict_variant(joint, pairs, every), own_predicted)
-
-
-def choose_variant(scores: Mapping[str, float], n_features: Mapping[str, int], baseline: str = BASELINE,
-                   margin: float = CHOICE_MARGIN) -> str:
-    """The protocol's choice: the candidate (every key of ``scores`` but ``baseline``, in table order) with
-    the highest score, provided it exceeds the baseline's score by at least ``margin``; candidates within
-    ``margin`` of that best go to fewer features, then to table order. Only candidates that themselves
-    clear the baseline by ``margin`` can be chosen; NaN scores never are. Returns ``baseline`` otherwise."""
-    base = scores[baseline]
-    eligible = [v for v in scores if v != baseline and np.isfinite(scores[v])
-                and (not np.isfinite(base) or scores[v] - base >= margin)]
-    if not eligible:
+def choose(scores: Mapping[str, float], baseline: str = BASELINE) -> str:
+    """V*: the candidate with the highest score (ties to 3 decimals: fewer features, then table order),
+    provided it exceeds the baseline's score; else the baseline. NaN scores are never chosen."""
+    candidates = [v for v in scores if v != baseline and np.isfinite(scores[v])]
+    if not candidates:
         return baseline
-    best = max(scores[v] for v in eligible)
-    tied = [v for v in eligible if best - scores[v] <= margin]
+    best = max(round(scores[v], 3) for v in candidates)
+    tied = [v for v in candidates if round(scores[v], 3) == best]
     order = list(scores)
-    return min(tied, key=lambda v: (n_features[v], order.index(v)))
+    chosen = min(tied, key=lambda v: (len(VARIANTS.get(v, ())), order.index(v)))
+    base = scores[baseline]
+    return chosen if not np.isfinite(base) or scores[chosen] > base else baseline
 
 
-# --- Paired bootstrap of a rho difference -------------------------------------------------------------------
+# --- Held-out, rig bootstrap, jackknife --------------------------------------------------------------------
 
-@dataclass(frozen=True)
-class PairedDifference:
-    """``rho(a) - rho(b)`` on the n pairs (NaN when either is undefined) and its 95 % bootstrap ``ci``
-    (2.5, 97.5 percentiles) over ``used`` of the resamples (those with no constant side)."""
-
-    rho_a: float
-    rho_b: float
-    difference: float
-    ci: tuple[float, float]
-    used: int
-    n: int
+def heldout(variant: str, study: Study, solver: str, control_draws=None, all_draws=None
+            ) -> tuple[Model, Pairs, np.ndarray]:
+    """Fit on the calibration pairs among ``control_draws`` and predict the held-out pairs among
+    ``all_draws`` (defaults: every rig once): (model, held-out pairs, predictions)."""
+    model = fit(variant, study, expand(study, *calibration_pairs(study, control_draws)), solver)
+    pairs = expand(study, *heldout_pairs(study, all_draws))
+    return model, pairs, model.predict(study, pairs)
 
 
-def stratified_resamples(strata, resamples: int, seed: int) -> np.ndarray:
-    """(resamples, n) int indices into n pairs, drawn with replacement within each stratum of ``strata``
-    (n,) (strata in order of first appearance, each as one (resamples, n_s) draw of one generator)."""
-    strata = np.asarray(strata)
+def rig_draws(study: Study, resamples: int, seed: int) -> list[tuple[np.ndarray, np.ndarray]]:
+    """``resamples`` (control draws, all draws): the control rigs and the other rigs each drawn with
+    replacement, as many as there are (all draws = control draws then other draws)."""
     rng = np.random.default_rng(seed)
-    columns = []
-    for stratum in dict.fromkeys(strata.tolist()):
-        members = np.flatnonzero(strata == stratum)
-        columns.append(members[rng.integers(0, len(members), (resamples, len(members)))])
-    return np.concatenate(columns, axis=1)
+    control, other = study.control_index, study.other_index
+    out = []
+    for _ in range(resamples):
+        c = rng.choice(control, len(control), replace=True)
+        o = rng.choice(other, len(other), replace=True)
+        out.append((c, np.concatenate([c, o])))
+    return out
 
 
-def paired_rho_difference(predicted_a, predicted_b, observed, strata=None, resamples: int = DEFAULT_BOOTSTRAP,
-                          seed: int = DEFAULT_SEED) -> PairedDifference:
-    """Spearman rho of predictions a (n,) minus that of b (n,) against observed (n,), with a paired
-    bootstrap: both rhos on the same resampled pairs, resampled within ``strata`` (n,) (default one)."""
-    a, b, o = (np.asarray(v, dtype=float) for v in (predicted_a, predicted_b, observed))
-    if not (len(a) == len(b) == len(o)):
-        raise RigoptError(f"predictions and observations differ in length: {len(a)}, {len(b)}, {len(o)}")
-    rho_a, rho_b = spearman(a, o)[0], spearman(b, o)[0]
-    nan = float("nan")
-    if not (np.isfinite(rho_a) and np.isfinite(rho_b)) or resamples <= 0:
-        return PairedDifference(rho_a, rho_b, rho_a - rho_b, (nan, nan), 0, len(o))
-    index = stratified_resamples(np.zeros(len(o)) if strata is None else strata, resamples, seed)
-    ra, rb, ro = a[index], b[index], o[index]
-    usable = (np.ptp(ra, axis=1) > 0) & (np.ptp(rb, axis=1) > 0) & (np.ptp(ro, axis=1) > 0)
-    if not usable.any():
-        return PairedDifference(rho_a, rho_b, rho_a - rho_b, (nan, nan), 0, len(o))
-    ranks_o = rankdata(ro[usable], axis=1)
-    differences = (_pearson_rows(rankdata(ra[usable], axis=1), ranks_o)
-                   - _pearson_rows(rankdata(rb[usable], axis=1), ranks_o))
-    low, high = np.percentile(differences, [2.5, 97.5])
-    return PairedDifference(rho_a, rho_b, rho_a - rho_b, (float(low), float(high)), int(usable.sum()), len(o))
+def bootstrap_rhos(variant: str, study: Study, solver: str, draws) -> np.ndarray:
+    """(B, D) held-out rho per group of ``variant`` refitted on each resample of ``draws`` (rig_draws)."""
+    return np.array([group_rhos(heldout(variant, study, solver, c, a)[2],
+                                expand(study, *heldout_pairs(study, a)), len(study.groups))
+                     for c, a in draws])
 
 
-def groups_above(predicted_a, predicted_b, observed, groups) -> int:
-    """How many groups (distinct values of ``groups`` (n,)) have rho(a) > rho(b) against ``observed`` (n,);
-    an undefined rho of a is never above, an undefined rho of b is below any defined one."""
-    a, b, o, groups = (np.asarray(v) for v in (predicted_a, predicted_b, observed, groups))
-    count = 0
-    for group in dict.fromkeys(groups.tolist()):
-        mine = groups == group
-        rho_a, rho_b = spearman(a[mine], o[mine])[0], spearman(b[mine], o[mine])[0]
-        count += bool(np.isfinite(rho_a) and (not np.isfinite(rho_b) or rho_a > rho_b))
-    return count
+def percentile_interval(values) -> tuple[float, float]:
+    """95 % percentile interval of the finite ``values``; (nan, nan) when none."""
+    values = np.asarray(values, dtype=float)
+    values = values[np.isfinite(values)]
+    if len(values) == 0:
+        return float("nan"), float("nan")
+    low, high = np.percentile(values, [2.5, 97.5])
+    return float(low), float(high)
 
 
-def beats_baseline(difference: PairedDifference, above: int, needed: int) -> bool:
-    """The decision rule: the paired 95 % interval lies entirely above 0 and the variant's rho is above the
-    baseline's in at least ``needed`` groups (``above`` of them are)."""
-    return bool(np.isfinite(difference.ci[0]) and difference.ci[0] > 0 and above >= needed)
+def bootstrap_scores(rhos) -> np.ndarray:
+    """(B,) S of each resample from (B, D) rhos; NaN where any group's rho is undefined."""
+    return np.asarray(rhos, dtype=float).mean(axis=1)
+
+
+def paired_interval(rhos_a, rhos_b) -> tuple[tuple[float, float], int]:
+    """95 % interval of S(a) - S(b) over the resamples where both are defined, and how many those are."""
+    d = bootstrap_scores(rhos_a) - bootstrap_scores(rhos_b)
+    return percentile_interval(d), int(np.isfinite(d).sum())
+
+
+def jackknife_scores(variant: str, study: Study, solver: str) -> np.ndarray:
+    """(R,) held-out S with each rig left out (a control rig left out is also left out of the fit)."""
+    out = []
+    everyone = np.arange(len(study.rigs))
+    for k in everyone:
+        keep = everyone[everyone != k]
+        control = keep[study.control[keep]]
+        _, pairs, predicted = heldout(variant, study, solver, control, keep)
+        out.append(score(predicted, pairs, len(study.groups)))
+    return np.array(out)
+
+
+def jackknife_interval(estimate: float, replicates) -> tuple[float, float]:
+    """estimate +- 1.96 jackknife standard errors of ``replicates`` (n,) (NaN when any is undefined)."""
+    r = np.asarray(replicates, dtype=float)
+    se = np.sqrt((len(r) - 1) / len(r) * np.sum((r - r.mean()) ** 2))
+    return float(estimate - 1.96 * se), float(estimate + 1.96 * se)
