@@ -16,13 +16,14 @@ compare with are passed in (:mod:`rigopt.design.problem` builds the usual ones);
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import reduce
 from typing import Callable, Sequence
 
 import numpy as np
 from scipy.spatial import cKDTree
 
+from rigopt.design.naming import mount_name, unique
 from rigopt.mounting.practice import in_keep_outs
 from rigopt.mounting.rules import RigCheck, check_rig
 from rigopt.coverage.footprint import Footprint
@@ -289,13 +290,14 @@ def _best_selection(costs, sees, needed, mount, mount_points, counts, alpha, set
 
 
 def _rig_from(chosen: CandidateSet, matched: np.ndarray, reference: Rig, vehicle: Vehicle) -> Rig:
-    """A rig of the chosen candidates; cameras take the id of the reference camera they match."""
-    cameras = []
-    for k in range(len(chosen)):
-        ident = reference.cameras[matched[k]].id if matched[k] >= 0 else f"CAM_EXTRA_{k}"
-        cameras.append(chosen.camera(k, ident))
+    """A rig of the chosen candidates, in the order of the reference cameras they match; each named after
+    where it is mounted and where it looks (:mod:`rigopt.design.naming`)."""
+    cameras = [chosen.camera(k, f"CAM_{k}") for k in range(len(chosen))]
     order = np.argsort([m if m >= 0 else len(reference) + k for k, m in enumerate(matched)])
-    return Rig(f"design_{vehicle.name}_from_{reference.name}", vehicle.blueprint, tuple(cameras[k] for k in order))
+    cameras = [cameras[k] for k in order]
+    names = unique([mount_name(c.zone, c.position, c.forward) for c in cameras])
+    return Rig(f"design_{vehicle.name}_from_{reference.name}", vehicle.blueprint,
+               tuple(replace(c, id=name) for c, name in zip(cameras, names)))
 
 
 def summarise(rig: Rig, vehicle: Vehicle, references: Sequence[Rig], calibration: Calibration, needed: np.ndarray,

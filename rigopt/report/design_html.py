@@ -24,6 +24,13 @@ def _distortion_text(lens: dict) -> str:
     return f"{lens['distortion']} " + ", ".join(f"{k:.4g}" for k in lens["coefficients"])
 
 
+def _match_text(camera: dict) -> str:
+    match = camera.get("matched_reference_camera")
+    if match is None:
+        return "- (no partner: more cameras than the reference)"
+    return f"{match['id']} ({match['t_m']:.2f}, {match['r_rad']:.2f}, {match['f_deg']:.1f})"
+
+
 def _interval_text(entry: dict) -> str:
     return "-" if entry.get("interval") is None else "{:.2f} to {:.2f}".format(*entry["interval"])
 
@@ -76,13 +83,17 @@ def render_design_html(summary: dict, figures: dict[str, bytes]) -> str:
             ["continuous refinement", escape(solver["refine_status"])], ["total time", num(solver["seconds"], 1, " s")],
         ]),
         "<h2>Cameras</h2>",
-        table(["camera", "zone", "position x, y, z (m, ISO)", "hfov", "image (px)", "fx (px)", "distortion",
-               "lens hFOV x vFOV"],
-              [[escape(c["id"]), escape(c["zone"] or "-"), escape(", ".join(f"{v:.2f}" for v in c["position"])),
+        table(["camera", "zone", "location x, y, z (m, CARLA: y right)", "pitch, yaw, roll (deg, CARLA)", "hfov",
+               "image (px)", "fx (px)", "distortion", "lens hFOV x vFOV", "matched reference camera (t m, r rad, f deg)"],
+              [[escape(c["id"]), escape(c["zone"] or "-"),
+                escape(", ".join(f"{v:.2f}" for v in c["carla"]["location_m"])),
+                escape(", ".join(f"{v:.1f}" for v in c["carla"]["rotation_pitch_yaw_roll_deg"])),
                 num(c["fov"], 1, "°"), escape(f"{c['lens']['width']}x{c['lens']['height']}"),
                 num(c["lens"]["fx"], 1, ""), escape(_distortion_text(c["lens"])),
-                escape(f"{c['lens']['hfov_deg']:.1f}° x {c['lens']['vfov_deg']:.1f}°")]
-               for c in summary["cameras"]], numeric_from=3),
+                escape(f"{c['lens']['hfov_deg']:.1f}° x {c['lens']['vfov_deg']:.1f}°"), escape(_match_text(c))]
+               for c in summary["cameras"]], numeric_from=4),
+        "<p class=\"note\">RigCD of the reference to the design (unit weights): " + escape(
+            "; ".join(f"{k} {v:.3f}" for k, v in summary["rigcd_breakdown"].items())) + ".</p>",
         f'<p class="note">Rig file: {escape(summary["rig_file"])} (the benchmark\'s JSON format, CARLA frame).</p>',
     ]
     if figures:

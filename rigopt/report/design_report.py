@@ -7,6 +7,7 @@ from pathlib import Path
 
 from rigopt.design.result import DesignResult, RigSummary
 from rigopt.report.json_values import json_ready
+from rigopt.rig.model import Rig
 from rigopt.rig.pccr_format import write_rig
 
 
@@ -25,6 +26,40 @@ def summary_dict(summary: RigSummary) -> dict:
             "meets_coverage_requirements": summary.meets_requirements,
             "per_reference": [{"reference": q.reference, "predicted_drop": q.predicted_drop, "rigcd": q.rigcd}
                               for q in summary.predictions]}
+
+
+def camera_rows(rig: Rig, reference: Rig) -> list[dict]:
+    """Each designed camera for an engineer: id (where it is mounted and looks), zone, lens, its pose twice
+    (``position`` m in rigopt's ISO frame: x forward, y left, z up; ``carla``: the rig file's location m and
+    [pitch, yaw, roll] deg, y right), and the reference camera it is matched to by RigCD (unit weights) with
+    that pair's t (m), r (rad), f (deg)."""
+    from rigopt.geometry import iso_to_carla
+    from rigopt.metrics.rigcd import camera_costs, rigcd
+
+    partner = {b: a for a, b in rigcd(reference, rig).pairs}
+    by_id = {c.id: c for c in reference.cameras}
+    location, rotation = iso_to_carla(rig.positions, rig.rotations)
+    rows = []
+    for k, camera in enumerate(rig.cameras):
+        row = {"id": camera.id, "zone": camera.zone, "fov": camera.fov, "position": camera.position.tolist(),
+               "carla": {"location_m": location[k].tolist(), "rotation_pitch_yaw_roll_deg": rotation[k].tolist()},
+               "lens": camera.lens_model.summary(), "matched_reference_camera": None}
+        if camera.id in partner:
+            ref = by_id[partner[camera.id]]
+            t, r, f = (float(v.item()) for v in camera_costs(ref.position[None], ref.rotation[None], [ref.fov],
+                                                     camera.position[None], camera.rotation[None], [camera.fov]))
+            row["matched_reference_camera"] = {"id": ref.id, "t_m": t, "r_rad": r, "f_deg": f}
+        rows.append(row)
+    return rows
+
+
+def rigcd_breakdown(rig: Rig, reference: Rig) -> dict:
+    """RigCD of reference -> design with unit weights and its components: rigcd, match, count, t m, r rad,
+    f deg."""
+    from rigopt.metrics.rigcd import rigcd
+
+    b = rigcd(reference, rig)
+    return {"rigcd": b.rigcd, "match": b.match, "count": b.count, "t_m": b.t, "r_rad": b.r, "f_deg": b.f}
 
 
 def design_dict(result: DesignResult, rig_file: Path | None) -> dict:
@@ -46,8 +81,8 @@ def design_dict(result: DesignResult, rig_file: Path | None) -> dict:
         "solver": {"milp_status": milp.status, "milp_gap": milp.gap, "milp_seconds": milp.selection.seconds,
                    "refine_status": result.refinement.status, "candidates": milp.n_candidates,
                    "offered_to_milp": milp.n_offered, "repairs": milp.repairs, "seconds": result.seconds},
-        "cameras": [{"id": c.id, "zone": c.zone, "fov": c.fov, "position": c.position.tolist(),
-                     "lens": c.lens_model.summary()} for c in design.rig.cameras],
+        "cameras": camera_rows(design.rig, result.references[0].rig),
+        "rigcd_breakdown": rigcd_breakdown(design.rig, result.references[0].rig),
         "comparisons": {
             "naive_transfer": summary_dict(comparisons.naive_transfer) if comparisons.naive_transfer else None,
             "benchmark_rig": summary_dict(comparisons.best_rig) if comparisons.best_rig else None,

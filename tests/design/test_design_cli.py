@@ -10,6 +10,7 @@ import os
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 from typer.testing import CliRunner
 
@@ -168,3 +169,18 @@ def test_bad_input_exits_2_with_one_error_line(bad_runs, case):
 
 def test_bad_input_writes_no_design_folder(bad_runs):
     assert list(bad_runs["cwd"].iterdir()) == []
+
+
+def test_each_camera_reports_its_carla_pose_and_the_reference_camera_it_matches(design_run):
+    from rigopt.geometry import iso_to_carla
+    from rigopt.rig.library import load_rig
+
+    summary, _, _ = design_run
+    reference = {c.id for c in load_rig("R1").cameras}
+    matched = [c["matched_reference_camera"] for c in summary["cameras"]]
+    assert sorted(m["id"] for m in matched) == sorted(reference)  # 8 cameras, one partner each
+    for camera in summary["cameras"]:
+        location, _ = iso_to_carla(np.array([camera["position"]]), np.eye(3)[None])
+        assert camera["carla"]["location_m"] == pytest.approx(location[0].tolist())
+    breakdown = summary["rigcd_breakdown"]
+    assert breakdown["t_m"] == pytest.approx(np.mean([m["t_m"] for m in matched]), rel=1e-9)

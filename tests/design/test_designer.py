@@ -125,9 +125,14 @@ def test_design_has_the_references_camera_count_by_default(firetruck):
     assert len(firetruck.milp_rig) == 8
 
 
-def test_design_cameras_are_named_after_the_reference_cameras_they_match(firetruck):
-    ids = [c.id for c in firetruck.design.rig.cameras]
-    assert sorted(ids) == sorted(c.id for c in firetruck.reference.cameras)
+def test_design_cameras_are_named_after_where_they_are_mounted_and_look(firetruck):
+    from rigopt.design.naming import look_of
+
+    rig = firetruck.milp_rig
+    assert len({c.id for c in rig.cameras}) == len(rig)
+    for camera in rig.cameras:
+        assert camera.id.startswith(f"CAM_{camera.zone.upper()}")
+        assert f"_TO_{look_of(camera.forward)}" in camera.id
 
 
 def test_naive_transfer_has_one_camera_per_reference_camera(firetruck):
