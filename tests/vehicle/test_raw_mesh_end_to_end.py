@@ -76,6 +76,19 @@ def test_show_check_and_design_work_on_it(session):
     assert (tmp / "design").is_dir()
 
 
+def test_the_design_puts_no_camera_on_a_wheel_or_below_half_a_metre(session, monkeypatch):
+    runs, tmp, _, _ = session
+    from rigopt.mounting.practice import on_wheels
+    from rigopt.vehicle.library import load_vehicle
+
+    monkeypatch.setenv("RIGOPT_HOME", str(tmp / "home"))
+    vehicle = load_vehicle("simcar")
+    assert len(vehicle.wheels) == 4  # found on the mesh
+    positions = np.array([c["position"] for c in json.loads(runs["design"].stdout)["cameras"]])
+    assert on_wheels(vehicle, positions, clearance=0.05) == [[]] * len(positions)
+    assert (positions[:, 2] >= 0.5 - 1e-6).all()
+
+
 def test_the_vehicle_knows_its_rear_axle(session, monkeypatch):
     _, tmp, _, _ = session
     from rigopt.vehicle.library import load_vehicle
