@@ -11,9 +11,8 @@ import typer
 from rigopt.cli.app import (FORCE_HELP, MIN_HEIGHT_HELP, NO_TRAILER_HELP, app, more_than, mount_rules, print_json,
                             print_table)
 from rigopt.cli.metric_commands import METRIC_HELP
-from rigopt.design.settings import (DEFAULT_LENSES, DEFAULT_PITCHES_DEG, DEFAULT_YAW_STEP_DEG, DesignSettings,
-                                    lens_catalogue, pinhole_catalogue, range_lenses, read_catalogue)
-from rigopt.rig.model import DEFAULT_IMAGE_SIZE
+from rigopt.design.defaults import BENCHMARK_IMAGE_SIZE as DEFAULT_IMAGE_SIZE
+from rigopt.design.defaults import DEFAULT_LENSES, DEFAULT_PITCHES_DEG, DEFAULT_YAW_STEP_DEG
 from rigopt.errors import RigoptError
 
 
@@ -50,6 +49,8 @@ def parse_camera_count(text: Optional[str]) -> tuple[int, int] | None:
 def parse_lenses(text: str) -> tuple[tuple[float, ...], tuple[float, float] | None]:
     """A lens catalogue ``"60,65,70"``, or a continuous range ``"60-120"`` (its lenses by the library's rule,
     ``design.settings.range_lenses``). Returns (lenses, range or None)."""
+    from rigopt.design.settings import lens_catalogue, range_lenses
+
     if "-" in text.strip()[1:] and "," not in text:
         low_text, _, high_text = text.partition("-")
         fov_range = (parse_numbers(low_text, "--fov")[0], parse_numbers(high_text, "--fov")[0])
@@ -119,6 +120,7 @@ def design_command(
 
     from rigopt.design.designer import design_rig
     from rigopt.design.problem import benchmark_rigs
+    from rigopt.design.settings import DesignSettings, pinhole_catalogue, read_catalogue
     from rigopt.cli.app import note_fallback
     from rigopt.metrics.calibration import load_weights
     from rigopt.output import atomic_folder, check_out_folder, published

@@ -21,21 +21,13 @@ from typing import TYPE_CHECKING, Sequence
 import numpy as np
 
 from rigopt.camera import DISTORTION_COEFFICIENTS, Lens
+from rigopt.design.defaults import DEFAULT_LENSES, DEFAULT_PITCHES_DEG, DEFAULT_YAW_STEP_DEG, RANGE_STEP
 from rigopt.errors import DataError, RigoptError, not_utf8
 from rigopt.rig.model import DEFAULT_IMAGE_SIZE, Camera
 
 if TYPE_CHECKING:
     from rigopt.mounting.rules import MountRules
     from rigopt.coverage.measures import CoverageSettings
-
-#: The default lens catalogue: horizontal FOVs (deg) of the benchmark's pinholes a design may use.
-DEFAULT_LENSES = (60.0, 65.0, 70.0, 75.0, 80.0, 90.0, 100.0, 110.0, 120.0)
-#: Pitch angles (deg, > 0 up) of the orientation grid.
-DEFAULT_PITCHES_DEG = (-20.0, -10.0, 0.0, 10.0)
-#: Step (deg) of the yaw grid, from -180 deg.
-DEFAULT_YAW_STEP_DEG = 10.0
-#: Step (deg) of the discrete lenses that seed a continuous FOV range.
-RANGE_STEP = 10.0
 
 
 def _design_coverage() -> CoverageSettings:

@@ -22,3 +22,10 @@ def test_names_carry_zone_side_and_look_and_skip_a_side_the_zone_already_says():
 
 def test_repeated_names_are_numbered_in_order():
     assert unique(["A", "B", "A", "A"]) == ["A", "B", "A_2", "A_3"]
+
+
+def test_the_designs_plain_defaults_match_the_library():
+    from rigopt.design.defaults import BENCHMARK_IMAGE_SIZE
+    from rigopt.rig.model import DEFAULT_IMAGE_SIZE
+
+    assert BENCHMARK_IMAGE_SIZE == DEFAULT_IMAGE_SIZE
