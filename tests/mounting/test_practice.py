@@ -41,10 +41,11 @@ def test_wheel_keep_outs_cover_tyre_and_arch_lip_but_not_a_fender_camera_above(f
     assert found[0] == ["rear-right wheel"] and found[1] == [] and found[2] == []
 
 
-def test_every_benchmark_rig_stays_valid_on_its_own_vehicle():
+def test_every_benchmark_rig_stays_clear_of_wheels_heights_and_keep_out_volumes():
+    # R9 (the benchmark's solo tractor) is checked against a coupled trailer's view in test_builtin_vehicles
     for name in rig_names():
         rig = load_rig(name)
-        assert check_rig(rig, load_vehicle(rig.vehicle)).valid, name
+        assert practical(load_vehicle(rig.vehicle), rig.positions).all(), name
 
 
 def test_the_minimum_lens_height_comes_from_the_rules_else_the_vehicle_else_half_a_metre(firetruck):
