@@ -17,7 +17,7 @@ from rigopt.design.settings import CatalogueCamera, catalogue_of
 from rigopt.mounting.rules import MountRules
 from rigopt.errors import RigoptError
 from rigopt.geometry import rotation_from_yaw_pitch_roll
-from rigopt.mounting.candidates import clear_directions
+from rigopt.mounting.candidates import body_fraction, clear_directions
 from rigopt.mounting.sampling import sample_zone_points
 from rigopt.vehicle.model import Vehicle
 
@@ -68,11 +68,12 @@ class CandidateSet:
 
 
 def build_candidates(vehicle: Vehicle, lenses, spacing: float, yaws_deg, pitches_deg, zones=None,
-                     rules: MountRules = MountRules()) -> CandidateSet:
+                     rules: MountRules = MountRules(), max_body_fraction: float | None = None) -> CandidateSet:
     """Every clear (mount point, pitch, yaw, catalogue camera) combination as a candidate camera.
 
     lenses : the catalogue: CatalogueCameras, Lenses or FOVs (deg, benchmark pinholes), taken once each in
-    the order of their FOVs (cameras of equal FOV in the given order)."""
+    the order of their FOVs (cameras of equal FOV in the given order); max_body_fraction : drop candidates
+    whose image shows more of the ego body than this share (:func:`mounting.candidates.body_fraction`)."""
     unique = list(dict.fromkeys(catalogue_of(lenses)))
     catalogue = tuple(sorted(unique, key=lambda c: c.fov))
     points, normals, names = sample_zone_points(vehicle, spacing, zones, rules=rules)
@@ -89,4 +90,12 @@ def build_candidates(vehicle: Vehicle, lenses, spacing: float, yaws_deg, pitches
         raise RigoptError(f"no mount point of {vehicle.name} has a clear view in any direction of the grid; "
                           "allow more zones or pitch angles")
     rotations = rotation_from_yaw_pitch_roll(yaw, pitch, np.zeros_like(yaw))
+    candidates = CandidateSet(points[mount], rotations, fov, yaw, pitch, mount, points, normals, names, lens, catalogue)
+    if max_body_fraction is None:
+        return candidates
+    keep = body_fraction(vehicle, candidates.positions, rotations, candidates.model()) <= max_body_fraction
+    if not keep.any():
+        raise RigoptError(f"every candidate camera of {vehicle.name} sees more than {max_body_fraction:.0%} of its "
+                          "own body; allow more zones or pitch angles, or raise the body share allowed")
+    mount, pitch, yaw, fov, lens, rotations = mount[keep], pitch[keep], yaw[keep], fov[keep], lens[keep], rotations[keep]
     return CandidateSet(points[mount], rotations, fov, yaw, pitch, mount, points, normals, names, lens, catalogue)

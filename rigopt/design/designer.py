@@ -136,7 +136,7 @@ def mount_candidates(vehicle: Vehicle, settings: DesignSettings, spacing: float 
     spacing = spacing or settings.spacing or default_spacing(vehicle, settings)
     yaws = np.arange(-180.0, 180.0, settings.yaw_step_deg)
     return build_candidates(vehicle, settings.lenses, spacing, yaws, settings.pitches_deg, settings.zones,
-                            settings.rules)
+                            settings.rules, settings.max_body_fraction)
 
 
 def fleet_requirements(references: Sequence[ReferenceRig], settings: DesignSettings,

@@ -223,9 +223,13 @@ class DesignSettings:
     """The rings and sectors of the coverage requirements (rings at 2, 5, 10, 20 m, 36 sectors)."""
     rules: MountRules = field(default_factory=_mount_rules)
     """The mount checks every camera of a design passes."""
+    max_body_fraction: float | None = 0.10
+    """Largest share of a designed camera's image that may show the ego body (None: no limit)."""
 
     def __post_init__(self):
         object.__setattr__(self, "lenses", catalogue_of(self.lenses))
+        if self.max_body_fraction is not None and not 0.0 <= self.max_body_fraction <= 1.0:
+            raise RigoptError(f"the largest ego-body share of an image must be in [0, 1], got {self.max_body_fraction}")
 
     @property
     def fovs(self) -> tuple[float, ...]:

@@ -83,3 +83,22 @@ def mount_candidates(vehicle: Vehicle, spacing: float = DEFAULT_SPACING, fov: fl
     clear = clear_directions(vehicle, points, yaws, pitches, fov, rules)
     hfov = fov.hfov if isinstance(fov, Lens) else fov
     return MountCandidates(points, normals, names, yaws, pitches, clear, float(hfov))
+
+
+#: Image grid (columns, rows) the ego-body share of a candidate's image is estimated on.
+BODY_GRID = (8, 5)
+#: Rays that meet the body within this distance (m) count as seeing it.
+BODY_RANGE_M = 30.0
+
+
+def body_fraction(vehicle: Vehicle, positions, rotations, model: CameraModel, grid=BODY_GRID) -> np.ndarray:
+    """(n,) float: the share of each camera's image that shows the ego body, estimated on a ``grid`` of image
+    cells (rays through their centres from the lens, body within BODY_RANGE_M).
+
+    positions : (n, 3) m; rotations : (n, 3, 3) R_vehicle_cam; model : CameraModel of batch shape (n,).
+    """
+    rays = model.grid_rays(grid)  # (n, g, 3) camera body frame
+    directions = np.einsum("nij,ngj->ngi", np.asarray(rotations, dtype=float), rays)
+    origins = np.asarray(positions, dtype=float)[:, None, :] + 0.02 * directions
+    distance = first_hit_distance(vehicle.mesh, origins.reshape(-1, 3), directions.reshape(-1, 3))
+    return (distance.reshape(directions.shape[:2]) <= BODY_RANGE_M).mean(axis=1)
