@@ -145,7 +145,7 @@ def fleet_requirements(references: Sequence[ReferenceRig], settings: DesignSetti
     ``target`` vehicle, none at its sector points that lie inside its keep-outs in force (a coupled trailer
     fills the space behind a tractor: there is nothing there to see)."""
     needed = np.max([requirements(r.rig, r.vehicle, settings) for r in references], axis=0)
-    if target is not None:
+    if target is not None and settings.rules.practice.enabled:
         points = sector_points(Footprint.of_mesh(target.mesh), settings.coverage)[0]
         inside = np.array([bool(b) for b in in_keep_outs(target, points, settings.rules.practice.lifted)])
         needed = np.where(inside, 0, needed)

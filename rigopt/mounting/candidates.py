@@ -66,7 +66,8 @@ def clear_directions(vehicle: Vehicle, points, yaws, pitches, lens: float | Lens
     directions = np.broadcast_to(rays[None], origins.shape)
     distance = first_hit_distance(vehicle.mesh, origins.reshape(-1, 3), directions.reshape(-1, 3))
     hit = distance <= rules.frustum_range - rules.near
-    blockers = keep_out_boxes(vehicle, rules.practice.lifted, occluding_only=True)  # e.g. a coupled trailer
+    # keep-outs that block views, e.g. a coupled trailer
+    blockers = keep_out_boxes(vehicle, rules.practice.lifted, occluding_only=True) if rules.practice.enabled else []
     if blockers:
         hit |= segments_hit_boxes(origins.reshape(-1, 3), directions.reshape(-1, 3), rules.frustum_range - rules.near,
                                   blockers)

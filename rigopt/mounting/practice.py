@@ -28,13 +28,15 @@ DEFAULT_MIN_HEIGHT = 0.5
 @dataclass(frozen=True)
 class MountPractice:
     """The practice rules' settings: ``min_height`` m (None: the vehicle's, else DEFAULT_MIN_HEIGHT),
-    ``wheel_clearance`` m around each tyre (its arch lip; a fender camera above the arch, as on the benchmark's
+    ``enabled`` False switches every practice rule off (to measure what practice costs); ``wheel_clearance`` m
+    around each tyre (its arch lip; a fender camera above the arch, as on the benchmark's
     cars 8-17 cm from the tread, stays allowed), ``lifted`` names of optional keep-outs
     switched off (e.g. ``("trailer",)`` for a tractor unit driven solo)."""
 
     min_height: float | None = None
     wheel_clearance: float = 0.05
     lifted: tuple[str, ...] = ()
+    enabled: bool = True
 
     def height_floor(self, vehicle: Vehicle) -> float:
         """The minimum lens height (m) on ``vehicle``."""
@@ -105,6 +107,8 @@ def segments_hit_boxes(starts, directions, length: float, boxes) -> np.ndarray:
 def practice_problems(vehicle: Vehicle, points, practice: MountPractice = MountPractice()) -> list[list[str]]:
     """For each lens position (n, 3) m: what mounting practice forbids there (empty lists where nothing)."""
     points = np.atleast_2d(np.asarray(points, dtype=float))
+    if not practice.enabled:
+        return [[] for _ in range(len(points))]
     floor = practice.height_floor(vehicle)
     wheels = on_wheels(vehicle, points, practice.wheel_clearance)
     boxes = in_keep_outs(vehicle, points, practice.lifted)

@@ -152,8 +152,8 @@ def check_rig(rig: Rig, vehicle: Vehicle, rules: MountRules = MountRules()) -> R
              if m is not None}
     posts = {k: p for k, p in posts.items() if p is not None}
     practice = practice_problems(vehicle, rig.positions, rules.practice)
-    blockers = [(box_object(low, high), label) for low, high, label in
-                keep_out_boxes(vehicle, rules.practice.lifted, occluding_only=True)]
+    in_force = keep_out_boxes(vehicle, rules.practice.lifted, occluding_only=True) if rules.practice.enabled else []
+    blockers = [(box_object(low, high), label) for low, high, label in in_force]
     checks = []
     for k, camera in enumerate(rig.cameras):
         problems = list(practice[k])

@@ -96,3 +96,11 @@ def test_a_keep_out_with_min_not_below_max_names_the_file():
             "keep_out": [{"name": "k", "min": [0, 0, 0], "max": [0, 1, 1]}]}
     with pytest.raises(DataError, match="keep_out 0 .k.*'min' must be below 'max'"):
         spec_from_dict(data, "v.toml")
+
+
+def test_practice_switched_off_allows_what_it_forbids(firetruck, hgv):
+    off = MountPractice(enabled=False)
+    assert practice_problems(firetruck, [[-2.75, -1.28, 0.55], [3.0, 0.0, 0.3]], off) == [[], []]
+    rig = Rig("behind", hgv.blueprint, (Camera("CAM_MUDGUARD", [-2.5, 0.96, 1.25], np.eye(3), 90.0),))
+    problems = check_rig(rig, hgv, MountRules(practice=off)).cameras[0].problems
+    assert not any("keep-out" in p or "trailer" in p for p in problems)
