@@ -128,3 +128,20 @@ def practice_problems(vehicle: Vehicle, points, practice: MountPractice = MountP
 def practical(vehicle: Vehicle, points, practice: MountPractice = MountPractice()) -> np.ndarray:
     """(n,) bool: lens positions mounting practice allows."""
     return np.array([not p for p in practice_problems(vehicle, points, practice)], dtype=bool)
+
+
+#: Spray from a tyre reaches about this far (m) around it, fore and aft and above its top.
+SPRAY_REACH_M = 0.6
+
+
+def spray_exposure(vehicle: Vehicle, points) -> list[str]:
+    """For each lens position (n, 3) m: "high" where tyre spray and road dirt reach it (outboard, within
+    SPRAY_REACH_M of a tyre's tread in x and z), else "low". A soft attribute shown in reports."""
+    points = np.atleast_2d(np.asarray(points, dtype=float))
+    high = np.zeros(len(points), dtype=bool)
+    for centre, radius, width in vehicle.wheels:
+        side = np.sign(centre[1]) or 1.0
+        outboard = side * points[:, 1] >= abs(centre[1]) - width / 2.0
+        near = np.hypot(points[:, 0] - centre[0], points[:, 2] - centre[2]) <= radius + SPRAY_REACH_M
+        high |= outboard & near
+    return ["high" if h else "low" for h in high]

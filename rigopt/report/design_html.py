@@ -84,13 +84,14 @@ def render_design_html(summary: dict, figures: dict[str, bytes]) -> str:
         ]),
         "<h2>Cameras</h2>",
         table(["camera", "zone", "location x, y, z (m, CARLA: y right)", "pitch, yaw, roll (deg, CARLA)", "hfov",
-               "image (px)", "fx (px)", "distortion", "lens hFOV x vFOV", "matched reference camera (t m, r rad, f deg)"],
+               "image (px)", "fx (px)", "distortion", "lens hFOV x vFOV", "matched reference camera (t m, r rad, f deg)", "zone cost", "tyre spray"],
               [[escape(c["id"]), escape(c["zone"] or "-"),
                 escape(", ".join(f"{v:.2f}" for v in c["carla"]["location_m"])),
                 escape(", ".join(f"{v:.1f}" for v in c["carla"]["rotation_pitch_yaw_roll_deg"])),
                 num(c["fov"], 1, "°"), escape(f"{c['lens']['width']}x{c['lens']['height']}"),
                 num(c["lens"]["fx"], 1, ""), escape(_distortion_text(c["lens"])),
-                escape(f"{c['lens']['hfov_deg']:.1f}° x {c['lens']['vfov_deg']:.1f}°"), escape(_match_text(c))]
+                escape(f"{c['lens']['hfov_deg']:.1f}° x {c['lens']['vfov_deg']:.1f}°"), escape(_match_text(c)),
+                num(c.get("zone_cost"), 2, ""), escape(c.get("spray") or "-")]
                for c in summary["cameras"]], numeric_from=4),
         "<p class=\"note\">RigCD of the reference to the design (unit weights): " + escape(
             "; ".join(f"{k} {v:.3f}" for k, v in summary["rigcd_breakdown"].items())) + ".</p>",

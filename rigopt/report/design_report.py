@@ -28,22 +28,29 @@ def summary_dict(summary: RigSummary) -> dict:
                               for q in summary.predictions]}
 
 
-def camera_rows(rig: Rig, reference: Rig) -> list[dict]:
+def camera_rows(rig: Rig, reference: Rig, vehicle=None) -> list[dict]:
     """Each designed camera for an engineer: id (where it is mounted and looks), zone, lens, its pose twice
     (``position`` m in rigopt's ISO frame: x forward, y left, z up; ``carla``: the rig file's location m and
     [pitch, yaw, roll] deg, y right), and the reference camera it is matched to by RigCD (unit weights) with
-    that pair's t (m), r (rad), f (deg)."""
+    that pair's t (m), r (rad), f (deg); with the ``vehicle``, its zone's mounting ``zone_cost`` and its
+    tyre ``spray`` exposure (high / low)."""
     from rigopt.geometry import iso_to_carla
     from rigopt.metrics.rigcd import camera_costs, rigcd
+    from rigopt.mounting.practice import spray_exposure
 
     partner = {b: a for a, b in rigcd(reference, rig).pairs}
     by_id = {c.id: c for c in reference.cameras}
     location, rotation = iso_to_carla(rig.positions, rig.rotations)
+    spray = spray_exposure(vehicle, rig.positions) if vehicle is not None else None
     rows = []
     for k, camera in enumerate(rig.cameras):
         row = {"id": camera.id, "zone": camera.zone, "fov": camera.fov, "position": camera.position.tolist(),
                "carla": {"location_m": location[k].tolist(), "rotation_pitch_yaw_roll_deg": rotation[k].tolist()},
                "lens": camera.lens_model.summary(), "matched_reference_camera": None}
+        if vehicle is not None:
+            costs = {z.name: z.cost for z in vehicle.zones}
+            row["zone_cost"] = costs.get(camera.zone)
+            row["spray"] = spray[k]
         if camera.id in partner:
             ref = by_id[partner[camera.id]]
             t, r, f = (float(v.item()) for v in camera_costs(ref.position[None], ref.rotation[None], [ref.fov],
@@ -81,7 +88,7 @@ def design_dict(result: DesignResult, rig_file: Path | None) -> dict:
         "solver": {"milp_status": milp.status, "milp_gap": milp.gap, "milp_seconds": milp.selection.seconds,
                    "refine_status": result.refinement.status, "candidates": milp.n_candidates,
                    "offered_to_milp": milp.n_offered, "repairs": milp.repairs, "seconds": result.seconds},
-        "cameras": camera_rows(design.rig, result.references[0].rig),
+        "cameras": camera_rows(design.rig, result.references[0].rig, result.vehicle),
         "rigcd_breakdown": rigcd_breakdown(design.rig, result.references[0].rig),
         "comparisons": {
             "naive_transfer": summary_dict(comparisons.naive_transfer) if comparisons.naive_transfer else None,

@@ -21,7 +21,7 @@ ZONE_QUERY_EDGE = 0.05
 class Zone:
     """One mounting region: box [``min``, ``max``] (3,) m and outward-normal cone around ``normal`` (3,);
     ``raised_max`` m > 0 makes it a raised zone (a camera may sit that far above it on a post along
-    ``normal``)."""
+    ``normal``); ``cost`` its relative mounting cost (1 an ordinary body panel)."""
 
     name: str
     min: np.ndarray
@@ -29,6 +29,7 @@ class Zone:
     normal: np.ndarray
     cone_deg: float
     raised_max: float = 0.0
+    cost: float = 1.0
 
     @property
     def raised(self) -> bool:
@@ -45,11 +46,11 @@ def expand_zones(specs: tuple[ZoneSpec, ...]) -> tuple[Zone, ...]:
     zones = []
     flip = np.array([1.0, -1.0, 1.0])
     for z in specs:
-        zones.append(Zone(z.name, z.min, z.max, z.normal, z.cone_deg, z.raised_max))
+        zones.append(Zone(z.name, z.min, z.max, z.normal, z.cone_deg, z.raised_max, z.cost))
         if z.mirrored:
             low, high = z.min * flip, z.max * flip
             zones.append(Zone(z.name, np.minimum(low, high), np.maximum(low, high), z.normal * flip, z.cone_deg,
-                              z.raised_max))
+                              z.raised_max, z.cost))
     return tuple(zones)
 
 

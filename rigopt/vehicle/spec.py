@@ -40,6 +40,7 @@ vehicle origin on the ground). A spec file::
     normal = [1, 0, 0]
     cone_deg = 80
     mirrored = false                        # true adds the zone reflected to -y under the same name
+    cost = 1.0                              # optional: relative mounting cost (1 an ordinary body panel)
     raised_max = 0.0                        # optional: a raised zone (roof rack, pod, mast): a camera may
                                             # sit up to this far (m) above the surface, on a post along
                                             # `normal` (see rigopt.mounting.rules)
@@ -118,6 +119,7 @@ class ZoneSpec:
     cone_deg: float
     mirrored: bool = False
     raised_max: float = 0.0
+    cost: float = 1.0
 
 
 @dataclass(frozen=True)
@@ -288,8 +290,11 @@ class _Reader:
         raised = self.number(table, "raised_max", where, positive=False) if "raised_max" in table else 0.0
         if raised < 0:
             raise self.fail(where, f"'raised_max' is a height above the surface in metres, >= 0, got {raised}")
+        cost = self.number(table, "cost", where, positive=False) if "cost" in table else 1.0
+        if cost < 0:
+            raise self.fail(where, f"'cost' is a relative mounting cost, >= 0 (1 an ordinary body panel), got {cost}")
         return ZoneSpec(name, low, high, normal / np.linalg.norm(normal), cone, self.flag(table, "mirrored", where),
-                        raised)
+                        raised, cost)
 
 
     def keep_out(self, table: dict, index: int) -> KeepOutSpec:

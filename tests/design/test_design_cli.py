@@ -182,5 +182,6 @@ def test_each_camera_reports_its_carla_pose_and_the_reference_camera_it_matches(
     for camera in summary["cameras"]:
         location, _ = iso_to_carla(np.array([camera["position"]]), np.eye(3)[None])
         assert camera["carla"]["location_m"] == pytest.approx(location[0].tolist())
+    assert all(camera["spray"] in ("high", "low") and camera["zone_cost"] == 1.0 for camera in summary["cameras"])
     breakdown = summary["rigcd_breakdown"]
     assert breakdown["t_m"] == pytest.approx(np.mean([m["t_m"] for m in matched]), rel=1e-9)

@@ -104,3 +104,19 @@ def test_practice_switched_off_allows_what_it_forbids(firetruck, hgv):
     rig = Rig("behind", hgv.blueprint, (Camera("CAM_MUDGUARD", [-2.5, 0.96, 1.25], np.eye(3), 90.0),))
     problems = check_rig(rig, hgv, MountRules(practice=off)).cameras[0].problems
     assert not any("keep-out" in p or "trailer" in p for p in problems)
+
+
+def test_spray_exposure_is_high_beside_a_tyre_and_low_away_from_it(firetruck):
+    from rigopt.mounting.practice import spray_exposure
+
+    beside_rear_tyre, front_bumper_top = [-2.0, -1.44, 0.7], [3.9, 0.0, 1.2]
+    assert spray_exposure(firetruck, [beside_rear_tyre, front_bumper_top]) == ["high", "low"]
+
+
+def test_a_zone_cost_is_read_and_checked():
+    base = {"name": "v", "solids": [{"name": "b", "type": "box", "center": [0, 0, 1], "size": [4, 2, 1]}]}
+    zone = {"name": "roof", "min": [-2, -1, 1.4], "max": [2, 1, 1.6], "normal": [0, 0, 1], "cone_deg": 30}
+    assert spec_from_dict({**base, "zones": [{**zone, "cost": 2.5}]}).zones[0].cost == 2.5
+    assert spec_from_dict({**base, "zones": [zone]}).zones[0].cost == 1.0
+    with pytest.raises(DataError, match="'cost' is a relative mounting cost"):
+        spec_from_dict({**base, "zones": [{**zone, "cost": -1}]}, "v.toml")
