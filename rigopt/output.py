@@ -119,13 +119,21 @@ def atomic_folder(path, *, force: bool = False, option: str = "--out") -> Iterat
         work.mkdir(parents=True)
     except OSError as error:
         raise RigoptError(f"{option} {path}: cannot create the folder ({_io_problem(error)})") from None
-    try:
+    with _published_or_removed(work, path, option, "the output", _publish_folder):
         yield work
-        _publish_folder(work, path)
+
+
+@contextlib.contextmanager
+def _published_or_removed(work: Path, path: Path, option: str, what: str, publish) -> Iterator[None]:
+    """Around writing into ``work``: ``publish(work, path)`` when the block ends; on any exception ``work`` is
+    removed, and an OSError becomes a RigoptError naming ``path`` (``what`` could not be written)."""
+    try:
+        yield
+        publish(work, path)
     except OSError as error:
         _remove(work)
-        raise RigoptError(f"{option} {path}: cannot write the output ({_io_problem(error)}); nothing was "
-                          "changed there") from None
+        raise RigoptError(f"{option} {path}: cannot write {what} ({_io_problem(error)}); nothing was changed "
+                          "there") from None
     except BaseException:
         _remove(work)
         raise
@@ -157,16 +165,8 @@ def atomic_file(path, *, option: str = "--out") -> Iterator[Path]:
         path.parent.mkdir(parents=True, exist_ok=True)
     except OSError as error:
         raise RigoptError(f"{option} {path}: cannot create its folder ({_io_problem(error)})") from None
-    try:
+    with _published_or_removed(work, path, option, "the file", os.replace):
         yield work
-        os.replace(work, path)
-    except OSError as error:
-        _remove(work)
-        raise RigoptError(f"{option} {path}: cannot write the file ({_io_problem(error)}); nothing was changed "
-                          "there") from None
-    except BaseException:
-        _remove(work)
-        raise
 
 
 def write_text_atomic(path, text: str, *, option: str = "--out") -> Path:

@@ -106,11 +106,12 @@ def validate_design(design: Rig, reference: str, family: str, data, calibration:
     predictions = predict_transfer(reference_rig, [rig for _, rig in rigs], calibration)
     entries = []
     for k, ((role, rig), prediction) in enumerate(zip(rigs, predictions), start=1):
+        predicted = prediction.to_dict()
         entries.append({"role": role, "rig": rig.name, "n_cameras": len(rig), "mAP": finite_or_none(maps[k]),
                         "measured_drop": finite_or_none(drops[k]), "measured_drop_ci": interval(resampled_drops[:, k]),
                         "predicted_drop": prediction.predicted_drop,
-                        "predicted_interval": prediction.to_dict()["interval"],
-                        "extrapolation": prediction.to_dict()["extrapolation"], "rigcd": prediction.rigcd})
+                        "predicted_interval": predicted["interval"], "extrapolation": predicted["extrapolation"],
+                        "rigcd": prediction.rigcd})
     design_minus = [{"rig": names[k - 1], "role": rigs[k - 1][0], "difference": finite_or_none(drops[1] - drops[k]),
                      "ci": interval(resampled_drops[:, 1] - resampled_drops[:, k])} for k in range(2, len(test_rigs))]
     return {"reference": reference_rig.name, "model": family, "checkpoint": str(checkpoint),

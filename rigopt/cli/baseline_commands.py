@@ -11,7 +11,7 @@ from typing import List, Optional
 
 import typer
 
-from rigopt.cli.app import app, console, print_json, print_table, status_console
+from rigopt.cli.app import app, console, note_fallback, print_json, print_table, status_console
 from rigopt.cli.bench_commands import bench_app
 from rigopt.cli.metric_commands import METRIC_HELP
 from rigopt.errors import RigoptError
@@ -171,7 +171,6 @@ def validate_command(
     from rigopt.baselines.config import model_config
     from rigopt.baselines.models import resolve_device
     from rigopt.baselines.validation import load_design, validate_design
-    from rigopt.cli.app import note_fallback
     from rigopt.metrics.calibration import load_weights
     from rigopt.report.json_values import json_ready
 

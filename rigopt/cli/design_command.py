@@ -8,8 +8,8 @@ from typing import Optional
 
 import typer
 
-from rigopt.cli.app import (FORCE_HELP, MIN_HEIGHT_HELP, NO_TRAILER_HELP, app, more_than, mount_rules, print_json,
-                            print_table)
+from rigopt.cli.app import (FORCE_HELP, MIN_HEIGHT_HELP, NO_TRAILER_HELP, app, more_than, mount_rules, note,
+                            note_fallback, print_json, print_table)
 from rigopt.cli.metric_commands import METRIC_HELP
 from rigopt.design.defaults import BENCHMARK_IMAGE_SIZE as DEFAULT_IMAGE_SIZE
 from rigopt.design.defaults import DEFAULT_LENSES, DEFAULT_PITCHES_DEG, DEFAULT_YAW_STEP_DEG
@@ -121,7 +121,6 @@ def design_command(
     from rigopt.design.designer import design_rig
     from rigopt.design.problem import benchmark_rigs
     from rigopt.design.settings import DesignSettings, pinhole_catalogue, read_catalogue
-    from rigopt.cli.app import note_fallback
     from rigopt.metrics.calibration import load_weights
     from rigopt.output import atomic_folder, check_out_folder, published
     from rigopt.report.design_report import design_dict, write_design_outputs
@@ -191,7 +190,6 @@ def design_command(
 
 def _reference(name: str, vehicle: Optional[str]):
     """A --ref rig on its vehicle (``vehicle`` when given), origin converted (noted), cameras inside refused."""
-    from rigopt.cli.app import note
     from rigopt.design.problem import ReferenceRig
     from rigopt.rig.library import load_rig
     from rigopt.vehicle.placement import rig_on_vehicle

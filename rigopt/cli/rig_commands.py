@@ -7,7 +7,7 @@ from typing import Optional
 
 import typer
 
-from rigopt.cli.app import app, console, import_app, print_json, print_table
+from rigopt.cli.app import app, console, import_app, note, print_json, print_table, status_console
 from rigopt.errors import RigoptError
 
 
@@ -85,7 +85,6 @@ def _check_out(out, force: bool, listing: bool) -> Path | None:
 
 def _finish_import(imported, out: Path, as_json: bool, source: str) -> None:
     """Write the imported rig, print the notes on stderr and a summary (or JSON) on stdout."""
-    from rigopt.cli.app import status_console
     from rigopt.output import atomic_file
     from rigopt.rig.pccr_format import write_rig
 
@@ -287,7 +286,6 @@ def export_command(
     Positions are converted to the origin the format assumes (nuScenes: the rear axle; the others: the vehicle
     centre) when rigopt knows the rig's vehicle, and the conversion is noted; otherwise they are written
     unchanged, with a warning."""
-    from rigopt.cli.app import note, status_console
     from rigopt.output import atomic_file, atomic_folder, check_out_file, check_out_folder
     from rigopt.rig.formats import EXPORT_FORMATS, EXPORT_ORIGINS, EXPORT_SUFFIXES, export_rig
     from rigopt.rig.library import load_rig

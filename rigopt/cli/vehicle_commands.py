@@ -8,8 +8,8 @@ from typing import Optional
 
 import typer
 
-from rigopt.cli.app import (MIN_HEIGHT_HELP, NO_TRAILER_HELP, PICTURE_SUFFIXES, app, console, mount_rules, print_json,
-                            print_table, vehicle_app)
+from rigopt.cli.app import (MIN_HEIGHT_HELP, NO_TRAILER_HELP, PICTURE_SUFFIXES, app, console, mount_rules, note,
+                            print_json, print_table, vehicle_app)
 from rigopt.errors import RigoptError
 
 
@@ -23,7 +23,6 @@ def check_command(
     as_json: bool = typer.Option(False, "--json", help="Print JSON instead of a table."),
 ):
     """Check that every camera can be mounted: on the surface, in a zone, housing and view clear of the body."""
-    from rigopt.cli.app import note
     from rigopt.mounting.rules import check_rig
     from rigopt.rig.library import load_rig
     from rigopt.vehicle.library import load_vehicle

@@ -140,13 +140,12 @@ def mount_candidates(vehicle: Vehicle, settings: DesignSettings, spacing: float 
 
 
 def fleet_requirements(references: Sequence[ReferenceRig], settings: DesignSettings,
-                       target: Vehicle | None = None) -> np.ndarray:
+                       target: Vehicle | None = None, points: np.ndarray | None = None) -> np.ndarray:
     """(q,) int: the largest requirement of any reference (on its own vehicle) at each sector point; with the
-    ``target`` vehicle, none at its sector points that lie inside its keep-outs in force (a coupled trailer
-    fills the space behind a tractor: there is nothing there to see)."""
+    ``target`` vehicle and its sector ``points`` (q, 3) m (``Prepared.points``), none at points inside its
+    keep-outs in force (a coupled trailer fills the space behind a tractor: there is nothing there to see)."""
     needed = np.max([requirements(r.rig, r.vehicle, settings) for r in references], axis=0)
     if target is not None and settings.rules.practice.enabled:
-        points = sector_points(Footprint.of_mesh(target.mesh), settings.coverage)[0]
         inside = np.array([bool(b) for b in in_keep_outs(target, points, settings.rules.practice.lifted)])
         needed = np.where(inside, 0, needed)
     return needed
@@ -208,7 +207,7 @@ def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRi
     reference = rigs[0]
     prepared = prepare(vehicle, rigs, calibration, settings, progress)
     progress(f"coverage requirements from {', '.join(r.name for r in rigs)}")
-    needed = fleet_requirements(references, settings, vehicle)
+    needed = fleet_requirements(references, settings, vehicle, prepared.points)
     counts = settings.cameras or (len(reference), len(reference))
     milp = select_valid(prepared, vehicle, calibration, needed, counts, settings, progress)
 

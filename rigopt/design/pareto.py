@@ -51,7 +51,7 @@ def pareto_designs(vehicle: Vehicle, references: Sequence[ReferenceRig], calibra
     for level in levels:
         min_coverage, min_overlap = LEVELS[level]
         level_settings = replace(settings, min_coverage=min_coverage, min_overlap=min_overlap)
-        needed = fleet_requirements(references, level_settings, vehicle)
+        needed = fleet_requirements(references, level_settings, vehicle, prepared.points)
         for n in range(counts[0], counts[1] + 1):
             progress(f"pareto: {n} cameras, coverage level {level}")
             try:

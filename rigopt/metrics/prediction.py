@@ -152,12 +152,17 @@ class Extrapolation:
                 "hull_distance": self.hull_distance}
 
     def describe(self) -> str:
-        """'t 1.37 m > 0.555; hull distance 2.1' (empty when not flagged)."""
-        parts = [f"{t} {v:.3g}{'' if TERM_UNITS[t] == '-' else ' ' + TERM_UNITS[t]} {'>' if v > hi else '<'} "
-                 f"{hi if v > hi else lo:.3g}" for t, (v, lo, hi) in self.terms.items()]
-        if self.hull_distance > HULL_TOLERANCE:
-            parts.append(f"{self.hull_distance:.2f} control ranges from the calibration pairs")
-        return "; ".join(parts)
+        """'t 1.37 m > 0.555; 2.10 control ranges from the calibration pairs' (empty when not flagged)."""
+        return describe_extrapolation(self.to_dict())
+
+
+def describe_extrapolation(data: dict) -> str:
+    """One line of an Extrapolation in its JSON form (``Extrapolation.to_dict``), for tables and reports."""
+    parts = [f"{t['term']} {t['value']:.3g}{'' if t['unit'] == '-' else ' ' + t['unit']} "
+             f"{'>' if t['beyond'] > 0 else '<'} {t['high'] if t['beyond'] > 0 else t['low']:.3g}" for t in data["terms"]]
+    if data["hull_distance"] > HULL_TOLERANCE:
+        parts.append(f"{data['hull_distance']:.2f} control ranges from the calibration pairs")
+    return "; ".join(parts)
 
 
 @dataclass(frozen=True, eq=False)

@@ -137,11 +137,4 @@ SPRAY_REACH_M = 0.6
 def spray_exposure(vehicle: Vehicle, points) -> list[str]:
     """For each lens position (n, 3) m: "high" where tyre spray and road dirt reach it (outboard, within
     SPRAY_REACH_M of a tyre's tread in x and z), else "low". A soft attribute shown in reports."""
-    points = np.atleast_2d(np.asarray(points, dtype=float))
-    high = np.zeros(len(points), dtype=bool)
-    for centre, radius, width in vehicle.wheels:
-        side = np.sign(centre[1]) or 1.0
-        outboard = side * points[:, 1] >= abs(centre[1]) - width / 2.0
-        near = np.hypot(points[:, 0] - centre[0], points[:, 2] - centre[2]) <= radius + SPRAY_REACH_M
-        high |= outboard & near
-    return ["high" if h else "low" for h in high]
+    return ["high" if wheels else "low" for wheels in on_wheels(vehicle, points, SPRAY_REACH_M)]

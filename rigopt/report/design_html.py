@@ -36,13 +36,11 @@ def _interval_text(entry: dict) -> str:
 
 
 def _extrapolation_text(entry: dict) -> str:
-    """'-' within the calibration data, else the out-of-range terms (e.g. 't 2.44 m > 0.555')."""
+    """'-' within the calibration data, else its out-of-range terms and hull distance."""
+    from rigopt.metrics.prediction import describe_extrapolation
+
     flag = entry.get("extrapolation")
-    if flag is None:
-        return "-"
-    terms = [f"{t['term']} {t['value']:.3g} > {t['high']:.3g}" if t["beyond"] > 0 else f"{t['term']} {t['value']:.3g} "
-             f"< {t['low']:.3g}" for t in flag["terms"]]
-    return "; ".join(terms) or f"off the calibration hull ({flag['hull_distance']:.2f})"
+    return "-" if flag is None else describe_extrapolation(flag)
 
 
 def render_design_html(summary: dict, figures: dict[str, bytes]) -> str:

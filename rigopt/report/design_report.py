@@ -28,17 +28,17 @@ def summary_dict(summary: RigSummary) -> dict:
                               for q in summary.predictions]}
 
 
-def camera_rows(rig: Rig, reference: Rig, vehicle=None) -> list[dict]:
+def camera_rows(rig: Rig, reference: Rig, pairs, vehicle=None) -> list[dict]:
     """Each designed camera for an engineer: id (where it is mounted and looks), zone, lens, its pose twice
     (``position`` m in rigopt's ISO frame: x forward, y left, z up; ``carla``: the rig file's location m and
     [pitch, yaw, roll] deg, y right), and the reference camera it is matched to by RigCD (unit weights) with
-    that pair's t (m), r (rad), f (deg); with the ``vehicle``, its zone's mounting ``zone_cost`` and its
-    tyre ``spray`` exposure (high / low)."""
+    that pair's t (m), r (rad), f (deg) (``pairs``: RigCDBreakdown.pairs, (reference id, rig id)); with the
+    ``vehicle``, its zone's mounting ``zone_cost`` and its tyre ``spray`` exposure (high / low)."""
     from rigopt.geometry import iso_to_carla
-    from rigopt.metrics.rigcd import camera_costs, rigcd
+    from rigopt.metrics.rigcd import camera_costs
     from rigopt.mounting.practice import spray_exposure
 
-    partner = {b: a for a, b in rigcd(reference, rig).pairs}
+    partner = {b: a for a, b in pairs}
     by_id = {c.id: c for c in reference.cameras}
     location, rotation = iso_to_carla(rig.positions, rig.rotations)
     spray = spray_exposure(vehicle, rig.positions) if vehicle is not None else None
@@ -60,18 +60,18 @@ def camera_rows(rig: Rig, reference: Rig, vehicle=None) -> list[dict]:
     return rows
 
 
-def rigcd_breakdown(rig: Rig, reference: Rig) -> dict:
-    """RigCD of reference -> design with unit weights and its components: rigcd, match, count, t m, r rad,
-    f deg."""
-    from rigopt.metrics.rigcd import rigcd
-
-    b = rigcd(reference, rig)
+def breakdown_dict(b) -> dict:
+    """A RigCDBreakdown's values: rigcd, match, count, t m, r rad, f deg."""
     return {"rigcd": b.rigcd, "match": b.match, "count": b.count, "t_m": b.t, "r_rad": b.r, "f_deg": b.f}
 
 
 def design_dict(result: DesignResult, rig_file: Path | None) -> dict:
     """The ``rigopt design --json`` object (and the body of report.json)."""
+    from rigopt.metrics.rigcd import rigcd
+
     design, milp, comparisons = result.design, result.milp, result.comparisons
+    reference = result.references[0].rig
+    breakdown = rigcd(reference, design.rig)  # unit weights: the matching each camera reports
     return {
         "rig_file": str(rig_file) if rig_file else None,
         "vehicle": design.rig.vehicle,
@@ -88,8 +88,8 @@ def design_dict(result: DesignResult, rig_file: Path | None) -> dict:
         "solver": {"milp_status": milp.status, "milp_gap": milp.gap, "milp_seconds": milp.selection.seconds,
                    "refine_status": result.refinement.status, "candidates": milp.n_candidates,
                    "offered_to_milp": milp.n_offered, "repairs": milp.repairs, "seconds": result.seconds},
-        "cameras": camera_rows(design.rig, result.references[0].rig, result.vehicle),
-        "rigcd_breakdown": rigcd_breakdown(design.rig, result.references[0].rig),
+        "cameras": camera_rows(design.rig, reference, breakdown.pairs, result.vehicle),
+        "rigcd_breakdown": breakdown_dict(breakdown),
         "comparisons": {
             "naive_transfer": summary_dict(comparisons.naive_transfer) if comparisons.naive_transfer else None,
             "benchmark_rig": summary_dict(comparisons.best_rig) if comparisons.best_rig else None,
