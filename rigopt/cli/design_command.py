@@ -105,6 +105,9 @@ def design_command(
     min_height: Optional[float] = typer.Option(None, "--min-height", min=0.0, max=5.0,
                                                help=MIN_HEIGHT_HELP),
     no_trailer: bool = typer.Option(False, "--no-trailer", help=NO_TRAILER_HELP),
+    asymmetric: bool = typer.Option(False, "--asymmetric",
+                                    help="Place cameras freely; by default a mirror-symmetric vehicle gets cameras "
+                                         "in mirrored pairs and on its centreline."),
     pareto: bool = typer.Option(False, "--pareto", help="Sweep camera counts (--cameras, default the reference's "
                                                         "+-2) and coverage levels; write the frontier."),
     ref_vehicle: Optional[str] = typer.Option(None, "--ref-vehicle",
@@ -144,7 +147,7 @@ def design_command(
         zones=tuple(z.strip() for z in zones.split(",")) if zones else None,
         pitches_deg=pitches, yaw_step_deg=yaw_step, spacing=spacing,
         min_coverage=min_coverage, min_overlap=min_overlap, time_limit=time_limit,
-        rules=mount_rules(min_height, no_trailer))
+        rules=mount_rules(min_height, no_trailer), symmetric=False if asymmetric else None)
     references = [_reference(name.strip(), ref_vehicle) for name in ref.split(",") if name.strip()]
     if not references:
         raise RigoptError("--ref needs at least one rig")
@@ -182,6 +185,7 @@ def design_command(
         print(f"rigopt: note: {', '.join(flagged)}: beyond the calibration pairs (see report.json 'extrapolation'); "
               "their predicted drops are less certain than the intervals say", file=sys.stderr)
     solver = summary["solver"]
+    print(f"{summary['symmetry']['describe']}", file=sys.stderr)
     print(f"MILP {solver['milp_status']} (gap {solver['milp_gap']:.2e}) on {solver['offered_to_milp']} of "
           f"{solver['candidates']} candidates; refinement {solver['refine_status']}; {solver['seconds']:.1f} s",
           file=sys.stderr)

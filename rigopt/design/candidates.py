@@ -18,7 +18,7 @@ from rigopt.mounting.rules import MountRules
 from rigopt.errors import RigoptError
 from rigopt.geometry import rotation_from_yaw_pitch_roll
 from rigopt.mounting.candidates import body_fraction, clear_directions
-from rigopt.mounting.sampling import sample_zone_points
+from rigopt.mounting.sampling import sample_symmetric_zone_points, sample_zone_points
 from rigopt.vehicle.model import Vehicle
 
 
@@ -42,6 +42,7 @@ class CandidateSet:
     mount_zones: np.ndarray
     lens: np.ndarray
     catalogue: tuple[CatalogueCamera, ...]
+    mirror: np.ndarray | None = None
 
     def __len__(self) -> int:
         return len(self.fovs)
@@ -52,6 +53,12 @@ class CandidateSet:
         return CandidateSet(self.positions[index], self.rotations[index], self.fovs[index], self.yaws[index],
                             self.pitches[index], self.mount[index], self.mount_points, self.mount_normals,
                             self.mount_zones, self.lens[index], self.catalogue)
+
+    def mirror_closed(self, index) -> np.ndarray:
+        """(k,) int: the sorted candidates ``index`` together with their mirrors (``index`` itself, sorted,
+        for a set without mirrors)."""
+        index = np.asarray(index, dtype=int)
+        return np.union1d(index, self.mirror[index]) if self.mirror is not None else np.unique(index)
 
     def model(self, index=slice(None)) -> CameraModel:
         """The CameraModel (batch (k,)) of the candidates ``index`` (default all): their lenses."""
@@ -68,34 +75,65 @@ class CandidateSet:
 
 
 def build_candidates(vehicle: Vehicle, lenses, spacing: float, yaws_deg, pitches_deg, zones=None,
-                     rules: MountRules = MountRules(), max_body_fraction: float | None = None) -> CandidateSet:
+                     rules: MountRules = MountRules(), max_body_fraction: float | None = None,
+                     symmetric: bool = False) -> CandidateSet:
     """Every clear (mount point, pitch, yaw, catalogue camera) combination as a candidate camera.
 
     lenses : the catalogue: CatalogueCameras, Lenses or FOVs (deg, benchmark pinholes), taken once each in
     the order of their FOVs (cameras of equal FOV in the given order); max_body_fraction : drop candidates
-    whose image shows more of the ego body than this share (:func:`mounting.candidates.body_fraction`)."""
+    whose image shows more of the ego body than this share (:func:`mounting.candidates.body_fraction`);
+    symmetric : mount points in mirrored pairs (:func:`rigopt.mounting.sampling.sample_symmetric_zone_points`)
+    and only candidates whose mirror image is a candidate too (``CandidateSet.mirror``)."""
     unique = list(dict.fromkeys(catalogue_of(lenses)))
     catalogue = tuple(sorted(unique, key=lambda c: c.fov))
-    points, normals, names = sample_zone_points(vehicle, spacing, zones, rules=rules)
+    if symmetric:
+        points, normals, names, mirror_mount = sample_symmetric_zone_points(vehicle, spacing, zones, rules=rules)
+    else:
+        (points, normals, names), mirror_mount = sample_zone_points(vehicle, spacing, zones, rules=rules), None
     yaws = np.deg2rad(np.asarray(yaws_deg, dtype=float))
     pitches = np.deg2rad(np.asarray(pitches_deg, dtype=float))
     parts = []
     for index, entry in enumerate(catalogue):
         clear = clear_directions(vehicle, points, yaws, pitches, entry.lens, rules)  # (m, k, j)
         mount, pitch_index, yaw_index = np.nonzero(clear)
-        parts.append((mount, pitches[pitch_index], yaws[yaw_index], np.full(len(mount), entry.fov),
-                      np.full(len(mount), index)))
-    mount, pitch, yaw, fov, lens = (np.concatenate(column) for column in zip(*parts))
-    if len(mount) == 0:
-        raise RigoptError(f"no mount point of {vehicle.name} has a clear view in any direction of the grid; "
-                          "allow more zones or pitch angles")
-    rotations = rotation_from_yaw_pitch_roll(yaw, pitch, np.zeros_like(yaw))
-    candidates = CandidateSet(points[mount], rotations, fov, yaw, pitch, mount, points, normals, names, lens, catalogue)
-    if max_body_fraction is None:
-        return candidates
-    keep = body_fraction(vehicle, candidates.positions, rotations, candidates.model()) <= max_body_fraction
+        parts.append((mount, pitch_index, yaw_index, np.full(len(mount), index)))
+    mount, pitch_index, yaw_index, lens = (np.concatenate(column) for column in zip(*parts))
+    keep = np.ones(len(mount), dtype=bool)
+    if len(mount) and max_body_fraction is not None:
+        rotations = rotation_from_yaw_pitch_roll(yaws[yaw_index], pitches[pitch_index], np.zeros(len(mount)))
+        model = CandidateSet(points[mount], rotations, np.zeros(len(mount)), yaws[yaw_index], pitches[pitch_index],
+                             mount, points, normals, names, lens, catalogue).model()
+        keep = body_fraction(vehicle, points[mount], rotations, model) <= max_body_fraction
+        if not keep.any():
+            raise RigoptError(f"every candidate camera of {vehicle.name} sees more than {max_body_fraction:.0%} of "
+                              "its own body; allow more zones or pitch angles, or raise the body share allowed")
+    mirror = None
+    if symmetric:
+        keep, mirror = _mirror_pairs(keep, mount, pitch_index, yaw_index, lens, mirror_mount, yaws_deg)
     if not keep.any():
-        raise RigoptError(f"every candidate camera of {vehicle.name} sees more than {max_body_fraction:.0%} of its "
-                          "own body; allow more zones or pitch angles, or raise the body share allowed")
-    mount, pitch, yaw, fov, lens, rotations = mount[keep], pitch[keep], yaw[keep], fov[keep], lens[keep], rotations[keep]
-    return CandidateSet(points[mount], rotations, fov, yaw, pitch, mount, points, normals, names, lens, catalogue)
+        raise RigoptError(f"no mount point of {vehicle.name} has a clear view in any direction of the grid"
+                          f"{' in mirrored pairs (try --asymmetric)' if symmetric else ''}; allow more zones or "
+                          "pitch angles")
+    mount, pitch, yaw, lens = mount[keep], pitches[pitch_index[keep]], yaws[yaw_index[keep]], lens[keep]
+    rotations = rotation_from_yaw_pitch_roll(yaw, pitch, np.zeros_like(yaw))
+    fov = np.array([c.fov for c in catalogue])[lens]
+    return CandidateSet(points[mount], rotations, fov, yaw, pitch, mount, points, normals, names, lens, catalogue,
+                        mirror)
+
+
+def _mirror_pairs(keep, mount, pitch_index, yaw_index, lens, mirror_mount, yaws_deg):
+    """The candidates ``keep`` (n,) bool whose mirror image (mirrored mount point, same pitch and lens, yaw
+    negated) is kept too, and each kept one's mirror as an index among the kept: (keep (n,) bool, mirror (k,) int)."""
+    yaws = np.asarray(yaws_deg, dtype=float)
+    wrapped = (-yaws + 180.0) % 360.0 - 180.0
+    yaw_mirror = np.array([int(np.flatnonzero(np.isclose(yaws, w, atol=1e-9))[0])
+                           if np.isclose(yaws, w, atol=1e-9).any() else -1 for w in wrapped])
+    shape = (int(mount.max(initial=0)) + 1, int(pitch_index.max(initial=0)) + 1, len(yaws), int(lens.max(initial=0)) + 1)
+    slot = np.full(shape, -1, dtype=int)
+    slot[mount[keep], pitch_index[keep], yaw_index[keep], lens[keep]] = np.flatnonzero(keep)
+    partner_yaw = yaw_mirror[yaw_index]
+    partner = np.where(partner_yaw >= 0, slot[mirror_mount[mount], pitch_index, np.maximum(partner_yaw, 0), lens], -1)
+    keep = keep & (partner >= 0)
+    keep &= keep[np.maximum(partner, 0)]
+    new_index = np.cumsum(keep) - 1
+    return keep, new_index[partner[keep]]

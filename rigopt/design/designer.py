@@ -21,6 +21,7 @@ from functools import reduce
 from typing import Callable, Sequence
 
 import numpy as np
+from scipy.optimize import linear_sum_assignment
 from scipy.spatial import cKDTree
 
 from rigopt.design.naming import mount_name, unique
@@ -31,7 +32,8 @@ from rigopt.coverage.matrix import rig_coverage_matrix, sector_points
 from rigopt.coverage.visibility import visible_by
 from rigopt.design.candidates import CandidateSet, build_candidates
 from rigopt.design.problem import ReferenceRig
-from rigopt.design.refine import RefineProblem, duty_points, frustum_margins, project_to_surface, refine
+from rigopt.design.refine import (RefineProblem, duty_points, free_radii, frustum_margins, project_to_surface,
+                                  refine)
 from rigopt.design.result import Comparisons, DesignResult, MilpStage, RefinementReport, RigSummary
 from rigopt.design.selection import DesignInfeasible, Selection, prune, select_cameras
 from rigopt.design.settings import DesignSettings
@@ -41,6 +43,7 @@ from rigopt.metrics.ranking import predict_transfer
 from rigopt.metrics.rigcd import camera_costs
 from rigopt.rig.model import Rig
 from rigopt.vehicle.model import Vehicle
+from rigopt.vehicle.symmetry import camera_mirrors
 
 #: Mount points closer than this (m) may not both hold a camera (8 cm housings plus a margin).
 CLASH_DISTANCE = 0.10
@@ -72,15 +75,19 @@ def requirements(reference: Rig, reference_vehicle: Vehicle, settings: DesignSet
 
 
 def _coverage_pool(candidates: CandidateSet, references: list[Rig], settings: DesignSettings) -> np.ndarray:
-    """Candidates offered for coverage: on a coarse subset of mount points (about ``coverage_mounts``),
-    every clear orientation with the reference's lenses and the widest lens."""
+    """Candidates offered for coverage: on a coarse subset of mount points (about ``coverage_mounts``, and
+    the centreline's in a symmetric design), every clear orientation with the reference's lenses and the
+    widest lens; with their mirror images in a symmetric design."""
     points = candidates.mount_points
     step = max(1, len(points) // settings.coverage_mounts)
     order = np.lexsort((points[:, 1], points[:, 0]))
     chosen_mounts = set(order[::step].tolist())
     lenses = {float(f) for rig in references for f in np.round(rig.fovs, 6)} | {float(candidates.fovs.max())}
-    mask = np.isin(candidates.mount, list(chosen_mounts)) & np.isin(np.round(candidates.fovs, 6), list(lenses))
-    return np.flatnonzero(mask)
+    mounts = np.isin(candidates.mount, list(chosen_mounts))
+    if candidates.mirror is not None:  # every centreline camera too: the few that face straight ahead or back
+        mounts |= candidates.mirror == np.arange(len(candidates))
+    mask = mounts & np.isin(np.round(candidates.fovs, 6), list(lenses))
+    return candidates.mirror_closed(np.flatnonzero(mask))
 
 
 def _explain_uncoverable(needed: np.ndarray, seen: np.ndarray, distance, height, azimuth) -> str:
@@ -124,6 +131,7 @@ def prepare(vehicle: Vehicle, references: Sequence[Rig], calibration: Calibratio
     no_sees, no_needs = np.zeros((len(candidates), 0), bool), np.zeros(0, int)
     pool = reduce(np.union1d, [prune(c, no_sees, no_needs, settings.keep_per_reference, 0) for c in costs],
                   _coverage_pool(candidates, list(references), settings))
+    pool = candidates.mirror_closed(pool)
     progress(f"coverage of {len(pool)} of {len(candidates)} candidates")
     sees_pool = visible_by(vehicle.mesh, candidates.model(pool), candidates.positions[pool],
                            candidates.rotations[pool], points, settings.coverage.max_range, settings.coverage.backend)
@@ -136,7 +144,7 @@ def mount_candidates(vehicle: Vehicle, settings: DesignSettings, spacing: float 
     spacing = spacing or settings.spacing or default_spacing(vehicle, settings)
     yaws = np.arange(-180.0, 180.0, settings.yaw_step_deg)
     return build_candidates(vehicle, settings.lenses, spacing, yaws, settings.pitches_deg, settings.zones,
-                            settings.rules, settings.max_body_fraction)
+                            settings.rules, settings.max_body_fraction, settings.is_symmetric_on(vehicle))
 
 
 def fleet_requirements(references: Sequence[ReferenceRig], settings: DesignSettings,
@@ -162,15 +170,16 @@ def select_valid(prepared: Prepared, vehicle: Vehicle, calibration: Calibration,
     if np.any(seen < needed):
         raise DesignInfeasible(_explain_uncoverable(needed, seen, prepared.distance, prepared.height, prepared.azimuth))
     pool, candidates = prepared.pool, prepared.candidates
-    offered = pool[reduce(np.union1d, [prune(c[pool], prepared.sees_pool, needed, settings.keep_per_reference,
-                                             settings.keep_per_sector) for c in prepared.costs])]
+    offered = candidates.mirror_closed(pool[reduce(np.union1d, [
+        prune(c[pool], prepared.sees_pool, needed, settings.keep_per_reference, settings.keep_per_sector)
+        for c in prepared.costs])])
     sees = prepared.sees_pool[np.searchsorted(pool, offered)]
     excluded: set[int] = set()
     for repairs in range(MAX_REPAIRS + 1):
         keep = np.array([k for k, c in enumerate(offered) if c not in excluded], dtype=int)
         best = _best_selection([c[offered[keep]] for c in prepared.costs], sees[keep], needed,
                                candidates.mount[offered[keep]], candidates.mount_points, counts, calibration.alpha,
-                               settings, progress)
+                               settings, progress, local_mirror(candidates, offered[keep]))
         chosen = offered[keep][best.chosen]
         rig = _rig_from(candidates.subset(chosen), best.matched, prepared.references[0], vehicle)
         check = check_rig(rig, vehicle, settings.rules)
@@ -184,6 +193,7 @@ def select_valid(prepared: Prepared, vehicle: Vehicle, calibration: Calibration,
                 excluded.add(int(index))
             else:
                 excluded.update(int(c) for c in offered[candidates.mount[offered] == candidates.mount[index]])
+        excluded = set(candidates.mirror_closed(sorted(excluded)).tolist())  # a pair goes as a whole
     problems = "; ".join(f"{c.id}: {', '.join(c.problems)}" for c in check.cameras if not c.valid)
     raise DesignInfeasible(f"after {MAX_REPAIRS} repairs the design still fails the mount checks ({problems})")
 
@@ -205,11 +215,17 @@ def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRi
                           "rigopt.vehicle.placement.place_rig), which converts them")
     rigs = [r.rig for r in references]
     reference = rigs[0]
-    prepared = prepare(vehicle, rigs, calibration, settings, progress)
-    progress(f"coverage requirements from {', '.join(r.name for r in rigs)}")
-    needed = fleet_requirements(references, settings, vehicle, prepared.points)
     counts = settings.cameras or (len(reference), len(reference))
-    milp = select_valid(prepared, vehicle, calibration, needed, counts, settings, progress)
+    symmetry_fallback = None
+    try:
+        prepared, needed, milp = _discrete_stage(vehicle, references, calibration, settings, counts, progress)
+    except DesignInfeasible as error:
+        if settings.symmetric is not None or not settings.is_symmetric_on(vehicle):
+            raise
+        symmetry_fallback = f"no symmetric design meets the requirements ({error}); designed without symmetry"
+        progress(symmetry_fallback)
+        settings = replace(settings, symmetric=False)
+        prepared, needed, milp = _discrete_stage(vehicle, references, calibration, settings, counts, progress)
 
     progress("validating the design: mount checks, coverage, RigCD")
     design = summarise(milp.rig, vehicle, rigs, calibration, needed, settings, milp.check)
@@ -230,7 +246,15 @@ def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRi
         summarise(naive, vehicle, rigs, calibration, needed, settings) if naive else None,
         tuple(summarise(rig, vehicle, rigs, calibration, needed, settings) for rig in compare_with))
     return DesignResult(design, milp, refinement, comparisons, float(reference_coverage), vehicle, references,
-                        calibration, settings, time.perf_counter() - start)
+                        calibration, settings, time.perf_counter() - start, symmetry_fallback)
+
+
+def _discrete_stage(vehicle, references, calibration, settings, counts, progress):
+    """Candidates, requirements and the valid MILP selection: (Prepared, needed (q,) int, MilpStage)."""
+    prepared = prepare(vehicle, [r.rig for r in references], calibration, settings, progress)
+    progress(f"coverage requirements from {', '.join(r.rig.name for r in references)}")
+    needed = fleet_requirements(references, settings, vehicle, prepared.points)
+    return prepared, needed, select_valid(prepared, vehicle, calibration, needed, counts, settings, progress)
 
 
 def _refined(design: RigSummary, vehicle: Vehicle, reference: Rig, calibration: Calibration, needed: np.ndarray,
@@ -239,21 +263,28 @@ def _refined(design: RigSummary, vehicle: Vehicle, reference: Rig, calibration: 
     lowers the calibrated RigCD, and the report says why not otherwise."""
     rig = design.rig
     sees = rig_coverage_matrix(rig, vehicle, settings.coverage).sees
-    index = {c.id: k for k, c in enumerate(reference.cameras)}
+    mirror = camera_mirrors(rig.positions, rig.rotations, rig.fovs) if settings.is_symmetric_on(vehicle) else None
+    normals = vehicle.surface(rig.positions).normal
+    radii = free_radii(rig, normals, vehicle, spacing, settings.rules)
+    if mirror is not None:  # a pair slides as far as both of its cameras may
+        radii = np.minimum(radii, radii[np.where(mirror >= 0, mirror, np.arange(len(rig)))])
     problem = RefineProblem(
-        rig, reference, np.array([index.get(c.id, -1) for c in rig.cameras]), vehicle.surface(rig.positions).normal,
+        rig, reference, calibrated_matching(rig, reference, calibration), normals,
         duty_points(sees, needed, frustum_margins(rig, points)), points, calibration.alpha, calibration.lambdas,
         (float(np.deg2rad(min(settings.pitches_deg))), float(np.deg2rad(max(settings.pitches_deg)))),
-        settings.fov_range, spacing)
+        settings.fov_range, radii, mirror)
     outcome = refine(problem)
     if outcome.rig is None:
         return RefinementReport(f"rejected: IPOPT {outcome.status}", solver_status=outcome.status)
     refined_rig = project_to_surface(Rig(rig.name, rig.vehicle, outcome.rig.cameras), vehicle, settings.rules)
     check = check_rig(refined_rig, vehicle, settings.rules)
     moved = len(rig)
-    if not check.valid:  # keep the MILP pose of the cameras whose refined pose fails, once
-        cameras = tuple(new if c.valid else old for new, old, c in zip(refined_rig.cameras, rig.cameras, check.cameras))
-        moved = sum(c.valid for c in check.cameras)
+    if not check.valid:  # keep the MILP pose of the cameras whose refined pose fails (with their mirrors), once
+        keep = np.array([not c.valid for c in check.cameras])
+        if mirror is not None:
+            keep |= np.array([m >= 0 and keep[m] for m in mirror])
+        cameras = tuple(old if k else new for new, old, k in zip(refined_rig.cameras, rig.cameras, keep))
+        moved = int((~keep).sum())
         refined_rig = Rig(rig.name, rig.vehicle, cameras)
         check = check_rig(refined_rig, vehicle, settings.rules)
     if not check.valid or moved == 0:
@@ -271,14 +302,23 @@ def _refined(design: RigSummary, vehicle: Vehicle, reference: Rig, calibration: 
                             solver_status=outcome.status, cameras_moved=moved, refined=refined)
 
 
-def _best_selection(costs, sees, needed, mount, mount_points, counts, alpha, settings, progress) -> Selection:
+def local_mirror(candidates: CandidateSet, index: np.ndarray) -> np.ndarray | None:
+    """(k,) int: the mirror of each of the candidates ``index`` (k,) (sorted, mirror-closed) as a position in
+    ``index``; None for a set without mirrors."""
+    if candidates.mirror is None:
+        return None
+    return np.searchsorted(index, candidates.mirror[index])
+
+
+def _best_selection(costs, sees, needed, mount, mount_points, counts, alpha, settings, progress,
+                    mirror=None) -> Selection:
     clashes = cKDTree(mount_points).query_pairs(CLASH_DISTANCE, output_type="ndarray")
     best = None
     for n_cameras in range(counts[0], counts[1] + 1):
         progress(f"MILP: {n_cameras} cameras from {len(costs[0])} candidates")
         try:
             selection = select_cameras(costs, sees, needed, mount, n_cameras, alpha, clashes, settings.time_limit,
-                                       settings.mip_gap)
+                                       settings.mip_gap, mirror)
         except DesignInfeasible:
             if n_cameras == counts[1] and best is None:
                 raise
@@ -305,6 +345,18 @@ def summarise(rig: Rig, vehicle: Vehicle, references: Sequence[Rig], calibration
     counts = rig_coverage_matrix(rig, vehicle, settings.coverage).sees.sum(axis=0)
     predictions = tuple(predict_transfer(reference, [rig], calibration)[0] for reference in references)
     return RigSummary(rig, predictions, float(np.mean(counts >= 1)), bool(np.all(counts >= needed)), check)
+
+
+def calibrated_matching(rig: Rig, reference: Rig, calibration: Calibration) -> np.ndarray:
+    """(k,) int: the reference camera each camera of ``rig`` is matched to by the calibrated RigCD's optimal
+    assignment (-1 for cameras beyond the reference's count)."""
+    lt, lr, lf = calibration.lambdas
+    t, r, f = camera_costs(rig.positions, rig.rotations, rig.fovs, reference.positions, reference.rotations,
+                           reference.fovs)
+    rows, cols = linear_sum_assignment(lt * t + lr * r + lf * f)
+    matched = np.full(len(rig), -1, dtype=int)
+    matched[rows] = cols
+    return matched
 
 
 def matching_costs(candidates: CandidateSet, reference: Rig, calibration: Calibration) -> np.ndarray:

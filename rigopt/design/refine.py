@@ -24,6 +24,7 @@ from rigopt.mounting.shapes import surface_frame
 from rigopt.geometry import rotation_from_yaw_pitch_roll
 from rigopt.rig.model import Camera, Rig
 from rigopt.vehicle.model import Vehicle
+from rigopt.vehicle.symmetry import mirror_points
 
 #: Smoothing of norms and angles at zero (m^2 and rad^2).
 SMOOTHING = 1e-6
@@ -51,7 +52,11 @@ class RefineProblem:
     design : the MILP's rig; matched : (k,) int reference camera of each design camera (-1 none);
     normals : (k, 3) outward normals at the design cameras' mount points; duties : (k, q) bool sector points
     each camera must keep in view; points : (q, 3) m sector points; weights: ``alpha``, ``lambdas``;
-    ``pitch_range`` (rad); ``fov_range`` (deg) or None to keep each camera's FOV; ``radius`` (m).
+    ``pitch_range`` (rad); ``fov_range`` (deg) or None to keep each camera's FOV; ``radius`` (m), how far
+    each camera may slide: one for all or (k,) per camera (see :func:`free_radii`);
+    ``mirror`` (k,) int the camera at each one's mirror image across y = 0 (itself on the centreline, -1
+    none), or None: pairs move as mirror images (the same tangent move reflected, yaw negated, pitch and FOV
+    shared) and a centreline camera stays on y = 0 facing ahead or back.
     """
 
     design: Rig
@@ -64,7 +69,8 @@ class RefineProblem:
     lambdas: tuple[float, float, float]
     pitch_range: tuple[float, float]
     fov_range: tuple[float, float] | None
-    radius: float
+    radius: float | np.ndarray
+    mirror: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -121,7 +127,9 @@ def refine(problem: RefineProblem, max_iter: int = 200) -> RefineOutcome:
             opti.subject_to(local[0] >= 0.1)
             opti.subject_to(opti.bounded(-local[0] * tan_h, local[1], local[0] * tan_h))
             opti.subject_to(opti.bounded(-local[0] * tan_v, local[2], local[0] * tan_v))
-        opti.subject_to(u[k] ** 2 + v[k] ** 2 <= problem.radius**2)
+        opti.subject_to(u[k] ** 2 + v[k] ** 2 <= float(np.broadcast_to(problem.radius, (n,))[k]) ** 2)
+    if problem.mirror is not None:
+        _keep_pairs(opti, problem, design, u, v, yaw, pitch, fov, yaw0)
     opti.subject_to(opti.bounded(problem.pitch_range[0], pitch, problem.pitch_range[1]))
     if fov is not None:
         opti.subject_to(opti.bounded(problem.fov_range[0], fov, problem.fov_range[1]))
@@ -156,6 +164,27 @@ def refine(problem: RefineProblem, max_iter: int = 200) -> RefineOutcome:
     return RefineOutcome(status, Rig(design.name, design.vehicle, tuple(cameras)))
 
 
+def _keep_pairs(opti, problem: RefineProblem, design: Rig, u, v, yaw, pitch, fov, yaw0) -> None:
+    """Constrain mirrored pairs to move as mirror images and centreline cameras to stay on it (see
+    RefineProblem.mirror). The tangent move (u, v) of camera k maps to its mirror j's tangent frame through
+    F_j^T M F_k (2 x 2; exact for mirrored frames, the nearest move on a slightly asymmetric body)."""
+    frames = [surface_frame(problem.normals[k], c.forward)[:, :2] for k, c in enumerate(design.cameras)]
+    for k, j in enumerate(problem.mirror):
+        if j < 0 or j < k:
+            continue
+        if j == k:  # on the centreline: no lateral move, facing straight ahead or back
+            opti.subject_to(frames[k][1, 0] * u[k] + frames[k][1, 1] * v[k] == 0)
+            opti.subject_to(yaw[k] == yaw0[k])
+            continue
+        b = frames[j].T @ mirror_points(frames[k].T).T  # (2, 2): F_j^T M F_k
+        opti.subject_to(u[j] == b[0, 0] * u[k] + b[0, 1] * v[k])
+        opti.subject_to(v[j] == b[1, 0] * u[k] + b[1, 1] * v[k])
+        opti.subject_to(yaw[j] + yaw[k] == yaw0[j] + yaw0[k])  # yaw_j = -yaw_k, up to the 2 pi of the start
+        opti.subject_to(pitch[j] == pitch[k])
+        if fov is not None:
+            opti.subject_to(fov[j] == fov[k])
+
+
 def _moved(camera: Camera, position, rotation, fov: float) -> Camera:
     """``camera`` at a new pose: a benchmark pinhole with FOV ``fov`` (deg), a real lens unchanged."""
     if camera.lens is not None:
@@ -171,6 +200,38 @@ def project_to_surface(rig: Rig, vehicle: Vehicle, rules: MountRules = MountRule
     cameras = [_moved(c, surface.foot[k] + surface.normal[k] * offset, c.rotation, c.fov)
                for k, c in enumerate(rig.cameras)]
     return Rig(rig.name, rig.vehicle, tuple(cameras))
+
+
+#: Directions and radii (fractions of the largest) of the disc samples that bound a camera's free slide.
+DISC_DIRECTIONS = 16
+DISC_STEPS = 8
+
+
+def free_radii(rig: Rig, normals: np.ndarray, vehicle: Vehicle, radius: float,
+               rules: MountRules = MountRules()) -> np.ndarray:
+    """(k,) float m: how far each camera of ``rig`` may slide in its tangent plane (``normals`` (k, 3)) and stay
+    mountable: the largest radius up to ``radius`` whose disc, sampled every radius / DISC_STEPS in
+    DISC_DIRECTIONS directions and projected onto the body, stays in the camera's zone and where mounting
+    practice allows a lens (off the wheels, high enough, out of the keep-outs). 0 where even the first ring
+    leaves it."""
+    from rigopt.mounting.practice import practical
+
+    angles = np.linspace(0.0, 2 * np.pi, DISC_DIRECTIONS, endpoint=False)
+    steps = np.arange(1, DISC_STEPS + 1) * radius / DISC_STEPS
+    offset = rules.housing[2] / 2.0
+    out = np.zeros(len(rig))
+    for k, camera in enumerate(rig.cameras):
+        frame = surface_frame(normals[k], camera.forward)
+        moves = steps[:, None, None] * (np.cos(angles)[None, :, None] * frame[:, 0] + np.sin(angles)[None, :, None]
+                                        * frame[:, 1])  # (steps, directions, 3)
+        points = (camera.position + moves).reshape(-1, 3)
+        surface = vehicle.surface(points)
+        lens = surface.foot + surface.normal * offset
+        fine = np.array(vehicle.zone_names(surface.foot, surface.normal)) == camera.zone
+        fine &= practical(vehicle, lens, rules.practice)
+        bad = np.flatnonzero(~fine.reshape(len(steps), len(angles)).all(axis=1))
+        out[k] = radius if len(bad) == 0 else steps[bad[0] - 1] if bad[0] > 0 else 0.0
+    return out
 
 
 def duty_points(sees: np.ndarray, needed: np.ndarray, margins: np.ndarray) -> np.ndarray:

@@ -106,3 +106,4 @@ class DesignResult:
     calibration: Calibration
     settings: DesignSettings
     seconds: float
+    symmetry_fallback: str | None = None

@@ -8,6 +8,7 @@ For a camera count N and a reference of R cameras, with M = min(N, R):
                N <  R: every chosen camera matched once (sum_r y_cr = x_c), sum_c y_cr <= 1
                coverage: sum_c sees_cq x_c >= required_q for every sector point q
                housings: at most one camera per mount point and per pair of clashing mount points
+               symmetry (optional): x_c = x_mirror(c), cameras in mirrored pairs or on the centreline
                x, y binary
 
 ``cost[c, r]`` is the raw-unit matching cost ``lt ||t_c - t_r|| + lr dR + lf |f_c - f_r|`` (the weighted
@@ -83,13 +84,16 @@ def _matching(cp, x, cost: np.ndarray, n_cameras: int, alpha: float):
 
 
 def select_cameras(cost, sees: np.ndarray, required: np.ndarray, mount: np.ndarray, n_cameras: int,
-                   alpha: float, clash_pairs=(), time_limit: float = 60.0, mip_gap: float = 1e-4) -> Selection:
+                   alpha: float, clash_pairs=(), time_limit: float = 60.0, mip_gap: float = 1e-4,
+                   mirror: np.ndarray | None = None) -> Selection:
     """Solve the selection MILP above.
 
     cost : (n, R) float raw-unit matching costs, or a list of them (one per reference rig: the fleet mode,
     which minimises the largest calibrated RigCD over the references); sees : (n, q) bool; required : (q,)
     int cameras needed per sector point; mount : (n,) int mount point of each candidate; clash_pairs :
-    (p, 2) int mount points whose housings collide. Raises DesignInfeasible when the MILP has no solution.
+    (p, 2) int mount points whose housings collide; mirror : (n,) int each candidate's mirror image among
+    the n (itself on the centreline), or None for no symmetry. Raises DesignInfeasible when the MILP has no
+    solution.
     """
     import cvxpy as cp
 
@@ -111,6 +115,10 @@ def select_cameras(cost, sees: np.ndarray, required: np.ndarray, mount: np.ndarr
     groups = _mount_groups(mount, clash_pairs)
     if groups.shape[0]:
         constraints.append(groups @ x <= 1)
+    if mirror is not None:
+        first = np.flatnonzero(np.arange(n) < mirror)
+        if len(first):
+            constraints.append(x[first] == x[mirror[first]])
     if len(matchings) == 1:
         objective = matchings[0][2]
     else:
@@ -127,9 +135,10 @@ def select_cameras(cost, sees: np.ndarray, required: np.ndarray, mount: np.ndarr
         raise RigoptError(f"the MIP solver failed ({error}); is highspy installed? pip install highspy") from None
     seconds = time.perf_counter() - start
     if problem.status in (cp.INFEASIBLE, cp.INFEASIBLE_INACCURATE):
-        raise DesignInfeasible(f"no choice of {n_cameras} candidate cameras meets the coverage and housing "
+        pairs = " in mirrored pairs" if mirror is not None else ""
+        raise DesignInfeasible(f"no choice of {n_cameras} candidate cameras{pairs} meets the coverage and housing "
                                "requirements; allow more cameras (--cameras), more zones, wider lenses or lower "
-                               "the coverage requirement")
+                               f"the coverage requirement{' (or design without symmetry: --asymmetric)' if pairs else ''}")
     chosen = np.flatnonzero(x.value > 0.5) if x.value is not None else np.zeros(0, dtype=int)
     if len(chosen) != n_cameras:  # stopped (time limit) before finding any feasible selection
         raise RigoptError(f"the MIP solver found no feasible design within the time limit of {time_limit:g} s "

@@ -225,6 +225,13 @@ class DesignSettings:
     """The mount checks every camera of a design passes."""
     max_body_fraction: float | None = 0.10
     """Largest share of a designed camera's image that may show the ego body (None: no limit)."""
+    symmetric: bool | None = None
+    """Cameras in mirrored pairs across y = 0 or on the centreline: None on a mirror-symmetric vehicle
+    (:mod:`rigopt.vehicle.symmetry`), True always, False never (``--asymmetric``)."""
+
+    def is_symmetric_on(self, vehicle) -> bool:
+        """Whether a design on ``vehicle`` places its cameras in mirrored pairs."""
+        return vehicle.symmetry.symmetric if self.symmetric is None else bool(self.symmetric)
 
     def __post_init__(self):
         object.__setattr__(self, "lenses", catalogue_of(self.lenses))

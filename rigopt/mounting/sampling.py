@@ -16,6 +16,7 @@ from rigopt.errors import RigoptError
 from rigopt.mounting.practice import practical
 from rigopt.mounting.rules import MountRules, housing_fits
 from rigopt.vehicle.model import Vehicle
+from rigopt.vehicle.symmetry import mirror_points
 
 DEFAULT_SPACING = 0.10
 
@@ -29,6 +30,85 @@ def sample_zone_points(vehicle: Vehicle, spacing: float = DEFAULT_SPACING, zones
     hollows), are dropped. Raised zones (``raised_max`` > 0) are sampled only when named in ``zones``: their
     points are lifted above the surface (see :func:`_raised_points`) and their normals are the posts' axes.
     """
+    points, normals, names, raised = _zone_samples(vehicle, spacing, zones, seed, rules)
+    keep = _mountable(vehicle, points, normals, names, raised, rules, zones)
+    return points[keep], normals[keep], names[keep]
+
+
+def sample_symmetric_zone_points(vehicle: Vehicle, spacing: float = DEFAULT_SPACING, zones=None, seed: int = 0,
+                                 rules: MountRules = MountRules()):
+    """Mount points in mirrored pairs across y = 0 and on the centreline, for symmetric designs.
+
+    The samples of the left half (y > spacing / 2) are reflected to the right and each reflection moved onto
+    the right side's own surface (a body asymmetric by a few centimetres keeps its pairs mountable); the
+    centreline is sampled every ``spacing`` along each zone's section by the plane y = 0 (normals made
+    lateral-free). A point is kept only when its mirror is mountable too. Returns points (n, 3), normals (n, 3), zone names (n,) str and
+    ``mirror`` (n,) int, the index of each point's mirror (itself on the centreline).
+    """
+    points, normals, names, raised = _zone_samples(vehicle, spacing, zones, seed, rules)
+    half = rules.housing[2] / 2.0
+    lifted = np.isin(names, sorted(raised))
+    left = points[:, 1] > spacing / 2.0
+    # the centreline: the zones' sections by y = 0 sampled every ``spacing``; raised zones' samples near it snapped
+    near = lifted & (np.abs(points[:, 1]) <= spacing / 4.0)
+    c_points, c_normals, c_names = _centreline_samples(vehicle, spacing, {str(n) for n in names[~lifted]}, half)
+    c_points = np.concatenate([c_points, points[near] * [1.0, 0.0, 1.0]])
+    c_normals = np.concatenate([c_normals, normals[near] * [1.0, 0.0, 1.0]])
+    c_normals /= np.maximum(np.linalg.norm(c_normals, axis=1, keepdims=True), 1e-12)
+    c_names = np.concatenate([c_names, names[near]])
+    # the right side: the left half reflected, moved onto the right side's surface
+    l_points, l_normals = points[left], normals[left]
+    r_points, r_normals = mirror_points(l_points), mirror_points(l_normals)
+    on_surface = ~lifted[left]
+    if on_surface.any():
+        surface = vehicle.surface(mirror_points(l_points[on_surface] - l_normals[on_surface] * half))
+        r_points[on_surface] = surface.foot + surface.normal * half
+        r_normals[on_surface] = surface.normal
+    n_left, n_centre = len(l_points), len(c_points)
+    points = np.concatenate([l_points, r_points, c_points])
+    normals = np.concatenate([l_normals, r_normals, c_normals])
+    names = np.concatenate([names[left], names[left], c_names])
+    mirror = np.concatenate([np.arange(n_left) + n_left, np.arange(n_left), np.arange(n_centre) + 2 * n_left])
+    keep = _mountable(vehicle, points, normals, names, raised, rules, zones)
+    keep &= keep[mirror]
+    if not keep.any():
+        raise RigoptError(f"no mirrored pair of mount points on {vehicle.name} is mountable; design without "
+                          "symmetry (--asymmetric) or allow more zones")
+    new_index = np.cumsum(keep) - 1
+    return points[keep], normals[keep], names[keep], new_index[mirror[keep]]
+
+
+def _centreline_samples(vehicle: Vehicle, spacing: float, zone_names, half: float):
+    """Lens positions every ``spacing`` m along the section of each zone in ``zone_names`` by y = 0, half a
+    housing depth off the surface along the lateral-free normal: points (n, 3), normals (n, 3), names (n,)."""
+    mesh = vehicle.fine_mesh
+    points, normals, names = [np.zeros((0, 3))], [np.zeros((0, 3))], []
+    for zone_name in sorted(zone_names):
+        faces = np.flatnonzero(vehicle.fine_face_zones == zone_name)
+        if len(faces) == 0:
+            continue
+        part = mesh.submesh([faces], append=True)
+        segments, crossed = trimesh.intersections.mesh_plane(part, [0.0, 1.0, 0.0], [0.0, 0.0, 0.0], return_faces=True)
+        if len(segments) == 0:
+            continue
+        length = np.linalg.norm(segments[:, 1] - segments[:, 0], axis=1)
+        ends = np.cumsum(length)
+        stations = np.arange(spacing / 2.0, ends[-1], spacing)
+        which = np.minimum(np.searchsorted(ends, stations), len(segments) - 1)
+        along = (stations - (ends[which] - length[which])) / np.maximum(length[which], 1e-12)
+        foot = segments[which, 0] + (segments[which, 1] - segments[which, 0]) * along[:, None]
+        normal = part.face_normals[crossed[which]] * [1.0, 0.0, 1.0]
+        normal /= np.maximum(np.linalg.norm(normal, axis=1, keepdims=True), 1e-12)
+        foot[:, 1] = 0.0
+        points.append(foot + normal * half)
+        normals.append(normal)
+        names += [zone_name] * len(foot)
+    return np.concatenate(points), np.concatenate(normals), np.array(names, dtype=str)
+
+
+def _zone_samples(vehicle: Vehicle, spacing: float, zones, seed: int, rules: MountRules):
+    """Every zone's surface samples as lens positions (see :func:`sample_zone_points`), unchecked: points (n, 3),
+    normals (n, 3), zone names (n,) str and the set of raised zone names."""
     if not spacing > 0:
         raise RigoptError(f"the candidate spacing must be positive (metres), got {spacing}")
     mesh = vehicle.fine_mesh
@@ -60,9 +140,13 @@ def sample_zone_points(vehicle: Vehicle, spacing: float = DEFAULT_SPACING, zones
         names += [zone_name] * len(samples)
     if not names:
         raise RigoptError(f"the zones {sorted(wanted) if wanted else sorted(known)} of {vehicle.name} hold no surface")
-    points, normals, names = np.concatenate(points), np.concatenate(normals), np.array(names)
-    # Keep the samples that the mount checks will place in the same zone (near edges the nearest surface of
-    # the lens can be a neighbouring face with another normal) and at the intended distance.
+    return np.concatenate(points), np.concatenate(normals), np.array(names), raised
+
+
+def _mountable(vehicle: Vehicle, points, normals, names, raised, rules: MountRules, zones) -> np.ndarray:
+    """(n,) bool: the samples the mount checks will place in the same zone (near edges the nearest surface of
+    the lens can be a neighbouring face with another normal), at the intended distance, with the housing
+    fitting, off the wheels, high enough and out of the keep-outs. Raises when none is."""
     surface = vehicle.surface(points)
     on_surface = ~np.isin(names, sorted(raised))
     agrees = np.array(vehicle.zone_names(surface.foot, surface.normal)) == names
@@ -71,9 +155,10 @@ def sample_zone_points(vehicle: Vehicle, spacing: float = DEFAULT_SPACING, zones
     agrees = np.where(on_surface, agrees, _raised_ok(vehicle, points, names, normals, surface, rules))
     agrees &= practical(vehicle, points, rules.practice)  # off wheels, high enough, out of the keep-outs
     if not agrees.any():
-        raise RigoptError(f"the zones {sorted(wanted) if wanted else sorted(known)} of {vehicle.name} hold no surface "
+        known = sorted({z.name for z in vehicle.zones})
+        raise RigoptError(f"the zones {sorted(zones) if zones else known} of {vehicle.name} hold no surface "
                           "a camera can be mounted on")
-    return points[agrees], normals[agrees], names[agrees]
+    return agrees
 
 
 def _raised_points(vehicle: Vehicle, zone_name: str, spacing: float, seed: int, rules: MountRules):

@@ -9,6 +9,7 @@ from rigopt.design.result import DesignResult, RigSummary
 from rigopt.report.json_values import json_ready
 from rigopt.rig.model import Rig
 from rigopt.rig.pccr_format import write_rig
+from rigopt.vehicle.symmetry import rig_symmetry
 
 
 def prediction_extras(p) -> dict:
@@ -65,6 +66,16 @@ def breakdown_dict(b) -> dict:
     return {"rigcd": b.rigcd, "match": b.match, "count": b.count, "t_m": b.t, "r_rad": b.r, "f_deg": b.f}
 
 
+def symmetry_dict(result: DesignResult) -> dict:
+    """The design's mirror symmetry: whether it was asked for, the vehicle's, and the pairs it has."""
+    symmetry = rig_symmetry(result.design.rig)
+    asked = result.settings.is_symmetric_on(result.vehicle)
+    describe = (symmetry.describe() if asked else result.symmetry_fallback
+                or f"symmetry not required ({symmetry.describe()})")
+    return {"required": asked, "vehicle": result.vehicle.symmetry.describe(), **symmetry.to_dict(),
+            "fallback": result.symmetry_fallback, "describe": describe}
+
+
 def design_dict(result: DesignResult, rig_file: Path | None) -> dict:
     """The ``rigopt design --json`` object (and the body of report.json)."""
     from rigopt.metrics.rigcd import rigcd
@@ -89,6 +100,7 @@ def design_dict(result: DesignResult, rig_file: Path | None) -> dict:
                    "refine_status": result.refinement.status, "candidates": milp.n_candidates,
                    "offered_to_milp": milp.n_offered, "repairs": milp.repairs, "seconds": result.seconds},
         "cameras": camera_rows(design.rig, reference, breakdown.pairs, result.vehicle),
+        "symmetry": symmetry_dict(result),
         "rigcd_breakdown": breakdown_dict(breakdown),
         "comparisons": {
             "naive_transfer": summary_dict(comparisons.naive_transfer) if comparisons.naive_transfer else None,

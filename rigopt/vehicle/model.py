@@ -11,6 +11,7 @@ import trimesh
 from rigopt import raycast
 from rigopt.vehicle.build import build_mesh
 from rigopt.vehicle.spec import VehicleSpec, Wheels, ZoneSpec
+from rigopt.vehicle.symmetry import MirrorSymmetry, mirror_symmetry
 
 
 #: Longest edge (m) of the subdivided mesh used for per-face zone queries.
@@ -136,6 +137,11 @@ class Vehicle:
         middle = 0.5 * (axles[0] + axles[-1])
         rear = [x for x in axles if x < middle] or [axles[-1]]
         return np.array([0.5 * (max(rear) + min(rear)), 0.0, 0.0])
+
+    @cached_property
+    def symmetry(self) -> MirrorSymmetry:
+        """How mirror-symmetric the body is across y = 0 (:mod:`rigopt.vehicle.symmetry`)."""
+        return mirror_symmetry(self.mesh)
 
     @cached_property
     def size(self) -> np.ndarray:

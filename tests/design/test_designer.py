@@ -14,6 +14,8 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
+from rigopt.coverage.measures import coverage_report
+from rigopt.mounting.practice import MountPractice, practice_problems
 from rigopt.mounting.rules import check_rig
 from rigopt.coverage.matrix import rig_coverage_matrix
 from rigopt.design.designer import design_rig, requirements
@@ -29,6 +31,7 @@ from rigopt.rig.model import Camera, Rig
 from rigopt.vehicle.library import load_vehicle
 from rigopt.vehicle.model import Vehicle
 from rigopt.vehicle.spec import read_spec
+from rigopt.vehicle.symmetry import rig_symmetry
 
 from box_car import BOX_ZONES, ROOF_ZONE, spec_text
 
@@ -146,6 +149,52 @@ def test_naive_transfer_keeps_each_reference_lens_on_the_catalogue(firetruck):
     lenses = np.asarray(firetruck.settings.fovs)
     for moved, original in zip(firetruck.result.comparisons.naive_transfer.rig.cameras, firetruck.reference.cameras):
         assert moved.fov == lenses[np.argmin(np.abs(lenses - original.fov))]
+
+
+def test_design_cameras_come_in_mirrored_pairs_or_sit_on_the_centreline(firetruck):
+    for rig in (firetruck.milp_rig, firetruck.design.rig):
+        symmetry = rig_symmetry(rig)
+        assert symmetry.symmetric, symmetry.describe()
+        assert len(symmetry.pairs) >= 2
+        # the firetruck's right side stands up to 6 cm further out than its left: pairs differ by that in |y|
+        assert symmetry.largest_offset <= 0.07
+        by_id = {c.id: c for c in rig.cameras}
+        for left, right in symmetry.pairs:
+            a, b = by_id[left], by_id[right]
+            assert a.position[[0, 2]] == pytest.approx(b.position[[0, 2]], abs=1e-6)
+            assert a.fov == b.fov
+            assert np.arctan2(a.forward[1], a.forward[0]) == pytest.approx(-np.arctan2(b.forward[1], b.forward[0]),
+                                                                           abs=1e-6)
+        for name in symmetry.centreline:
+            assert abs(by_id[name].position[1]) <= 1e-9
+
+
+def test_design_mounts_only_where_practice_allows(firetruck):
+    rig = firetruck.design.rig
+    assert np.all(rig.positions[:, 2] >= 0.5)
+    assert not any(practice_problems(firetruck.vehicle, rig.positions, MountPractice()))
+
+
+def test_design_sees_the_near_field_at_least_as_well_as_r6(firetruck):
+    r6 = next(s.rig for s in firetruck.result.comparisons.rigs if s.rig.name == "R6")
+    ours, theirs = (coverage_report(rig, firetruck.vehicle) for rig in (firetruck.design.rig, r6))
+    ring = [k for k, r in enumerate(ours.rings) if (r.distance_m, r.height_m) == (2.0, 0.0)][0]
+    assert ours.rings[ring].covered_frac >= theirs.rings[ring].covered_frac
+    assert ours.blind.area_m2 <= theirs.blind.area_m2
+
+
+def test_design_predicts_at_most_seven_tenths_of_r6s_linear_drop(firetruck):
+    r6 = next(s for s in firetruck.result.comparisons.rigs if s.rig.name == "R6")
+    assert firetruck.design.prediction.linear_drop <= 0.7 * r6.prediction.linear_drop
+
+
+def test_an_asymmetric_design_is_no_worse_in_rigcd_than_the_symmetric_one(firetruck):
+    # the symmetric MILP's feasible set is a subset of the free one's (on the free candidate set's superset of
+    # mount points); here only the MILP stage is compared
+    free = design_rig(firetruck.vehicle, r1_on_its_vehicle(), firetruck.calibration,
+                      DesignSettings(symmetric=False, refine=False))
+    assert not rig_symmetry(free.design.rig).symmetric
+    assert free.milp.selection.objective <= firetruck.result.milp.selection.objective + 1e-9
 
 
 def test_benchmark_rigs_are_the_library_rigs_of_the_target_vehicle(firetruck):

@@ -336,3 +336,25 @@ def test_pruning_to_two_per_reference_keeps_the_optimum():
     assert kept.tolist() == [0, 1, 2]
     pruned = select_cameras(COST[kept], sees[kept], required, DISTINCT_MOUNTS[kept], 2, ALPHA)
     assert pruned.objective == pytest.approx(solve().objective, abs=1e-9)
+
+
+# --- symmetric selection --------------------------------------------------------------------------------
+
+
+def test_a_mirror_constraint_chooses_whole_pairs():
+    # 4 candidates: 0 <-> 1 and 2 <-> 3 mirror images. Free, the cheapest two are 0 (r0) and 2 (r1): 1 + 1;
+    # in pairs, {0, 1} costs 1 + 1.5 and {2, 3} costs 1 + 3 (best matchings), so {0, 1} wins.
+    cost = np.array([[1.0, 4.0], [4.0, 1.5], [4.0, 1.0], [3.0, 5.0]])
+    free = select_cameras(cost, *no_coverage(4), np.arange(4), 2, ALPHA)
+    assert set(free.chosen.tolist()) == {0, 2}
+    paired = select_cameras(cost, *no_coverage(4), np.arange(4), 2, ALPHA, mirror=np.array([1, 0, 3, 2]))
+    assert set(paired.chosen.tolist()) == {0, 1}
+    assert paired.objective == pytest.approx(ALPHA / 2 * 2.5)
+
+
+def test_an_odd_count_in_pairs_needs_a_centreline_camera():
+    cost = np.array([[1.0], [1.0], [2.0]])
+    mirror = np.array([1, 0, 2])  # 2 is its own mirror: on the centreline
+    assert select_cameras(cost, *no_coverage(3), np.arange(3), 1, ALPHA, mirror=mirror).chosen.tolist() == [2]
+    with pytest.raises(DesignInfeasible, match="mirrored pairs"):
+        select_cameras(cost[:2], *no_coverage(2), np.arange(2), 1, ALPHA, mirror=np.array([1, 0]))
