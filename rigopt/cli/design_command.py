@@ -105,6 +105,9 @@ def design_command(
     min_height: Optional[float] = typer.Option(None, "--min-height", min=0.0, max=5.0,
                                                help=MIN_HEIGHT_HELP),
     no_trailer: bool = typer.Option(False, "--no-trailer", help=NO_TRAILER_HELP),
+    cost_weight: float = typer.Option(0.0, "--cost-weight", min=0.0,
+                                      help="Weight of the cameras' mean relative mounting cost (zone cost, +0.5 in "
+                                           "tyre spray) added to the calibrated RigCD; 0 reports it only."),
     asymmetric: bool = typer.Option(False, "--asymmetric",
                                     help="Place cameras freely; by default a mirror-symmetric vehicle gets cameras "
                                          "in mirrored pairs and on its centreline."),
@@ -147,7 +150,7 @@ def design_command(
         zones=tuple(z.strip() for z in zones.split(",")) if zones else None,
         pitches_deg=pitches, yaw_step_deg=yaw_step, spacing=spacing,
         min_coverage=min_coverage, min_overlap=min_overlap, time_limit=time_limit,
-        rules=mount_rules(min_height, no_trailer), symmetric=False if asymmetric else None)
+        rules=mount_rules(min_height, no_trailer), symmetric=False if asymmetric else None, cost_weight=cost_weight)
     references = [_reference(name.strip(), ref_vehicle) for name in ref.split(",") if name.strip()]
     if not references:
         raise RigoptError("--ref needs at least one rig")

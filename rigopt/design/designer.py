@@ -25,7 +25,7 @@ from scipy.optimize import linear_sum_assignment
 from scipy.spatial import cKDTree
 
 from rigopt.design.naming import mount_name, unique
-from rigopt.mounting.practice import in_keep_outs
+from rigopt.mounting.practice import in_keep_outs, mounting_costs
 from rigopt.mounting.rules import RigCheck, check_rig
 from rigopt.coverage.footprint import Footprint
 from rigopt.coverage.matrix import rig_coverage_matrix, sector_points
@@ -106,7 +106,7 @@ def _explain_uncoverable(needed: np.ndarray, seen: np.ndarray, distance, height,
 class Prepared:
     """What every MILP of one design problem shares: the candidates, their matching costs to each
     reference (n, R_k), the sector points (q, 3) with their rings, the coverage pool (p,) int and what it
-    sees (p, q), and the mount spacing (m)."""
+    sees (p, q), the mount spacing (m) and each candidate's relative mounting cost (n,)."""
 
     references: tuple[Rig, ...]
     candidates: CandidateSet
@@ -118,6 +118,7 @@ class Prepared:
     pool: np.ndarray
     sees_pool: np.ndarray
     spacing: float
+    mount_cost: np.ndarray
 
 
 def prepare(vehicle: Vehicle, references: Sequence[Rig], calibration: Calibration, settings: DesignSettings,
@@ -135,7 +136,9 @@ def prepare(vehicle: Vehicle, references: Sequence[Rig], calibration: Calibratio
     progress(f"coverage of {len(pool)} of {len(candidates)} candidates")
     sees_pool = visible_by(vehicle.mesh, candidates.model(pool), candidates.positions[pool],
                            candidates.rotations[pool], points, settings.coverage.max_range, settings.coverage.backend)
-    return Prepared(tuple(references), candidates, costs, points, distance, height, azimuth, pool, sees_pool, spacing)
+    per_mount = mounting_costs(vehicle, candidates.mount_zones, candidates.mount_points)
+    return Prepared(tuple(references), candidates, costs, points, distance, height, azimuth, pool, sees_pool, spacing,
+                    per_mount[candidates.mount])
 
 
 def mount_candidates(vehicle: Vehicle, settings: DesignSettings, spacing: float | None = None) -> CandidateSet:
@@ -179,7 +182,8 @@ def select_valid(prepared: Prepared, vehicle: Vehicle, calibration: Calibration,
         keep = np.array([k for k, c in enumerate(offered) if c not in excluded], dtype=int)
         best = _best_selection([c[offered[keep]] for c in prepared.costs], sees[keep], needed,
                                candidates.mount[offered[keep]], candidates.mount_points, counts, calibration.alpha,
-                               settings, progress, local_mirror(candidates, offered[keep]))
+                               settings, progress, local_mirror(candidates, offered[keep]),
+                               prepared.mount_cost[offered[keep]])
         chosen = offered[keep][best.chosen]
         rig = _rig_from(candidates.subset(chosen), best.matched, prepared.references[0], vehicle)
         check = check_rig(rig, vehicle, settings.rules)
@@ -311,19 +315,19 @@ def local_mirror(candidates: CandidateSet, index: np.ndarray) -> np.ndarray | No
 
 
 def _best_selection(costs, sees, needed, mount, mount_points, counts, alpha, settings, progress,
-                    mirror=None) -> Selection:
+                    mirror=None, mount_cost=None) -> Selection:
     clashes = cKDTree(mount_points).query_pairs(CLASH_DISTANCE, output_type="ndarray")
     best = None
     for n_cameras in range(counts[0], counts[1] + 1):
         progress(f"MILP: {n_cameras} cameras from {len(costs[0])} candidates")
         try:
             selection = select_cameras(costs, sees, needed, mount, n_cameras, alpha, clashes, settings.time_limit,
-                                       settings.mip_gap, mirror)
+                                       settings.mip_gap, mirror, mount_cost, settings.cost_weight)
         except DesignInfeasible:
             if n_cameras == counts[1] and best is None:
                 raise
             continue
-        if best is None or selection.objective < best.objective:
+        if best is None or selection.objective + selection.cost_term < best.objective + best.cost_term:
             best = selection
     return best
 

@@ -2,7 +2,7 @@
 
 For a camera count N and a reference of R cameras, with M = min(N, R):
 
-    minimise   alpha / M * sum_e cost_e y_e  +  (1 - alpha) |N - R| / max(N, R)
+    minimise   alpha / M * sum_e cost_e y_e  +  (1 - alpha) |N - R| / max(N, R)  +  w / N * sum_c m_c x_c
     subject to sum_c x_c = N
                N >= R: every reference camera matched once (sum_c y_cr = 1), sum_r y_cr <= x_c
                N <  R: every chosen camera matched once (sum_r y_cr = x_c), sum_c y_cr <= 1
@@ -13,7 +13,9 @@ For a camera count N and a reference of R cameras, with M = min(N, R):
 
 ``cost[c, r]`` is the raw-unit matching cost ``lt ||t_c - t_r|| + lr dR + lf |f_c - f_r|`` (the weighted
 matching of RigCD), so the objective is exactly the calibrated RigCD of the chosen rig to the reference
-when the matching is optimal, which the MILP guarantees on the candidate set.
+when the matching is optimal, which the MILP guarantees on the candidate set. The last term, off by default
+(w = 0), adds the mean relative mounting cost m_c of the chosen cameras (their zones' costs and tyre spray,
+:func:`rigopt.mounting.practice.mounting_costs`) weighted by w.
 """
 
 from __future__ import annotations
@@ -36,8 +38,8 @@ class DesignInfeasible(RigoptError):
 class Selection:
     """The MILP's answer: ``chosen`` (k,) candidate indices, ``matched`` (k,) index into the (first)
     reference or -1, ``objective`` (calibrated RigCD; in fleet mode the largest over the references), solver
-    ``status``, relative ``gap``, ``seconds``, ``n_candidates``, and ``matchings``: one ``matched`` per
-    reference."""
+    ``status``, relative ``gap``, ``seconds``, ``n_candidates``, ``matchings``: one ``matched`` per
+    reference, and ``cost_term``: the weighted mounting cost the MILP added to the objective (0 unweighted)."""
 
     chosen: np.ndarray
     matched: np.ndarray
@@ -47,6 +49,7 @@ class Selection:
     seconds: float
     n_candidates: int
     matchings: tuple[np.ndarray, ...] = ()
+    cost_term: float = 0.0
 
 
 def count_term(n_cameras: int, n_reference: int) -> float:
@@ -85,15 +88,17 @@ def _matching(cp, x, cost: np.ndarray, n_cameras: int, alpha: float):
 
 def select_cameras(cost, sees: np.ndarray, required: np.ndarray, mount: np.ndarray, n_cameras: int,
                    alpha: float, clash_pairs=(), time_limit: float = 60.0, mip_gap: float = 1e-4,
-                   mirror: np.ndarray | None = None) -> Selection:
+                   mirror: np.ndarray | None = None, mount_cost: np.ndarray | None = None,
+                   cost_weight: float = 0.0) -> Selection:
     """Solve the selection MILP above.
 
     cost : (n, R) float raw-unit matching costs, or a list of them (one per reference rig: the fleet mode,
     which minimises the largest calibrated RigCD over the references); sees : (n, q) bool; required : (q,)
     int cameras needed per sector point; mount : (n,) int mount point of each candidate; clash_pairs :
     (p, 2) int mount points whose housings collide; mirror : (n,) int each candidate's mirror image among
-    the n (itself on the centreline), or None for no symmetry. Raises DesignInfeasible when the MILP has no
-    solution.
+    the n (itself on the centreline), or None for no symmetry; mount_cost : (n,) float relative mounting cost
+    of each candidate, weighted by ``cost_weight`` in the objective. Raises DesignInfeasible when the MILP has
+    no solution; ``objective`` is the calibrated RigCD (the mounting cost term left out).
     """
     import cvxpy as cp
 
@@ -125,7 +130,10 @@ def select_cameras(cost, sees: np.ndarray, required: np.ndarray, mount: np.ndarr
         worst = cp.Variable()
         constraints += [worst >= rigcd for _, _, rigcd in matchings]
         objective = worst
-    problem = cp.Problem(cp.Minimize(objective), constraints)
+    penalty = 0.0
+    if cost_weight and mount_cost is not None:
+        penalty = cost_weight / n_cameras * (np.asarray(mount_cost, dtype=float) @ x)
+    problem = cp.Problem(cp.Minimize(objective + penalty), constraints)
     start = time.perf_counter()
     try:
         with warnings.catch_warnings():  # a time-limited solve warns "may be inaccurate": its status says so
@@ -149,7 +157,9 @@ def select_cameras(cost, sees: np.ndarray, required: np.ndarray, mount: np.ndarr
         matched.append(np.array([int(np.argmax(pairs[k])) if pairs[k].any() else -1 for k in chosen]))
     gap = _gap(problem)
     status = "optimal" if problem.status == cp.OPTIMAL else "time_limit" if problem.status == cp.USER_LIMIT else problem.status
-    return Selection(chosen, matched[0], float(problem.value), status, gap, seconds, n, tuple(matched))
+    rigcd_value = float(objective.value) if len(matchings) > 1 else float(matchings[0][2].value)
+    cost_term = float(penalty.value) if hasattr(penalty, "value") else 0.0
+    return Selection(chosen, matched[0], rigcd_value, status, gap, seconds, n, tuple(matched), cost_term)
 
 
 def _gap(problem) -> float:

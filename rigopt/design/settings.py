@@ -225,6 +225,9 @@ class DesignSettings:
     """The mount checks every camera of a design passes."""
     max_body_fraction: float | None = 0.10
     """Largest share of a designed camera's image that may show the ego body (None: no limit)."""
+    cost_weight: float = 0.0
+    """Weight of the chosen cameras' mean relative mounting cost (zone cost, tyre spray) added to the
+    calibrated RigCD in the MILP's objective (0: the cost is reported only)."""
     symmetric: bool | None = None
     """Cameras in mirrored pairs across y = 0 or on the centreline: None on a mirror-symmetric vehicle
     (:mod:`rigopt.vehicle.symmetry`), True always, False never (``--asymmetric``)."""
@@ -235,6 +238,8 @@ class DesignSettings:
 
     def __post_init__(self):
         object.__setattr__(self, "lenses", catalogue_of(self.lenses))
+        if not self.cost_weight >= 0.0:
+            raise RigoptError(f"the mounting cost weight must be >= 0, got {self.cost_weight}")
         if self.max_body_fraction is not None and not 0.0 <= self.max_body_fraction <= 1.0:
             raise RigoptError(f"the largest ego-body share of an image must be in [0, 1], got {self.max_body_fraction}")
 

@@ -138,3 +138,17 @@ def spray_exposure(vehicle: Vehicle, points) -> list[str]:
     """For each lens position (n, 3) m: "high" where tyre spray and road dirt reach it (outboard, within
     SPRAY_REACH_M of a tyre's tread in x and z), else "low". A soft attribute shown in reports."""
     return ["high" if wheels else "low" for wheels in on_wheels(vehicle, points, SPRAY_REACH_M)]
+
+
+#: Extra mounting cost of a lens in tyre spray (it needs a washer and is cleaned more often), in units of an
+#: ordinary body panel's cost (1).
+SPRAY_COST = 0.5
+
+
+def mounting_costs(vehicle: Vehicle, zones, points) -> np.ndarray:
+    """(n,) float: the relative cost of mounting a lens at each of ``points`` (n, 3) m in ``zones`` (n,) zone
+    names: the zone's ``cost`` (1 an ordinary body panel; 1 for an unknown zone) plus SPRAY_COST where tyre
+    spray reaches the lens (:func:`spray_exposure`)."""
+    cost = {z.name: z.cost for z in vehicle.zones}
+    spray = np.array([s == "high" for s in spray_exposure(vehicle, points)], dtype=bool)
+    return np.array([cost.get(z, 1.0) for z in zones], dtype=float) + SPRAY_COST * spray

@@ -19,14 +19,25 @@ def prediction_extras(p) -> dict:
             if key in ("interval", "linear_drop", "extrapolation", "fallback")}
 
 
-def summary_dict(summary: RigSummary) -> dict:
-    """A rig's worst predicted transfer over the references, its coverage, and each reference's prediction."""
+def summary_dict(summary: RigSummary, vehicle=None) -> dict:
+    """A rig's worst predicted transfer over the references, its coverage, each reference's prediction, and
+    with the ``vehicle`` its relative mounting cost (the sum over its cameras, see ``mounting_costs``)."""
     p = summary.prediction
-    return {"name": summary.rig.name, "predicted_drop": p.predicted_drop, **prediction_extras(p), "rigcd": p.rigcd,
-            "t": p.t, "r": p.r, "f": p.f, "count": p.count, "n_cameras": len(summary.rig), "coverage": summary.coverage,
-            "meets_coverage_requirements": summary.meets_requirements,
-            "per_reference": [{"reference": q.reference, "predicted_drop": q.predicted_drop, "rigcd": q.rigcd}
-                              for q in summary.predictions]}
+    out = {"name": summary.rig.name, "predicted_drop": p.predicted_drop, **prediction_extras(p), "rigcd": p.rigcd,
+           "t": p.t, "r": p.r, "f": p.f, "count": p.count, "n_cameras": len(summary.rig), "coverage": summary.coverage,
+           "meets_coverage_requirements": summary.meets_requirements,
+           "per_reference": [{"reference": q.reference, "predicted_drop": q.predicted_drop, "rigcd": q.rigcd}
+                             for q in summary.predictions]}
+    if vehicle is not None:
+        out["mounting_cost"] = rig_mounting_cost(summary.rig, vehicle)
+    return out
+
+
+def rig_mounting_cost(rig: Rig, vehicle) -> float:
+    """The relative mounting cost of ``rig`` on ``vehicle``: the sum of its cameras' (zone cost + spray)."""
+    from rigopt.mounting.practice import mounting_costs
+
+    return float(mounting_costs(vehicle, [c.zone for c in rig.cameras], rig.positions).sum())
 
 
 def camera_rows(rig: Rig, reference: Rig, pairs, vehicle=None) -> list[dict]:
@@ -37,12 +48,13 @@ def camera_rows(rig: Rig, reference: Rig, pairs, vehicle=None) -> list[dict]:
     ``vehicle``, its zone's mounting ``zone_cost`` and its tyre ``spray`` exposure (high / low)."""
     from rigopt.geometry import iso_to_carla
     from rigopt.metrics.rigcd import camera_costs
-    from rigopt.mounting.practice import spray_exposure
+    from rigopt.mounting.practice import mounting_costs, spray_exposure
 
     partner = {b: a for a, b in pairs}
     by_id = {c.id: c for c in reference.cameras}
     location, rotation = iso_to_carla(rig.positions, rig.rotations)
     spray = spray_exposure(vehicle, rig.positions) if vehicle is not None else None
+    mounting = mounting_costs(vehicle, [c.zone for c in rig.cameras], rig.positions) if vehicle is not None else None
     rows = []
     for k, camera in enumerate(rig.cameras):
         row = {"id": camera.id, "zone": camera.zone, "fov": camera.fov, "position": camera.position.tolist(),
@@ -52,6 +64,7 @@ def camera_rows(rig: Rig, reference: Rig, pairs, vehicle=None) -> list[dict]:
             costs = {z.name: z.cost for z in vehicle.zones}
             row["zone_cost"] = costs.get(camera.zone)
             row["spray"] = spray[k]
+            row["mounting_cost"] = float(mounting[k])
         if camera.id in partner:
             ref = by_id[partner[camera.id]]
             t, r, f = (float(v.item()) for v in camera_costs(ref.position[None], ref.rotation[None], [ref.fov],
@@ -96,6 +109,8 @@ def design_dict(result: DesignResult, rig_file: Path | None) -> dict:
         "per_reference": summary_dict(design)["per_reference"],
         "coverage": design.coverage,
         "reference_coverage": result.reference_coverage,
+        "mounting_cost": rig_mounting_cost(design.rig, result.vehicle),
+        "cost_weight": result.settings.cost_weight,
         "solver": {"milp_status": milp.status, "milp_gap": milp.gap, "milp_seconds": milp.selection.seconds,
                    "refine_status": result.refinement.status, "candidates": milp.n_candidates,
                    "offered_to_milp": milp.n_offered, "repairs": milp.repairs, "seconds": result.seconds},
@@ -103,9 +118,10 @@ def design_dict(result: DesignResult, rig_file: Path | None) -> dict:
         "symmetry": symmetry_dict(result),
         "rigcd_breakdown": breakdown_dict(breakdown),
         "comparisons": {
-            "naive_transfer": summary_dict(comparisons.naive_transfer) if comparisons.naive_transfer else None,
-            "benchmark_rig": summary_dict(comparisons.best_rig) if comparisons.best_rig else None,
-            "benchmark_rigs": [summary_dict(s) for s in comparisons.rigs],
+            "naive_transfer": (summary_dict(comparisons.naive_transfer, result.vehicle)
+                               if comparisons.naive_transfer else None),
+            "benchmark_rig": summary_dict(comparisons.best_rig, result.vehicle) if comparisons.best_rig else None,
+            "benchmark_rigs": [summary_dict(s, result.vehicle) for s in comparisons.rigs],
         },
     }
 

@@ -358,3 +358,15 @@ def test_an_odd_count_in_pairs_needs_a_centreline_camera():
     assert select_cameras(cost, *no_coverage(3), np.arange(3), 1, ALPHA, mirror=mirror).chosen.tolist() == [2]
     with pytest.raises(DesignInfeasible, match="mirrored pairs"):
         select_cameras(cost[:2], *no_coverage(2), np.arange(2), 1, ALPHA, mirror=np.array([1, 0]))
+
+
+def test_a_weighted_mounting_cost_trades_rigcd_for_cheaper_mounts():
+    # one reference camera; candidate 0 matches it best (cost 1) but is expensive to mount (3), candidate 1
+    # matches worse (1.5) on an ordinary panel (1). The objective adds w / N * m_c: w = 0.1 keeps 0 (0.9 + 0.3 <
+    # 1.35 + 0.1), w = 1 moves to 1 (0.9 + 3 > 1.35 + 1); the reported objective stays the RigCD.
+    cost, mount_cost = np.array([[1.0], [1.5]]), np.array([3.0, 1.0])
+    light = select_cameras(cost, *no_coverage(2), np.arange(2), 1, ALPHA, mount_cost=mount_cost, cost_weight=0.1)
+    heavy = select_cameras(cost, *no_coverage(2), np.arange(2), 1, ALPHA, mount_cost=mount_cost, cost_weight=1.0)
+    assert light.chosen.tolist() == [0] and light.cost_term == pytest.approx(0.3)
+    assert heavy.chosen.tolist() == [1] and heavy.cost_term == pytest.approx(1.0)
+    assert heavy.objective == pytest.approx(ALPHA * 1.5)
