@@ -308,3 +308,20 @@ def test_the_design_page_section_names_the_compared_rig():
     heading, note, scene = scene_section("<div>view</div>", "R1")
     assert heading == "<h2>3D view</h2>" and "R1 is drawn in grey" in note and "ISO 8855" in note
     assert "grey, dashed" not in scene_section("<div>view</div>", None)[1]
+
+
+def test_the_coverage_page_holds_the_view_when_given_the_vehicle(car, tmp_path):
+    from rigopt.coverage.measures import CoverageSettings, coverage_report
+    from rigopt.report.coverage_html import write_html_report
+
+    rig = Rig("two", "vehicle.test.wheelbox", (Camera("F", np.array([2.04, 0.0, 1.0]), np.eye(3), 100.0),
+                                                Camera("B", np.array([-2.04, 0.0, 1.0]), rotation_from_yaw_pitch_roll(
+                                                    np.pi, 0.0, 0.0), 100.0)))
+    quick = CoverageSettings(ring_distances=(2.0,), ring_heights=(0.0,), ring_samples=72, sectors=72, bev_extent=10.0,
+                             blind_azimuths=36, blind_search=5.0, blind_cell=0.2, image_grid=(16, 9),
+                             overlap_ring=(2.0, 0.0))
+    report = coverage_report(rig, car, quick)
+    with_view = write_html_report(report, tmp_path / "a", rig, figures={}, vehicle=car).read_text(encoding="utf-8")
+    without = write_html_report(report, tmp_path / "b", rig, figures={}).read_text(encoding="utf-8")
+    assert "<h2>3D view</h2>" in with_view and with_view.count("plotly.js v") == 1
+    assert '"name":"F"' in with_view and "<h2>3D view</h2>" not in without and "plotly" not in without
