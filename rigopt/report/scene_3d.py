@@ -13,7 +13,8 @@ vehicle's centre on the ground, the frame of every rigopt vehicle mesh; a rig me
 - the keep-out boxes in force (translucent, their reason on hover);
 - each camera: a marker at its lens (hover: id, zone, pose, lens) and its frustum: lines from the lens to the
   image's four corners ``frustum_range`` m away along the real lens's corner rays, and the image's outline
-  through the rays of points along its edges (so a distorted lens draws its true, curved outline);
+  through the rays of points along its edges (so a distorted lens draws its true, curved outline; see
+  :func:`frustum_lines`);
 - optionally a second rig in grey (``compare``) and ground regions (translucent polygons at z = 0).
 
 plotly is imported inside the functions, so importing this module stays cheap.
@@ -43,6 +44,8 @@ FRUSTUM_RANGE_M = 2.0
 MAX_DRAWN_FACES = 20_000
 #: Points per image edge of a drawn frustum outline (rays through them: curved for a distorted lens).
 EDGE_POINTS = 9
+#: A frustum whose outline rays stay within this angle (deg) of the optical axis ends on a plane, else on a sphere.
+PLANE_LIMIT_DEG = 75.0
 #: A body face counts as a wheel's when its vertices lie within this distance (m) of the wheel's cylinder.
 WHEEL_TOLERANCE_M = 0.01
 #: Height (m) at which ground regions are drawn, just above the ground plane.
@@ -233,18 +236,25 @@ def _polylines(lines: Sequence[np.ndarray]) -> list[list]:
 
 
 def frustum_lines(camera: Camera, frustum_range: float = FRUSTUM_RANGE_M) -> tuple[np.ndarray, np.ndarray]:
-    """A camera's drawn frustum in the vehicle frame (m): its image's corners (4, 3), ``frustum_range`` m from
-    the lens along the rays through the image's corners (top-left, top-right, bottom-right, bottom-left
-    pixel corners), and the image's outline (4 EDGE_POINTS + 1, 3) at that range, closed, from the
-    top-left corner clockwise as seen from behind the camera. Rays come from the camera's lens model
-    (distortion included), so a wide or distorted lens's outline is its true, curved one."""
+    """A camera's drawn frustum in the vehicle frame (m): its image's corners (4, 3) (top-left, top-right,
+    bottom-right, bottom-left pixel corners) and its outline (4 EDGE_POINTS + 1, 3), closed, from the
+    top-left corner clockwise as seen from behind the camera, each on the ray of its pixel through the
+    camera's lens model (distortion included, so a distorted lens draws its true, curved outline).
+
+    Where the points lie on their rays: on the plane across the optical axis at which the corner farthest off
+    the axis is ``frustum_range`` m from the lens (a centred lens has all four corners there, and a pinhole's
+    outline is a rectangle); for a lens whose outline reaches more than PLANE_LIMIT_DEG off its axis (a wide
+    fisheye, whose corners may look backwards) on the sphere of radius ``frustum_range`` instead."""
     width, height = camera.image_size
     corners_px = np.array([[0.0, 0.0], [width, 0.0], [width, height], [0.0, height]])
     s = np.arange(EDGE_POINTS) / EDGE_POINTS
     outline_px = np.concatenate([a + s[:, None] * (b - a) for a, b in zip(corners_px, np.roll(corners_px, -1, 0))])
     outline_px = np.concatenate([outline_px, corners_px[:1]])
     rays = CameraModel.of_camera(camera).pixel_rays(np.concatenate([corners_px, outline_px]), frame="body")
-    points = camera.position + frustum_range * rays @ camera.rotation.T
+    distance = np.full(len(rays), float(frustum_range))
+    if rays[:, 0].min() >= np.cos(np.deg2rad(PLANE_LIMIT_DEG)):
+        distance *= rays[:4, 0].min() / rays[:, 0]  # on the plane x = frustum_range * (least corner cosine)
+    points = camera.position + (distance[:, None] * rays) @ camera.rotation.T
     return points[:4], points[4:]
 
 
@@ -410,14 +420,14 @@ def scene_figure(vehicle: Vehicle, rig: Rig | None = None, *, regions: Sequence[
             placed, _ = to_vehicle_centre(other, vehicle)
             traces += _camera_traces(go, placed, frustum_range, dimmed)
     traces += _region_traces(go, regions)
-    title = vehicle.name + (f": rig {rig.name}" if rig is not None else "") + (
+    title = f"{vehicle.name} ({vehicle.blueprint})" + (f" with rig {rig.name}" if rig is not None else "") + (
         f", {compare.name} in grey" if compare is not None else "")
     axes = {f"{axis}axis": dict(title=dict(text=text)) for axis, text in zip("xyz", AXIS_TITLES)}
     figure = go.Figure(traces)
     figure.update_layout(
         title=dict(text=html.escape(title)), template="plotly_white", height=720,
         margin=dict(l=0, r=0, t=40, b=0),
-        scene=dict(aspectmode="data", camera=dict(eye=dict(x=1.1, y=1.1, z=0.7)), **axes),
+        scene=dict(aspectmode="data", camera=dict(eye=dict(x=1.5, y=1.2, z=0.8)), **axes),
         legend=dict(title=dict(text="click to show or hide"), itemsizing="constant", groupclick="togglegroup"))
     return figure
 

@@ -160,10 +160,29 @@ def test_a_distorted_lens_draws_its_true_corners_and_outline(figure, rig, index)
     assert np.allclose(corners_of(trace), corners, atol=1e-9)
 
 
-def test_the_fisheye_frustum_reaches_behind_its_lens(rig):
+def test_the_fisheye_frustum_reaches_behind_its_lens_on_a_sphere(rig):
     camera = rig.cameras[2]  # wider than 180 degrees: its corner rays point behind the image plane
-    corners, _ = scene_3d.frustum_lines(camera, RANGE)
+    corners, outline = scene_3d.frustum_lines(camera, RANGE)
     assert np.all(((corners - camera.position) @ camera.rotation)[:, 0] < 0)
+    assert np.allclose(np.linalg.norm(outline - camera.position, axis=1), RANGE, atol=1e-9)
+
+
+def test_a_pinhole_frustum_ends_in_a_rectangle_across_its_axis(rig):
+    camera = rig.cameras[0]
+    corners, outline = scene_3d.frustum_lines(camera, RANGE)
+    body = (outline - camera.position) @ camera.rotation
+    assert np.allclose(body[:, 0], body[0, 0], atol=1e-9)  # one plane across the optical axis
+    left, right, top, bottom = body[:, 1].max(), body[:, 1].min(), body[:, 2].max(), body[:, 2].min()
+    on_an_edge = np.minimum.reduce([abs(body[:, 1] - left), abs(body[:, 1] - right), abs(body[:, 2] - top),
+                                    abs(body[:, 2] - bottom)])
+    assert on_an_edge.max() < 1e-9  # straight edges
+
+
+def test_an_off_centre_lens_has_its_farthest_corner_at_the_range(rig):
+    camera = rig.cameras[1]  # radtan, principal point off the image centre
+    corners, _ = scene_3d.frustum_lines(camera, RANGE)
+    distances = np.linalg.norm(corners - camera.position, axis=1)
+    assert distances.max() == pytest.approx(RANGE, abs=1e-9) and distances.min() < RANGE - 1e-4
 
 
 def test_the_compared_rig_is_grey_and_dashed(figure):
