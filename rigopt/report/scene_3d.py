@@ -197,7 +197,7 @@ def _mesh_trace(go, triangles: np.ndarray, name: str, colour: str, hover: str, *
 
 
 def _cylinder_triangles(centre: np.ndarray, radius: float, width: float, segments: int = 24) -> np.ndarray:
-    """(4 segments, 3, 3) m: a wheel's cylinder (axis along y) as triangles, caps included."""
+    """(4 * segments, 3, 3) m: a wheel's cylinder (axis along y) as triangles, caps included."""
     angle = np.linspace(0.0, 2.0 * np.pi, segments + 1)
     ring = np.stack([radius * np.cos(angle), np.zeros_like(angle), radius * np.sin(angle)], axis=1)
     sides = [centre + ring + [0.0, s * width / 2.0, 0.0] for s in (-1.0, 1.0)]
