@@ -25,6 +25,7 @@ from rigopt.report.coverage_figures import (
 from rigopt.report.html_page import escape, image, num, page, pct, table
 from rigopt.report.json_values import json_ready
 from rigopt.rig.model import Rig
+from rigopt.vehicle.model import Vehicle
 
 REPORT_FILE = "report.html"
 
@@ -59,9 +60,10 @@ _CAPTIONS = {
 
 
 def render_html(report: CoverageReport, rig: Rig, comparison: CoverageComparison | None = None,
-                compare_report: CoverageReport | None = None, figures: dict[str, bytes] | None = None) -> str:
+                compare_report: CoverageReport | None = None, figures: dict[str, bytes] | None = None,
+                scene: str | None = None) -> str:
     """The report page as a string; ``figures`` maps ``bev``, ``rings``, ``blind`` to PNG bytes (omitted
-    figures are left out)."""
+    figures are left out); ``scene``: the 3D view's HTML fragment (``report.scene_3d.scene_html``), if any."""
     data = report_dict(report)
     other = report_dict(compare_report) if compare_report is not None else None
     settings = report.settings
@@ -152,6 +154,14 @@ def render_html(report: CoverageReport, rig: Rig, comparison: CoverageComparison
                      + (f'<strong>{escape(f"{area:+.1f}")} m²</strong>' if area is not None else "-")
                      + f" ({escape(diff['b'])} minus {escape(diff['a'])}; negative is better).</p>")
 
+    if scene is not None:
+        from rigopt.report.scene_3d import FRAME_TEXT
+
+        parts += ["<h2>3D view</h2>",
+                  '<p class="note">Drag to turn, scroll to zoom, hover for details; click a legend entry to hide or '
+                  "show it. The cameras with their frustums (lines to the image corners along each lens's own "
+                  "corner rays), the mounting zones, the keep-outs in orange, the wheels dark grey. "
+                  f"{escape(FRAME_TEXT)}.</p>", scene]
     if figures:
         parts.append("<h2>Figures</h2>")
         for name in ("bev", "rings", "blind"):
@@ -162,24 +172,30 @@ def render_html(report: CoverageReport, rig: Rig, comparison: CoverageComparison
 
 def write_html_report(report: CoverageReport, out_dir, rig: Rig, comparison: CoverageComparison | None = None,
                       compare_report: CoverageReport | None = None, *,
-                      figures: dict[str, Path] | None = None) -> Path:
+                      figures: dict[str, Path] | None = None, vehicle: Vehicle | None = None) -> Path:
     """Write ``report.html`` into ``out_dir`` (created): self-contained, figures embedded as PNG data URIs.
 
     ``figures`` maps ``bev``, ``rings``, ``blind`` to PNG files already written (e.g. by the CLI) so that they
     are not drawn twice; without it the figures are drawn here (``compare_report`` dashed in the ring plot).
+    With the ``vehicle`` the rig sits on, the page also holds the interactive 3D view (plotly.js inline).
     Returns the path of the page.
     """
+    from rigopt.report.scene_3d import scene_html
+
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    page = render_html(report, rig, comparison, compare_report, _figures(report, rig, compare_report, figures))
+    scene = scene_html(vehicle, rig) if vehicle is not None else None
+    page = render_html(report, rig, comparison, compare_report, _figures(report, rig, compare_report, figures),
+                       scene)
     path = out_dir / REPORT_FILE
     path.write_text(page, encoding="utf-8")
     return path
 
 
 def write_coverage_folder(out_dir, report: CoverageReport, rig: Rig, comparison: CoverageComparison | None = None,
-                          compare_report: CoverageReport | None = None) -> list[Path]:
-    """Write the coverage folder: ``coverage.json``, ``bev.png``, ``rings.png``, ``blind.png``, ``report.html``.
+                          compare_report: CoverageReport | None = None, vehicle: Vehicle | None = None) -> list[Path]:
+    """Write the coverage folder: ``coverage.json``, ``bev.png``, ``rings.png``, ``blind.png``, ``report.html``
+    (with the 3D view when the rig's ``vehicle`` is given).
 
     ``out_dir`` is created if missing and written in place (callers that need the folder whole or not at all
     write into a temporary sibling, see ``rigopt.output.atomic_folder``). The JSON holds ``report_dict`` and,
@@ -195,5 +211,5 @@ def write_coverage_folder(out_dir, report: CoverageReport, rig: Rig, comparison:
     figures = {"bev": write_bev_figure(report, out_dir / "bev.png", rig),
                "rings": write_rings_figure(report, out_dir / "rings.png", compare_report),
                "blind": write_blind_figure(report, out_dir / "blind.png")}
-    page_path = write_html_report(report, out_dir, rig, comparison, compare_report, figures=figures)
+    page_path = write_html_report(report, out_dir, rig, comparison, compare_report, figures=figures, vehicle=vehicle)
     return [json_path, *figures.values(), page_path]

@@ -43,8 +43,25 @@ def _extrapolation_text(entry: dict) -> str:
     return "-" if flag is None else describe_extrapolation(flag)
 
 
-def render_design_html(summary: dict, figures: dict[str, bytes]) -> str:
-    """The page for ``summary`` (the ``design_dict`` of a result) and PNG ``figures`` by name."""
+def scene_section(scene: str, compared: str | None) -> list[str]:
+    """The "3D view" section: its heading, a note on what is drawn and in which frame, and the ``scene``
+    fragment (``report.scene_3d.scene_html``); ``compared``: the name of the rig drawn in grey, if any."""
+    from rigopt.report.scene_3d import FRAME_TEXT
+
+    grey = f" The reference rig {escape(compared)} is drawn in grey, dashed." if compared else ""
+    return ["<h2>3D view</h2>",
+            '<p class="note">Drag to turn, scroll to zoom, hover for details; click a legend entry to hide or show '
+            "it. The design's cameras with their frustums (lines to the image corners along the lens's own corner "
+            f"rays, outline through its edges' rays), the mounting zones as in the pictures, the keep-outs in "
+            f"orange, the wheels (not mountable) dark grey.{grey} {escape(FRAME_TEXT)}; the camera table's CARLA "
+            "frame has y to the right.</p>",
+            scene]
+
+
+def render_design_html(summary: dict, figures: dict[str, bytes], scene: str | None = None,
+                       compared: str | None = None) -> str:
+    """The page for ``summary`` (the ``design_dict`` of a result) and PNG ``figures`` by name; ``scene``: the
+    3D view's HTML fragment (plotly.js inline), ``compared`` the name of the rig it draws in grey."""
     comparisons = summary["comparisons"]
     named = [("design", {**summary, "meets_coverage_requirements": True}),
              ("naive transfer", comparisons["naive_transfer"]),
@@ -95,17 +112,21 @@ def render_design_html(summary: dict, figures: dict[str, bytes]) -> str:
             "; ".join(f"{k} {v:.3f}" for k, v in summary["rigcd_breakdown"].items())) + ".</p>",
         f'<p class="note">Rig file: {escape(summary["rig_file"])} (the benchmark\'s JSON format, CARLA frame).</p>',
     ]
+    if scene is not None:
+        parts += scene_section(scene, compared)
     if figures:
         parts.append("<h2>Pictures</h2>")
         parts += [image(figures[name], name, _CAPTIONS.get(name, name)) for name in _CAPTIONS if name in figures]
     return page(f"Design for {summary['vehicle']} from {summary['reference']}", parts)
 
 
-def write_design_html(summary: dict, out_dir, pictures: dict[str, Path]) -> Path:
-    """Write ``report.html`` into ``out_dir`` with the PNG files of ``pictures`` embedded."""
+def write_design_html(summary: dict, out_dir, pictures: dict[str, Path], scene: str | None = None,
+                      compared: str | None = None) -> Path:
+    """Write ``report.html`` into ``out_dir`` with the PNG files of ``pictures`` and the 3D view ``scene``
+    (see :func:`render_design_html`) embedded."""
     path = Path(out_dir) / "report.html"
     figures = {name: Path(p).read_bytes() for name, p in pictures.items()}
-    path.write_text(render_design_html(summary, figures), encoding="utf-8")
+    path.write_text(render_design_html(summary, figures, scene, compared), encoding="utf-8")
     return path
 
 

@@ -127,7 +127,9 @@ def design_dict(result: DesignResult, rig_file: Path | None) -> dict:
 
 
 def write_design_outputs(result: DesignResult, out_dir, *, published_as=None) -> list[Path]:
-    """Write rig.json (benchmark format), report.json, the pictures and report.html into ``out_dir``.
+    """Write rig.json (benchmark format), report.json, the pictures and report.html (with the interactive 3D
+    view of the design on its vehicle, and the reference rig in grey when it sits on the same vehicle) into
+    ``out_dir``.
 
     ``published_as``: the folder ``out_dir`` becomes once complete (when it is a temporary one, see
     rigopt.output.atomic_folder); the reports name the rig file there.
@@ -135,6 +137,7 @@ def write_design_outputs(result: DesignResult, out_dir, *, published_as=None) ->
     from rigopt.coverage.measures import ring_report
     from rigopt.report.coverage_figures import write_rings_figure
     from rigopt.report.design_html import write_design_html
+    from rigopt.report.scene_3d import scene_html
     from rigopt.report.vehicle_figures import write_vehicle_figure
 
     out_dir = Path(out_dir)
@@ -152,5 +155,7 @@ def write_design_outputs(result: DesignResult, out_dir, *, published_as=None) ->
     design_coverage = ring_report(result.design.rig, vehicle)
     reference_coverage = ring_report(reference.rig, reference.vehicle)
     pictures["coverage"] = write_rings_figure(design_coverage, out_dir / "coverage.png", compare=reference_coverage)
-    page = write_design_html(summary, out_dir, pictures)
+    compared = next((r.rig for r in result.references if r.vehicle.name == vehicle.name), None)
+    scene = scene_html(vehicle, result.design.rig, compare=compared, lifted=result.settings.rules.practice.lifted)
+    page = write_design_html(summary, out_dir, pictures, scene, compared.name if compared is not None else None)
     return [rig_file, report, *pictures.values(), page]

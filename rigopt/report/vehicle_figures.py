@@ -17,7 +17,7 @@ FRUSTUM_DRAW_LENGTH = 1.2
 _BODY_GREY = (0.78, 0.78, 0.80)
 
 
-def _zone_legend(vehicle: Vehicle) -> dict[str, tuple]:
+def zone_colours(vehicle: Vehicle) -> dict[str, tuple]:
     """The RGBA colour of each zone name (tab20, names sorted)."""
     from matplotlib import colormaps
 
@@ -116,7 +116,7 @@ def _draw_cameras(ax, rig: Rig, axes: tuple[int, int], vertical: bool):
 def write_vehicle_figure(vehicle: Vehicle, path, rig: Rig | None = None) -> Path:
     """Top view (x-y, from above) and side view (x-z, from the left) of ``vehicle``'s body mesh, zones
     coloured; PNG at ``path``."""
-    legend, patches = _zone_legend(vehicle), _zone_patches(vehicle)
+    legend, patches = zone_colours(vehicle), _zone_patches(vehicle)
     figure = Figure(figsize=(12, 8.5), dpi=120, layout="constrained")
     top, side = figure.subplots(2, 1, height_ratios=[vehicle.size[1] + 2, vehicle.size[2] + 2])
     _draw_view(top, vehicle, patches, legend, (0, 1), 2, 1.0)

@@ -3,7 +3,7 @@
 import subprocess
 import sys
 
-HEAVY = ("numpy", "scipy", "cvxpy", "casadi", "trimesh", "matplotlib", "torch", "pyarrow")
+HEAVY = ("numpy", "scipy", "cvxpy", "casadi", "trimesh", "matplotlib", "torch", "pyarrow", "plotly")
 
 
 def test_importing_the_command_line_loads_no_heavy_library():

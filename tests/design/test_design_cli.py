@@ -147,6 +147,20 @@ def test_report_json_repeats_the_summary(design_run):
     assert report["n_cameras"] == summary["n_cameras"]
 
 
+def test_report_html_holds_the_3d_view_offline(design_run):
+    import re
+
+    summary, out, _ = design_run
+    page = (out / "report.html").read_text(encoding="utf-8")
+    view = page[page.index("<h2>3D view</h2>"):page.index("<h2>Pictures</h2>")]
+    assert page.count("plotly.js v") == 1 and "plotly.js v" in view  # the library once, inline
+    assert not re.search(r"<script[^>]*\bsrc=", page) and 'src="http' not in page
+    assert "ISO 8855 vehicle frame" in view and "drawn in grey" not in view  # R1 sits on the etron: no comparison
+    data = view[view.index("Plotly.newPlot"):]
+    assert all(f'"name":"{camera["id"]}"' in data for camera in summary["cameras"])  # a frustum per camera
+    assert '"name":"keep-out: locker_doors_front (roll-up locker doors)"' in data
+
+
 def test_nothing_is_written_outside_the_out_folder(design_run):
     _, out, cwd = design_run
     assert [p.name for p in cwd.iterdir()] == [out.name]
