@@ -259,15 +259,17 @@ def parse_require(text: str, vehicle: Vehicle, traffic: str = "right") -> tuple[
             raise RigoptError(f"--require {name!r}: unknown traffic suffix {suffix!r}; use :lht (left-hand "
                               "traffic, nearside left) or :rht (right-hand traffic, the default)")
         side = sides.get(suffix, traffic)
-        if key == "none" and not suffix and len(names) == 1:
-            return ()
+        if key == "none" and not suffix:
+            if len(names) == 1:
+                return ()
+            raise RigoptError(f"--require {text!r}: 'none' stands alone (no field is checked); drop it or the other "
+                              "names")
         if key == "default":
             chosen = default_presets(vehicle, side)
         elif key in PRESETS:
             chosen = (PRESETS[key].with_traffic(side),)
         else:
-            hint = " ('none' stands alone)" if key == "none" else ""
-            raise RigoptError(f"--require: unknown preset {name!r}{hint}; use comma-separated names from: {known} "
+            raise RigoptError(f"--require: unknown preset {name!r}; use comma-separated names from: {known} "
                               "(a name may end in :lht for left-hand traffic); see docs/regulations.md")
         out += [p for p in chosen if p.key not in {q.key for q in out}]
     return tuple(out)
