@@ -61,6 +61,13 @@ class FieldBox:
     offside: tuple[str, float]
     nearside: tuple[str, float]
 
+    def __post_init__(self):
+        for name, lines in (("back", X_LINES), ("ahead", X_LINES), ("offside", SIDE_LINES), ("nearside", SIDE_LINES)):
+            line, offset = getattr(self, name)
+            if line not in lines or not np.isfinite(offset):
+                raise RigoptError(f"a field box's {name} edge is (line, offset m) with line one of "
+                                  f"{', '.join(lines)} and a finite offset, got {getattr(self, name)!r}")
+
 
 @dataclass(frozen=True)
 class BodyLines:
@@ -115,6 +122,12 @@ class RegionPreset:
     boxes: tuple[FieldBox, ...]
     traffic: str = "right"
     clearance: float = NEAR_BODY_CLEARANCE
+
+    def __post_init__(self):
+        if not self.heights or not all(np.isfinite(h) and h >= 0 for h in self.heights):
+            raise RigoptError(f"preset {self.key}: heights must be metres above the ground, >= 0, got {self.heights!r}")
+        if self.traffic not in TRAFFIC or not self.boxes or not self.clearance >= 0:
+            raise RigoptError(f"preset {self.key}: needs boxes, traffic right or left and a clearance >= 0")
 
     @property
     def base_key(self) -> str:

@@ -115,6 +115,17 @@ def test_no_field_asks_for_ground_under_or_right_next_to_the_body(firetruck):
         assert polygon.intersection(grown).area < 1e-9, preset.key
 
 
+def test_a_field_box_names_its_lines():
+    from rigopt.coverage.regulations import FieldBox, RegionPreset
+
+    with pytest.raises(RigoptError, match="back edge"):
+        FieldBox(("middle", 0.0), ("front", 1.0), ("offside", 0.0), ("nearside", 0.0))
+    with pytest.raises(RigoptError, match="nearside edge"):
+        FieldBox(("rear", -1.0), ("front", 1.0), ("offside", 0.0), ("front", 1.0))
+    with pytest.raises(RigoptError, match="heights"):
+        RegionPreset("x", "x", "x", (-1.0,), PRESETS["r158"].boxes)
+
+
 def test_left_hand_traffic_mirrors_the_nearside(box_vehicle):
     for key in ("r151", "r46-iv", "r46-v", "r46-vi", "dvs"):
         right, left = PRESETS[key], PRESETS[key].with_traffic("left")
