@@ -379,30 +379,29 @@ def regions_figure(regions: tuple[RegionCoverage, ...], report: CoverageReport, 
                    ) -> Figure:
     """Top view of the regulation fields (outlines) over the body, the ground positions where some height is
     unseen marked, and ``rig``'s cameras with their frustum wedges; forward up, the vehicle's left on the left."""
-    figure = Figure(figsize=(9, 9), dpi=DPI, layout="constrained")
+    bounds = [report.footprint.polygon.bounds] + [r.polygon.bounds for r in regions if not r.polygon.is_empty]
+    low, high = np.min([b[:2] for b in bounds], axis=0) - 1.0, np.max([b[2:] for b in bounds], axis=0) + 1.0
+    aspect = (high[1] - low[1]) / (high[0] - low[0])  # across / along, as drawn
+    figure = Figure(figsize=(float(np.clip(9.0 * aspect + 1.5, 6.0, 16.0)), 9.0), dpi=DPI, layout="constrained")
     ax = figure.subplots()
     ax.fill(*_top(report.footprint.outline), facecolor="white", edgecolor="black", linewidth=1.0, zorder=3)
     palette = colormaps["tab10"]
-    bounds = [report.footprint.polygon.bounds]
     for k, region in enumerate(regions):
         colour = palette(k % 10)
-        if not region.polygon.is_empty:
-            bounds.append(region.polygon.bounds)
-            for ring in _rings(region.polygon):
-                ax.plot(*_top(ring), color=colour, linewidth=1.2, zorder=4)
+        for ring in _rings(region.polygon) if not region.polygon.is_empty else []:
+            ax.plot(*_top(ring), color=colour, linewidth=1.2, zorder=4)
         unseen = np.unique(np.round(region.unseen[:, :2], 6), axis=0) if len(region.unseen) else np.zeros((0, 2))
         ax.plot(*_top(unseen), ".", color=colour, markersize=1.2, alpha=0.6, zorder=2,
                 label=f"{region.key}: {100 * region.covered_frac:.1f} % seen ({region.unseen_area_m2:.1f} m² unseen)")
     if rig is not None:
         _draw_frustums(ax, rig, labels=False, inside=report.cameras_inside)
-    low, high = np.min([b[:2] for b in bounds], axis=0) - 1.0, np.max([b[2:] for b in bounds], axis=0) + 1.0
     ax.set_xlim(high[1], low[1])  # +y (left) on the left
     ax.set_ylim(low[0], high[0])
     ax.set_aspect("equal")
     ax.set_xlabel("y (m), left <-> right")
     ax.set_ylabel("x (m), forward up")
     ax.legend(loc="best", fontsize=7, markerscale=6)
-    ax.set_title(f"{report.rig} on {report.vehicle}: regulation fields (outlines) and their unseen ground positions "
+    ax.set_title(f"{report.rig} on {report.vehicle}: regulation fields (outlines)\nand their unseen ground positions "
                  "(dots: some height unseen)", fontsize=9)
     return figure
 
