@@ -11,16 +11,31 @@ import typer
 from rigopt.cli.app import FORCE_HELP, app, console, note, print_json, print_table
 
 
-def _report(rig_name: str, vehicle: Optional[str]):
+#: The --require option's help (also for other commands that take regulation fields).
+REQUIRE_HELP = ("Regulation fields every camera-visible point of which is checked, comma-separated: r158 (rear, "
+                "reversing), r151 (nearside blind spot), r159 (front, moving off), r46-iv, r46-v, r46-vi (R46 "
+                "classes IV, V, VI), dvs (London Direct Vision Standard); default (the vehicle category's: trucks "
+                "r151,r159,r158, cars r158) or none. Add :lht for left-hand traffic (nearside on the left), e.g. "
+                "r151:lht. See docs/regulations.md.")
+
+
+def _placed(rig_name: str, vehicle: Optional[str]):
     """The rig on ``vehicle`` (or its own), origin converted to the vehicle's centre (noted), cameras inside
-    the body refused; and its coverage report."""
-    from rigopt.coverage.measures import coverage_report
+    the body refused; and that vehicle."""
     from rigopt.rig.library import load_rig
     from rigopt.vehicle.placement import rig_on_vehicle
 
     rig, on, change = rig_on_vehicle(load_rig(rig_name), vehicle)
     if change is not None:
         note(change.describe())
+    return rig, on
+
+
+def _report(rig_name: str, vehicle: Optional[str]):
+    """The rig placed as by :func:`_placed`, and its coverage report."""
+    from rigopt.coverage.measures import coverage_report
+
+    rig, on = _placed(rig_name, vehicle)
     return rig, coverage_report(rig, on)
 
 
@@ -37,24 +52,31 @@ def coverage_command(
                                                           "and report.html (self-contained)."),
     force: bool = typer.Option(False, "--force", help=FORCE_HELP),
     as_json: bool = typer.Option(False, "--json", help="Print the JSON report instead of tables."),
+    require: str = typer.Option("none", "--require", help=REQUIRE_HELP),
 ):
     """Coverage of a rig around its vehicle: rings at 2-50 m, bird's-eye counts, near-field blind zone, per camera."""
-    from rigopt.coverage.measures import compare_coverage
-    from rigopt.report.coverage_figures import comparison_dict, report_dict
+    from rigopt.coverage.measures import compare_coverage, coverage_report
+    from rigopt.coverage.regulations import parse_require, region_coverage
+    from rigopt.report.coverage_figures import comparison_dict, regions_dict, report_dict
 
     from rigopt.output import check_out_folder
 
     out_dir = check_out_folder(out, force=force) if out is not None else None
-    loaded, report = _report(rig, vehicle)
+    loaded, on = _placed(rig, vehicle)
+    presets = parse_require(require, on)
+    report = coverage_report(loaded, on)
+    regions = region_coverage(loaded, on, presets, backend=report.settings.backend,
+                              max_range=report.settings.max_range)
     other = comparison = None
     if compare is not None:
         _, other = _report(compare, None)
         comparison = compare_coverage(other, report)  # differences: RIG minus --compare
     data = report_dict(report)
+    data["regions"] = regions_dict(regions)
     if comparison is not None:
         data["compare"] = comparison_dict(comparison)
 
-    written = _write_out(out_dir, force, report, loaded, other, comparison) if out_dir is not None else []
+    written = _write_out(out_dir, force, report, loaded, other, comparison, regions, on) if out_dir is not None else []
     message = f"wrote {', '.join(p.name for p in written)} to {out_dir}"
     if as_json:
         print_json(data)
@@ -66,13 +88,13 @@ def coverage_command(
         console.print(message)
 
 
-def _write_out(out_dir: Path, force: bool, report, rig, other, comparison) -> list[Path]:
+def _write_out(out_dir: Path, force: bool, report, rig, other, comparison, regions=(), vehicle=None) -> list[Path]:
     """Write the report folder whole (a temporary sibling renamed into place), or leave ``out_dir`` as it was."""
     from rigopt.output import atomic_folder, published
     from rigopt.report.coverage_html import write_coverage_folder
 
     with atomic_folder(out_dir, force=force) as work:
-        written = write_coverage_folder(work, report, rig, comparison, other)
+        written = write_coverage_folder(work, report, rig, comparison, other, vehicle, regions)
     return published(written, work, out_dir)
 
 
@@ -119,6 +141,13 @@ def _print_tables(data: dict, other: dict | None) -> None:
     console.print(f"bird's-eye ({bev['height_m']:g} m height, {bev['cell_m']:g} m cells): "
                   f"{100 * bev['covered_frac_within_20m']:.1f} % of cells within 20 m seen, "
                   f"{100 * bev['overlap2_frac_within_20m']:.1f} % by >= 2 cameras, at most {bev['max_count']}")
+
+    if data.get("regions"):
+        print_table("regulation fields (--require): required points seen by >= 1 camera; covered = all of them",
+                    ["field", "covered", "seen", "seen per height", "unseen area (m²)", "area (m²)", "points"],
+                    [[r["key"], "yes" if r["covered"] else "no", r["covered_frac"],
+                      ", ".join(f"{h['height_m']:g} m {100 * h['covered_frac']:.1f} %" for h in r["height_covered_frac"]),
+                      f"{r['unseen_area_m2']:.1f}", f"{r['area_m2']:.1f}", r["n_points"]] for r in data["regions"]])
 
     if "compare" in data:
         diff = data["compare"]

@@ -13,12 +13,14 @@ import math
 from pathlib import Path
 
 import numpy as np
+import shapely
 from matplotlib import colormaps
 from matplotlib.colors import BoundaryNorm, ListedColormap
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
 from rigopt.coverage.measures import CoverageComparison, CoverageReport, RingReport
+from rigopt.coverage.regulations import RegionCoverage
 from rigopt.rig.model import Rig
 
 DPI = 120
@@ -105,6 +107,18 @@ def comparison_dict(comparison: CoverageComparison) -> dict:
                   for r in comparison.rings],
         "blind_area_diff_m2": _number(comparison.blind_area_diff_m2),
     }
+
+
+def regions_dict(regions: tuple[RegionCoverage, ...]) -> list[dict]:
+    """The regulation fields' coverage (:class:`RegionCoverage`) as plain JSON values, one entry per preset:
+    ``covered`` (every required point seen), ``covered_frac`` and per height, the required points and those
+    unseen, the region's area and its unseen part (m^2), the sampling ``spacing_m``."""
+    return [{"key": r.key, "title": r.title, "source": r.source, "heights_m": [float(h) for h in r.heights],
+             "covered": r.covered, "covered_frac": r.covered_frac,
+             "height_covered_frac": [{"height_m": float(h), "covered_frac": f}
+                                     for h, f in zip(r.heights, r.height_covered_frac)],
+             "n_points": r.n_points, "n_unseen": int(len(r.unseen)), "area_m2": r.area_m2,
+             "unseen_area_m2": r.unseen_area_m2, "spacing_m": r.spacing} for r in regions]
 
 
 # ---------------------------------------------------------------------------------------------- helpers
@@ -356,3 +370,48 @@ def write_blind_figure(report: CoverageReport, path) -> Path:
     """Polar plot of the blind distance per azimuth (never seen: drawn at the search limit, marked x) and its
     top view; PNG at ``path``."""
     return _save(blind_figure(report), path)
+
+
+# ------------------------------------------------------------------------------------- regulation fields
+
+
+def regions_figure(regions: tuple[RegionCoverage, ...], report: CoverageReport, rig: Rig | None = None
+                   ) -> Figure:
+    """Top view of the regulation fields (outlines) over the body, the ground positions where some height is
+    unseen marked, and ``rig``'s cameras with their frustum wedges; forward up, the vehicle's left on the left."""
+    bounds = [report.footprint.polygon.bounds] + [r.polygon.bounds for r in regions if not r.polygon.is_empty]
+    low, high = np.min([b[:2] for b in bounds], axis=0) - 1.0, np.max([b[2:] for b in bounds], axis=0) + 1.0
+    aspect = (high[1] - low[1]) / (high[0] - low[0])  # across / along, as drawn
+    figure = Figure(figsize=(float(np.clip(9.0 * aspect + 1.5, 6.0, 16.0)), 9.0), dpi=DPI, layout="constrained")
+    ax = figure.subplots()
+    ax.fill(*_top(report.footprint.outline), facecolor="white", edgecolor="black", linewidth=1.0, zorder=3)
+    palette = colormaps["tab10"]
+    for k, region in enumerate(regions):
+        colour = palette(k % 10)
+        for ring in _rings(region.polygon) if not region.polygon.is_empty else []:
+            ax.plot(*_top(ring), color=colour, linewidth=1.2, zorder=4)
+        unseen = np.unique(np.round(region.unseen[:, :2], 6), axis=0) if len(region.unseen) else np.zeros((0, 2))
+        ax.plot(*_top(unseen), ".", color=colour, markersize=1.2, alpha=0.6, zorder=2,
+                label=f"{region.key}: {100 * region.covered_frac:.1f} % seen ({region.unseen_area_m2:.1f} m² unseen)")
+    if rig is not None:
+        _draw_frustums(ax, rig, labels=False, inside=report.cameras_inside)
+    ax.set_xlim(high[1], low[1])  # +y (left) on the left
+    ax.set_ylim(low[0], high[0])
+    ax.set_aspect("equal")
+    ax.set_xlabel("y (m), left <-> right")
+    ax.set_ylabel("x (m), forward up")
+    ax.legend(loc="best", fontsize=7, markerscale=6)
+    ax.set_title(f"{report.rig} on {report.vehicle}: regulation fields (outlines)\nand their unseen ground positions "
+                 "(dots: some height unseen)", fontsize=9)
+    return figure
+
+
+def _rings(geometry) -> list[np.ndarray]:
+    """(k, 2) closed coordinate arrays of every ring of a Polygon or MultiPolygon."""
+    return [shapely.get_coordinates(ring) for ring in shapely.get_rings(shapely.get_parts(geometry))]
+
+
+def write_regions_figure(regions: tuple[RegionCoverage, ...], report: CoverageReport, path,
+                         rig: Rig | None = None) -> Path:
+    """The regulation fields figure (:func:`regions_figure`) as a PNG at ``path``."""
+    return _save(regions_figure(regions, report, rig), path)

@@ -10,16 +10,21 @@ import json
 from datetime import datetime, timezone
 from pathlib import Path
 
+import numpy as np
+
 from rigopt.coverage.measures import CoverageComparison, CoverageReport
 from rigopt.report.coverage_figures import (
     bev_figure,
     blind_figure,
     comparison_dict,
     figure_png,
+    regions_dict,
+    regions_figure,
     report_dict,
     rings_figure,
     write_bev_figure,
     write_blind_figure,
+    write_regions_figure,
     write_rings_figure,
 )
 from rigopt.report.html_page import escape, image, num, page, pct, table
@@ -41,12 +46,16 @@ def _diff_cell(value: float, text: str, better_when_positive: bool = True) -> st
 
 
 def _figures(report: CoverageReport, rig: Rig, compare_report: CoverageReport | None,
-             figures: dict[str, Path] | None) -> dict[str, bytes]:
-    """PNG bytes of the bev, rings and blind figures: read from ``figures`` paths when given, else drawn."""
+             figures: dict[str, Path] | None, regions=()) -> dict[str, bytes]:
+    """PNG bytes of the bev, rings, blind (and, with ``regions``, regions) figures: read from ``figures`` paths
+    when given, else drawn."""
     if figures is not None:
         return {name: Path(path).read_bytes() for name, path in figures.items()}
-    return {"bev": figure_png(bev_figure(report, rig)), "rings": figure_png(rings_figure(report, compare_report)),
-            "blind": figure_png(blind_figure(report))}
+    drawn = {"bev": figure_png(bev_figure(report, rig)), "rings": figure_png(rings_figure(report, compare_report)),
+             "blind": figure_png(blind_figure(report))}
+    if regions:
+        drawn["regions"] = figure_png(regions_figure(regions, report, rig))
+    return drawn
 
 
 _CAPTIONS = {
@@ -56,14 +65,17 @@ _CAPTIONS = {
              "distances are shifted slightly apart); the compared rig dashed.",
     "blind": "Near-field blind zone: per azimuth, the distance from the body at which the ground becomes visible; "
              "azimuths with no ground seen within the search limit are drawn at the limit and marked x.",
+    "regions": "Regulation fields (--require): each field's outline, and dots where some required height is unseen "
+               "(forward up, the vehicle's left on the left).",
 }
 
 
 def render_html(report: CoverageReport, rig: Rig, comparison: CoverageComparison | None = None,
                 compare_report: CoverageReport | None = None, figures: dict[str, bytes] | None = None,
-                scene: str | None = None) -> str:
-    """The report page as a string; ``figures`` maps ``bev``, ``rings``, ``blind`` to PNG bytes (omitted
-    figures are left out); ``scene``: the 3D view's HTML fragment (``report.scene_3d.scene_html``), if any."""
+                scene: str | None = None, regions=()) -> str:
+    """The report page as a string; ``figures`` maps ``bev``, ``rings``, ``blind``, ``regions`` to PNG bytes
+    (omitted figures are left out); ``scene``: the 3D view's HTML fragment (``report.scene_3d.scene_html``), if
+    any; ``regions`` the regulation fields' coverage (RegionCoverage), if any."""
     data = report_dict(report)
     other = report_dict(compare_report) if compare_report is not None else None
     settings = report.settings
@@ -97,6 +109,22 @@ def render_html(report: CoverageReport, rig: Rig, comparison: CoverageComparison
             row += [pct(match["covered_frac"]), pct(match["overlap2_frac"])] if match else ["-", "-"]
         rows.append(row)
     parts.append(table(header, rows))
+
+    if regions:
+        parts.append("<h2>Regulation fields</h2>")
+        parts.append('<p class="note">Share of each field\'s required points (a grid and the field\'s outline, at '
+                     "every height) seen by at least one camera; a field is covered when every point is. Fields, "
+                     "figures and sources: docs/regulations.md.</p>")
+        rows = []
+        for region in regions_dict(regions):
+            heights = ", ".join(f"{h['height_m']:g} m {100 * h['covered_frac']:.1f} %"
+                                for h in region["height_covered_frac"])
+            rows.append([f"<td>{escape(region['key'])}</td>", f"<td>{escape(region['title'])}</td>",
+                         "yes" if region["covered"] else "no", pct(region["covered_frac"]), f"<td>{escape(heights)}</td>",
+                         num(region["unseen_area_m2"], 1, " m²"), num(region["area_m2"], 1, " m²"),
+                         f"<td>{escape(region['source'])}</td>"])
+        parts.append(table(["field", "what", "covered", "seen", "seen per height", "unseen area", "area", "source"],
+                           rows))
 
     parts.append("<h2>Blind zone and bird's-eye view</h2>")
     blind, bev = data["blind_distance_m"], data["bev"]
@@ -164,7 +192,7 @@ def render_html(report: CoverageReport, rig: Rig, comparison: CoverageComparison
                   f"{escape(FRAME_TEXT)}.</p>", scene]
     if figures:
         parts.append("<h2>Figures</h2>")
-        for name in ("bev", "rings", "blind"):
+        for name in ("bev", "rings", "blind", "regions"):
             if name in figures:
                 parts.append(image(figures[name], f"{name} figure of {report.rig}", _CAPTIONS[name]))
     return page(f"Coverage of {report.rig} on {report.vehicle}", parts)
@@ -172,7 +200,8 @@ def render_html(report: CoverageReport, rig: Rig, comparison: CoverageComparison
 
 def write_html_report(report: CoverageReport, out_dir, rig: Rig, comparison: CoverageComparison | None = None,
                       compare_report: CoverageReport | None = None, *,
-                      figures: dict[str, Path] | None = None, vehicle: Vehicle | None = None) -> Path:
+                      figures: dict[str, Path] | None = None, vehicle: Vehicle | None = None,
+                      regions=()) -> Path:
     """Write ``report.html`` into ``out_dir`` (created): self-contained, figures embedded as PNG data URIs.
 
     ``figures`` maps ``bev``, ``rings``, ``blind`` to PNG files already written (e.g. by the CLI) so that they
@@ -184,26 +213,31 @@ def write_html_report(report: CoverageReport, out_dir, rig: Rig, comparison: Cov
 
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    scene = scene_html(vehicle, rig) if vehicle is not None else None
-    page = render_html(report, rig, comparison, compare_report, _figures(report, rig, compare_report, figures),
-                       scene)
+    scene = (scene_html(vehicle, rig, regions=[(r.key, np.asarray(r.polygon.exterior.coords)[:, :2]) for r in regions])
+             if vehicle is not None else None)
+    page = render_html(report, rig, comparison, compare_report,
+                       _figures(report, rig, compare_report, figures, regions), scene, regions)
     path = out_dir / REPORT_FILE
     path.write_text(page, encoding="utf-8")
     return path
 
 
 def write_coverage_folder(out_dir, report: CoverageReport, rig: Rig, comparison: CoverageComparison | None = None,
-                          compare_report: CoverageReport | None = None, vehicle: Vehicle | None = None) -> list[Path]:
-    """Write the coverage folder: ``coverage.json``, ``bev.png``, ``rings.png``, ``blind.png``, ``report.html``
-    (with the 3D view when the rig's ``vehicle`` is given).
+                          compare_report: CoverageReport | None = None, vehicle: Vehicle | None = None,
+                          regions=()) -> list[Path]:
+    """Write the coverage folder: ``coverage.json``, ``bev.png``, ``rings.png``, ``blind.png``, with
+    ``regions`` (RegionCoverage of the regulation fields) ``regions.png``, and ``report.html`` (with the 3D
+    view when the rig's ``vehicle`` is given).
 
     ``out_dir`` is created if missing and written in place (callers that need the folder whole or not at all
-    write into a temporary sibling, see ``rigopt.output.atomic_folder``). The JSON holds ``report_dict`` and,
-    with a comparison, its ``compare`` block. Returns the written paths in that order.
+    write into a temporary sibling, see ``rigopt.output.atomic_folder``). The JSON holds ``report_dict``, the
+    ``regions`` list (``regions_dict``; empty without regions) and, with a comparison, its ``compare`` block.
+    Returns the written paths in that order.
     """
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     data = report_dict(report)
+    data["regions"] = regions_dict(regions)
     if comparison is not None:
         data["compare"] = comparison_dict(comparison)
     json_path = out_dir / "coverage.json"
@@ -211,5 +245,8 @@ def write_coverage_folder(out_dir, report: CoverageReport, rig: Rig, comparison:
     figures = {"bev": write_bev_figure(report, out_dir / "bev.png", rig),
                "rings": write_rings_figure(report, out_dir / "rings.png", compare_report),
                "blind": write_blind_figure(report, out_dir / "blind.png")}
-    page_path = write_html_report(report, out_dir, rig, comparison, compare_report, figures=figures, vehicle=vehicle)
+    if regions:
+        figures["regions"] = write_regions_figure(regions, report, out_dir / "regions.png", rig)
+    page_path = write_html_report(report, out_dir, rig, comparison, compare_report, figures=figures, vehicle=vehicle,
+                                  regions=regions)
     return [json_path, *figures.values(), page_path]

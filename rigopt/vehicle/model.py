@@ -16,6 +16,15 @@ from rigopt.vehicle.symmetry import MirrorSymmetry, mirror_symmetry
 
 #: Longest edge (m) of the subdivided mesh used for per-face zone queries.
 ZONE_QUERY_EDGE = 0.05
+#: A vehicle without a category in its spec counts as a heavy truck (N3) when longer or taller than these (m).
+HEAVY_LENGTH, HEAVY_HEIGHT = 6.0, 2.6
+
+
+def infer_category(size) -> str:
+    """The UN category assumed for a vehicle of ``size`` (length, width, height) m whose spec names none: N3 when
+    it is longer than HEAVY_LENGTH or taller than HEAVY_HEIGHT, else M1."""
+    length, _, height = (float(v) for v in size)
+    return "N3" if length > HEAVY_LENGTH or height > HEAVY_HEIGHT else "M1"
 
 
 @dataclass(frozen=True)
@@ -84,6 +93,11 @@ class Vehicle:
     @property
     def blueprint(self) -> str:
         return self.spec.blueprint
+
+    @property
+    def category(self) -> str:
+        """UN vehicle category (M1, M2, M3, N1, N2, N3): the spec's ``category``, else :func:`infer_category`."""
+        return self.spec.category or infer_category(self.size)
 
     @cached_property
     def zones(self) -> tuple[Zone, ...]:

@@ -8,6 +8,8 @@ vehicle origin on the ground). A spec file::
     aliases = ["suv"]
     box = [4.8557, 2.0328, 1.6494]         # CARLA bounding box length, width, height (m), for checks
     axles = [1.45, -1.48]                  # optional: x of each axle (m); default: the wheels solids' axles
+    category = "M1"                        # optional: UN vehicle category (M1, M2, M3, N1, N2, N3); default:
+                                           # inferred from the size (rigopt.vehicle.model.infer_category)
 
     [[solids]]                              # intersection of a side profile extruded across y and a
     name = "body"                           # plan outline extruded along z
@@ -64,6 +66,9 @@ import numpy as np
 from rigopt.errors import DataError, not_utf8
 
 SOLID_TYPES = ("prism", "wheels", "box", "mesh")
+#: UN vehicle categories a spec may name: M (passengers; M1 cars, M2/M3 buses), N (goods; N1 vans up to 3.5 t,
+#: N2 trucks up to 12 t, N3 heavier).
+CATEGORIES = ("M1", "M2", "M3", "N1", "N2", "N3")
 
 
 @dataclass(frozen=True)
@@ -141,7 +146,8 @@ class KeepOutSpec:
 class VehicleSpec:
     """A vehicle: ``name``, CARLA ``blueprint``, ``aliases``, ``box`` (length, width, height) m, solids,
     zones, the file it came from, ``axles`` (x m) and ``wheels``: wheel descriptions that are not solids
-    (the ``[[wheels]]`` tables of a user vehicle, whose mesh holds the wheels already)."""
+    (the ``[[wheels]]`` tables of a user vehicle, whose mesh holds the wheels already); ``category`` the UN
+    vehicle category it names (None: not given)."""
 
     name: str
     blueprint: str
@@ -154,6 +160,7 @@ class VehicleSpec:
     wheels: tuple[Wheels, ...] = ()
     keep_outs: tuple[KeepOutSpec, ...] = ()
     min_lens_height: float | None = None
+    category: str | None = None
 
 
 def read_toml(path, what: str) -> dict:
@@ -195,8 +202,9 @@ def spec_from_dict(data: dict, source: str = "<spec>") -> VehicleSpec:
     min_height = reader.number(data, "min_lens_height", "top level", positive=False) if "min_lens_height" in data else None
     if min_height is not None and min_height < 0:
         raise DataError(f"{source}: 'min_lens_height' is a height above the ground in metres, >= 0, got {min_height}")
+    category = reader.category(data) if "category" in data else None
     return VehicleSpec(name, blueprint, tuple(aliases), box, solids, zones, source, tuple(float(a) for a in axles),
-                       wheels, keep_outs, min_height)
+                       wheels, keep_outs, min_height, category)
 
 
 class _Reader:
@@ -213,6 +221,13 @@ class _Reader:
         if not isinstance(value, str) or not value:
             raise self.fail(where, f"'{key}' must be a non-empty string")
         return value
+
+    def category(self, table: dict) -> str:
+        value = table.get("category")
+        if not isinstance(value, str) or value.strip().upper() not in CATEGORIES:
+            raise self.fail("top level", f"'category' must be a UN vehicle category, one of {', '.join(CATEGORIES)} "
+                                         f"(M1 a car, N3 a heavy truck), got {value!r}")
+        return value.strip().upper()
 
     def table_list(self, table: dict, key: str) -> list:
         value = table.get(key, [])

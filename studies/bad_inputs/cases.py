@@ -102,6 +102,10 @@ def make_fixtures(tmp: Path) -> dict[str, str]:
     wreck = tmp / "home" / "vehicles" / "wreck"
     wreck.mkdir(parents=True, exist_ok=True)
     (wreck / "vehicle.toml").write_text("name = [unclosed\n")
+    odd = tmp / "home" / "vehicles" / "oddcategory"
+    odd.mkdir(parents=True, exist_ok=True)
+    (odd / "vehicle.toml").write_text('name = "oddcategory"\ncategory = "truck"\n[[solids]]\ntype = "box"\n'
+                                      'center = [0, 0, 1]\nsize = [4, 2, 1.5]\n')
     if not (tmp / "home" / "vehicles" / "mycar").is_dir():
         from rigopt.vehicle.user import add_user_vehicle
         import os
@@ -276,6 +280,10 @@ CASES: list[tuple[str, list[str], str]] = [
     ("coverage --out under a file", ["coverage", "R1", "--out", f"{T}/file.txt/sub"], "is a file, not a folder"),
     ("coverage --out not empty", ["coverage", "R1", "--out", f"{T}/full"], "--force"),
     ("coverage --out empty name", ["coverage", "R1", "--out", ""], "needs a folder name"),
+    ("coverage --require unknown preset", ["coverage", "R1", "--require", "r158,r999"], "r999"),
+    ("coverage --require unknown traffic side", ["coverage", "R1", "--require", "r151:uk"], ":lht"),
+    ("coverage --require none with others", ["coverage", "R1", "--require", "none,r158"], "stands alone"),
+    ("user vehicle of an unknown category", ["coverage", "R4", "--vehicle", "oddcategory"], "'category'"),
     ("coverage --out the current folder", ["coverage", "R1", "--out", "."], "a name of its own"),
     ("coverage --out unwritable", ["coverage", "R1", "--out", "/proc/rigopt-out"], "/proc/rigopt-out"),
     # --- design ---
