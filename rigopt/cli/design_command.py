@@ -105,6 +105,11 @@ def design_command(
     min_height: Optional[float] = typer.Option(None, "--min-height", min=0.0, max=5.0,
                                                help=MIN_HEIGHT_HELP),
     no_trailer: bool = typer.Option(False, "--no-trailer", help=NO_TRAILER_HELP),
+    require: str = typer.Option("none", "--require",
+                                help="Regulation fields the design must see: comma-separated r158, r151, r159, "
+                                     "r46-iv, r46-v, r46-vi, dvs (':lht' for left-hand traffic), 'default' (the "
+                                     "vehicle category's: trucks r151,r159,r158; cars r158) or 'none' (the "
+                                     "category's fields are then reported only). See docs/regulations.md."),
     cost_weight: float = typer.Option(0.0, "--cost-weight", min=0.0,
                                       help="Weight of the cameras' mean relative mounting cost (zone cost, +0.5 in "
                                            "tyre spray) added to the calibrated RigCD; 0 reports it only."),
@@ -150,7 +155,8 @@ def design_command(
         zones=tuple(z.strip() for z in zones.split(",")) if zones else None,
         pitches_deg=pitches, yaw_step_deg=yaw_step, spacing=spacing,
         min_coverage=min_coverage, min_overlap=min_overlap, time_limit=time_limit,
-        rules=mount_rules(min_height, no_trailer), symmetric=False if asymmetric else None, cost_weight=cost_weight)
+        rules=mount_rules(min_height, no_trailer), symmetric=False if asymmetric else None, cost_weight=cost_weight,
+        require=require)
     references = [_reference(name.strip(), ref_vehicle) for name in ref.split(",") if name.strip()]
     if not references:
         raise RigoptError("--ref needs at least one rig")
@@ -189,6 +195,10 @@ def design_command(
               "their predicted drops are less certain than the intervals say", file=sys.stderr)
     solver = summary["solver"]
     print(f"{summary['symmetry']['describe']}", file=sys.stderr)
+    for region in summary["regions"]:
+        state = "required" if summary["regions_required"] else "reported"
+        print(f"field {region['key']} ({state}): {region['covered_frac']:.1%} of its points seen, unseen area "
+              f"{region['unseen_area_m2']:.1f} m²", file=sys.stderr)
     print(f"MILP {solver['milp_status']} (gap {solver['milp_gap']:.2e}) on {solver['offered_to_milp']} of "
           f"{solver['candidates']} candidates; refinement {solver['refine_status']}; {solver['seconds']:.1f} s",
           file=sys.stderr)

@@ -25,15 +25,17 @@ from scipy.optimize import linear_sum_assignment
 from scipy.spatial import cKDTree
 
 from rigopt.design.naming import mount_name, unique
-from rigopt.mounting.practice import in_keep_outs, mounting_costs
+from rigopt.mounting.practice import mounting_costs
 from rigopt.mounting.rules import RigCheck, check_rig
-from rigopt.coverage.footprint import Footprint
-from rigopt.coverage.matrix import rig_coverage_matrix, sector_points
+from rigopt.coverage.matrix import rig_coverage_matrix
 from rigopt.coverage.visibility import visible_by
 from rigopt.design.candidates import CandidateSet, build_candidates
 from rigopt.design.problem import ReferenceRig
 from rigopt.design.refine import (RefineProblem, duty_points, free_radii, frustum_margins, project_to_surface,
                                   refine)
+from rigopt.coverage.regulations import default_presets, region_coverage
+from rigopt.design.requirements import (DENSE_SPACING, Requirements, design_requirements, explain_uncoverable,
+                                       field_labels)
 from rigopt.design.result import Comparisons, DesignResult, MilpStage, RefinementReport, RigSummary
 from rigopt.design.selection import DesignInfeasible, Selection, prune, select_cameras
 from rigopt.design.settings import DesignSettings
@@ -47,6 +49,10 @@ from rigopt.vehicle.symmetry import camera_mirrors
 
 #: Mount points closer than this (m) may not both hold a camera (8 cm housings plus a margin).
 CLASH_DISTANCE = 0.10
+#: Rounds of the dense field check: unseen field points become requirements and the MILP is solved again.
+MAX_FIELD_ROUNDS = 3
+#: At most this many unseen points of one field are added per round.
+MAX_NEW_FIELD_POINTS = 200
 #: How many validation rounds (re-solves after removing cameras that fail the fcl checks) at most.
 MAX_REPAIRS = 10
 
@@ -62,16 +68,6 @@ def default_spacing(vehicle: Vehicle, settings: DesignSettings) -> float:
     allowed = np.array([z is not None and (not settings.zones or z in settings.zones) for z in zones])
     area = float(vehicle.fine_mesh.area_faces[allowed].sum())
     return max(0.1, float(np.sqrt(area / settings.target_mounts)))
-
-
-def requirements(reference: Rig, reference_vehicle: Vehicle, settings: DesignSettings) -> np.ndarray:
-    """(q,) int cameras needed at each sector point: where the reference (on its own vehicle) sees a point,
-    one; where it sees it twice, ``min_overlap``; everywhere at least ``min_coverage``."""
-    counts = rig_coverage_matrix(reference, reference_vehicle, settings.coverage).sees.sum(axis=0)
-    needed = np.minimum(counts, 1)
-    if settings.min_overlap:
-        needed = np.where(counts >= 2, np.maximum(needed, settings.min_overlap), needed)
-    return np.maximum(needed, settings.min_coverage).astype(int)
 
 
 def _coverage_pool(candidates: CandidateSet, references: list[Rig], settings: DesignSettings) -> np.ndarray:
@@ -90,31 +86,16 @@ def _coverage_pool(candidates: CandidateSet, references: list[Rig], settings: De
     return candidates.mirror_closed(np.flatnonzero(mask))
 
 
-def _explain_uncoverable(needed: np.ndarray, seen: np.ndarray, distance, height, azimuth) -> str:
-    bad = np.flatnonzero(seen < needed)
-    lines = []
-    for q in bad[:8]:
-        lines.append(f"ring {distance[q]:g} m at height {height[q]:g} m, azimuth {np.rad2deg(azimuth[q]):+.0f} deg "
-                     f"(needs {needed[q]} camera(s), at most {seen[q]} candidate(s) see it)")
-    more = f" and {len(bad) - 8} more" if len(bad) > 8 else ""
-    return ("no valid camera position covers " + "; ".join(lines) + more +
-            ". To make it feasible: allow more zones, more pitch angles (e.g. --pitch -30,-20,-10,0,10), "
-            "wider lenses, or lower --min-coverage / --min-overlap")
-
-
 @dataclass(frozen=True)
 class Prepared:
     """What every MILP of one design problem shares: the candidates, their matching costs to each
-    reference (n, R_k), the sector points (q, 3) with their rings, the coverage pool (p,) int and what it
-    sees (p, q), the mount spacing (m) and each candidate's relative mounting cost (n,)."""
+    reference (n, R_k), the requirement points (q, 3) m (``Requirements.points``), the coverage pool (p,) int
+    and what it sees (p, q), the mount spacing (m) and each candidate's relative mounting cost (n,)."""
 
     references: tuple[Rig, ...]
     candidates: CandidateSet
     costs: tuple[np.ndarray, ...]
     points: np.ndarray
-    distance: np.ndarray
-    height: np.ndarray
-    azimuth: np.ndarray
     pool: np.ndarray
     sees_pool: np.ndarray
     spacing: float
@@ -122,23 +103,35 @@ class Prepared:
 
 
 def prepare(vehicle: Vehicle, references: Sequence[Rig], calibration: Calibration, settings: DesignSettings,
-            progress: Callable[[str], None] = no_progress) -> Prepared:
-    """Candidates, costs and the coverage of the candidates worth considering."""
+            points: np.ndarray, progress: Callable[[str], None] = no_progress) -> Prepared:
+    """Candidates, costs and the coverage of the requirement ``points`` (q, 3) m by the candidates worth
+    considering."""
     spacing = settings.spacing or default_spacing(vehicle, settings)
     progress(f"sampling mount candidates on {vehicle.name} (spacing {spacing:.2f} m)")
     candidates = mount_candidates(vehicle, settings, spacing)
     costs = tuple(matching_costs(candidates, rig, calibration) for rig in references)
-    points, distance, height, _, azimuth = sector_points(Footprint.of_mesh(vehicle.mesh), settings.coverage)
     no_sees, no_needs = np.zeros((len(candidates), 0), bool), np.zeros(0, int)
     pool = reduce(np.union1d, [prune(c, no_sees, no_needs, settings.keep_per_reference, 0) for c in costs],
                   _coverage_pool(candidates, list(references), settings))
     pool = candidates.mirror_closed(pool)
-    progress(f"coverage of {len(pool)} of {len(candidates)} candidates")
-    sees_pool = visible_by(vehicle.mesh, candidates.model(pool), candidates.positions[pool],
-                           candidates.rotations[pool], points, settings.coverage.max_range, settings.coverage.backend)
+    progress(f"coverage of {len(points)} requirement points by {len(pool)} of {len(candidates)} candidates")
+    sees_pool = _pool_sees(vehicle, candidates, pool, points, settings)
     per_mount = mounting_costs(vehicle, candidates.mount_zones, candidates.mount_points)
-    return Prepared(tuple(references), candidates, costs, points, distance, height, azimuth, pool, sees_pool, spacing,
-                    per_mount[candidates.mount])
+    return Prepared(tuple(references), candidates, costs, points, pool, sees_pool, spacing, per_mount[candidates.mount])
+
+
+def _pool_sees(vehicle: Vehicle, candidates: CandidateSet, pool: np.ndarray, points: np.ndarray,
+               settings: DesignSettings) -> np.ndarray:
+    """(p, q) bool: which of ``points`` (q, 3) m each pool candidate sees."""
+    return visible_by(vehicle.mesh, candidates.model(pool), candidates.positions[pool], candidates.rotations[pool],
+                      points, settings.coverage.max_range, settings.coverage.backend)
+
+
+def with_points(prepared: Prepared, vehicle: Vehicle, points: np.ndarray, settings: DesignSettings) -> Prepared:
+    """``prepared`` with the requirement ``points`` (k, 3) m appended (their coverage by the pool computed)."""
+    more = _pool_sees(vehicle, prepared.candidates, prepared.pool, points, settings)
+    return replace(prepared, points=np.concatenate([prepared.points, points]),
+                   sees_pool=np.concatenate([prepared.sees_pool, more], axis=1))
 
 
 def mount_candidates(vehicle: Vehicle, settings: DesignSettings, spacing: float | None = None) -> CandidateSet:
@@ -150,32 +143,23 @@ def mount_candidates(vehicle: Vehicle, settings: DesignSettings, spacing: float 
                             settings.rules, settings.max_body_fraction, settings.is_symmetric_on(vehicle))
 
 
-def fleet_requirements(references: Sequence[ReferenceRig], settings: DesignSettings,
-                       target: Vehicle | None = None, points: np.ndarray | None = None) -> np.ndarray:
-    """(q,) int: the largest requirement of any reference (on its own vehicle) at each sector point; with the
-    ``target`` vehicle and its sector ``points`` (q, 3) m (``Prepared.points``), none at points inside its
-    keep-outs in force (a coupled trailer fills the space behind a tractor: there is nothing there to see)."""
-    needed = np.max([requirements(r.rig, r.vehicle, settings) for r in references], axis=0)
-    if target is not None and settings.rules.practice.enabled:
-        inside = np.array([bool(b) for b in in_keep_outs(target, points, settings.rules.practice.lifted)])
-        needed = np.where(inside, 0, needed)
-    return needed
-
-
-def select_valid(prepared: Prepared, vehicle: Vehicle, calibration: Calibration, needed: np.ndarray,
+def select_valid(prepared: Prepared, vehicle: Vehicle, calibration: Calibration, requirements: Requirements,
                  counts: tuple[int, int], settings: DesignSettings, progress: Callable[[str], None] = no_progress
                  ) -> MilpStage:
-    """The best selection meeting ``needed`` whose cameras all pass the mount checks.
+    """The best selection meeting ``requirements`` (its points are ``prepared.points``) whose cameras all pass
+    the mount checks.
 
-    Raises DesignInfeasible with the uncoverable sectors, or when repairs run out.
+    Raises DesignInfeasible with the uncoverable points, or when repairs run out.
     """
+    needed = requirements.needed
     seen = np.minimum(prepared.sees_pool.sum(axis=0), needed.max(initial=1))
     if np.any(seen < needed):
-        raise DesignInfeasible(_explain_uncoverable(needed, seen, prepared.distance, prepared.height, prepared.azimuth))
+        raise DesignInfeasible(explain_uncoverable(requirements, seen))
     pool, candidates = prepared.pool, prepared.candidates
     offered = candidates.mirror_closed(pool[reduce(np.union1d, [
         prune(c[pool], prepared.sees_pool, needed, settings.keep_per_reference, settings.keep_per_sector)
-        for c in prepared.costs])])
+        for c in prepared.costs], _best_coverers(prepared.sees_pool[:, requirements.n_sector:],
+                                                 needed[requirements.n_sector:], settings.keep_coverers))])
     sees = prepared.sees_pool[np.searchsorted(pool, offered)]
     excluded: set[int] = set()
     for repairs in range(MAX_REPAIRS + 1):
@@ -219,54 +203,100 @@ def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRi
                           "rigopt.vehicle.placement.place_rig), which converts them")
     rigs = [r.rig for r in references]
     reference = rigs[0]
-    counts = settings.cameras or (len(reference), len(reference))
+    progress(f"coverage requirements from {', '.join(r.name for r in rigs)} and the required fields")
+    requirements = design_requirements(references, vehicle, settings)
+    counts = settings.cameras or default_counts(len(reference), bool(requirements.presets))
     symmetry_fallback = None
     try:
-        prepared, needed, milp = _discrete_stage(vehicle, references, calibration, settings, counts, progress)
+        prepared, milp = _discrete_stage(vehicle, rigs, calibration, settings, requirements, counts, progress)
     except DesignInfeasible as error:
         if settings.symmetric is not None or not settings.is_symmetric_on(vehicle):
             raise
         symmetry_fallback = f"no symmetric design meets the requirements ({error}); designed without symmetry"
         progress(symmetry_fallback)
         settings = replace(settings, symmetric=False)
-        prepared, needed, milp = _discrete_stage(vehicle, references, calibration, settings, counts, progress)
+        prepared, milp = _discrete_stage(vehicle, rigs, calibration, settings, requirements, counts, progress)
 
-    progress("validating the design: mount checks, coverage, RigCD")
-    design = summarise(milp.rig, vehicle, rigs, calibration, needed, settings, milp.check)
-    refinement = RefinementReport("off" if len(rigs) == 1 else "off (fleet design)")
-    if settings.refine and design.meets_requirements and len(rigs) == 1:
-        progress("continuous refinement (casadi + IPOPT)")
-        refinement = _refined(design, vehicle, reference, calibration, needed, prepared.points, prepared.spacing,
-                              settings)
-        if refinement.accepted:
-            design = refinement.refined
-    if not design.meets_requirements:
-        raise DesignInfeasible("the selected rig does not meet the coverage requirements when recomputed; "
-                               "this should not happen: please report it")
+    for round in range(MAX_FIELD_ROUNDS + 1):
+        progress("validating the design: mount checks, coverage, RigCD")
+        design = summarise(milp.rig, vehicle, rigs, calibration, requirements, settings, milp.check)
+        refinement = RefinementReport("off" if len(rigs) == 1 else "off (fleet design)")
+        if settings.refine and design.meets_requirements and len(rigs) == 1:
+            progress("continuous refinement (casadi + IPOPT)")
+            refinement = _refined(design, vehicle, reference, calibration, requirements, prepared.spacing, settings)
+            if refinement.accepted:
+                design = refinement.refined
+        if not design.meets_requirements:
+            raise DesignInfeasible("the selected rig does not meet the coverage requirements when recomputed; "
+                                   "this should not happen: please report it")
+        regions = field_coverage(design.rig, vehicle, requirements.presets, settings)
+        unseen = [(r.key, r.unseen) for r in regions if len(r.unseen)]
+        if not requirements.presets:  # nothing required: the vehicle category's fields are reported
+            regions = field_coverage(design.rig, vehicle, default_presets(vehicle), settings)
+        if not unseen or round == MAX_FIELD_ROUNDS:
+            break
+        points = np.concatenate([_spread(u, MAX_NEW_FIELD_POINTS) for _, u in unseen])
+        progress(f"{sum(len(u) for _, u in unseen)} field points unseen in the dense check; solving again with "
+                 f"{len(points)} of them required")
+        requirements = requirements.extended(points, [label for key, u in unseen
+                                                      for label in field_labels(key, _spread(u, MAX_NEW_FIELD_POINTS))])
+        prepared = with_points(prepared, vehicle, points, settings)
+        milp = select_valid(prepared, vehicle, calibration, requirements, counts, settings, progress)
+
     reference_coverage = rig_coverage_matrix(reference, references[0].vehicle,
                                              settings.coverage).sees.any(axis=0).mean()
     naive = naive_transfer(vehicle, reference, prepared.candidates, settings)
     comparisons = Comparisons(
-        summarise(naive, vehicle, rigs, calibration, needed, settings) if naive else None,
-        tuple(summarise(rig, vehicle, rigs, calibration, needed, settings) for rig in compare_with))
+        summarise(naive, vehicle, rigs, calibration, requirements, settings) if naive else None,
+        tuple(summarise(rig, vehicle, rigs, calibration, requirements, settings) for rig in compare_with))
     return DesignResult(design, milp, refinement, comparisons, float(reference_coverage), vehicle, references,
-                        calibration, settings, time.perf_counter() - start, symmetry_fallback)
+                        calibration, settings, time.perf_counter() - start, symmetry_fallback, regions)
 
 
-def _discrete_stage(vehicle, references, calibration, settings, counts, progress):
-    """Candidates, requirements and the valid MILP selection: (Prepared, needed (q,) int, MilpStage)."""
-    prepared = prepare(vehicle, [r.rig for r in references], calibration, settings, progress)
-    progress(f"coverage requirements from {', '.join(r.rig.name for r in references)}")
-    needed = fleet_requirements(references, settings, vehicle, prepared.points)
-    return prepared, needed, select_valid(prepared, vehicle, calibration, needed, counts, settings, progress)
+#: Cameras beyond the reference's count a design with required fields may use by default (near-field cameras).
+FIELD_EXTRA_CAMERAS = 2
 
 
-def _refined(design: RigSummary, vehicle: Vehicle, reference: Rig, calibration: Calibration, needed: np.ndarray,
-             points: np.ndarray, spacing: float, settings: DesignSettings) -> RefinementReport:
+def default_counts(n_reference: int, with_fields: bool) -> tuple[int, int]:
+    """The (min, max) camera count of a design without ``--cameras``: the reference's, up to
+    FIELD_EXTRA_CAMERAS more when regulation fields are required (a truck's near field needs cameras of its
+    own: the count term of RigCD weighs them against the matching)."""
+    return n_reference, n_reference + (FIELD_EXTRA_CAMERAS if with_fields else 0)
+
+
+def field_coverage(rig: Rig, vehicle: Vehicle, presets, settings: DesignSettings):
+    """The dense coverage (every DENSE_SPACING m) of the required fields ``presets`` by ``rig``."""
+    return region_coverage(rig, vehicle, presets, DENSE_SPACING, settings.coverage.backend,
+                           settings.coverage.max_range, settings.rules.practice.lifted)
+
+
+def _spread(points: np.ndarray, most: int) -> np.ndarray:
+    """At most ``most`` of ``points`` (k, 3), evenly through their order."""
+    if len(points) <= most:
+        return points
+    return points[np.linspace(0, len(points) - 1, most).round().astype(int)]
+
+
+def _best_coverers(sees: np.ndarray, needed: np.ndarray, count: int) -> np.ndarray:
+    """(k,) int: the ``count`` pool candidates (rows of ``sees`` (p, q), the field points) that see the most
+    required points, so that wide requirements (a regulation field's hundreds of points) are offered cameras
+    that cover much of them at once, not only each point's cheapest in RigCD."""
+    seen = sees[:, needed > 0].sum(axis=1)
+    return np.flatnonzero(seen > 0)[np.argsort(-seen[seen > 0], kind="stable")[:count]]
+
+
+def _discrete_stage(vehicle, rigs, calibration, settings, requirements, counts, progress):
+    """Candidates and the valid MILP selection meeting ``requirements``: (Prepared, MilpStage)."""
+    prepared = prepare(vehicle, rigs, calibration, settings, requirements.points, progress)
+    return prepared, select_valid(prepared, vehicle, calibration, requirements, counts, settings, progress)
+
+
+def _refined(design: RigSummary, vehicle: Vehicle, reference: Rig, calibration: Calibration,
+             requirements: Requirements, spacing: float, settings: DesignSettings) -> RefinementReport:
     """Refine the MILP ``design``; the refined rig is accepted when it validates, meets the requirements and
     lowers the calibrated RigCD, and the report says why not otherwise."""
     rig = design.rig
-    sees = rig_coverage_matrix(rig, vehicle, settings.coverage).sees
+    points, sees = requirements.points, requirements.counts_matrix(rig, vehicle, settings)
     mirror = camera_mirrors(rig.positions, rig.rotations, rig.fovs) if settings.is_symmetric_on(vehicle) else None
     normals = vehicle.surface(rig.positions).normal
     radii = free_radii(rig, normals, vehicle, spacing, settings.rules)
@@ -274,7 +304,7 @@ def _refined(design: RigSummary, vehicle: Vehicle, reference: Rig, calibration: 
         radii = np.minimum(radii, radii[np.where(mirror >= 0, mirror, np.arange(len(rig)))])
     problem = RefineProblem(
         rig, reference, calibrated_matching(rig, reference, calibration), normals,
-        duty_points(sees, needed, frustum_margins(rig, points)), points, calibration.alpha, calibration.lambdas,
+        duty_points(sees, requirements.needed, frustum_margins(rig, points)), points, calibration.alpha, calibration.lambdas,
         (float(np.deg2rad(min(settings.pitches_deg))), float(np.deg2rad(max(settings.pitches_deg)))),
         settings.fov_range, radii, mirror)
     outcome = refine(problem)
@@ -294,7 +324,7 @@ def _refined(design: RigSummary, vehicle: Vehicle, reference: Rig, calibration: 
     if not check.valid or moved == 0:
         return RefinementReport(f"rejected: IPOPT {outcome.status}, refined cameras fail the mount checks",
                                 solver_status=outcome.status)
-    refined = summarise(refined_rig, vehicle, [reference], calibration, needed, settings, check)
+    refined = summarise(refined_rig, vehicle, [reference], calibration, requirements, settings, check)
     if not refined.meets_requirements:
         return RefinementReport(f"rejected: IPOPT {outcome.status}, refined rig loses required coverage",
                                 solver_status=outcome.status, cameras_moved=moved, refined=refined)
@@ -343,12 +373,14 @@ def _rig_from(chosen: CandidateSet, matched: np.ndarray, reference: Rig, vehicle
                tuple(replace(c, id=name) for c, name in zip(cameras, names)))
 
 
-def summarise(rig: Rig, vehicle: Vehicle, references: Sequence[Rig], calibration: Calibration, needed: np.ndarray,
-              settings: DesignSettings, check: RigCheck | None = None) -> RigSummary:
-    """Predicted transfer from each reference, coverage fraction and requirement check of ``rig``."""
-    counts = rig_coverage_matrix(rig, vehicle, settings.coverage).sees.sum(axis=0)
+def summarise(rig: Rig, vehicle: Vehicle, references: Sequence[Rig], calibration: Calibration,
+              requirements: Requirements, settings: DesignSettings, check: RigCheck | None = None) -> RigSummary:
+    """Predicted transfer from each reference, coverage fraction (of the sector points) and requirement check
+    of ``rig``."""
+    counts = requirements.counts(rig, vehicle, settings)
     predictions = tuple(predict_transfer(reference, [rig], calibration)[0] for reference in references)
-    return RigSummary(rig, predictions, float(np.mean(counts >= 1)), bool(np.all(counts >= needed)), check)
+    return RigSummary(rig, predictions, float(np.mean(counts[:requirements.n_sector] >= 1)),
+                      bool(np.all(counts >= requirements.needed)), check)
 
 
 def calibrated_matching(rig: Rig, reference: Rig, calibration: Calibration) -> np.ndarray:

@@ -12,7 +12,8 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Callable, Sequence
 
-from rigopt.design.designer import fleet_requirements, no_progress, prepare, select_valid, summarise
+from rigopt.design.designer import no_progress, prepare, select_valid, summarise
+from rigopt.design.requirements import design_requirements, fleet_requirements
 from rigopt.design.problem import ReferenceRig
 from rigopt.design.selection import DesignInfeasible
 from rigopt.design.settings import DesignSettings
@@ -46,12 +47,14 @@ def pareto_designs(vehicle: Vehicle, references: Sequence[ReferenceRig], calibra
     """Solve every camera count in ``counts`` (inclusive range) at every coverage level, for the references
     each on its own vehicle."""
     rigs = [r.rig for r in references]
-    prepared = prepare(vehicle, rigs, calibration, settings, progress)
+    base = design_requirements(references, vehicle, settings)
+    prepared = prepare(vehicle, rigs, calibration, settings, base.points, progress)
     points = []
     for level in levels:
         min_coverage, min_overlap = LEVELS[level]
         level_settings = replace(settings, min_coverage=min_coverage, min_overlap=min_overlap)
-        needed = fleet_requirements(references, level_settings, vehicle, prepared.points)
+        needed = base.with_sector_needs(fleet_requirements(references, level_settings, vehicle,
+                                                           base.points[:base.n_sector]))
         for n in range(counts[0], counts[1] + 1):
             progress(f"pareto: {n} cameras, coverage level {level}")
             try:

@@ -107,3 +107,6 @@ class DesignResult:
     settings: DesignSettings
     seconds: float
     symmetry_fallback: str | None = None
+    regions: tuple = ()
+    """The design's dense coverage (RegionCoverage each) of the required regulation fields, or, when none
+    is required, of the vehicle category's default fields (reported only)."""

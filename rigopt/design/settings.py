@@ -209,6 +209,8 @@ class DesignSettings:
     """Pruning: each reference camera's cheapest candidates offered to the MILP."""
     keep_per_sector: int = 6
     """Pruning: for every required sector point, the cheapest candidates that see it offered to the MILP."""
+    keep_coverers: int = 300
+    """Pruning: the candidates that see the most required field points, offered to the MILP."""
     coverage_mounts: int = 80
     """About how many mount points offer every orientation for coverage (the coverage pool)."""
     time_limit: float = 60.0
@@ -225,6 +227,10 @@ class DesignSettings:
     """The mount checks every camera of a design passes."""
     max_body_fraction: float | None = 0.10
     """Largest share of a designed camera's image that may show the ego body (None: no limit)."""
+    require: str = "none"
+    """The regulation fields the design must see (:func:`rigopt.coverage.regulations.parse_require`):
+    comma-separated preset keys, ``default`` (the vehicle category's: trucks r151, r159, r158; cars r158) or
+    ``none`` (the category's fields are then reported, not required)."""
     cost_weight: float = 0.0
     """Weight of the chosen cameras' mean relative mounting cost (zone cost, tyre spray) added to the
     calibrated RigCD in the MILP's objective (0: the cost is reported only)."""

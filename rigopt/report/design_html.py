@@ -14,6 +14,8 @@ _CAPTIONS = {
     "naive_transfer": "The naive transfer: each reference camera moved to the nearest mount point facing its way.",
     "coverage": "Camera count per azimuth on each ring: the design solid, the reference (on its own vehicle) "
                 "dashed. Forward is up, the vehicle's left on the left.",
+    "fields": "The regulation fields over the design's near-field blind zones (ISO vehicle frame, x forward, "
+              "y left): unseen field points marked.",
 }
 
 
@@ -112,6 +114,17 @@ def render_design_html(summary: dict, figures: dict[str, bytes], scene: str | No
             "; ".join(f"{k} {v:.3f}" for k, v in summary["rigcd_breakdown"].items())) + ".</p>",
         f'<p class="note">Rig file: {escape(summary["rig_file"])} (the benchmark\'s JSON format, CARLA frame).</p>',
     ]
+    if summary.get("regions"):
+        state = "required" if summary["regions_required"] else "reported, not required (--require to enforce)"
+        parts += [f"<h2>Regulation fields ({escape(state)})</h2>",
+                  table(["field", "source", "seen", "seen per height", "unseen area"],
+                        [[escape(r["key"]), escape(r["source"]), pct(r["covered_frac"]),
+                          escape(", ".join(f"{h['height_m']:g} m {h['covered_frac']:.1%}"
+                                           for h in r["height_covered_frac"])),
+                          num(r["unseen_area_m2"], 2, " m²")] for r in summary["regions"]], numeric_from=2),
+                  '<p class="note">Every point of each field (grid and outline every '
+                  f'{summary["regions"][0]["spacing_m"]:g} m, at each test-object height) checked with occlusion; '
+                  "geometry and sources in docs/regulations.md.</p>"]
     if scene is not None:
         parts += scene_section(scene, compared)
     if figures:

@@ -5,6 +5,8 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import numpy as np
+
 from rigopt.design.result import DesignResult, RigSummary
 from rigopt.report.json_values import json_ready
 from rigopt.rig.model import Rig
@@ -92,6 +94,7 @@ def symmetry_dict(result: DesignResult) -> dict:
 def design_dict(result: DesignResult, rig_file: Path | None) -> dict:
     """The ``rigopt design --json`` object (and the body of report.json)."""
     from rigopt.metrics.rigcd import rigcd
+    from rigopt.report.coverage_figures import regions_dict
 
     design, milp, comparisons = result.design, result.milp, result.comparisons
     reference = result.references[0].rig
@@ -116,6 +119,8 @@ def design_dict(result: DesignResult, rig_file: Path | None) -> dict:
                    "offered_to_milp": milp.n_offered, "repairs": milp.repairs, "seconds": result.seconds},
         "cameras": camera_rows(design.rig, reference, breakdown.pairs, result.vehicle),
         "symmetry": symmetry_dict(result),
+        "regions_required": result.settings.require != "none",
+        "regions": regions_dict(result.regions),
         "rigcd_breakdown": breakdown_dict(breakdown),
         "comparisons": {
             "naive_transfer": (summary_dict(comparisons.naive_transfer, result.vehicle)
@@ -127,15 +132,16 @@ def design_dict(result: DesignResult, rig_file: Path | None) -> dict:
 
 
 def write_design_outputs(result: DesignResult, out_dir, *, published_as=None) -> list[Path]:
-    """Write rig.json (benchmark format), report.json, the pictures and report.html (with the interactive 3D
-    view of the design on its vehicle, and the reference rig in grey when it sits on the same vehicle) into
+    """Write rig.json (benchmark format), report.json, the pictures (with the regulation fields over the
+    near-field blind zones, fields.png) and report.html (with the interactive 3D view of the design on its
+    vehicle, the fields on the ground and the reference rig in grey when it sits on the same vehicle) into
     ``out_dir``.
 
     ``published_as``: the folder ``out_dir`` becomes once complete (when it is a temporary one, see
     rigopt.output.atomic_folder); the reports name the rig file there.
     """
-    from rigopt.coverage.measures import ring_report
-    from rigopt.report.coverage_figures import write_rings_figure
+    from rigopt.coverage.measures import coverage_report, ring_report
+    from rigopt.report.coverage_figures import write_regions_figure, write_rings_figure
     from rigopt.report.design_html import write_design_html
     from rigopt.report.scene_3d import scene_html
     from rigopt.report.vehicle_figures import write_vehicle_figure
@@ -155,7 +161,13 @@ def write_design_outputs(result: DesignResult, out_dir, *, published_as=None) ->
     design_coverage = ring_report(result.design.rig, vehicle)
     reference_coverage = ring_report(reference.rig, reference.vehicle)
     pictures["coverage"] = write_rings_figure(design_coverage, out_dir / "coverage.png", compare=reference_coverage)
+    if result.regions:
+        pictures["fields"] = write_regions_figure(result.regions, coverage_report(result.design.rig, vehicle),
+                                                  out_dir / "fields.png", result.design.rig)
     compared = next((r.rig for r in result.references if r.vehicle.name == vehicle.name), None)
-    scene = scene_html(vehicle, result.design.rig, compare=compared, lifted=result.settings.rules.practice.lifted)
+    outlines = [(r.key, np.asarray(r.polygon.exterior.coords)[:, :2]) for r in result.regions
+                if r.polygon.geom_type == "Polygon"]
+    scene = scene_html(vehicle, result.design.rig, compare=compared, lifted=result.settings.rules.practice.lifted,
+                       regions=outlines)
     page = write_design_html(summary, out_dir, pictures, scene, compared.name if compared is not None else None)
     return [rig_file, report, *pictures.values(), page]

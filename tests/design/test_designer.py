@@ -15,10 +15,12 @@ import numpy as np
 import pytest
 
 from rigopt.coverage.measures import coverage_report
+from rigopt.coverage.regulations import parse_require, region_coverage
 from rigopt.mounting.practice import MountPractice, practice_problems
 from rigopt.mounting.rules import check_rig
 from rigopt.coverage.matrix import rig_coverage_matrix
-from rigopt.design.designer import design_rig, requirements
+from rigopt.design.designer import design_rig
+from rigopt.design.requirements import reference_requirements as requirements
 from rigopt.design.problem import ReferenceRig, benchmark_rigs
 from rigopt.design.result import DesignResult
 from rigopt.design.selection import DesignInfeasible
@@ -276,3 +278,35 @@ def test_triple_coverage_with_narrow_lenses_is_infeasible(box_car):
 
 def test_design_infeasible_is_an_input_error_for_the_cli():
     assert issubclass(DesignInfeasible, RigoptError)
+
+
+# --- regulation fields ------------------------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def box_car_with_front_field(box_car):
+    settings = DesignSettings(require="r159", lenses=(90.0, 120.0), yaw_step_deg=30.0, pitches_deg=(-20.0, 0.0),
+                              refine=False)
+    return design_rig(box_car, r1_on_its_vehicle(), load_weights("joint"), settings), settings
+
+
+def test_a_required_field_is_seen_at_every_dense_point(box_car, box_car_with_front_field):
+    result, settings = box_car_with_front_field
+    assert [r.key for r in result.regions] == ["r159"]
+    assert result.regions[0].covered and result.regions[0].covered_frac == 1.0
+    again = region_coverage(result.design.rig, box_car, parse_require("r159", box_car), spacing=0.1)
+    assert again[0].covered
+    assert len(result.design.rig) <= len(load_rig("R1")) + 2  # the reference's count, up to two near-field more
+
+
+def test_without_a_required_field_the_categorys_fields_are_reported(firetruck):
+    assert [r.key for r in firetruck.result.regions] == ["r151", "r159", "r158"]  # N3 defaults
+    assert firetruck.result.settings.require == "none"
+    assert all(0.0 <= r.covered_frac <= 1.0 for r in firetruck.result.regions)
+
+
+def test_an_unseeable_field_point_is_named_with_the_field(box_car):
+    settings = DesignSettings(zones=("front",), require="r158", lenses=(60.0,), yaw_step_deg=30.0, refine=False,
+                              min_coverage=0)
+    with pytest.raises(DesignInfeasible, match=r"r158 field at x .* height .*--require|ring"):
+        design_rig(box_car, r1_on_its_vehicle(), load_weights("joint"), settings)
