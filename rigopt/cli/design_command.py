@@ -117,7 +117,8 @@ def design_command(
                                     help="Place cameras freely; by default a mirror-symmetric vehicle gets cameras "
                                          "in mirrored pairs and on its centreline."),
     pareto: bool = typer.Option(False, "--pareto", help="Sweep camera counts (--cameras, default the reference's "
-                                                        "+-2) and coverage levels; write the frontier."),
+                                                        "+-2) and coverage levels; write the frontier of predicted "
+                                                        "drop, unseen near-field ground and mounting cost."),
     ref_vehicle: Optional[str] = typer.Option(None, "--ref-vehicle",
                                               help="Vehicle the reference rigs were mounted on, for rigs whose own "
                                                    "vehicle rigopt does not know (imported rigs) or to override it; "
@@ -233,8 +234,10 @@ def _pareto(target, references, calibration, settings, out: Path, force: bool, a
     if as_json:
         print_json([{k: v for k, v in asdict(p).items() if k != "rig"} for p in points])
         return
-    print_table(f"designs for {target.name}: predicted drop against coverage and camera count",
-                ["cameras", "coverage level", "predicted drop", "rigcd", "coverage", "frontier"],
-                [[p.n_cameras, p.level, p.predicted_drop, p.rigcd, p.coverage, "yes" if p.frontier else "-"]
-                 if p.feasible else [p.n_cameras, p.level, "infeasible", "-", "-", "-"] for p in points])
+    print_table(f"designs for {target.name}: predicted drop against the near field and the mounting cost",
+                ["cameras", "coverage level", "predicted drop", "rigcd", "coverage", "2 m ring ground",
+                 "unseen within 5 m (m²)", "fields seen (min)", "mounting cost", "frontier"],
+                [[p.n_cameras, p.level, p.predicted_drop, p.rigcd, p.coverage, p.ring_2m_ground, p.blind_area_m2,
+                  p.fields, p.mounting_cost, "yes" if p.frontier else "-"]
+                 if p.feasible else [p.n_cameras, p.level, "infeasible", *["-"] * 7] for p in points])
     print(f"wrote {', '.join(str(f) for f in files)}")

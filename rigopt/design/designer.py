@@ -49,7 +49,8 @@ from rigopt.vehicle.symmetry import camera_mirrors
 
 #: Mount points closer than this (m) may not both hold a camera (8 cm housings plus a margin).
 CLASH_DISTANCE = 0.10
-#: Rounds of the dense field check: unseen field points become requirements and the MILP is solved again.
+#: Rounds of the dense field check of the MILP's rig: unseen field points become requirements and the MILP is
+#: solved again.
 MAX_FIELD_ROUNDS = 3
 #: At most this many unseen points of one field are added per round.
 MAX_NEW_FIELD_POINTS = 200
@@ -156,10 +157,11 @@ def select_valid(prepared: Prepared, vehicle: Vehicle, calibration: Calibration,
     if np.any(seen < needed):
         raise DesignInfeasible(explain_uncoverable(requirements, seen))
     pool, candidates = prepared.pool, prepared.candidates
-    offered = candidates.mirror_closed(pool[reduce(np.union1d, [
-        prune(c[pool], prepared.sees_pool, needed, settings.keep_per_reference, settings.keep_per_sector)
-        for c in prepared.costs], _best_coverers(prepared.sees_pool[:, requirements.n_sector:],
-                                                 needed[requirements.n_sector:], settings.keep_coverers))])
+    field = slice(requirements.n_sector, None)
+    kept = [prune(c[pool], prepared.sees_pool, needed, settings.keep_per_reference, settings.keep_per_sector)
+            for c in prepared.costs]
+    kept.append(_best_coverers(prepared.sees_pool[:, field], needed[field], settings.keep_coverers))
+    offered = candidates.mirror_closed(pool[reduce(np.union1d, kept)])
     sees = prepared.sees_pool[np.searchsorted(pool, offered)]
     excluded: set[int] = set()
     for repairs in range(MAX_REPAIRS + 1):
@@ -217,31 +219,33 @@ def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRi
         settings = replace(settings, symmetric=False)
         prepared, milp = _discrete_stage(vehicle, rigs, calibration, settings, requirements, counts, progress)
 
-    for round in range(MAX_FIELD_ROUNDS + 1):
-        progress("validating the design: mount checks, coverage, RigCD")
-        design = summarise(milp.rig, vehicle, rigs, calibration, requirements, settings, milp.check)
-        refinement = RefinementReport("off" if len(rigs) == 1 else "off (fleet design)")
-        if settings.refine and design.meets_requirements and len(rigs) == 1:
-            progress("continuous refinement (casadi + IPOPT)")
-            refinement = _refined(design, vehicle, reference, calibration, requirements, prepared.spacing, settings)
-            if refinement.accepted:
-                design = refinement.refined
-        if not design.meets_requirements:
-            raise DesignInfeasible("the selected rig does not meet the coverage requirements when recomputed; "
-                                   "this should not happen: please report it")
-        regions = field_coverage(design.rig, vehicle, requirements.presets, settings)
-        unseen = [(r.key, r.unseen) for r in regions if len(r.unseen)]
-        if not requirements.presets:  # nothing required: the vehicle category's fields are reported
-            regions = field_coverage(design.rig, vehicle, default_presets(vehicle), settings)
-        if not unseen or round == MAX_FIELD_ROUNDS:
+    for round in range(MAX_FIELD_ROUNDS + 1):  # the MILP's rig checked densely over the required fields
+        regions = field_coverage(milp.rig, vehicle, requirements.presets, settings)
+        unseen = [(r.key, _spread(r.unseen, MAX_NEW_FIELD_POINTS)) for r in regions if len(r.unseen)]
+        if not unseen:
             break
-        points = np.concatenate([_spread(u, MAX_NEW_FIELD_POINTS) for _, u in unseen])
-        progress(f"{sum(len(u) for _, u in unseen)} field points unseen in the dense check; solving again with "
-                 f"{len(points)} of them required")
-        requirements = requirements.extended(points, [label for key, u in unseen
-                                                      for label in field_labels(key, _spread(u, MAX_NEW_FIELD_POINTS))])
+        if round == MAX_FIELD_ROUNDS:
+            raise DesignInfeasible(f"after {MAX_FIELD_ROUNDS} rounds the design still misses field points in the "
+                                   f"dense check ({', '.join(f'{k}: {len(u)}' for k, u in unseen)}); allow more "
+                                   "cameras (--cameras), zones or pitch angles, or fewer fields (--require)")
+        points = np.concatenate([u for _, u in unseen])
+        progress(f"{len(points)} field points unseen in the dense check; solving again with them required")
+        requirements = requirements.extended(points, [label for key, u in unseen for label in field_labels(key, u)])
         prepared = with_points(prepared, vehicle, points, settings)
         milp = select_valid(prepared, vehicle, calibration, requirements, counts, settings, progress)
+
+    progress("validating the design: mount checks, coverage, RigCD")
+    design = summarise(milp.rig, vehicle, rigs, calibration, requirements, settings, milp.check)
+    if not design.meets_requirements:
+        raise DesignInfeasible("the selected rig does not meet the coverage requirements when recomputed; "
+                               "this should not happen: please report it")
+    refinement = RefinementReport("off" if len(rigs) == 1 else "off (fleet design)")
+    if settings.refine and len(rigs) == 1:
+        progress("continuous refinement (casadi + IPOPT)")
+        refinement = _refined(design, vehicle, reference, calibration, requirements, prepared.spacing, settings)
+        if refinement.accepted:
+            design = refinement.refined
+    regions = field_coverage(design.rig, vehicle, requirements.presets or default_presets(vehicle), settings)
 
     reference_coverage = rig_coverage_matrix(reference, references[0].vehicle,
                                              settings.coverage).sees.any(axis=0).mean()
@@ -304,7 +308,7 @@ def _refined(design: RigSummary, vehicle: Vehicle, reference: Rig, calibration: 
         radii = np.minimum(radii, radii[np.where(mirror >= 0, mirror, np.arange(len(rig)))])
     problem = RefineProblem(
         rig, reference, calibrated_matching(rig, reference, calibration), normals,
-        duty_points(sees, requirements.needed, frustum_margins(rig, points)), points, calibration.alpha, calibration.lambdas,
+        duty_points(sees, requirements.needed, frustum_margins(rig, points), points), points, calibration.alpha, calibration.lambdas,
         (float(np.deg2rad(min(settings.pitches_deg))), float(np.deg2rad(max(settings.pitches_deg)))),
         settings.fov_range, radii, mirror)
     outcome = refine(problem)
@@ -328,6 +332,10 @@ def _refined(design: RigSummary, vehicle: Vehicle, reference: Rig, calibration: 
     if not refined.meets_requirements:
         return RefinementReport(f"rejected: IPOPT {outcome.status}, refined rig loses required coverage",
                                 solver_status=outcome.status, cameras_moved=moved, refined=refined)
+    lost = [r.key for r in field_coverage(refined_rig, vehicle, requirements.presets, settings) if not r.covered]
+    if lost:
+        return RefinementReport(f"rejected: IPOPT {outcome.status}, refined rig loses part of the field(s) "
+                                f"{', '.join(lost)}", solver_status=outcome.status, cameras_moved=moved, refined=refined)
     if refined.prediction.rigcd >= design.prediction.rigcd:
         return RefinementReport(f"rejected: IPOPT {outcome.status}, no improvement", solver_status=outcome.status,
                                 cameras_moved=moved, refined=refined)
@@ -346,15 +354,20 @@ def local_mirror(candidates: CandidateSet, index: np.ndarray) -> np.ndarray | No
 
 def _best_selection(costs, sees, needed, mount, mount_points, counts, alpha, settings, progress,
                     mirror=None, mount_cost=None) -> Selection:
+    """The best selection over the camera ``counts`` (low, high): one MILP for a range at or above every
+    reference's count (the count a variable), else one per count."""
     clashes = cKDTree(mount_points).query_pairs(CLASH_DISTANCE, output_type="ndarray")
+    n_ref = max(c.shape[1] for c in costs)
+    ranges = [counts] if counts[0] >= n_ref and counts[0] < counts[1] else [(n, n) for n in range(counts[0],
+                                                                                                   counts[1] + 1)]
     best = None
-    for n_cameras in range(counts[0], counts[1] + 1):
-        progress(f"MILP: {n_cameras} cameras from {len(costs[0])} candidates")
+    for low, high in ranges:
+        progress(f"MILP: {low if low == high else f'{low}-{high}'} cameras from {len(costs[0])} candidates")
         try:
-            selection = select_cameras(costs, sees, needed, mount, n_cameras, alpha, clashes, settings.time_limit,
+            selection = select_cameras(costs, sees, needed, mount, (low, high), alpha, clashes, settings.time_limit,
                                        settings.mip_gap, mirror, mount_cost, settings.cost_weight)
         except DesignInfeasible:
-            if n_cameras == counts[1] and best is None:
+            if high == counts[1] and best is None:
                 raise
             continue
         if best is None or selection.objective + selection.cost_term < best.objective + best.cost_term:

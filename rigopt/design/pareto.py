@@ -1,8 +1,12 @@
 """The trade-off sweep of ``rigopt design --pareto``: camera counts x coverage levels.
 
 Every (count, level) pair is solved as its own MILP on one shared candidate set (no continuous
-refinement, so the sweep stays quick); a point is on the frontier when no other feasible point is at least
-as good in predicted drop (lower), coverage (higher) and camera count (lower) and better in one of them.
+refinement, so the sweep stays quick), meeting the required regulation fields (``--require``) at every
+level. Each design is judged by its predicted drop, its near field (ground seen on the 2 m ring, unseen
+ground within 5 m of the body), its coverage of the vehicle category's regulation fields and its relative
+mounting cost (zone costs and tyre spray, :func:`rigopt.mounting.practice.mounting_costs`). A point is on
+the frontier when no other feasible point is at least as good in predicted drop (lower), unseen near-field
+ground (lower) and mounting cost (lower) and better in one of them.
 """
 
 from __future__ import annotations
@@ -28,7 +32,10 @@ LEVELS = {"reference": (0, 0), "reference+overlap": (0, 2), "full": (1, 0)}
 @dataclass(frozen=True)
 class ParetoPoint:
     """One (camera count, coverage level) design: its worst predicted drop and RigCD over the references,
-    coverage fraction, whether it is feasible (``reason`` when not) and on the frontier."""
+    coverage fraction (of the sector points), ``ring_2m_ground`` (fraction of the 2 m ring's ground seen),
+    ``blind_area_m2`` (unseen ground within 5 m of the body), ``fields`` (the smallest covered fraction of the
+    category's regulation fields), ``mounting_cost``, whether it is feasible (``reason`` when not) and on the
+    frontier."""
 
     n_cameras: int
     level: str
@@ -36,6 +43,10 @@ class ParetoPoint:
     predicted_drop: float = float("nan")
     rigcd: float = float("nan")
     coverage: float = float("nan")
+    ring_2m_ground: float = float("nan")
+    blind_area_m2: float = float("nan")
+    fields: float = float("nan")
+    mounting_cost: float = float("nan")
     frontier: bool = False
     reason: str = ""
     rig: Rig | None = None
@@ -63,18 +74,37 @@ def pareto_designs(vehicle: Vehicle, references: Sequence[ReferenceRig], calibra
                 points.append(ParetoPoint(n, level, False, reason=str(error)))
                 continue
             summary = summarise(rig, vehicle, rigs, calibration, needed, level_settings)
+            ring, blind, fields, cost = near_field(rig, vehicle, level_settings)
             points.append(ParetoPoint(n, level, True, summary.prediction.predicted_drop, summary.prediction.rigcd,
-                                      summary.coverage, rig=rig))
+                                      summary.coverage, ring, blind, fields, cost, rig=rig))
     return _mark_frontier(points)
+
+
+def near_field(rig: Rig, vehicle: Vehicle, settings: DesignSettings) -> tuple[float, float, float, float]:
+    """(ground fraction seen on the 2 m ring, unseen ground m^2 within 5 m, smallest covered fraction of the
+    vehicle category's regulation fields, relative mounting cost) of ``rig`` on ``vehicle``."""
+    from rigopt.coverage.footprint import Footprint
+    from rigopt.coverage.measures import CoverageSettings, blind_zone, ring_coverage
+    from rigopt.coverage.regulations import default_presets
+    from rigopt.design.designer import field_coverage
+    from rigopt.mounting.practice import mounting_costs
+
+    footprint, measures = Footprint.of_mesh(vehicle.mesh), CoverageSettings(ring_distances=(2.0,), ring_heights=(0.0,))
+    ring = ring_coverage(vehicle, rig, measures, footprint)[0].covered_frac
+    blind = blind_zone(vehicle, rig, measures, footprint).area_m2
+    fields = min((r.covered_frac for r in field_coverage(rig, vehicle, default_presets(vehicle), settings)), default=1.0)
+    cost = float(mounting_costs(vehicle, [c.zone for c in rig.cameras], rig.positions).sum())
+    return float(ring), float(blind), float(fields), cost
 
 
 def _mark_frontier(points: list[ParetoPoint]) -> list[ParetoPoint]:
     feasible = [p for p in points if p.feasible]
 
+    def key(p: ParetoPoint) -> tuple[float, float, float]:
+        return p.predicted_drop, p.blind_area_m2, p.mounting_cost  # all three: lower is better
+
     def dominated(p: ParetoPoint) -> bool:
-        return any(q.predicted_drop <= p.predicted_drop and q.coverage >= p.coverage and q.n_cameras <= p.n_cameras
-                   and (q.predicted_drop, -q.coverage, q.n_cameras) != (p.predicted_drop, -p.coverage, p.n_cameras)
-                   for q in feasible)
+        return any(all(a <= b for a, b in zip(key(q), key(p))) and key(q) != key(p) for q in feasible)
 
     return [replace(p, frontier=p.feasible and not dominated(p)) for p in points]
 
@@ -88,10 +118,12 @@ def write_pareto(points: list[ParetoPoint], out_dir) -> list[Path]:
     table = out_dir / "pareto.csv"
     with table.open("w", newline="") as handle:
         writer = csv.writer(handle)
-        writer.writerow(["n_cameras", "level", "feasible", "predicted_drop", "rigcd", "coverage", "frontier", "reason"])
+        writer.writerow(["n_cameras", "level", "feasible", "predicted_drop", "rigcd", "coverage", "ring_2m_ground",
+                         "blind_area_m2", "fields", "mounting_cost", "frontier", "reason"])
         for p in points:
-            writer.writerow([p.n_cameras, p.level, p.feasible, f"{p.predicted_drop:.6g}", f"{p.rigcd:.6g}",
-                             f"{p.coverage:.6g}", p.frontier, p.reason])
+            writer.writerow([p.n_cameras, p.level, p.feasible, *(f"{v:.6g}" for v in (
+                p.predicted_drop, p.rigcd, p.coverage, p.ring_2m_ground, p.blind_area_m2, p.fields, p.mounting_cost)),
+                p.frontier, p.reason])
     figure = Figure(figsize=(7, 5), dpi=120, layout="constrained")
     ax = figure.subplots()
     feasible = [p for p in points if p.feasible]
@@ -100,17 +132,17 @@ def write_pareto(points: list[ParetoPoint], out_dir) -> list[Path]:
     for level in LEVELS:
         mine = [p for p in feasible if p.level == level]
         if mine:
-            scatter = ax.scatter([p.coverage for p in mine], [p.predicted_drop for p in mine],
+            scatter = ax.scatter([p.blind_area_m2 for p in mine], [p.predicted_drop for p in mine],
                                  c=[p.n_cameras for p in mine], marker=markers[level], cmap="viridis", s=60,
                                  vmin=min(p.n_cameras for p in feasible), vmax=max(p.n_cameras for p in feasible),
                                  label=f"coverage level: {level}")
-    frontier = sorted((p for p in feasible if p.frontier), key=lambda p: p.coverage)
+    frontier = sorted((p for p in feasible if p.frontier), key=lambda p: p.blind_area_m2)
     if frontier:
-        ax.plot([p.coverage for p in frontier], [p.predicted_drop for p in frontier], "k--", linewidth=1,
-                label="frontier")
+        ax.plot([p.blind_area_m2 for p in frontier], [p.predicted_drop for p in frontier], "k--", linewidth=1,
+                label="frontier (drop, blind area, mounting cost)")
     if scatter is not None:
         figure.colorbar(scatter, ax=ax, label="cameras")
-    ax.set_xlabel("coverage (fraction of ring sectors seen)")
+    ax.set_xlabel("unseen ground within 5 m of the body (m²)")
     ax.set_ylabel("predicted relative mAP drop (worst reference)")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)

@@ -234,15 +234,37 @@ def free_radii(rig: Rig, normals: np.ndarray, vehicle: Vehicle, radius: float,
     return out
 
 
-def duty_points(sees: np.ndarray, needed: np.ndarray, margins: np.ndarray) -> np.ndarray:
-    """(k, q) bool: for each required sector point, the ``needed`` cameras that see it deepest inside their
-    frustum (``margins`` (k, q), larger is deeper) keep it in view."""
+def duty_points(sees: np.ndarray, needed: np.ndarray, margins: np.ndarray, points: np.ndarray | None = None
+                ) -> np.ndarray:
+    """(k, q) bool: for each required point, the ``needed`` cameras that see it deepest inside their frustum
+    (``margins`` (k, q), larger is deeper) keep it in view. With the ``points`` (q, 3) m, a camera keeps only
+    the corners of the convex hull of its duty points: its frustum is a convex cone, so the hull's corners
+    inside it keep every duty point inside (a regulation field's hundreds of points become a few)."""
     duties = np.zeros_like(sees)
     for q in np.flatnonzero(needed > 0):
         seeing = np.flatnonzero(sees[:, q])
         chosen = seeing[np.argsort(-margins[seeing, q], kind="stable")[:needed[q]]]
         duties[chosen, q] = True
+    if points is not None:
+        for k in range(len(duties)):
+            duties[k] = np.isin(np.arange(duties.shape[1]), hull_corners(points, np.flatnonzero(duties[k])))
     return duties
+
+
+def hull_corners(points: np.ndarray, index: np.ndarray) -> np.ndarray:
+    """(h,) int: those of ``index`` that are corners of the convex hull of ``points[index]`` (all of them when
+    the hull is flat or too small to compute)."""
+    from scipy.spatial import ConvexHull, QhullError
+
+    if len(index) <= 4:
+        return index
+    try:
+        return index[ConvexHull(points[index]).vertices]
+    except QhullError:  # flat (e.g. every duty point at one height): the 2-D hull of the ground coordinates
+        try:
+            return index[ConvexHull(points[index][:, :2]).vertices] if np.ptp(points[index][:, 2]) == 0 else index
+        except QhullError:
+            return index
 
 
 def frustum_margins(rig: Rig, points: np.ndarray) -> np.ndarray:

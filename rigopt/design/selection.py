@@ -2,7 +2,7 @@
 
 For a camera count N and a reference of R cameras, with M = min(N, R):
 
-    minimise   alpha / M * sum_e cost_e y_e  +  (1 - alpha) |N - R| / max(N, R)  +  w / N * sum_c m_c x_c
+    minimise   alpha / M * sum_e cost_e y_e  +  (1 - alpha) |N - R| / max(N, R)  +  w / R * sum_c m_c x_c
     subject to sum_c x_c = N
                N >= R: every reference camera matched once (sum_c y_cr = 1), sum_r y_cr <= x_c
                N <  R: every chosen camera matched once (sum_r y_cr = x_c), sum_c y_cr <= 1
@@ -14,7 +14,7 @@ For a camera count N and a reference of R cameras, with M = min(N, R):
 ``cost[c, r]`` is the raw-unit matching cost ``lt ||t_c - t_r|| + lr dR + lf |f_c - f_r|`` (the weighted
 matching of RigCD), so the objective is exactly the calibrated RigCD of the chosen rig to the reference
 when the matching is optimal, which the MILP guarantees on the candidate set. The last term, off by default
-(w = 0), adds the mean relative mounting cost m_c of the chosen cameras (their zones' costs and tyre spray,
+(w = 0), adds the relative mounting cost m_c of the chosen cameras per reference camera (their zones' costs and tyre spray,
 :func:`rigopt.mounting.practice.mounting_costs`) weighted by w.
 """
 
@@ -70,8 +70,33 @@ def prune(cost: np.ndarray, sees: np.ndarray, required: np.ndarray, keep_per_ref
     return np.array(sorted(keep), dtype=int)
 
 
-def _matching(cp, x, cost: np.ndarray, n_cameras: int, alpha: float):
-    """Matching variables of one reference and the calibrated RigCD they give; returns (y, constraints, rigcd)."""
+def essential_requirements(sees: np.ndarray, required: np.ndarray) -> np.ndarray:
+    """(k,) int: the requirement points whose constraints the MILP needs. A point b is implied by a point a
+    when every candidate that sees a also sees b and a needs at least as many cameras: meeting a meets b (of
+    points seen by the same candidates, the one needing most, then the first, is kept). Dropping implied
+    points leaves the feasible set as it is; a regulation field's hundreds of points shrink to those that
+    bind.
+
+    sees : (n, q) bool; required : (q,) int. Returns the indices of the points kept, sorted."""
+    q = np.flatnonzero(required > 0)
+    if len(q) < 2:
+        return q
+    # points seen by exactly the same candidates: the one needing most (the first of those) stands for all
+    packed = np.packbits(sees[:, q], axis=0).T
+    order = np.lexsort((q, -required[q]))  # most needed first, then by index
+    _, first = np.unique(packed[order], axis=0, return_index=True)
+    q = np.sort(q[order[first]])
+    columns = sparse.csc_matrix(sees[:, q].astype(np.int32))
+    size = np.asarray(columns.sum(axis=0)).ravel()
+    common = (columns.T @ columns).toarray()
+    implies = (common == size[:, None]) & (required[q][:, None] >= required[q][None, :])  # [a, b]: a implies b
+    np.fill_diagonal(implies, False)
+    return q[~implies.any(axis=0)]
+
+
+def _matching(cp, x, cost: np.ndarray, n_cameras: int, alpha: float, count_choice=None):
+    """Matching variables of one reference and the calibrated RigCD they give; returns (y, constraints, rigcd).
+    ``count_choice``: (z, counts) for a count range at or above the reference's count, z binary over counts."""
     n, n_ref = cost.shape
     y = cp.Variable(n * n_ref, boolean=True)  # y[c * n_ref + r]
     edges = np.arange(n * n_ref)
@@ -82,11 +107,15 @@ def _matching(cp, x, cost: np.ndarray, n_cameras: int, alpha: float):
         constraints = [per_reference @ y == 1, per_candidate @ y <= x]
     else:
         constraints = [per_candidate @ y == x, per_reference @ y <= 1]
+    if count_choice is not None:  # N >= R for every N of the range: the matching term is linear, the count term
+        z, counts = count_choice    # one of the range's constants
+        terms = np.array([count_term(k, n_ref) for k in counts])
+        return y, constraints, alpha / n_ref * (cost.ravel() @ y) + (1.0 - alpha) * (terms @ z)
     rigcd = alpha / min(n_cameras, n_ref) * (cost.ravel() @ y) + (1.0 - alpha) * count_term(n_cameras, n_ref)
     return y, constraints, rigcd
 
 
-def select_cameras(cost, sees: np.ndarray, required: np.ndarray, mount: np.ndarray, n_cameras: int,
+def select_cameras(cost, sees: np.ndarray, required: np.ndarray, mount: np.ndarray, n_cameras: int | tuple[int, int],
                    alpha: float, clash_pairs=(), time_limit: float = 60.0, mip_gap: float = 1e-4,
                    mirror: np.ndarray | None = None, mount_cost: np.ndarray | None = None,
                    cost_weight: float = 0.0) -> Selection:
@@ -94,27 +123,40 @@ def select_cameras(cost, sees: np.ndarray, required: np.ndarray, mount: np.ndarr
 
     cost : (n, R) float raw-unit matching costs, or a list of them (one per reference rig: the fleet mode,
     which minimises the largest calibrated RigCD over the references); sees : (n, q) bool; required : (q,)
-    int cameras needed per sector point; mount : (n,) int mount point of each candidate; clash_pairs :
+    int cameras needed per sector point; mount : (n,) int mount point of each candidate; n_cameras : a count,
+    or a (low, high) range at or above every reference's camera count, solved at once (the count a variable
+    of the MILP: with N >= R the objective stays linear); clash_pairs :
     (p, 2) int mount points whose housings collide; mirror : (n,) int each candidate's mirror image among
     the n (itself on the centreline), or None for no symmetry; mount_cost : (n,) float relative mounting cost
-    of each candidate, weighted by ``cost_weight`` in the objective. Raises DesignInfeasible when the MILP has
-    no solution; ``objective`` is the calibrated RigCD (the mounting cost term left out).
+    of each candidate, weighted by ``cost_weight`` per reference camera in the objective (w / R sum m_c x_c,
+    R the largest reference count). Raises DesignInfeasible when the MILP has no solution; ``objective`` is
+    the calibrated RigCD (the mounting cost term left out).
     """
     import cvxpy as cp
 
     costs = [np.asarray(c, dtype=float) for c in (cost if isinstance(cost, (list, tuple)) else [cost])]
     n = costs[0].shape[0]
-    if n_cameras < 1:
-        raise RigoptError(f"the camera count must be at least 1, got {n_cameras}")
-    if len(np.unique(mount)) < n_cameras:
-        raise DesignInfeasible(f"only {len(np.unique(mount))} mount points are available for {n_cameras} cameras; "
+    low, high = (n_cameras, n_cameras) if np.isscalar(n_cameras) else (int(n_cameras[0]), int(n_cameras[1]))
+    n_ref = max(c.shape[1] for c in costs)
+    if low < 1 or high < low:
+        raise RigoptError(f"the camera count must be at least 1 (a range low <= high), got {n_cameras}")
+    if low < high and low < n_ref:
+        raise RigoptError(f"a camera count range is solved at once only at or above the reference's {n_ref} "
+                          f"cameras, got {low}-{high}; solve each count instead")
+    if len(np.unique(mount)) < low:
+        raise DesignInfeasible(f"only {len(np.unique(mount))} mount points are available for {low} cameras; "
                                "lower the camera count, allow more zones or a finer --spacing")
     x = cp.Variable(n, boolean=True)
-    constraints = [cp.sum(x) == n_cameras]
-    matchings = [_matching(cp, x, c, n_cameras, alpha) for c in costs]
+    if low == high:
+        constraints, choice = [cp.sum(x) == low], None
+    else:
+        z = cp.Variable(high - low + 1, boolean=True)
+        counts = np.arange(low, high + 1)
+        constraints, choice = [cp.sum(z) == 1, cp.sum(x) == counts @ z], (z, counts)
+    matchings = [_matching(cp, x, c, high if choice else low, alpha, choice) for c in costs]
     for _, matching_constraints, _ in matchings:
         constraints += matching_constraints
-    needed = np.flatnonzero(required > 0)
+    needed = essential_requirements(sees, required)
     if len(needed):
         constraints.append(sparse.csr_matrix(sees[:, needed].T.astype(float)) @ x >= required[needed])
     groups = _mount_groups(mount, clash_pairs)
@@ -132,7 +174,7 @@ def select_cameras(cost, sees: np.ndarray, required: np.ndarray, mount: np.ndarr
         objective = worst
     penalty = 0.0
     if cost_weight and mount_cost is not None:
-        penalty = cost_weight / n_cameras * (np.asarray(mount_cost, dtype=float) @ x)
+        penalty = cost_weight / n_ref * (np.asarray(mount_cost, dtype=float) @ x)
     problem = cp.Problem(cp.Minimize(objective + penalty), constraints)
     start = time.perf_counter()
     try:
@@ -144,11 +186,11 @@ def select_cameras(cost, sees: np.ndarray, required: np.ndarray, mount: np.ndarr
     seconds = time.perf_counter() - start
     if problem.status in (cp.INFEASIBLE, cp.INFEASIBLE_INACCURATE):
         pairs = " in mirrored pairs" if mirror is not None else ""
-        raise DesignInfeasible(f"no choice of {n_cameras} candidate cameras{pairs} meets the coverage and housing "
+        raise DesignInfeasible(f"no choice of {low if low == high else f'{low}-{high}'} candidate cameras{pairs} meets the coverage and housing "
                                "requirements; allow more cameras (--cameras), more zones, wider lenses or lower "
                                f"the coverage requirement{' (or design without symmetry: --asymmetric)' if pairs else ''}")
     chosen = np.flatnonzero(x.value > 0.5) if x.value is not None else np.zeros(0, dtype=int)
-    if len(chosen) != n_cameras:  # stopped (time limit) before finding any feasible selection
+    if not low <= len(chosen) <= high:  # stopped (time limit) before finding any feasible selection
         raise RigoptError(f"the MIP solver found no feasible design within the time limit of {time_limit:g} s "
                           f"(status {problem.status}); raise --time-limit")
     matched = []

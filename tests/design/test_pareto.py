@@ -18,28 +18,31 @@ from rigopt.rig.pccr_format import write_rig
 
 from box_car import front_and_left_rig, install_user_vehicle
 
-POINT_KEYS = {"n_cameras", "level", "feasible", "predicted_drop", "rigcd", "coverage", "frontier", "reason"}
+POINT_KEYS = {"n_cameras", "level", "feasible", "predicted_drop", "rigcd", "coverage", "ring_2m_ground",
+              "blind_area_m2", "fields", "mounting_cost", "frontier", "reason"}
+CRITERIA = ("predicted_drop", "blind_area_m2", "mounting_cost")  # all three: lower is better
 
 
 def dominates(q: dict, p: dict) -> bool:
-    """q is at least as good as p in drop (lower), coverage (higher) and camera count (lower), better in one."""
-    at_least = (q["predicted_drop"] <= p["predicted_drop"] and q["coverage"] >= p["coverage"]
-                and q["n_cameras"] <= p["n_cameras"])
-    better = (q["predicted_drop"] < p["predicted_drop"] or q["coverage"] > p["coverage"]
-              or q["n_cameras"] < p["n_cameras"])
-    return at_least and better
+    """q is at least as good as p in drop, unseen near-field ground and mounting cost, better in one."""
+    return all(q[k] <= p[k] for k in CRITERIA) and any(q[k] < p[k] for k in CRITERIA)
 
 
 # --- the frontier rule --------------------------------------------------------------------------------
 
 
+def point(n, level, drop, blind, cost, feasible=True) -> ParetoPoint:
+    return ParetoPoint(n, level, feasible, drop, 1.0, 0.9, 0.9, blind, 1.0, cost) if feasible else ParetoPoint(
+        n, level, False, reason="infeasible")
+
+
 def test_the_frontier_of_hand_made_points():
-    points = [ParetoPoint(4, "reference", True, 0.30, 1.0, 0.90),   # A
-              ParetoPoint(4, "reference", True, 0.20, 0.9, 0.80),   # B
-              ParetoPoint(4, "full", True, 0.30, 1.0, 0.80),        # C: dominated by A (coverage) and B (drop)
-              ParetoPoint(5, "full", True, 0.20, 0.9, 0.90),        # D: a camera more than A for less drop
-              ParetoPoint(6, "full", True, 0.20, 0.9, 0.90),        # E: D with a camera more: dominated by D
-              ParetoPoint(3, "full", False, reason="infeasible")]   # never on the frontier
+    points = [point(4, "reference", 0.30, 10.0, 4.0),   # A
+              point(4, "reference", 0.20, 12.0, 4.0),   # B: less drop, more blind area than A
+              point(4, "full", 0.30, 12.0, 4.0),        # C: dominated by A (blind area) and B (drop)
+              point(5, "full", 0.20, 10.0, 5.5),        # D: costs more than A for less drop
+              point(6, "full", 0.20, 10.0, 6.0),        # E: D at a higher cost: dominated by D
+              point(3, "full", 0, 0, 0, feasible=False)]  # never on the frontier
     marked = _mark_frontier(points)
     assert [p.frontier for p in marked] == [True, True, False, True, False, False]
     assert [(p.n_cameras, p.level, p.predicted_drop) for p in marked][:5] == [
@@ -47,7 +50,7 @@ def test_the_frontier_of_hand_made_points():
 
 
 def test_equal_points_do_not_dominate_each_other():
-    twins = [ParetoPoint(4, "reference", True, 0.3, 1.0, 0.9), ParetoPoint(4, "reference+overlap", True, 0.3, 1.0, 0.9)]
+    twins = [point(4, "reference", 0.3, 10.0, 4.0), point(4, "reference+overlap", 0.3, 10.0, 4.0)]
     assert [p.frontier for p in _mark_frontier(twins)] == [True, True]
 
 
@@ -84,6 +87,8 @@ def test_feasible_points_have_values_and_infeasible_ones_a_reason(sweep):
     assert feasible, "the sweep found no feasible design"
     for p in feasible:
         assert p["predicted_drop"] > 0 and p["rigcd"] > 0 and 0 < p["coverage"] <= 1 and p["reason"] == ""
+        assert 0 <= p["ring_2m_ground"] <= 1 and p["blind_area_m2"] >= 0 and 0 <= p["fields"] <= 1
+        assert p["mounting_cost"] >= p["n_cameras"]  # every camera costs at least an ordinary panel (1)
     for p in points:
         if not p["feasible"]:
             assert p["reason"] and p["predicted_drop"] is None and not p["frontier"]

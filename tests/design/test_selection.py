@@ -14,7 +14,8 @@ import numpy as np
 import pytest
 from scipy.optimize import linear_sum_assignment
 
-from rigopt.design.selection import DesignInfeasible, Selection, count_term, prune, select_cameras
+from rigopt.design.selection import (DesignInfeasible, Selection, count_term, essential_requirements, prune,
+                                     select_cameras)
 from rigopt.errors import RigoptError
 
 ALPHA = 0.9
@@ -370,3 +371,51 @@ def test_a_weighted_mounting_cost_trades_rigcd_for_cheaper_mounts():
     assert light.chosen.tolist() == [0] and light.cost_term == pytest.approx(0.3)
     assert heavy.chosen.tolist() == [1] and heavy.cost_term == pytest.approx(1.0)
     assert heavy.objective == pytest.approx(ALPHA * 1.5)
+
+
+# --- implied requirements and count ranges ------------------------------------------------------------
+
+
+def test_implied_requirement_points_are_dropped_and_the_binding_ones_kept():
+    sees = np.array([[1, 1, 0, 1, 1],
+                     [0, 1, 1, 0, 1],
+                     [0, 1, 0, 0, 1]], dtype=bool)
+    # point 0 (seen by {0}) implies 1 ({0,1,2}) and 3 ({0}, equal: the first kept); 2 ({1}) is needed;
+    # 4 equals 1 but needs 2 cameras: 1 implies nothing about it, and 4 implies 1
+    required = np.array([1, 1, 1, 1, 2])
+    assert essential_requirements(sees, required).tolist() == [0, 2, 4]
+    assert essential_requirements(sees, np.array([0, 1, 1, 0, 0])).tolist() == [2]
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_implied_points_do_not_change_the_optimum(seed):
+    rng = np.random.default_rng(seed)
+    cost = rng.uniform(0.5, 3.0, (9, 3))
+    sees = rng.random((9, 12)) < 0.35
+    sees[np.arange(9), rng.integers(0, 12, 9)] = True
+    required = (sees.sum(axis=0) > 0).astype(int)
+    full = select_cameras(cost, sees, required, np.arange(9), 4, ALPHA)
+    # the same MILP with every requirement written out: brute force over subsets gives the same optimum
+    best = min(objective_by_enumeration(cost, c) for c in itertools.combinations(range(9), 4)
+               if np.all(sees[list(c)].sum(axis=0) >= required))
+    assert full.objective == pytest.approx(best, abs=1e-9)
+
+
+def objective_by_enumeration(cost, chosen) -> float:
+    rows, cols = linear_sum_assignment(cost[list(chosen)])
+    return ALPHA / min(len(chosen), cost.shape[1]) * cost[list(chosen)][rows, cols].sum() + (1 - ALPHA) * count_term(
+        len(chosen), cost.shape[1])
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_a_count_range_solved_at_once_equals_the_best_single_count(seed):
+    rng = np.random.default_rng(100 + seed)
+    cost = rng.uniform(0.2, 2.0, (10, 3))
+    sees = rng.random((10, 8)) < 0.3
+    required = (sees.sum(axis=0) > 0).astype(int)
+    at_once = select_cameras(cost, sees, required, np.arange(10), (3, 6), ALPHA)
+    singles = [select_cameras(cost, sees, required, np.arange(10), n, ALPHA) for n in range(3, 7)]
+    assert at_once.objective == pytest.approx(min(s.objective for s in singles), abs=1e-9)
+    assert 3 <= len(at_once.chosen) <= 6
+    with pytest.raises(RigoptError, match="at or above"):
+        select_cameras(cost, sees, required, np.arange(10), (2, 4), ALPHA)
