@@ -130,6 +130,7 @@ def design_command(
     """Design a rig on VEHICLE that minimises the calibrated RigCD to REF while covering what REF covers."""
     from rich.console import Console
 
+    from rigopt.coverage.regulations import parse_require
     from rigopt.design.designer import design_rig
     from rigopt.design.problem import benchmark_rigs
     from rigopt.design.settings import DesignSettings, pinhole_catalogue, read_catalogue
@@ -162,6 +163,7 @@ def design_command(
     if not references:
         raise RigoptError("--ref needs at least one rig")
     target, calibration = load_vehicle(vehicle), load_weights(weights, metric)
+    parse_require(require, target)  # a bad --require is an error before any work
     note_fallback(calibration)
     label = "+".join(r.rig.name for r in references)
     out = check_out_folder(out or Path(f"design-{target.name}-{label}"), force=force)

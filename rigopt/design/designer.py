@@ -258,7 +258,7 @@ def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRi
 
 
 #: Cameras beyond the reference's count a design with required fields may use by default (near-field cameras).
-FIELD_EXTRA_CAMERAS = 2
+FIELD_EXTRA_CAMERAS = 4
 
 
 def default_counts(n_reference: int, with_fields: bool) -> tuple[int, int]:
