@@ -310,3 +310,19 @@ def test_an_unseeable_field_point_is_named_with_the_field(box_car):
                               min_coverage=0)
     with pytest.raises(DesignInfeasible, match=r"r158 field at x .* height .*--require|ring"):
         design_rig(box_car, r1_on_its_vehicle(), load_weights("joint"), settings)
+
+
+def test_a_camera_may_slide_only_as_far_as_its_disc_stays_mountable(firetruck):
+    from rigopt.design.refine import free_radii
+    from rigopt.mounting.practice import on_wheels
+    from rigopt.mounting.sampling import sample_zone_points
+
+    vehicle, reach = firetruck.vehicle, 0.3
+    points, normals, zones = sample_zone_points(vehicle, 0.4)
+    cameras = tuple(Camera(f"c{k}", p, np.eye(3), 60.0, zone=z) for k, (p, z) in enumerate(zip(points, zones)))
+    radii = free_radii(Rig("r", "x", cameras), normals, vehicle, reach)
+    assert np.all((radii >= 0) & (radii <= reach))
+    assert np.any(radii > 0) and np.any(radii < reach)
+    # a lens less than the reach from a wheel's keep-out (its arch) cannot slide the whole reach
+    near_wheel = np.array([bool(w) for w in on_wheels(vehicle, points, 0.05 + reach)])
+    assert near_wheel.any() and np.all(radii[near_wheel] < reach)
