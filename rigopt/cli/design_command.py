@@ -105,11 +105,13 @@ def design_command(
     min_height: Optional[float] = typer.Option(None, "--min-height", min=0.0, max=5.0,
                                                help=MIN_HEIGHT_HELP),
     no_trailer: bool = typer.Option(False, "--no-trailer", help=NO_TRAILER_HELP),
-    require: str = typer.Option("none", "--require",
-                                help="Regulation fields the design must see: comma-separated r158, r151, r159, "
-                                     "r46-iv, r46-v, r46-vi, dvs (':lht' for left-hand traffic), 'default' (the "
-                                     "vehicle category's: trucks r151,r159,r158; cars r158) or 'none' (the "
-                                     "category's fields are then reported only). See docs/regulations.md."),
+    require: Optional[str] = typer.Option(None, "--require",
+                                          help="Regulation fields the design must see: comma-separated r158, r151, "
+                                               "r159, r46-iv, r46-v, r46-vi, dvs (':lht' for left-hand traffic), "
+                                               "'default' (the vehicle category's: trucks r151,r159,r158; cars "
+                                               "r158) or 'none'. Without it the category's fields are required "
+                                               "unless no design sees them all (then reported). See "
+                                               "docs/regulations.md."),
     cost_weight: float = typer.Option(0.0, "--cost-weight", min=0.0,
                                       help="Weight of the cameras' mean relative mounting cost (zone cost, +0.5 in "
                                            "tyre spray) added to the calibrated RigCD; 0 reports it only."),
@@ -163,7 +165,8 @@ def design_command(
     if not references:
         raise RigoptError("--ref needs at least one rig")
     target, calibration = load_vehicle(vehicle), load_weights(weights, metric)
-    parse_require(require, target)  # a bad --require is an error before any work
+    if require is not None:
+        parse_require(require, target)  # a bad --require is an error before any work
     note_fallback(calibration)
     label = "+".join(r.rig.name for r in references)
     out = check_out_folder(out or Path(f"design-{target.name}-{label}"), force=force)
@@ -198,6 +201,8 @@ def design_command(
               "their predicted drops are less certain than the intervals say", file=sys.stderr)
     solver = summary["solver"]
     print(f"{summary['symmetry']['describe']}", file=sys.stderr)
+    if summary["regions_fallback"]:
+        print(f"rigopt: note: {summary['regions_fallback']}", file=sys.stderr)
     for region in summary["regions"]:
         state = "required" if summary["regions_required"] else "reported"
         print(f"field {region['key']} ({state}): {region['covered_frac']:.1%} of its points seen, unseen area "

@@ -207,32 +207,35 @@ def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRi
     reference = rigs[0]
     progress(f"coverage requirements from {', '.join(r.name for r in rigs)} and the required fields")
     requirements = design_requirements(references, vehicle, settings)
-    counts = settings.cameras or default_counts(len(reference), bool(requirements.presets))
-    symmetry_fallback = None
-    try:
-        prepared, milp = _discrete_stage(vehicle, rigs, calibration, settings, requirements, counts, progress)
-    except DesignInfeasible as error:
-        if settings.symmetric is not None or not settings.is_symmetric_on(vehicle):
-            raise
-        symmetry_fallback = f"no symmetric design meets the requirements ({error}); designed without symmetry"
-        progress(symmetry_fallback)
-        settings = replace(settings, symmetric=False)
-        prepared, milp = _discrete_stage(vehicle, rigs, calibration, settings, requirements, counts, progress)
-
-    for round in range(MAX_FIELD_ROUNDS + 1):  # the MILP's rig checked densely over the required fields
-        regions = field_coverage(milp.rig, vehicle, requirements.presets, settings)
-        unseen = [(r.key, _spread(r.unseen, MAX_NEW_FIELD_POINTS)) for r in regions if len(r.unseen)]
-        if not unseen:
+    # What the design must have, and what it gives up, in this order, when nothing meets it: mirrored pairs
+    # (unless asked for or refused) and the category's fields (unless named).
+    auto_symmetry = settings.symmetric is None and settings.is_symmetric_on(vehicle)
+    auto_fields = settings.require is None and bool(requirements.presets)
+    attempts = [(settings.is_symmetric_on(vehicle), True)] + [(False, True)] * auto_symmetry
+    attempts += [(s, False) for s, _ in attempts] if auto_fields else []
+    prepared_for, reasons = {}, []
+    for k, (symmetric, with_fields) in enumerate(attempts):
+        tried = replace(settings, symmetric=symmetric, require=settings.require if with_fields else "none")
+        needs = requirements if with_fields else requirements.sector_only()
+        counts = settings.cameras or default_counts(len(reference), with_fields and bool(requirements.presets))
+        try:
+            if symmetric not in prepared_for:
+                prepared_for[symmetric] = prepare(vehicle, rigs, calibration, tried, requirements.points, progress)
+            prepared, needs, milp = _select_seeing_fields(prepared_for[symmetric], vehicle, calibration, needs, counts,
+                                                          tried, progress)
             break
-        if round == MAX_FIELD_ROUNDS:
-            raise DesignInfeasible(f"after {MAX_FIELD_ROUNDS} rounds the design still misses field points in the "
-                                   f"dense check ({', '.join(f'{k}: {len(u)}' for k, u in unseen)}); allow more "
-                                   "cameras (--cameras), zones or pitch angles, or fewer fields (--require)")
-        points = np.concatenate([u for _, u in unseen])
-        progress(f"{len(points)} field points unseen in the dense check; solving again with them required")
-        requirements = requirements.extended(points, [label for key, u in unseen for label in field_labels(key, u)])
-        prepared = with_points(prepared, vehicle, points, settings)
-        milp = select_valid(prepared, vehicle, calibration, requirements, counts, settings, progress)
+        except DesignInfeasible as error:
+            if k == len(attempts) - 1:
+                raise
+            reasons.append(str(error))
+            progress(f"no design with{'' if symmetric else 'out'} mirrored pairs"
+                     f"{' seeing the fields' if with_fields else ''} ({error}); trying with less")
+    settings, requirements = tried, needs
+    symmetry_fallback = (f"no symmetric design meets the requirements ({reasons[0]}); designed without symmetry"
+                         if auto_symmetry and not symmetric else None)
+    fields_fallback = (f"no design sees all of the vehicle category's fields "
+                       f"{', '.join(p.key for p in requirements.presets)} ({reasons[-1]}); they are reported, not "
+                       "required" if auto_fields and not with_fields else None)
 
     progress("validating the design: mount checks, coverage, RigCD")
     design = summarise(milp.rig, vehicle, rigs, calibration, requirements, settings, milp.check)
@@ -245,7 +248,8 @@ def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRi
         refinement = _refined(design, vehicle, reference, calibration, requirements, prepared.spacing, settings)
         if refinement.accepted:
             design = refinement.refined
-    regions = field_coverage(design.rig, vehicle, requirements.presets or default_presets(vehicle), settings)
+    required = requirements.presets if settings.require != "none" else ()
+    regions = field_coverage(design.rig, vehicle, required or default_presets(vehicle), settings)
 
     reference_coverage = rig_coverage_matrix(reference, references[0].vehicle,
                                              settings.coverage).sees.any(axis=0).mean()
@@ -254,7 +258,8 @@ def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRi
         summarise(naive, vehicle, rigs, calibration, requirements, settings) if naive else None,
         tuple(summarise(rig, vehicle, rigs, calibration, requirements, settings) for rig in compare_with))
     return DesignResult(design, milp, refinement, comparisons, float(reference_coverage), vehicle, references,
-                        calibration, settings, time.perf_counter() - start, symmetry_fallback, regions)
+                        calibration, settings, time.perf_counter() - start, symmetry_fallback, regions,
+                        fields_fallback)
 
 
 #: Cameras beyond the reference's count a design with required fields may use by default (near-field cameras).
@@ -289,10 +294,28 @@ def _best_coverers(sees: np.ndarray, needed: np.ndarray, count: int) -> np.ndarr
     return np.flatnonzero(seen > 0)[np.argsort(-seen[seen > 0], kind="stable")[:count]]
 
 
-def _discrete_stage(vehicle, rigs, calibration, settings, requirements, counts, progress):
-    """Candidates and the valid MILP selection meeting ``requirements``: (Prepared, MilpStage)."""
-    prepared = prepare(vehicle, rigs, calibration, settings, requirements.points, progress)
-    return prepared, select_valid(prepared, vehicle, calibration, requirements, counts, settings, progress)
+def _select_seeing_fields(prepared: Prepared, vehicle: Vehicle, calibration: Calibration, requirements: Requirements,
+                          counts: tuple[int, int], settings: DesignSettings, progress: Callable[[str], None]):
+    """The valid MILP selection meeting ``requirements``, its required fields checked densely: unseen field
+    points become requirements and the MILP is solved again (MAX_FIELD_ROUNDS). Returns (Prepared,
+    Requirements, MilpStage), both extended by the points added."""
+    milp = select_valid(prepared, vehicle, calibration, requirements, counts, settings, progress)
+    presets = requirements.presets if settings.require != "none" else ()
+    for round in range(MAX_FIELD_ROUNDS + 1):
+        regions = field_coverage(milp.rig, vehicle, presets, settings)
+        unseen = [(r.key, _spread(r.unseen, MAX_NEW_FIELD_POINTS)) for r in regions if len(r.unseen)]
+        if not unseen:
+            break
+        if round == MAX_FIELD_ROUNDS:
+            raise DesignInfeasible(f"after {MAX_FIELD_ROUNDS} rounds the design still misses field points in the "
+                                   f"dense check ({', '.join(f'{k}: {len(u)}' for k, u in unseen)}); allow more "
+                                   "cameras (--cameras), zones or pitch angles, or fewer fields (--require)")
+        points = np.concatenate([u for _, u in unseen])
+        progress(f"{len(points)} field points unseen in the dense check; solving again with them required")
+        requirements = requirements.extended(points, [label for key, u in unseen for label in field_labels(key, u)])
+        prepared = with_points(prepared, vehicle, points, settings)
+        milp = select_valid(prepared, vehicle, calibration, requirements, counts, settings, progress)
+    return prepared, requirements, milp
 
 
 def _refined(design: RigSummary, vehicle: Vehicle, reference: Rig, calibration: Calibration,

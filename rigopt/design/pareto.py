@@ -1,8 +1,8 @@
 """The trade-off sweep of ``rigopt design --pareto``: camera counts x coverage levels.
 
 Every (count, level) pair is solved as its own MILP on one shared candidate set (no continuous
-refinement, so the sweep stays quick), meeting the required regulation fields (``--require``) at every
-level. Each design is judged by its predicted drop, its near field (ground seen on the 2 m ring, unseen
+refinement, so the sweep stays quick), meeting the regulation fields named by ``--require`` at every
+level (without it none). Each design is judged by its predicted drop, its near field (ground seen on the 2 m ring, unseen
 ground within 5 m of the body), its coverage of the vehicle category's regulation fields and its relative
 mounting cost (zone costs and tyre spray, :func:`rigopt.mounting.practice.mounting_costs`). A point is on
 the frontier when no other feasible point is at least as good in predicted drop (lower), unseen near-field
@@ -59,6 +59,8 @@ def pareto_designs(vehicle: Vehicle, references: Sequence[ReferenceRig], calibra
     each on its own vehicle."""
     rigs = [r.rig for r in references]
     base = design_requirements(references, vehicle, settings)
+    if settings.require is None:  # the sweep requires fields only when named; the category's are reported
+        base, settings = base.sector_only(), replace(settings, require="none")
     prepared = prepare(vehicle, rigs, calibration, settings, base.points, progress)
     points = []
     for level in levels:

@@ -103,8 +103,8 @@ def fleet_requirements(references: Sequence[ReferenceRig], settings: DesignSetti
 
 
 def required_presets(vehicle: Vehicle, settings: DesignSettings) -> tuple[RegionPreset, ...]:
-    """The regulation presets ``settings.require`` names for ``vehicle`` ('default': its category's)."""
-    return parse_require(settings.require, vehicle)
+    """The regulation presets ``settings.require`` names for ``vehicle`` ('default' or None: its category's)."""
+    return parse_require(settings.require or "default", vehicle)
 
 
 def design_requirements(references: Sequence[ReferenceRig], vehicle: Vehicle,

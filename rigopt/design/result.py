@@ -110,3 +110,5 @@ class DesignResult:
     regions: tuple = ()
     """The design's dense coverage (RegionCoverage each) of the required regulation fields, or, when none
     is required, of the vehicle category's default fields (reported only)."""
+    fields_fallback: str | None = None
+    """Why the vehicle category's fields, required by default, were dropped (None when they were not)."""

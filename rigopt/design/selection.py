@@ -86,9 +86,9 @@ def essential_requirements(sees: np.ndarray, required: np.ndarray) -> np.ndarray
     order = np.lexsort((q, -required[q]))  # most needed first, then by index
     _, first = np.unique(packed[order], axis=0, return_index=True)
     q = np.sort(q[order[first]])
-    columns = sparse.csc_matrix(sees[:, q].astype(np.int32))
-    size = np.asarray(columns.sum(axis=0)).ravel()
-    common = (columns.T @ columns).toarray()
+    columns = sees[:, q].astype(np.float32)  # counts stay exact in float32 (below 2^24 candidates)
+    size = columns.sum(axis=0)
+    common = columns.T @ columns  # (k, k): candidates that see both points (one BLAS product)
     implies = (common == size[:, None]) & (required[q][:, None] >= required[q][None, :])  # [a, b]: a implies b
     np.fill_diagonal(implies, False)
     return q[~implies.any(axis=0)]

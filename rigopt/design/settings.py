@@ -227,10 +227,11 @@ class DesignSettings:
     """The mount checks every camera of a design passes."""
     max_body_fraction: float | None = 0.10
     """Largest share of a designed camera's image that may show the ego body (None: no limit)."""
-    require: str = "none"
+    require: str | None = None
     """The regulation fields the design must see (:func:`rigopt.coverage.regulations.parse_require`):
     comma-separated preset keys, ``default`` (the vehicle category's: trucks r151, r159, r158; cars r158) or
-    ``none`` (the category's fields are then reported, not required)."""
+    ``none``; None (the default) requires the category's fields unless no design sees them all, when they
+    are dropped with a note and reported."""
     cost_weight: float = 0.0
     """Weight of the chosen cameras' mean relative mounting cost (zone cost, tyre spray) added to the
     calibrated RigCD in the MILP's objective (0: the cost is reported only)."""

@@ -120,6 +120,7 @@ def design_dict(result: DesignResult, rig_file: Path | None) -> dict:
         "cameras": camera_rows(design.rig, reference, breakdown.pairs, result.vehicle),
         "symmetry": symmetry_dict(result),
         "regions_required": result.settings.require != "none",
+        "regions_fallback": result.fields_fallback,
         "regions": regions_dict(result.regions),
         "rigcd_breakdown": breakdown_dict(breakdown),
         "comparisons": {

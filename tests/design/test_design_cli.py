@@ -104,7 +104,11 @@ def test_each_predicted_drop_has_its_interval_and_the_far_benchmark_rig_is_flagg
 
 def test_json_values_are_plausible(design_run):
     summary, _, _ = design_run
-    assert summary["n_cameras"] == 8
+    assert 8 <= summary["n_cameras"] <= 12  # R1's 8, up to 4 near-field cameras for the firetruck's fields
+    assert summary["regions_required"] and summary["regions_fallback"] is None
+    assert [r["key"] for r in summary["regions"]] == ["r151", "r159", "r158"]
+    assert all(r["covered"] and r["covered_frac"] == 1.0 for r in summary["regions"])
+    assert summary["symmetry"]["required"] and summary["symmetry"]["symmetric"]
     assert 0.0 < summary["coverage"] <= 1.0 and 0.0 < summary["reference_coverage"] <= 1.0
     assert summary["rigcd"] > 0 and summary["predicted_drop"] > 0
     assert summary["solver"]["milp_status"] == "optimal"
@@ -191,8 +195,8 @@ def test_each_camera_reports_its_carla_pose_and_the_reference_camera_it_matches(
 
     summary, _, _ = design_run
     reference = {c.id for c in load_rig("R1").cameras}
-    matched = [c["matched_reference_camera"] for c in summary["cameras"]]
-    assert sorted(m["id"] for m in matched) == sorted(reference)  # 8 cameras, one partner each
+    matched = [c["matched_reference_camera"] for c in summary["cameras"] if c["matched_reference_camera"]]
+    assert sorted(m["id"] for m in matched) == sorted(reference)  # every reference camera has one partner
     for camera in summary["cameras"]:
         location, _ = iso_to_carla(np.array([camera["position"]]), np.eye(3)[None])
         assert camera["carla"]["location_m"] == pytest.approx(location[0].tolist())
