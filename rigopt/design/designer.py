@@ -248,8 +248,8 @@ def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRi
         refinement = _refined(design, vehicle, reference, calibration, requirements, prepared.spacing, settings)
         if refinement.accepted:
             design = refinement.refined
-    required = requirements.presets if settings.require != "none" else ()
-    regions = field_coverage(design.rig, vehicle, required or default_presets(vehicle), settings)
+    regions = field_coverage(design.rig, vehicle, required_fields(requirements, settings) or default_presets(vehicle),
+                             settings)
 
     reference_coverage = rig_coverage_matrix(reference, references[0].vehicle,
                                              settings.coverage).sees.any(axis=0).mean()
@@ -271,6 +271,12 @@ def default_counts(n_reference: int, with_fields: bool) -> tuple[int, int]:
     FIELD_EXTRA_CAMERAS more when regulation fields are required (a truck's near field needs cameras of its
     own: the count term of RigCD weighs them against the matching)."""
     return n_reference, n_reference + (FIELD_EXTRA_CAMERAS if with_fields else 0)
+
+
+def required_fields(requirements: Requirements, settings: DesignSettings) -> tuple:
+    """The regulation presets a design must see: the requirements' fields, none when ``settings`` says so
+    (``require="none"``, also after the category's fields were dropped)."""
+    return requirements.presets if settings.require != "none" else ()
 
 
 def field_coverage(rig: Rig, vehicle: Vehicle, presets, settings: DesignSettings):
@@ -300,7 +306,7 @@ def _select_seeing_fields(prepared: Prepared, vehicle: Vehicle, calibration: Cal
     points become requirements and the MILP is solved again (MAX_FIELD_ROUNDS). Returns (Prepared,
     Requirements, MilpStage), both extended by the points added."""
     milp = select_valid(prepared, vehicle, calibration, requirements, counts, settings, progress)
-    presets = requirements.presets if settings.require != "none" else ()
+    presets = required_fields(requirements, settings)
     for round in range(MAX_FIELD_ROUNDS + 1):
         regions = field_coverage(milp.rig, vehicle, presets, settings)
         unseen = [(r.key, _spread(r.unseen, MAX_NEW_FIELD_POINTS)) for r in regions if len(r.unseen)]
@@ -355,7 +361,8 @@ def _refined(design: RigSummary, vehicle: Vehicle, reference: Rig, calibration: 
     if not refined.meets_requirements:
         return RefinementReport(f"rejected: IPOPT {outcome.status}, refined rig loses required coverage",
                                 solver_status=outcome.status, cameras_moved=moved, refined=refined)
-    lost = [r.key for r in field_coverage(refined_rig, vehicle, requirements.presets, settings) if not r.covered]
+    lost = [r.key for r in field_coverage(refined_rig, vehicle, required_fields(requirements, settings), settings)
+            if not r.covered]
     if lost:
         return RefinementReport(f"rejected: IPOPT {outcome.status}, refined rig loses part of the field(s) "
                                 f"{', '.join(lost)}", solver_status=outcome.status, cameras_moved=moved, refined=refined)

@@ -318,6 +318,15 @@ def test_fields_no_design_sees_are_dropped_with_a_note_and_reported(box_car):
         design_rig(box_car, r1_on_its_vehicle(), load_weights("joint"), replace(settings, require="r158"))
 
 
+def test_a_design_whose_fields_were_dropped_is_the_design_without_fields(box_car):
+    settings = DesignSettings(lenses=(90.0, 120.0), yaw_step_deg=30.0, pitches_deg=(-20.0, 0.0))
+    dropped = design_rig(box_car, r1_on_its_vehicle(), load_weights("joint"), settings)
+    without = design_rig(box_car, r1_on_its_vehicle(), load_weights("joint"), replace(settings, require="none"))
+    assert dropped.fields_fallback and without.fields_fallback is None
+    assert dropped.refinement.status == without.refinement.status  # the dropped field does not veto the refinement
+    assert dropped.design.prediction.rigcd == pytest.approx(without.design.prediction.rigcd, abs=1e-9)
+
+
 def test_an_unseeable_field_point_is_named_with_the_field(box_car):
     settings = DesignSettings(zones=("front",), require="r158", lenses=(60.0,), yaw_step_deg=30.0, refine=False,
                               min_coverage=0)
