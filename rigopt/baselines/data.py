@@ -6,7 +6,7 @@ order of their sorted channel names)::
     images      (B, N, 3, H, W) float32, RGB scaled to [0, 1]
     intrinsics  (B, N, 3, 3)    float32, pixels of the (possibly resized) images
     cam_to_ego  (B, N, 4, 4)    float32, camera optical frame (x right, y down, z forward) -> ego, metres
-    boxes       list of B BoxTargets (ego frame, ISO 8855: x forward, y left, z up)
+    boxes       list of B BoxTargets (ego frame, ISO 8855: x forward, y left, z up), the boxes the rig sees
 
 Images are decoded once and kept as uint8 in memory (a 480-sample, 8-camera split at 160 x 90 is 170 MB).
 """
@@ -120,9 +120,11 @@ class RigSplit:
         return self._images[index]
 
     def targets(self, index: int) -> BoxTargets:
-        """The annotated boxes of sample ``index`` (evaluated classes, within ``max_range`` m of the ego)."""
+        """The training targets of sample ``index``: its annotated boxes of evaluated classes within
+        ``max_range`` m of the ego that some camera of the rig sees (``TrainingSample.visible``). Objects
+        in the rig's blind zones are annotated (evaluation counts them) but not taught: no image shows them."""
         s = self.samples[index]
-        keep = (s.classes >= 0) & (np.hypot(s.centers[:, 0], s.centers[:, 1]) <= self.max_range)
+        keep = (s.classes >= 0) & (np.hypot(s.centers[:, 0], s.centers[:, 1]) <= self.max_range) & s.visible
         return BoxTargets(torch.tensor(s.centers[keep], dtype=torch.float32),
                           torch.tensor(s.sizes[keep], dtype=torch.float32),
                           torch.tensor(s.yaws[keep], dtype=torch.float32),

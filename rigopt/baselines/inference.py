@@ -2,7 +2,9 @@
 (``rigopt.bench.evaluation``).
 
 Both ground truth and detections are kept within ``EVAL_RANGE`` m (bird's-eye distance) of the ego, as
-nuScenes' evaluation keeps each class within its range; the detectors' bird's-eye square covers it.
+nuScenes' evaluation keeps each class within its range; the detectors' bird's-eye square covers it. The
+ground truth is every annotated object with its visibility under the split's rig, so that one matching
+gives both the fixed-set and the visible-only score.
 """
 
 from __future__ import annotations

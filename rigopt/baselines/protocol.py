@@ -6,9 +6,13 @@ Folders:
   out    ``<out>/<model>/trained_on_<rig>.json``, the benchmark's own layout::
 
              {"model": "lss", "trained_on": "R1",
-              "results": {"R1-c6": {"metrics": {"mAP": 0.31, "raw": {"car_AP_dist_0.5": ...}}}, ...}}
+              "results": {"R1-c6": {"metrics": {"mAP": 0.31, "mAP_visible": 0.35,
+                                                "raw": {"car_AP_dist_0.5": ...}, "raw_visible": {...}}}, ...}}
 
-         which ``rigopt calibrate --results <out>`` reads unchanged.
+         which ``rigopt calibrate --results <out>`` reads unchanged. ``mAP`` and ``raw`` score the fixed
+         set (every annotated object, an object in the test rig's blind zone included), ``mAP_visible`` and
+         ``raw_visible`` the objects the test rig sees (``rigopt.bench.evaluation``). Results files made
+         before the fixed set hold only ``mAP`` and ``raw`` (then scored against the seen objects).
 
 A finished results file is skipped when the matrix is run again, and training resumes from its
 checkpoint, so an interrupted matrix picks up where it stopped. With a Ray address each training run
@@ -48,7 +52,8 @@ def train_on(data, rig: str, config: ModelConfig, runs, device: str = "cpu", see
 
 def evaluate_on(checkpoint, data, rig: str, device: str = "cpu", family: str | None = None,
                 split_name: str = TEST_SPLIT) -> dict:
-    """The benchmark's metrics dict ({"mAP", "raw"}) of a checkpoint on ``<data>/<rig>/<split_name>``."""
+    """The benchmark's metrics dict ({"mAP", "mAP_visible", "raw", "raw_visible"}; see
+    ``MatchedDetections.metrics``) of a checkpoint on ``<data>/<rig>/<split_name>``."""
     return evaluate_on_rigs(checkpoint, data, [rig], device, family, split_name)[rig]
 
 
@@ -56,7 +61,7 @@ def evaluate_on_rigs(checkpoint, data, rigs: Sequence[str], device: str = "cpu",
                      split_name: str = TEST_SPLIT) -> dict:
     """{rig: metrics dict} of a checkpoint, loaded once, on ``<data>/<rig>/<split_name>`` of every rig."""
     matched = match_on_rigs(checkpoint, data, rigs, device, family, split_name)
-    return {rig: matched[rig].evaluation().to_dict() for rig in rigs}
+    return {rig: matched[rig].metrics() for rig in rigs}
 
 
 def match_on_rigs(checkpoint, data, rigs: Sequence[str], device: str = "cpu", family: str | None = None,

@@ -7,6 +7,10 @@ reference is evaluated on each; the measured relative drop (mAP(ref -> ref) - mA
 mAP(ref -> ref) stands beside the drop that the calibrated RigCD predicts. The test frames are resampled
 in blocks (paired across rigs) for a 95 % interval of each drop and of the design's drop minus each other
 rig's: the noise of one test split, not of training.
+
+mAP is the fixed-set score (every rig is scored against the same objects, so a blind zone costs what
+it misses); the visible-only mAP and its drop (``mAP_visible``, ``measured_drop_visible``) stand beside
+it, so that the loss from coverage (the gap between the two) and from viewpoint can be told apart.
 """
 
 from __future__ import annotations
@@ -99,16 +103,23 @@ def validate_design(design: Rig, reference: str, family: str, data, calibration:
     test_rigs = [reference_rig.name, *names]
     matched = match_on_rigs(checkpoint, data, test_rigs, device, family)
     maps = np.array([matched[name].evaluation().map for name in test_rigs])
+    maps_visible = np.array([matched[name].evaluation(visible_only=True).map for name in test_rigs])
     blocks = sample_blocks(RigSplit(data, reference_rig.name, TEST_SPLIT).samples, BLOCK_SAMPLES)
     progress(f"bootstrapping the drops over {len(blocks)} blocks of test samples")
-    resampled = resampled_maps([matched[name] for name in test_rigs], blocks, resamples, seed)
+    runs_matched = [matched[name] for name in test_rigs]
+    resampled = resampled_maps(runs_matched, blocks, resamples, seed)
+    resampled_visible = resampled_maps(runs_matched, blocks, resamples, seed, visible_only=True)
     drops, resampled_drops = relative_drops(maps), relative_drops(resampled)
+    drops_visible, resampled_drops_visible = relative_drops(maps_visible), relative_drops(resampled_visible)
     predictions = predict_transfer(reference_rig, [rig for _, rig in rigs], calibration)
     entries = []
     for k, ((role, rig), prediction) in enumerate(zip(rigs, predictions), start=1):
         predicted = prediction.to_dict()
         entries.append({"role": role, "rig": rig.name, "n_cameras": len(rig), "mAP": finite_or_none(maps[k]),
+                        "mAP_visible": finite_or_none(maps_visible[k]),
                         "measured_drop": finite_or_none(drops[k]), "measured_drop_ci": interval(resampled_drops[:, k]),
+                        "measured_drop_visible": finite_or_none(drops_visible[k]),
+                        "measured_drop_visible_ci": interval(resampled_drops_visible[:, k]),
                         "predicted_drop": prediction.predicted_drop,
                         "predicted_interval": predicted["interval"], "extrapolation": predicted["extrapolation"],
                         "rigcd": prediction.rigcd})
@@ -116,6 +127,7 @@ def validate_design(design: Rig, reference: str, family: str, data, calibration:
                      "ci": interval(resampled_drops[:, 1] - resampled_drops[:, k])} for k in range(2, len(test_rigs))]
     return {"reference": reference_rig.name, "model": family, "checkpoint": str(checkpoint),
             "metric": calibration.metric, "weights": calibration.name, "reference_mAP": finite_or_none(maps[0]),
+            "reference_mAP_visible": finite_or_none(maps_visible[0]),
             "test_scenes": len(scenes), "image_size": list(size), "rigs": entries,
             "design_minus": design_minus,
             "bootstrap": {"resamples": resamples, "seed": seed, "blocks": len(blocks), "block_samples": BLOCK_SAMPLES}}

@@ -10,6 +10,12 @@ Conventions are nuScenes': ``ego_pose`` and ``sample_annotation`` are in the glo
 quaternions are (w, x, y, z), annotation sizes are (width, length, height) metres, and a camera's
 ``calibrated_sensor`` maps its optical frame (z forward, x right, y down) into the ego frame. The reader
 serves rigopt's own data and the real benchmark's folders alike.
+
+One field is rigopt's own: each ``sample_annotation`` record of rigopt's data carries ``visible_fraction``,
+the float in [0, 1] its ``visibility_token`` is binned from; 0 marks an object that no camera of the rig
+sees (nuScenes' lowest level, v0-40, cannot tell it from a barely visible one). nuScenes loaders ignore the
+extra key. A record without it (the real benchmark's data, or rigopt's data made before the field, when
+only seen objects were annotated) reads as visible.
 """
 
 from __future__ import annotations
@@ -69,7 +75,8 @@ class TrainingSample:
     images : {channel: path}; intrinsics : {channel: (3, 3)}; T_ego_cam : {channel: (4, 4)} optical frame
     -> ego; T_world_ego (4, 4); boxes in the ego frame: centers (n, 3) m, sizes (n, 3) (length, width,
     height) m, yaws (n,) rad, classes (n,) int into CLASSES, visibility (n,) str tokens, instances (n,) str
-    instance tokens (the same object across samples and, for rigopt's data, across rigs).
+    instance tokens (the same object across samples and, for rigopt's data, across rigs);
+    visible_fractions (n,) float in [0, 1] (NaN where the dataset does not record it), None when not read.
     """
 
     token: str
@@ -85,6 +92,14 @@ class TrainingSample:
     classes: np.ndarray
     visibility: np.ndarray
     instances: np.ndarray
+    visible_fractions: np.ndarray | None = None
+
+    @property
+    def visible(self) -> np.ndarray:
+        """(n,) bool: the boxes some camera of the rig sees (fraction > 0; unrecorded fractions count as seen)."""
+        if self.visible_fractions is None:
+            return np.ones(len(self.classes), dtype=bool)
+        return ~(np.asarray(self.visible_fractions, dtype=float) <= 0)
 
 
 def _transform(record: dict) -> np.ndarray:
@@ -154,8 +169,20 @@ def read_dataset(root, version: str | None = None) -> list[TrainingSample]:
         samples.append(TrainingSample(
             sample["token"], scene_name.get(sample["scene_token"], ""), int(sample["timestamp"]), images, intrinsics,
             extrinsics, T_world_ego, centers, sizes, np.angle(np.exp(1j * (world_yaw - ego_yaw))), classes,
-            np.array([b.get("visibility_token", "") for b in boxes]), np.array([b["instance_token"] for b in boxes])))
+            np.array([b.get("visibility_token", "") for b in boxes]), np.array([b["instance_token"] for b in boxes]),
+            np.array([_fraction(b) for b in boxes], dtype=float)))
     return samples
+
+
+def _fraction(record: dict) -> float:
+    """An annotation's ``visible_fraction`` (NaN when the record has none)."""
+    value = record.get("visible_fraction")
+    if value is None:
+        return float("nan")
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 <= value <= 1:
+        raise DataError(f"sample_annotation {record.get('token', '?')}: visible_fraction must be a number in [0, 1], "
+                        f"got {value!r}")
+    return float(value)
 
 
 def _yaw(rotation: np.ndarray) -> float:

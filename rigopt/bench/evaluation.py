@@ -20,6 +20,15 @@ For each class and each distance threshold ``d`` (default 0.5, 1, 2 and 4 m):
 5. AP keeps the points with r > 0.1 (indices 11..100), subtracts 0.1 from precision, clips at 0,
    averages and divides by 0.9, so a perfect ranking gives 1 and no true positive gives 0.
 
+Two ground-truth sets, one matching. The *fixed set* counts every annotated object, seen by the rig or
+not (rigopt's ground truth is the same for every rig), so an object in a blind zone that no detection
+finds is a missed detection: this is the reported ``mAP``. The *visible-only* score (``mAP_visible``)
+counts only the objects some camera sees (``GroundTruth.visible``); the matching of step 2 is the same,
+and a detection matched there to an unseen object is left out of the ranking (neither a true nor a false
+positive), as nuScenes and COCO treat detections on ignored objects. A detector that finds every seen
+object and nothing else thus gets visible-only AP 1 and a fixed-set AP that falls with the unseen share:
+the gap between the two is the coverage effect, the visible-only score the viewpoint effect.
+
 A class without ground truth has AP NaN and is left out of the mean; a class with ground truth but no
 detection has AP 0. mAP is the mean over the classes with ground truth of the class's mean AP over the
 thresholds (NaN when no class has ground truth).
@@ -76,30 +85,38 @@ class SamplePrediction:
 @dataclass(frozen=True)
 class GroundTruth:
     """n ground-truth objects: sample (n,) int or str id; cls (n,) int class index; xy (n, 2) float m centre
-    in the ego frame."""
+    in the ego frame; visible (n,) bool, whether some camera of the rig sees the object (None: all do)."""
 
     sample: np.ndarray
     cls: np.ndarray
     xy: np.ndarray
+    visible: np.ndarray | None = None
 
     def __len__(self) -> int:
         return len(self.cls)
 
+    def seen(self) -> np.ndarray:
+        """(n,) bool ``visible``, all True when it is None."""
+        return np.ones(len(self.cls), dtype=bool) if self.visible is None else np.asarray(self.visible, dtype=bool)
+
     def within(self, radius: float = EVAL_RANGE) -> GroundTruth:
         """The objects whose centre lies within ``radius`` m (bird's-eye distance) of the ego."""
         keep = np.hypot(self.xy[:, 0], self.xy[:, 1]) <= radius
-        return GroundTruth(self.sample[keep], self.cls[keep], self.xy[keep])
+        return GroundTruth(self.sample[keep], self.cls[keep], self.xy[keep],
+                           None if self.visible is None else np.asarray(self.visible)[keep])
 
     @classmethod
     def from_samples(cls, samples: Iterable[TrainingSample]) -> GroundTruth:
-        """The boxes of every sample, keyed by its token; boxes of unevaluated categories (class -1) are dropped."""
+        """The boxes of every sample, keyed by its token, with their visibility (``TrainingSample.visible``);
+        boxes of unevaluated categories (class -1) are dropped."""
         samples = list(samples)
-        columns = [(np.asarray(s.classes, dtype=int).reshape(-1), _centers_xy(s.centers, f"sample {s.token!r}"))
-                   for s in samples]
-        keep = [c >= 0 for c, _ in columns]
+        columns = [(np.asarray(s.classes, dtype=int).reshape(-1), _centers_xy(s.centers, f"sample {s.token!r}"),
+                    s.visible) for s in samples]
+        keep = [c >= 0 for c, _, _ in columns]
         return cls(np.array([s.token for s, k in zip(samples, keep) for _ in range(int(k.sum()))], dtype=str),
-                   np.concatenate([c[k] for (c, _), k in zip(columns, keep)] + [np.zeros(0, dtype=int)]),
-                   np.concatenate([xy[k] for (_, xy), k in zip(columns, keep)] + [np.zeros((0, 2))]))
+                   np.concatenate([c[k] for (c, _, _), k in zip(columns, keep)] + [np.zeros(0, dtype=int)]),
+                   np.concatenate([xy[k] for (_, xy, _), k in zip(columns, keep)] + [np.zeros((0, 2))]),
+                   np.concatenate([v[k] for (_, _, v), k in zip(columns, keep)] + [np.zeros(0, dtype=bool)]))
 
 
 @dataclass(frozen=True)
@@ -139,7 +156,8 @@ class Evaluation:
 
     ``classes`` (C,) names and ``thresholds`` (T,) m as evaluated; ``ap`` (C, T) float, NaN rows for
     classes without ground truth; ``per_class_ap`` (C,) the mean of each row; ``map`` the mean of
-    ``per_class_ap`` over the classes with ground truth (NaN if none); ``n_ground_truth`` (C,) int.
+    ``per_class_ap`` over the classes with ground truth (NaN if none); ``n_ground_truth`` (C,) int, the
+    ground truths counted (every object for the fixed set, the seen ones for the visible-only score).
     """
 
     map: float
@@ -157,13 +175,14 @@ class Evaluation:
 
 
 def evaluate(detections: Detections, ground_truth: GroundTruth, classes: Sequence[str] = CLASSES,
-             thresholds: Sequence[float] = DEFAULT_THRESHOLDS) -> Evaluation:
-    """Centre-distance AP (classes x thresholds) and mAP of ``detections`` against ``ground_truth``.
+             thresholds: Sequence[float] = DEFAULT_THRESHOLDS, visible_only: bool = False) -> Evaluation:
+    """Centre-distance AP (classes x thresholds) and mAP of ``detections`` against ``ground_truth``: the
+    fixed set, or with ``visible_only`` the seen objects only (rules in the module docstring).
 
     Raises DataError for arrays of mismatched lengths, non-finite centres or scores, class indices outside
     ``classes``, sample ids of incompatible kinds (int vs str), or non-positive thresholds.
     """
-    return match(detections, ground_truth, classes, thresholds).evaluation()
+    return match(detections, ground_truth, classes, thresholds).evaluation(visible_only=visible_only)
 
 
 @dataclass(frozen=True)
@@ -172,8 +191,9 @@ class MatchedDetections:
     without matching again (a detection is matched only within its own sample).
 
     ``samples`` (S,) ids; ``rank_sample[c]`` (m_c,) int sample index of class c's detections in rank order;
-    ``tp[c]`` (T, m_c) bool, true positive at each threshold; ``gt_count`` (C, S) int ground truths per
-    class and sample.
+    ``tp[c]`` (T, m_c) bool, true positive at each threshold (fixed set); ``on_unseen[c]`` (T, m_c) bool,
+    those true positives whose object no camera sees (left out of the visible-only ranking); ``gt_count``
+    and ``gt_count_visible`` (C, S) int ground truths (all, seen) per class and sample.
     """
 
     samples: np.ndarray
@@ -182,9 +202,12 @@ class MatchedDetections:
     gt_count: np.ndarray
     classes: tuple[str, ...]
     thresholds: tuple[float, ...]
+    on_unseen: tuple[np.ndarray, ...]
+    gt_count_visible: np.ndarray
 
-    def evaluation(self, weights: np.ndarray | None = None) -> Evaluation:
-        """AP and mAP with sample i counted ``weights[i]`` times ((S,) int >= 0; default all once).
+    def evaluation(self, weights: np.ndarray | None = None, visible_only: bool = False) -> Evaluation:
+        """AP and mAP with sample i counted ``weights[i]`` times ((S,) int >= 0; default all once), against
+        the fixed set or, with ``visible_only``, the seen objects only.
 
         Repeated samples are scored as distinct samples whose detections are ranked next to each other;
         with all weights 1 this is exactly ``evaluate``.
@@ -193,22 +216,31 @@ class MatchedDetections:
         if weights.shape != (len(self.samples),) or not np.issubdtype(weights.dtype, np.integer) or (weights < 0).any():
             raise DataError(f"sample weights must be ({len(self.samples)},) integers >= 0, got {weights.dtype} "
                             f"{weights.shape}")
-        n_gt = self.gt_count @ weights
+        n_gt = (self.gt_count_visible if visible_only else self.gt_count) @ weights
         ap = np.full((len(self.classes), len(self.thresholds)), np.nan)
         for c in np.flatnonzero(n_gt):
             repeats = weights[self.rank_sample[c]]
             for j in range(len(self.thresholds)):
-                ap[c, j] = average_precision(np.repeat(self.tp[c][j], repeats), int(n_gt[c]))
+                ranked = ~self.on_unseen[c][j] if visible_only else slice(None)
+                ap[c, j] = average_precision(np.repeat(self.tp[c][j][ranked], repeats[ranked]), int(n_gt[c]))
         per_class = ap.mean(axis=1)
         has_gt = n_gt > 0
         mean = float(per_class[has_gt].mean()) if has_gt.any() else float("nan")
         return Evaluation(mean, ap, per_class, self.classes, self.thresholds, n_gt)
 
+    def metrics(self) -> dict:
+        """The benchmark's metrics shape, fixed set first: {"mAP", "raw"} as ``Evaluation.to_dict`` gives
+        them, plus "mAP_visible" and "raw_visible" for the seen objects only; NaN -> None."""
+        fixed, visible = self.evaluation().to_dict(), self.evaluation(visible_only=True).to_dict()
+        return {"mAP": fixed["mAP"], "mAP_visible": visible["mAP"], "raw": fixed["raw"], "raw_visible": visible["raw"]}
+
 
 def resampled_maps(matched: Sequence[MatchedDetections], groups: Sequence[Sequence[int]],
-                   resamples: int = DEFAULT_BOOTSTRAP, seed: int = DEFAULT_SEED) -> np.ndarray:
-    """(resamples, K) mAP of K matched runs over the same samples, each resample drawing ``len(groups)``
-    groups of sample indices with replacement (the same draw for all K, so differences are paired).
+                   resamples: int = DEFAULT_BOOTSTRAP, seed: int = DEFAULT_SEED,
+                   visible_only: bool = False) -> np.ndarray:
+    """(resamples, K) mAP (fixed set, or ``visible_only``) of K matched runs over the same samples, each
+    resample drawing ``len(groups)`` groups of sample indices with replacement (the same draw for all K,
+    so differences are paired).
 
     Groups are the resampling unit: samples that are not independent (consecutive frames) belong together.
     """
@@ -225,7 +257,7 @@ def resampled_maps(matched: Sequence[MatchedDetections], groups: Sequence[Sequen
     for r in range(resamples):
         drawn = np.concatenate([members[i] for i in rng.integers(len(members), size=len(members))])
         weights = np.bincount(drawn, minlength=len(samples))
-        maps[r] = [m.evaluation(weights).map for m in matched]
+        maps[r] = [m.evaluation(weights, visible_only).map for m in matched]
     return maps
 
 
@@ -246,11 +278,17 @@ def match(detections: Detections, ground_truth: GroundTruth, classes: Sequence[s
                                           len(classes), detections.score)
     gt_cls, gt_xy, _ = _checked("ground truth", ground_truth.sample, ground_truth.cls, ground_truth.xy,
                                 len(classes))
+    gt_seen = ground_truth.seen()
+    if gt_seen.shape != gt_cls.shape:
+        raise DataError(f"ground truth: visible must be (n,) like cls, got shape {gt_seen.shape} for {len(gt_cls)} "
+                        "objects")
     ids, det_sample, gt_sample = _sample_codes(detections.sample, ground_truth.sample, samples)
 
     gt_count = np.zeros((len(classes), len(ids)), dtype=int)
     np.add.at(gt_count, (gt_cls, gt_sample), 1)
-    rank_sample, tp = [], []
+    gt_count_visible = np.zeros_like(gt_count)
+    np.add.at(gt_count_visible, (gt_cls[gt_seen], gt_sample[gt_seen]), 1)
+    rank_sample, tp, on_unseen = [], [], []
     for c in range(len(classes)):
         d_rows, g_rows = det_cls == c, gt_cls == c
         order = _rank(det_sample[d_rows], det_xy[d_rows], det_score[d_rows])
@@ -258,10 +296,15 @@ def match(detections: Detections, ground_truth: GroundTruth, classes: Sequence[s
         rank_sample.append(ranked_sample)
         if not g_rows.any():  # nothing to match: every detection is a false positive
             tp.append(np.zeros((len(thresholds), len(order)), dtype=bool))
+            on_unseen.append(np.zeros((len(thresholds), len(order)), dtype=bool))
             continue
-        tp.append(np.array([_match(ranked_sample, ranked_xy, gt_sample[g_rows], gt_xy[g_rows], d)
-                            for d in thresholds]).reshape(len(thresholds), -1))
-    return MatchedDetections(ids, tuple(rank_sample), tuple(tp), gt_count, classes, thresholds)
+        taken = np.array([_match(ranked_sample, ranked_xy, gt_sample[g_rows], gt_xy[g_rows], d)
+                          for d in thresholds]).reshape(len(thresholds), -1)  # (T, m) taken object, -1 none
+        unseen = np.append(~gt_seen[g_rows], False)  # index -1: no object taken
+        tp.append(taken >= 0)
+        on_unseen.append(unseen[taken])
+    return MatchedDetections(ids, tuple(rank_sample), tuple(tp), gt_count, classes, thresholds, tuple(on_unseen),
+                             gt_count_visible)
 
 
 def average_precision(tp: np.ndarray, n_ground_truth: int) -> float:
@@ -292,11 +335,12 @@ def _rank(det_sample: np.ndarray, det_xy: np.ndarray, det_score: np.ndarray) -> 
 
 def _match(det_sample: np.ndarray, det_xy: np.ndarray, gt_sample: np.ndarray, gt_xy: np.ndarray,
            threshold: float) -> np.ndarray:
-    """Greedy matching of one class's ranked detections (m,) to its ground truths (g,) -> tp (m,) bool."""
+    """Greedy matching of one class's ranked detections (m,) to its ground truths (g,) -> (m,) int: the
+    index into the ground truths of the object each detection takes (a true positive), -1 for none."""
     gt_order = np.lexsort((gt_xy[:, 1], gt_xy[:, 0], gt_sample))
     gt_sample, gt_xy = gt_sample[gt_order], gt_xy[gt_order]
     free = np.ones(len(gt_sample), dtype=bool)
-    tp = np.zeros(len(det_sample), dtype=bool)
+    taken = np.full(len(det_sample), -1, dtype=int)
     for rank in range(len(det_sample)):
         candidates = np.flatnonzero(free & (gt_sample == det_sample[rank]))
         if len(candidates) == 0:
@@ -304,9 +348,9 @@ def _match(det_sample: np.ndarray, det_xy: np.ndarray, gt_sample: np.ndarray, gt
         distance = np.hypot(*(gt_xy[candidates] - det_xy[rank]).T)
         nearest = int(np.argmin(distance))  # first of equal distances: canonical (x, y) order
         if distance[nearest] < threshold:
-            tp[rank] = True
+            taken[rank] = gt_order[candidates[nearest]]
             free[candidates[nearest]] = False
-    return tp
+    return taken
 
 
 def _checked(what: str, sample, cls, xy, n_classes: int, score=None):

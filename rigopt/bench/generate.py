@@ -5,10 +5,12 @@ table records) beside its images, so an interrupted run resumes by skipping fini
 assembled from all parts at the end of every run. Scene, sample and instance tokens depend only on the
 scene, so the same scene has the same tokens under every rig.
 
-Annotations: every box within ``ANNOTATION_RANGE`` of the ego (class >= 0) that the rig sees. Its visible
-fraction is measured on 26 surface points (corners, edge midpoints and face centres, pulled 5 % inwards):
-of the points on faces turned towards some camera, the fraction that some camera sees unoccluded (the
-rendered pixel shows this box at the point's depth). Boxes no camera sees are dropped for that rig.
+Annotations are the world's objects, the same under every rig: every box within ``ANNOTATION_RANGE`` of
+the ego (class >= 0), with the same instance token and box whatever the rig. What depends on the rig is
+each box's visible fraction, measured on 26 surface points (corners, edge midpoints and face centres,
+pulled 5 % inwards): of the points on faces turned towards some camera, the fraction that some camera sees
+unoccluded (the rendered pixel shows this box at the point's depth). It is kept as the nuScenes
+``visibility_token`` and, exactly, as the record's ``visible_fraction`` (0: no camera sees the box).
 """
 
 from __future__ import annotations
@@ -112,7 +114,7 @@ def scene_records(scene: Scene, rig: Rig, root: Path, size: tuple[int, int], ego
         keep = (boxes.classes >= 0) & (np.linalg.norm(boxes.centers[:, :2] - ego, axis=1) <= ANNOTATION_RANGE)
         boxes = Boxes(*(getattr(boxes, f)[keep] for f in ("centers", "sizes", "yaws", "classes", "instance")))
         fractions = visible_fractions(boxes, rig, frame.T_world_ego, rendered)
-        for j in np.flatnonzero(fractions > 0):
+        for j in range(len(boxes)):
             instance = int(boxes.instance[j])
             instance_token = nuscenes_token("instance", f"{scene.name}/{instance}")
             instances.setdefault(instance, {"token": instance_token, "category_token":
@@ -122,7 +124,8 @@ def scene_records(scene: Scene, rig: Rig, root: Path, size: tuple[int, int], ego
             tables["sample_annotation"].append({
                 "token": nuscenes_token("sample_annotation", f"{scene.name}/{k}/{instance}"),
                 "sample_token": sample_tokens[k], "instance_token": instance_token,
-                "visibility_token": visibility_token(float(fractions[j])), "attribute_tokens": [],
+                "visibility_token": visibility_token(float(fractions[j])),
+                "visible_fraction": round(float(fractions[j]), 4), "attribute_tokens": [],
                 "translation": boxes.centers[j].tolist(), "size": [float(width), float(length), float(height)],
                 "rotation": box_rotation(float(boxes.yaws[j])), "num_lidar_pts": 0, "num_radar_pts": 0})
     tables["instance"] = list(instances.values())

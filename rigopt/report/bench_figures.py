@@ -31,7 +31,8 @@ def project(points_ego: np.ndarray, T_ego_cam: np.ndarray, intrinsics: np.ndarra
 
 
 def write_sample_figure(sample: TrainingSample, path, title: str = "") -> Path:
-    """Tile the sample's camera images with the annotated boxes drawn in, beside a bird's-eye view."""
+    """Tile the sample's camera images with the boxes the rig sees drawn in, beside a bird's-eye view of
+    every annotated box (dotted: no camera of the rig sees it)."""
     from matplotlib import colormaps
     from PIL import Image
 
@@ -42,12 +43,14 @@ def write_sample_figure(sample: TrainingSample, path, title: str = "") -> Path:
     grid = figure.add_gridspec(rows, columns + 2)
     colours = colormaps["tab10"]
     corners = ego_corners(sample)
+    seen = sample.visible
     for k, channel in enumerate(channels):
         ax = figure.add_subplot(grid[k // columns, k % columns])
         image = np.asarray(Image.open(sample.images[channel]))
         ax.imshow(image)
         pixels, front = project(corners, sample.T_ego_cam[channel], sample.intrinsics[channel])
-        for box, cls in enumerate(sample.classes):
+        for box in np.flatnonzero(seen):
+            cls = sample.classes[box]
             for a, b in _EDGES:
                 if front[box, a] and front[box, b]:
                     ax.plot(pixels[box, [a, b], 0], pixels[box, [a, b], 1], color=colours(cls % 10), linewidth=0.8)
@@ -58,7 +61,8 @@ def write_sample_figure(sample: TrainingSample, path, title: str = "") -> Path:
     bev = figure.add_subplot(grid[:, columns:])
     for box, cls in enumerate(sample.classes):
         outline = corners[box, [0, 1, 2, 3, 0]]
-        bev.plot(-outline[:, 1], outline[:, 0], color=colours(cls % 10), linewidth=1)
+        bev.plot(-outline[:, 1], outline[:, 0], color=colours(cls % 10), linewidth=1,
+                 linestyle="-" if seen[box] else ":")
     bev.plot([0], [0], marker="^", color="black", markersize=8)
     for cls in sorted(set(sample.classes.tolist())):
         bev.plot([], [], color=colours(cls % 10), label=CLASSES[cls])
@@ -68,7 +72,7 @@ def write_sample_figure(sample: TrainingSample, path, title: str = "") -> Path:
     bev.grid(alpha=0.3)
     if len(sample.classes):
         bev.legend(fontsize=7, loc="upper right")
-    bev.set_title("boxes, ego frame (ego at the triangle)", fontsize=9)
+    bev.set_title("boxes, ego frame (ego at the triangle; dotted: unseen)", fontsize=9)
     figure.suptitle(title or f"{sample.scene} sample {sample.token[:8]}")
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)

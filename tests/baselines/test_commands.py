@@ -72,19 +72,23 @@ def test_evaluate_prints_the_metrics_of_the_checkpoint_on_another_rig(trained):
     metrics = json.loads(process.stdout)
     expected = evaluate_on(trained / "runs" / "lss" / "R1" / "checkpoint.pt", trained, "R5", family="lss")
     assert metrics == json.loads(json.dumps(expected))
-    assert len(metrics["raw"]) == 9 * 4
+    assert len(metrics["raw"]) == len(metrics["raw_visible"]) == 9 * 4
+    assert all(metrics[key] is None or 0 <= metrics[key] <= 1 for key in ("mAP", "mAP_visible"))
     table = invoke("bench", "evaluate", "--data", trained, "--rig", "R5", "--model", "lss", "--trained-on", "R1")
-    assert "AP@0.5 m" in table and "car" in table
+    assert "AP@0.5 m" in table and "visible AP@0.5 m" in table and "visible-only mAP" in table and "car" in table
 
 
 def test_matrix_prints_the_table_and_writes_the_layout(trained, tmp_path):
     output = invoke("bench", "matrix", "--data", trained, "--rigs", "R1", "R5", "--model", "lss", "--size", "tiny",
                     "--epochs", "1", "--out", tmp_path / "results")
     assert "lss trained on R5: done" in output
-    assert [line.split()[1] for line in output.splitlines() if line.startswith("│ R")] == ["R1", "R5"]  # table rows
+    # Two tables, fixed-set mAP then visible-only mAP, each with a row per training rig.
+    assert [line.split()[1] for line in output.splitlines() if line.startswith("│ R")] == ["R1", "R5"] * 2
+    assert "visible-only mAP" in output
     for rig in ("R1", "R5"):
         row = json.loads((tmp_path / "results" / "lss" / f"trained_on_{rig}.json").read_text())
         assert row["trained_on"] == rig and set(row["results"]) == {"R1", "R5"}
+        assert all({"mAP", "mAP_visible"} <= set(result["metrics"]) for result in row["results"].values())
 
 
 def test_calibrate_reads_a_results_folder_the_protocol_writes(tmp_path):
@@ -115,6 +119,8 @@ def test_validate_renders_the_design_and_reports_measured_beside_predicted(train
     for entry in result["rigs"]:
         assert (trained / entry["rig"] / "test" / "v1.0-test" / "sample.json").is_file()
         assert entry["predicted_drop"] is not None and entry["rigcd"] > 0
+        assert {"mAP_visible", "measured_drop_visible", "measured_drop_visible_ci"} <= set(entry)
+    assert "reference_mAP_visible" in result
     assert result["reference"] == "R1" and result["test_scenes"] == 1 and result["image_size"] == [64, 36]
     by_rig = {entry["rig"]: entry for entry in result["rigs"]}
     assert [e["role"] for e in result["design_minus"]] == ["hand-designed", "naive transfer"]

@@ -264,3 +264,93 @@ def test_a_prediction_within_the_range_keeps_each_kept_detection_whole():
     assert near.token == "s"
     assert near.centers.tolist() == [[1.0, 2.0, 0.5]]
     assert near.classes.tolist() == [CAR] and near.scores.tolist() == [0.4]
+
+
+# --- fixed set and visible-only score --------------------------------------------------------------
+
+
+def seen_gt(rows):
+    """GroundTruth from (sample, class, x, y, visible) rows."""
+    base = gt([r[:4] for r in rows])
+    return GroundTruth(base.sample, base.cls, base.xy, np.array([r[4] for r in rows], dtype=bool))
+
+
+# One visible car in front, one car behind that no camera sees.
+FRONT_SEEN_REAR_UNSEEN = [("s0", CAR, 10.0, 0.0, True), ("s0", CAR, -10.0, 0.0, False)]
+
+
+def test_missing_an_unseen_object_costs_the_fixed_set_only():
+    # The seen car found, the unseen one missed: fixed recall stops at 1/2 (AP 4/9), visible-only is perfect.
+    found = det([("s0", CAR, 10.0, 0.0, 0.9)])
+    truth = seen_gt(FRONT_SEEN_REAR_UNSEEN)
+    assert evaluate(found, truth).map == pytest.approx(TWO_OF_TWO_FIRST, abs=1e-12)
+    assert evaluate(found, truth, visible_only=True).map == pytest.approx(1.0, abs=1e-12)
+    assert evaluate(found, truth).n_ground_truth[CAR] == 2
+    assert evaluate(found, truth, visible_only=True).n_ground_truth[CAR] == 1
+
+
+def test_a_detection_of_an_unseen_object_is_neither_credited_nor_penalised_when_visible_only():
+    # Ranks: FP (0.95), the unseen car (0.9), the seen car (0.8). Fixed: FP, TP, TP against 2 (precision
+    # 2/3 at every recall point: AP (2/3 - 0.1) / 0.9 = 17/27). Visible-only: the unseen car's detection
+    # leaves the ranking, leaving FP, TP against 1 (precision 1/2 throughout: AP 4/9).
+    found = det([("s0", CAR, 30.0, 0.0, 0.95), ("s0", CAR, -10.0, 0.0, 0.9), ("s0", CAR, 10.0, 0.0, 0.8)])
+    truth = seen_gt(FRONT_SEEN_REAR_UNSEEN)
+    assert evaluate(found, truth).map == pytest.approx(17 / 27, abs=1e-12)
+    assert evaluate(found, truth, visible_only=True).map == pytest.approx(4 / 9, abs=1e-12)
+
+
+def test_a_second_detection_of_an_unseen_object_is_a_false_positive():
+    # The unseen car is taken by the first detection; the duplicate's nearest free object is 20 m away.
+    found = det([("s0", CAR, -10.0, 0.0, 0.9), ("s0", CAR, -10.1, 0.0, 0.8), ("s0", CAR, 10.0, 0.0, 0.7)])
+    truth = seen_gt(FRONT_SEEN_REAR_UNSEEN)
+    assert evaluate(found, truth).map == pytest.approx(ALL_AFTER_FP, abs=1e-12)  # TP, FP, TP against 2
+    assert evaluate(found, truth, visible_only=True).map == pytest.approx(TWO_OF_TWO_FIRST, abs=1e-12)  # FP, TP / 1
+
+
+def test_without_visibility_both_scores_agree():
+    found, truth = hand_case()
+    assert truth.visible is None
+    assert evaluate(found, truth, visible_only=True).map == evaluate(found, truth).map == pytest.approx(301 / 486)
+
+
+def test_a_class_whose_objects_are_all_unseen_leaves_the_visible_only_mean():
+    truth = seen_gt([("s0", CAR, 10.0, 0.0, True), ("s0", BUS, -10.0, 0.0, False)])
+    found = det([("s0", CAR, 10.0, 0.0, 0.9)])
+    assert evaluate(found, truth).map == pytest.approx(0.5, abs=1e-12)  # car 1, bus 0
+    visible = evaluate(found, truth, visible_only=True)
+    assert visible.map == pytest.approx(1.0, abs=1e-12) and np.isnan(visible.per_class_ap[BUS])
+
+
+def test_metrics_hold_both_scores_and_resampling_can_use_either():
+    from rigopt.bench.evaluation import match, resampled_maps
+
+    found = det([("s0", CAR, 10.0, 0.0, 0.9), ("s1", CAR, 0.0, 5.0, 0.8)])
+    truth = seen_gt(FRONT_SEEN_REAR_UNSEEN + [("s1", CAR, 0.0, 5.0, True)])
+    matched = match(found, truth)
+    metrics = matched.metrics()
+    assert set(metrics) == {"mAP", "mAP_visible", "raw", "raw_visible"}
+    assert metrics["mAP"] == pytest.approx(evaluate(found, truth).map) and metrics["mAP"] < 1
+    assert metrics["mAP_visible"] == pytest.approx(1.0) and metrics["raw_visible"]["car_AP_dist_0.5"] == 1.0
+    # One group holding every sample: each resample is the whole set once.
+    maps = resampled_maps([matched], [np.arange(2)], resamples=3, seed=1, visible_only=True)
+    np.testing.assert_allclose(maps, 1.0)
+    np.testing.assert_allclose(resampled_maps([matched], [np.arange(2)], resamples=3, seed=1), metrics["mAP"])
+
+
+def test_within_the_range_keeps_visibility_and_bad_visibility_is_refused():
+    truth = seen_gt([("a", CAR, 60.0, 0.0, True), ("a", CAR, 5.0, 0.0, False)])
+    assert truth.within().visible.tolist() == [False]
+    bad = GroundTruth(truth.sample, truth.cls, truth.xy, np.array([True]))
+    with pytest.raises(DataError, match="visible"):
+        evaluate(no_detections(), bad)
+
+
+def test_samples_give_their_visibility_to_the_ground_truth():
+    def sample(token, fractions):
+        n = len(fractions)
+        return TrainingSample(token, "scene", 0, {}, {}, {}, np.eye(4), np.arange(3.0 * n).reshape(-1, 3),
+                              np.ones((n, 3)), np.zeros(n), np.zeros(n, dtype=int), np.array(["1"] * n),
+                              np.array([f"i{k}" for k in range(n)]), np.array(fractions, dtype=float))
+
+    truth = GroundTruth.from_samples([sample("t0", [0.0, 0.3, np.nan]), sample("t1", [])])
+    assert truth.visible.tolist() == [False, True, True]  # NaN: not recorded, counted as seen
