@@ -36,6 +36,10 @@ def calibrate_command(
     rigs: Optional[Path] = typer.Option(None, help="Folder of <rig>.json files for rigs not in the library."),
     solver: str = typer.Option("lbfgsb", help="Whose beta is reported: lbfgsb (the benchmark's) or qp (cvxpy)."),
     metric: str = typer.Option("rigcd", "--metric", help=METRIC_HELP),
+    test_on: Optional[Path] = typer.Option(None, "--test-on",
+                                           help="Other measured transfer (e.g. the real benchmark's results) on "
+                                                "which the joint calibration fitted on --results is judged, beside "
+                                                "that data's own calibration: key 'test_on' of the JSON."),
     out: Optional[Path] = typer.Option(None, help="Folder for the JSON, pairs CSV, weights and figures."),
     force: bool = typer.Option(False, "--force", help=FORCE_HELP),
     as_json: bool = typer.Option(False, "--json", help="Print the JSON report instead of tables."),
@@ -56,6 +60,15 @@ def calibrate_command(
     _check_cross_rig_pairs(table, control_rigs, results)
     study = calibrate(table, control_rigs, _rig_lookup(rigs), bootstrap, seed, solver, metric)
     report = study_dict(study)
+    if test_on is not None:
+        from rigopt.metrics.protocol import calibration_on
+        from rigopt.report.calibration_tables import transfer_dict
+
+        target = read_transfer(test_on)
+        _check_cross_rig_pairs(target, control_rigs, test_on)
+        transfer = calibration_on(study.joint.fit.calibration, target, control_rigs, _rig_lookup(rigs), bootstrap,
+                                  seed, solver)
+        report["test_on"] = {"results": str(test_on), **transfer_dict(transfer, study.joint.fit)}
     if out is not None:
         from rigopt.report.calibration_figures import write_calibration_figures
 
@@ -69,6 +82,16 @@ def calibrate_command(
         print_json(report)
         return
     _print_tables(report)
+    if test_on is not None:
+        _print_transfer(report["test_on"])
+
+
+def _print_transfer(test: dict) -> None:
+    print_table(f"The joint calibration fitted on --results, judged on {test['results']} (held-out pairs)",
+                ["model", "rho", "CI", "MAE (linear)", "MAE (bounded)", "own: rho per detector", "own: rho joint"],
+                [[m, e["heldout"]["rho"], _ci(e["heldout"]["ci"]), e["heldout"]["mae"], e["bounded"]["heldout"]["mae"],
+                  e["own_per_detector"]["heldout"]["rho"], e["own_joint"]["heldout"]["rho"]]
+                 for m, e in test["models"].items()])
 
 
 def _check_cross_rig_pairs(table, control_rigs: tuple[str, ...], source: Path) -> None:

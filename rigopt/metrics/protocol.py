@@ -263,3 +263,39 @@ def _with_link(fit: CalibrationFit, features: np.ndarray, mask: np.ndarray, drop
 def _named(rig: Rig, name: str) -> Rig:
     """The rig under the name the results use (a library lookup may differ in letter case)."""
     return rig if rig.name == name else Rig(name, rig.vehicle, rig.cameras)
+
+
+@dataclass(frozen=True)
+class CalibrationTransfer:
+    """A calibration fitted on one body of measured transfer (``source``, e.g. the synthetic benchmark's) and
+    judged on another (``target``, e.g. the real benchmark's pairs), beside the target's own calibration.
+
+    ``models``: per target detector, the source's joint calibration on the target's pairs (ModelReliability:
+    control and held-out pairs of the target's control rigs, linear and bounded); ``own``: the target's own
+    protocol study (its per-detector and joint fits on its control pairs)."""
+
+    calibration: Calibration
+    models: tuple[ModelReliability, ...]
+    own: CalibrationStudy
+
+
+def calibration_on(calibration: Calibration, table: TransferTable, control_rigs: Sequence[str] = CONTROL_RIGS,
+                   rig_lookup: Callable[[str], Rig] = load_rig, resamples: int = DEFAULT_BOOTSTRAP,
+                   seed: int = DEFAULT_SEED, solver: str = "lbfgsb") -> CalibrationTransfer:
+    """Judge ``calibration`` (fitted elsewhere) on the measured transfer ``table``: per detector, Spearman rho
+    and MAE of its linear prediction, and the bounded drop's accuracy, on the table's control and held-out
+    pairs; with the table's own protocol study (same control rigs) to compare with."""
+    own = calibrate(table, control_rigs, rig_lookup, resamples, seed, solver, calibration.metric)
+    drops = table.drops()
+    rig_names = list(dict.fromkeys(drops.train.tolist() + drops.test.tolist()))
+    rigs = [_named(rig_lookup(name), name) for name in rig_names]
+    features = pair_features(rigs, drops.train, drops.test, tuple(float(v) for v in calibration.match_lambdas))
+    control = np.isin(drops.train, own.control_rigs) & np.isin(drops.test, own.control_rigs)
+    pairs = _predictions(drops, features, calibration, control)
+    models = []
+    for model in dict.fromkeys(drops.model.tolist()):
+        mine = pairs.model == model
+        subset = PairPredictions(*(getattr(pairs, f)[mine] for f in PairPredictions.__dataclass_fields__))
+        models.append(ModelReliability(model, *_split_reliability(subset, resamples, seed),
+                                       bounded_accuracy(subset, subset.control), bounded_accuracy(subset, ~subset.control)))
+    return CalibrationTransfer(calibration, tuple(models), own)

@@ -69,6 +69,28 @@ def study_dict(study: CalibrationStudy) -> dict:
             "skipped": [list(s) for s in study.skipped]}
 
 
+def transfer_dict(transfer, source_fit: CalibrationFit) -> dict:
+    """A CalibrationTransfer as JSON: per target detector the transferred calibration's ``control`` and
+    ``heldout`` agreement (linear prediction: rho, CI, MAE, RMSE) and ``bounded`` accuracy, beside the target's
+    own per-detector and joint calibrations on the same pairs (``own_per_detector``, ``own_joint``);
+    ``weights``: those of ``source_fit``, the fit that was transferred."""
+    own_models = {m.model: m for m in transfer.own.models}
+    own_joint = {r.model: r for r in transfer.own.joint.models}
+    return {
+        "weights": weights_dict(source_fit),
+        "models": {r.model: {
+            "control": r.control.to_dict(), "heldout": r.heldout.to_dict(),
+            "bounded": bounded_dict(r.bounded_control, r.bounded_heldout),
+            "own_per_detector": {"heldout": own_models[r.model].heldout.to_dict(),
+                                 "bounded": bounded_dict(own_models[r.model].bounded_control,
+                                                         own_models[r.model].bounded_heldout)},
+            "own_joint": {"heldout": own_joint[r.model].heldout.to_dict(),
+                          "bounded": bounded_dict(own_joint[r.model].bounded_control,
+                                                  own_joint[r.model].bounded_heldout)},
+        } for r in transfer.models},
+    }
+
+
 PAIRS_HEADER = ["fit", "model", "train_rig", "test_rig", "split", *FEATURES, "delta", "predicted",
                 "rank_observed", "rank_predicted", "rank_error", "drop", "low", "high"]
 
