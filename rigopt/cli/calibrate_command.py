@@ -58,14 +58,15 @@ def calibrate_command(
     control_rigs = CONTROL_RIGS if control is None else tuple(r.strip() for r in control.split(",") if r.strip())
     table = read_transfer(results)
     _check_cross_rig_pairs(table, control_rigs, results)
+    target = read_transfer(test_on) if test_on is not None else None  # bad input is an error before any work
+    if target is not None:
+        _check_cross_rig_pairs(target, control_rigs, test_on)
     study = calibrate(table, control_rigs, _rig_lookup(rigs), bootstrap, seed, solver, metric)
     report = study_dict(study)
     if test_on is not None:
         from rigopt.metrics.protocol import calibration_on
         from rigopt.report.calibration_tables import transfer_dict
 
-        target = read_transfer(test_on)
-        _check_cross_rig_pairs(target, control_rigs, test_on)
         transfer = calibration_on(study.joint.fit.calibration, target, control_rigs, _rig_lookup(rigs), bootstrap,
                                   seed, solver)
         report["test_on"] = {"results": str(test_on), **transfer_dict(transfer, study.joint.fit)}

@@ -283,6 +283,8 @@ CASES: list[tuple[str, list[str], str]] = [
     ("coverage --require unknown preset", ["coverage", "R1", "--require", "r158,r999"], "r999"),
     ("coverage --require unknown traffic side", ["coverage", "R1", "--require", "r151:uk"], ":lht"),
     ("coverage --require none with others", ["coverage", "R1", "--require", "none,r158"], "stands alone"),
+    ("calibrate --test-on missing", ["calibrate", "--results", "{repo}/metrics/pccr_transfer.csv", "--test-on",
+                                     "{tmp}/no-such-results"], "no-such-results"),
     ("design --require unknown preset", ["design", "--vehicle", "firetruck", "--ref", "R1", "--require", "r15",
                                          "--out", "{tmp}/d-require"], "r15"),
     ("design --cost-weight negative", ["design", "--vehicle", "firetruck", "--ref", "R1", "--cost-weight", "-1",
