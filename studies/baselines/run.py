@@ -25,10 +25,14 @@ from pathlib import Path
 from rigopt.report.tables import markdown, read_csv, write_csv
 
 HERE = Path(__file__).resolve().parent
-RESULTS = HERE / "results"
+RESULTS = HERE / "results"  # the readings: tables, calibration, logs
+#: The committed measurements, as metrics/ holds the benchmark's: the cross-rig matrix in the benchmark's
+#: results layout, the validation outputs, the validated design rigs.
+BASELINES = HERE.parents[1] / "baselines"
+TRANSFER, VALIDATION = BASELINES / "transfer", BASELINES / "validation"
 CONTROL = ["R1", "R1-r", "R1-t", "R1-f", "R1-c6", "R1-c10"]
 DIVERSE = ["R2", "R5", "R9"]
-DESIGNS = [HERE / "rigs" / "firetruck_from_R1.json", HERE / "rigs" / "hgv_from_R1.json"]
+DESIGNS = [BASELINES / "rigs" / "firetruck_from_R1.json", BASELINES / "rigs" / "hgv_from_R1.json"]
 #: Each synthetic family against its real counterparts in the benchmark.
 COUNTERPARTS = {"lss": ["BEVDet", "BEVFusion"], "petr": ["PETR"]}
 STEPS = ("data", "matrix", "calibration", "agreement", "validation", "report")
@@ -48,7 +52,7 @@ def data_step(data: Path) -> None:
 
 def matrix_step(data: Path, family: str, epochs: int, device: str) -> None:
     rigopt("bench", "matrix", "--data", data, "--rigs", *CONTROL, *DIVERSE, "--model", family, "--epochs", epochs,
-           "--device", device, "--out", RESULTS / "transfer")
+           "--device", device, "--out", TRANSFER)
     logs = RESULTS / "logs" / family
     logs.mkdir(parents=True, exist_ok=True)
     for rig in CONTROL + DIVERSE:
@@ -56,7 +60,7 @@ def matrix_step(data: Path, family: str, epochs: int, device: str) -> None:
 
 
 def calibration_step() -> None:
-    rigopt("calibrate", "--results", RESULTS / "transfer", "--out", RESULTS / "calibration")
+    rigopt("calibrate", "--results", TRANSFER, "--out", RESULTS / "calibration")
 
 
 def agreement_step() -> list[list]:
@@ -68,7 +72,7 @@ def agreement_step() -> list[list]:
     from rigopt.metrics.transfer import read_transfer
     from rigopt.resources import data_dir
 
-    synthetic = read_transfer(RESULTS / "transfer").drops()
+    synthetic = read_transfer(TRANSFER).drops()
     real = read_transfer(data_dir("metrics") / "pccr_transfer.csv").drops()
     rigs = CONTROL + DIVERSE
     real = real.select(np.isin(real.train, rigs) & np.isin(real.test, rigs))
@@ -98,7 +102,7 @@ def validation_step(data: Path, family: str, device: str, epochs: int, seeds: li
         for design in DESIGNS:
             suffix = "" if seed == 0 else f"_seed{seed}"
             rigopt("validate", design, "--ref", "R1", "--model", family, "--data", data, "--device", device,
-                   "--runs", runs, "--out", RESULTS / "validation" / f"{family}_{design.stem}{suffix}.json")
+                   "--runs", runs, "--out", VALIDATION / f"{family}_{design.stem}{suffix}.json")
 
 
 def matrix_tables(family: str) -> tuple[list[list], list[list]]:
@@ -106,7 +110,7 @@ def matrix_tables(family: str) -> tuple[list[list], list[list]]:
     rigs = CONTROL + DIVERSE
     rows_map, rows_drop = [], []
     for train in rigs:
-        path = RESULTS / "transfer" / family / f"trained_on_{train}.json"
+        path = TRANSFER / family / f"trained_on_{train}.json"
         if not path.is_file():
             continue
         results = json.loads(path.read_text())["results"]
@@ -170,7 +174,7 @@ def report_step(families) -> None:
     if (RESULTS / "agreement_real.csv").is_file():
         table = read_csv(RESULTS / "agreement_real.csv")
         parts += ["## Yardstick: the real detectors against one another on the same pairs", "", markdown(table), ""]
-    validations = sorted((RESULTS / "validation").glob("*.json"))
+    validations = sorted((VALIDATION).glob("*.json"))
     if validations:
         parts += ["## Validation across training seeds (design's drop minus the other rig's)", "",
                   markdown([["model", "design", "seed", "own mAP", "design drop", "- naive", "ci_low", "ci_high",

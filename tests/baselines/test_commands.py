@@ -109,7 +109,7 @@ def test_calibrate_reads_a_results_folder_the_protocol_writes(tmp_path):
 
 def test_validate_renders_the_design_and_reports_measured_beside_predicted(trained):
     """Through the installed console script: its stdout is JSON only, whatever torch or a C library prints."""
-    design = REPO / "studies" / "baselines" / "rigs" / "firetruck_from_R1.json"
+    design = REPO / "baselines" / "rigs" / "firetruck_from_R1.json"
     process = console_script("validate", design, "--ref", "R1", "--model", "lss", "--data", trained, "--json")
     assert process.returncode == 0, process.stderr
     result = json.loads(process.stdout)
@@ -141,7 +141,7 @@ def test_validate_renders_the_design_and_reports_measured_beside_predicted(train
     (["validate", "{design}", "--ref", "R1", "--model", "petr", "--data", "{data}"], "rigopt bench train"),
 ])
 def test_bad_input_exits_2_with_one_line(trained, args, message, capsys):
-    design = REPO / "studies" / "baselines" / "rigs" / "hgv_from_R1.json"
+    design = REPO / "baselines" / "rigs" / "hgv_from_R1.json"
     code, stderr = run_cli(capsys, *[a.format(data=trained, design=design) for a in args])
     assert code == INPUT_ERROR, stderr
     assert message in stderr and "Traceback" not in stderr

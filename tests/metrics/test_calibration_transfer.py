@@ -21,8 +21,8 @@ from in_process import run_rigopt
 
 REPO = Path(__file__).resolve().parents[2]
 REAL = REPO / "metrics" / "pccr_transfer.csv"
-SYNTHETIC = REPO / "studies" / "baselines" / "results" / "transfer"
-SYNTHETIC_RIGS = REPO / "studies" / "baselines" / "rigs"
+SYNTHETIC = REPO / "baselines" / "transfer"
+SYNTHETIC_RIGS = REPO / "baselines" / "rigs"
 RESAMPLES = 50
 
 
