@@ -55,17 +55,25 @@ def load_design(path) -> Rig:
     return rig
 
 
-def comparison_rigs(design: Rig, reference: Rig) -> list[tuple[str, Rig]]:
-    """(role, rig): the design, the library's hand-designed rigs for its vehicle, the naive transfer."""
-    from rigopt.design.designer import mount_candidates, naive_transfer
-    from rigopt.design.problem import benchmark_rigs
+def comparison_rigs(design: Rig, reference: Rig, calibration: Calibration | None = None) -> list[tuple[str, Rig]]:
+    """(role, rig): the design, the library's hand-designed rigs for its vehicle, the naive transfer; with the
+    ``calibration``, the naive transfer refined as a design is (``designer.refine_comparison``: the same
+    continuous stage, keeping what it sees of the reference's coverage), so that the comparison credits the
+    design's objective and not its extra refinement."""
+    from rigopt.design.designer import default_spacing, mount_candidates, naive_transfer, refine_comparison
+    from rigopt.design.problem import ReferenceRig, benchmark_rigs
+    from rigopt.design.requirements import design_requirements
     from rigopt.design.settings import DesignSettings
     from rigopt.vehicle.library import load_vehicle
 
     vehicle = load_vehicle(design.vehicle)
-    settings = DesignSettings()
+    settings = DesignSettings(symmetric=False, require="none")
     rigs = [("design", design)] + [("hand-designed", rig) for rig in benchmark_rigs(vehicle)]
     naive = naive_transfer(vehicle, reference, mount_candidates(vehicle, settings), settings)
+    if naive is not None and calibration is not None:
+        requirements = design_requirements([ReferenceRig.on_own_vehicle(reference)], vehicle, settings)
+        naive, _ = refine_comparison(naive, vehicle, reference, calibration, requirements,
+                                     default_spacing(vehicle, settings), settings)
     if naive is not None:
         rigs.append(("naive transfer", naive))
     return rigs
@@ -92,7 +100,7 @@ def validate_design(design: Rig, reference: str, family: str, data, calibration:
         raise DataError(f"{checkpoint}: no {family} model trained on {reference_rig.name}; train it first with "
                         f"rigopt bench train --data {data} --rig {reference_rig.name} --model {family}")
     scenes, size = split_layout(split_root(data, reference_rig.name, TEST_SPLIT))
-    rigs = comparison_rigs(design, reference_rig)
+    rigs = comparison_rigs(design, reference_rig, calibration)
     names = [rig.name for _, rig in rigs]
     if len(set(names)) != len(names) or reference_rig.name in names:
         raise DataError(f"rig names must differ from each other and from the reference: {names}")

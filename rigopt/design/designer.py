@@ -254,9 +254,15 @@ def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRi
     reference_coverage = rig_coverage_matrix(reference, references[0].vehicle,
                                              settings.coverage).sees.any(axis=0).mean()
     naive = naive_transfer(vehicle, reference, prepared.candidates, settings)
+    naive_refinement = "off"
+    if naive is not None and settings.refine and len(rigs) == 1:
+        progress("refining the naive transfer as the design")
+        naive, naive_refinement = refine_comparison(naive, vehicle, reference, calibration, requirements,
+                                                    prepared.spacing, settings)
     comparisons = Comparisons(
         summarise(naive, vehicle, rigs, calibration, requirements, settings) if naive else None,
-        tuple(summarise(rig, vehicle, rigs, calibration, requirements, settings) for rig in compare_with))
+        tuple(summarise(rig, vehicle, rigs, calibration, requirements, settings) for rig in compare_with),
+        naive_refinement)
     return DesignResult(design, milp, refinement, comparisons, float(reference_coverage), vehicle, references,
                         calibration, settings, time.perf_counter() - start, symmetry_fallback, regions,
                         fields_fallback)
@@ -290,6 +296,20 @@ def _spread(points: np.ndarray, most: int) -> np.ndarray:
     if len(points) <= most:
         return points
     return points[np.linspace(0, len(points) - 1, most).round().astype(int)]
+
+
+def refine_comparison(rig: Rig, vehicle: Vehicle, reference: Rig, calibration: Calibration,
+                      requirements: Requirements, spacing: float, settings: DesignSettings) -> tuple[Rig, str]:
+    """``rig`` (the naive transfer) through the design's continuous stage, so that a comparison credits the
+    design's objective and not its extra refinement: the same moves, matching and acceptance, keeping the
+    requirement points ``rig`` already sees (none added, no pairing, no fields). Returns (the refined rig
+    when accepted, else ``rig``; the refinement's status line)."""
+    counts = requirements.counts(rig, vehicle, settings)
+    own = replace(requirements, needed=np.minimum(requirements.needed, counts), presets=())
+    free = replace(settings, symmetric=False, require="none")
+    summary = summarise(rig, vehicle, [reference], calibration, own, free, check_rig(rig, vehicle, free.rules))
+    report = _refined(summary, vehicle, reference, calibration, own, spacing, free)
+    return (report.refined.rig if report.accepted else rig), report.status
 
 
 def _best_coverers(sees: np.ndarray, needed: np.ndarray, count: int) -> np.ndarray:
@@ -465,5 +485,5 @@ def naive_transfer(vehicle: Vehicle, reference: Rig, candidates: CandidateSet, s
             return None
         best = options[np.argmin(np.linalg.norm(candidates.positions[options] - camera.position, axis=1))]
         used.add(int(candidates.mount[best]))
-        cameras.append(candidates.camera(best, camera.id, with_zone=False))
+        cameras.append(candidates.camera(best, camera.id))
     return Rig(f"naive_{vehicle.name}_from_{reference.name}", vehicle.blueprint, tuple(cameras))

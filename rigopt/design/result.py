@@ -76,11 +76,14 @@ class RefinementReport:
 @dataclass(frozen=True)
 class Comparisons:
     """The design's yardsticks, judged like the design: ``naive_transfer``, each reference camera moved to
-    the nearest mount point facing its way (None when some camera finds none); ``rigs``, the rigs the
-    caller asked to compare with (by default the library's hand-designed rigs for the vehicle)."""
+    the nearest mount point facing its way (None when some camera finds none), then refined as the design
+    is; ``rigs``, the rigs the caller asked to compare with (by default the library's hand-designed rigs for
+    the vehicle)."""
 
     naive_transfer: RigSummary | None
     rigs: tuple[RigSummary, ...]
+    naive_refinement: str = "off"
+    """The naive transfer's continuous stage, as the design's (``refine_comparison``): its status line."""
 
     @property
     def best_rig(self) -> RigSummary | None:

@@ -124,8 +124,8 @@ def design_dict(result: DesignResult, rig_file: Path | None) -> dict:
         "regions": regions_dict(result.regions),
         "rigcd_breakdown": breakdown_dict(breakdown),
         "comparisons": {
-            "naive_transfer": (summary_dict(comparisons.naive_transfer, result.vehicle)
-                               if comparisons.naive_transfer else None),
+            "naive_transfer": ({**summary_dict(comparisons.naive_transfer, result.vehicle),
+                                "refinement": comparisons.naive_refinement} if comparisons.naive_transfer else None),
             "benchmark_rig": summary_dict(comparisons.best_rig, result.vehicle) if comparisons.best_rig else None,
             "benchmark_rigs": [summary_dict(s, result.vehicle) for s in comparisons.rigs],
         },

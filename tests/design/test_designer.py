@@ -348,3 +348,20 @@ def test_a_camera_may_slide_only_as_far_as_its_disc_stays_mountable(firetruck):
     # a lens less than the reach from a wheel's keep-out (its arch) cannot slide the whole reach
     near_wheel = np.array([bool(w) for w in on_wheels(vehicle, points, 0.05 + reach)])
     assert near_wheel.any() and np.all(radii[near_wheel] < reach)
+
+
+def test_the_naive_transfer_is_refined_as_the_design_is(firetruck):
+    from rigopt.design.designer import mount_candidates, naive_transfer
+
+    status = firetruck.result.comparisons.naive_refinement
+    assert status.startswith(("accepted", "rejected"))
+    settings = firetruck.result.settings
+    unrefined = naive_transfer(firetruck.vehicle, firetruck.reference, mount_candidates(firetruck.vehicle, settings),
+                               settings)
+    refined = firetruck.result.comparisons.naive_transfer.rig
+    assert [c.id for c in refined.cameras] == [c.id for c in unrefined.cameras]
+    before, after = weighted_rigcd(firetruck, unrefined), weighted_rigcd(firetruck, refined)
+    if status.startswith("accepted"):
+        assert after < before  # accepted only when it lowers the calibrated RigCD
+    else:
+        assert after == pytest.approx(before, abs=1e-12)
