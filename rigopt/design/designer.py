@@ -302,10 +302,10 @@ def refine_comparison(rig: Rig, vehicle: Vehicle, reference: Rig, calibration: C
                       requirements: Requirements, spacing: float, settings: DesignSettings) -> tuple[Rig, str]:
     """``rig`` (the naive transfer) through the design's continuous stage, so that a comparison credits the
     design's objective and not its extra refinement: the same moves, matching and acceptance, keeping the
-    requirement points ``rig`` already sees (none added, no pairing, no fields). Returns (the refined rig
+    sector points ``rig`` already sees (none added, no pairing, no fields). Returns (the refined rig
     when accepted, else ``rig``; the refinement's status line)."""
     counts = requirements.counts(rig, vehicle, settings)
-    own = replace(requirements, needed=np.minimum(requirements.needed, counts), presets=())
+    own = replace(requirements.sector_only(), needed=np.minimum(requirements.sector_only().needed, counts), presets=())
     free = replace(settings, symmetric=False, require="none")
     summary = summarise(rig, vehicle, [reference], calibration, own, free, check_rig(rig, vehicle, free.rules))
     report = _refined(summary, vehicle, reference, calibration, own, spacing, free)
