@@ -239,3 +239,19 @@ def is_rotation(rotation, atol=1e-6):
     eye = np.broadcast_to(np.eye(3), r.shape)
     orthonormal = np.all(np.abs(np.swapaxes(r, -1, -2) @ r - eye) < atol, axis=(-1, -2))
     return orthonormal & (np.abs(np.linalg.det(r) - 1.0) < atol)
+
+
+def clip_polygon(polygon, axis: int, bound: float, side: float) -> np.ndarray:
+    """The part of a convex planar ``polygon`` (k, 3) where ``side * (p[axis] - bound) >= 0``, as (j, 3): one
+    Sutherland-Hodgman step against an axis-aligned plane (j < 3 when nothing of it is on that side)."""
+    polygon = np.asarray(polygon, dtype=float)
+    inside = side * (polygon[:, axis] - bound)
+    kept = []
+    for k in range(len(polygon)):
+        a, b = polygon[k], polygon[(k + 1) % len(polygon)]
+        da, db = inside[k], inside[(k + 1) % len(polygon)]
+        if da >= 0:
+            kept.append(a)
+        if (da >= 0) != (db >= 0):
+            kept.append(a + (b - a) * (da / (da - db)))
+    return np.array(kept).reshape(-1, 3)

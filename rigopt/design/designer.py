@@ -305,7 +305,8 @@ def refine_comparison(rig: Rig, vehicle: Vehicle, reference: Rig, calibration: C
     sector points ``rig`` already sees (none added, no pairing, no fields). Returns (the refined rig
     when accepted, else ``rig``; the refinement's status line)."""
     counts = requirements.counts(rig, vehicle, settings)
-    own = replace(requirements.sector_only(), needed=np.minimum(requirements.sector_only().needed, counts), presets=())
+    sectors = requirements.sector_only()
+    own = replace(sectors, needed=np.minimum(sectors.needed, counts), presets=())
     free = replace(settings, symmetric=False, require="none")
     summary = summarise(rig, vehicle, [reference], calibration, own, free, check_rig(rig, vehicle, free.rules))
     report = _refined(summary, vehicle, reference, calibration, own, spacing, free)

@@ -29,7 +29,7 @@ import numpy as np
 
 from rigopt.camera import CameraModel
 from rigopt.errors import RigoptError
-from rigopt.geometry import iso_to_carla, yaw_pitch_roll_from_rotation
+from rigopt.geometry import clip_polygon, iso_to_carla, yaw_pitch_roll_from_rotation
 from rigopt.mounting.practice import keep_out_boxes
 from rigopt.rig.model import Camera, Rig
 from rigopt.vehicle.model import Vehicle
@@ -95,20 +95,6 @@ def _coarse_triangles(vertices: np.ndarray, faces: np.ndarray, max_faces: int) -
         cell *= 1.3
 
 
-def _clip_half(polygon: np.ndarray, axis: int, bound: float, side: float) -> np.ndarray:
-    """The part of a convex planar ``polygon`` (k, 3) m where ``side * (p[axis] - bound) >= 0``, as (j, 3)."""
-    inside = side * (polygon[:, axis] - bound)
-    kept = []
-    for k in range(len(polygon)):
-        a, b = polygon[k], polygon[(k + 1) % len(polygon)]
-        da, db = inside[k], inside[(k + 1) % len(polygon)]
-        if da >= 0:
-            kept.append(a)
-        if (da >= 0) != (db >= 0):
-            kept.append(a + (b - a) * (da / (da - db)))
-    return np.array(kept).reshape(-1, 3)
-
-
 def _split_along_boxes(triangle: np.ndarray, boxes: list[tuple[np.ndarray, np.ndarray]]) -> list[np.ndarray]:
     """Convex pieces (each (j, 3) m) of ``triangle`` (3, 3) cut along every plane of ``boxes`` [(low, high)]
     that crosses it: each piece lies wholly inside or wholly outside each box."""
@@ -120,7 +106,7 @@ def _split_along_boxes(triangle: np.ndarray, boxes: list[tuple[np.ndarray, np.nd
                 for piece in pieces:
                     offset = piece[:, axis] - bound
                     if offset.min() < -1e-9 and offset.max() > 1e-9:
-                        cut += [p for p in (_clip_half(piece, axis, bound, 1.0), _clip_half(piece, axis, bound, -1.0))
+                        cut += [p for p in (clip_polygon(piece, axis, bound, 1.0), clip_polygon(piece, axis, bound, -1.0))
                                 if len(p) >= 3]
                     else:
                         cut.append(piece)

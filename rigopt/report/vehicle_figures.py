@@ -9,6 +9,7 @@ from matplotlib.collections import PolyCollection
 from matplotlib.figure import Figure
 
 from rigopt.camera import vertical_fov
+from rigopt.geometry import clip_polygon
 from rigopt.rig.model import Rig
 from rigopt.vehicle.model import Vehicle
 
@@ -32,16 +33,7 @@ def _clip_to_box(polygon: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.n
         for bound, side in ((low[axis], 1.0), (high[axis], -1.0)):
             if len(polygon) < 3:
                 return polygon
-            inside = side * (polygon[:, axis] - bound)
-            kept = []
-            for k in range(len(polygon)):
-                a, b = polygon[k], polygon[(k + 1) % len(polygon)]
-                da, db = inside[k], inside[(k + 1) % len(polygon)]
-                if da >= 0:
-                    kept.append(a)
-                if (da >= 0) != (db >= 0):
-                    kept.append(a + (b - a) * (da / (da - db)))
-            polygon = np.array(kept).reshape(-1, 3)
+            polygon = clip_polygon(polygon, axis, bound, side)
     return polygon
 
 

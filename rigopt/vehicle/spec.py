@@ -290,12 +290,17 @@ class _Reader:
         return Wheels(name, tuple(float(a) for a in axles), self.number(table, "radius", where),
                       self.number(table, "width", where), self.number(table, "track", where))
 
-    def zone(self, table: dict, index: int) -> ZoneSpec:
-        where = f"zone {index} ({table.get('name', '?')})"
+    def named_box(self, table: dict, where: str) -> tuple[str, np.ndarray, np.ndarray]:
+        """A table's ``name`` and its box ``min`` < ``max`` (3,) m."""
         name = self.text(table, "name", where)
         low, high = np.array(self.numbers(table, "min", 3, where)), np.array(self.numbers(table, "max", 3, where))
         if np.any(low >= high):
             raise self.fail(where, f"'min' must be below 'max' on every axis, got {low.tolist()} and {high.tolist()}")
+        return name, low, high
+
+    def zone(self, table: dict, index: int) -> ZoneSpec:
+        where = f"zone {index} ({table.get('name', '?')})"
+        name, low, high = self.named_box(table, where)
         normal = np.array(self.numbers(table, "normal", 3, where))
         if np.linalg.norm(normal) < 1e-9:
             raise self.fail(where, "'normal' must be a non-zero vector")
@@ -314,10 +319,7 @@ class _Reader:
 
     def keep_out(self, table: dict, index: int) -> KeepOutSpec:
         where = f"keep_out {index} ({table.get('name', '?')})"
-        name = self.text(table, "name", where)
-        low, high = np.array(self.numbers(table, "min", 3, where)), np.array(self.numbers(table, "max", 3, where))
-        if np.any(low >= high):
-            raise self.fail(where, f"'min' must be below 'max' on every axis, got {low.tolist()} and {high.tolist()}")
+        name, low, high = self.named_box(table, where)
         reason = self.text(table, "reason", where) if "reason" in table else name
         return KeepOutSpec(name, low, high, reason, self.flag(table, "mirrored", where),
                            self.flag(table, "optional", where), self.flag(table, "occludes", where))
