@@ -23,7 +23,8 @@ class ModelConfig:
     optical axis); position_depths : points per pixel ray in PETR's 3D position embedding; dn_groups : PETR's groups of
     denoising queries in training (0: none); azimuth_prior : PETR's cross-attention favours the tokens whose rays
     pass over each query's reference point; token_supervision : PETR's auxiliary loss on its image tokens
-    (object centre and depth); image_size :
+    (object centre and depth); depth_weight : weight of LSS's depth supervision from the renderer's depth maps
+    (0: none; used only where the data holds depth maps); image_size :
     (width, height) pixels the images are resized to, None to keep them as stored.
     """
 
@@ -43,6 +44,7 @@ class ModelConfig:
     dn_groups: int = 3
     azimuth_prior: bool = True
     token_supervision: bool = True
+    depth_weight: float = 1.0
     image_size: tuple | None = None
     lr: float = 1e-3
     weight_decay: float = 1e-2

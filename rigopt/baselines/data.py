@@ -7,6 +7,8 @@ order of their sorted channel names)::
     intrinsics  (B, N, 3, 3)    float32, pixels of the (possibly resized) images
     cam_to_ego  (B, N, 4, 4)    float32, camera optical frame (x right, y down, z forward) -> ego, metres
     boxes       list of B BoxTargets (ego frame, ISO 8855: x forward, y left, z up), the boxes the rig sees
+    depths      (B, N, H, W)    float32 renderer depth along the optical axis, m (0: no surface), or None
+                                when the dataset has no depth maps
 
 Images are decoded once and kept as uint8 in memory (a 480-sample, 8-camera split at 160 x 90 is 170 MB).
 """
@@ -20,6 +22,7 @@ import numpy as np
 import torch
 
 from rigopt.bench.dataset import TrainingSample, read_dataset
+from rigopt.bench.generate import DEPTH_SCALE
 from rigopt.errors import DataError
 
 
@@ -46,10 +49,12 @@ class Batch:
     cam_to_ego: torch.Tensor
     boxes: list
     tokens: list
+    depths: torch.Tensor | None = None
 
     def to(self, device) -> Batch:
         return Batch(self.images.to(device), self.intrinsics.to(device), self.cam_to_ego.to(device),
-                     [b.to(device) for b in self.boxes], self.tokens)
+                     [b.to(device) for b in self.boxes], self.tokens,
+                     None if self.depths is None else self.depths.to(device))
 
     @property
     def n_cameras(self) -> int:
@@ -92,7 +97,9 @@ class RigSplit:
                                        dtype=torch.float32)
         self.cam_to_ego = torch.tensor(np.stack([first.T_ego_cam[c] for c in self.channels]), dtype=torch.float32)
         self.max_range = max_range
+        self.has_depth = all(sample.depths for sample in self.samples)
         self._images: dict[int, np.ndarray] = {}
+        self._depths: dict[int, np.ndarray] = {}
 
     def __len__(self) -> int:
         return len(self.samples)
@@ -104,20 +111,17 @@ class RigSplit:
     def images(self, index: int) -> np.ndarray:
         """(N, H, W, 3) uint8 images of sample ``index``."""
         if index not in self._images:
-            from PIL import Image
-
-            frames = []
-            for channel in self.channels:
-                path = self.samples[index].images[channel]
-                try:
-                    image = Image.open(path).convert("RGB")
-                except OSError as error:
-                    raise DataError(f"{path}: cannot read the image ({error})") from None
-                if image.size != self.image_size:
-                    image = image.resize(self.image_size, Image.BILINEAR)
-                frames.append(np.asarray(image))
-            self._images[index] = np.stack(frames)
+            self._images[index] = np.stack([_read_image(self.samples[index].images[c], self.image_size, "RGB")
+                                            for c in self.channels])
         return self._images[index]
+
+    def depths(self, index: int) -> np.ndarray:
+        """(N, H, W) uint16 depth maps of sample ``index`` (units of 1 / ``DEPTH_SCALE`` m, 0: none), resized
+        by nearest neighbour."""
+        if index not in self._depths:
+            self._depths[index] = np.stack([_read_image(self.samples[index].depths[c], self.image_size, "I;16")
+                                            for c in self.channels])
+        return self._depths[index]
 
     def targets(self, index: int) -> BoxTargets:
         """The training targets of sample ``index``: its annotated boxes of evaluated classes within
@@ -134,15 +138,34 @@ class RigSplit:
         indices = [int(i) for i in indices]
         images = torch.from_numpy(np.stack([self.images(i) for i in indices])).permute(0, 1, 4, 2, 3)
         b = len(indices)
+        depths = None
+        if self.has_depth:
+            depths = torch.from_numpy(np.stack([self.depths(i) for i in indices]).astype(np.float32)) / DEPTH_SCALE
         return Batch(images.float().div_(255.0), self.intrinsics.expand(b, -1, -1, -1).clone(),
                      self.cam_to_ego.expand(b, -1, -1, -1).clone(), [self.targets(i) for i in indices],
-                     [self.samples[i].token for i in indices])
+                     [self.samples[i].token for i in indices], depths)
 
     def batches(self, batch_size: int, order=None):
         """Batches of ``batch_size`` samples in ``order`` (default: the split's order)."""
         order = np.arange(len(self)) if order is None else np.asarray(order)
         for start in range(0, len(order), batch_size):
             yield self.batch(order[start:start + batch_size])
+
+
+def _read_image(path, size: tuple[int, int], mode: str) -> np.ndarray:
+    """An image file as an array at ``size`` (width, height): ``mode`` "RGB" (H, W, 3) uint8, resized
+    bilinearly, or "I;16" (H, W) uint16 (a depth map), resized by nearest neighbour."""
+    from PIL import Image
+
+    try:
+        image = Image.open(path)
+        image = image.convert("RGB") if mode == "RGB" else image
+    except OSError as error:
+        raise DataError(f"{path}: cannot read the image ({error})") from None
+    if image.size != tuple(size):
+        image = image.resize(tuple(size), Image.BILINEAR if mode == "RGB" else Image.NEAREST)
+    array = np.asarray(image)
+    return array if mode == "RGB" else array.astype(np.uint16)
 
 
 def _image_size(path) -> tuple[int, int]:

@@ -7,6 +7,10 @@
    below it (points more than 2 m below the ground or 6 m above it are dropped); cells sum their points.
 4. A bird's-eye CNN and a centre-heatmap head (``center_head.py``) detect the boxes.
 
+Depth supervision (as BEVDepth): where the batch carries the renderer's depth maps, each feature cell's depth
+distribution is also taught the nearest surface in its image patch (cross-entropy over the bins, weight
+``config.depth_weight``; cells whose nearest surface lies outside the bins are left out).
+
 Any camera count works: the calibration of the rig at hand decides where each camera's features land.
 """
 
@@ -57,7 +61,9 @@ class LSSDetector(nn.Module):
         bev = self.splat(volume.view(b, n, *volume.shape[1:]), batch, (h, w))
         near = self.bev_near(bev)
         far = F.interpolate(self.bev_far(near), size=near.shape[-2:], mode="bilinear", align_corners=False)
-        return self.head(self.bev_merge(torch.cat([near, far], dim=1)))
+        outputs = self.head(self.bev_merge(torch.cat([near, far], dim=1)))
+        outputs["depth_logits"] = lifted[:, :self.config.depth_bins]
+        return outputs
 
     def splat(self, volume: torch.Tensor, batch: Batch, feature_hw) -> torch.Tensor:
         """(B, N, D, Cc, h, w) lifted features -> (B, Cc, G, G) bird's-eye features (sum per cell)."""
@@ -76,7 +82,25 @@ class LSSDetector(nn.Module):
         return bev.view(b, g, g, c).permute(0, 3, 1, 2).contiguous()
 
     def loss(self, outputs: dict, batch: Batch) -> tuple[torch.Tensor, dict]:
-        return self.head.loss(outputs, batch.boxes)
+        loss, parts = self.head.loss(outputs, batch.boxes)
+        if batch.depths is None or self.config.depth_weight <= 0:
+            return loss, parts
+        logits = outputs["depth_logits"]  # (B*N, D, h, w)
+        bins = self.depth_bins(batch.depths.flatten(0, 1), logits.shape[-2:])
+        depth_loss = F.cross_entropy(logits, bins, ignore_index=-1) if (bins >= 0).any() else logits.sum() * 0
+        return loss + self.config.depth_weight * depth_loss, {**parts, "depth": float(depth_loss.detach())}
+
+    def depth_bins(self, depths: torch.Tensor, feature_hw) -> torch.Tensor:
+        """(M, H, W) depth maps (m, 0: none) -> (M, h, w) long: the bin of the nearest surface in each feature
+        cell's stride x stride patch, -1 where it has none inside [depth_min, depth_max)."""
+        h, w = feature_hw
+        s = self.encoder.stride
+        padded = F.pad(depths, (0, w * s - depths.shape[-1], 0, h * s - depths.shape[-2]))
+        nearest = -F.max_pool2d(-torch.where(padded > 0, padded, torch.full_like(padded, float("inf")))[:, None], s)[:, 0]
+        step = (self.config.depth_max - self.config.depth_min) / self.config.depth_bins
+        index = torch.floor((nearest - self.config.depth_min) / step)
+        inside = (index >= 0) & (index < self.config.depth_bins)
+        return torch.where(inside, index, torch.full_like(index, -1)).long()
 
     def detections(self, outputs: dict, top_k: int = 100) -> list[dict]:
         return self.head.decode(outputs, top_k)

@@ -4,9 +4,10 @@ The test split of the reference rig is rendered again, the same scenes and image
 the benchmark's hand-designed rigs for the design's vehicle and the naive transfer of the reference
 (each reference camera moved to the nearest valid mount facing its way). The detector trained on the
 reference is evaluated on each; the measured relative drop (mAP(ref -> ref) - mAP(ref -> rig)) /
-mAP(ref -> ref) stands beside the drop that the calibrated RigCD predicts. The test frames are resampled
-in blocks (paired across rigs) for a 95 % interval of each drop and of the design's drop minus each other
-rig's: the noise of one test split, not of training.
+mAP(ref -> ref) stands beside the drop that the calibrated RigCD predicts. The test scenes are resampled
+whole (paired across rigs: frames of one scene see nearly the same objects, so the scene is the unit) for a
+95 % interval of each drop and of the design's drop minus each other rig's: the noise of the test scenes,
+not of training.
 
 mAP is the fixed-set score (every rig is scored against the same objects, so a blind zone costs what
 it misses); the visible-only mAP and its drop (``mAP_visible``, ``measured_drop_visible``) stand beside
@@ -31,8 +32,6 @@ from rigopt.metrics.reliability import DEFAULT_BOOTSTRAP, DEFAULT_SEED, finite_o
 from rigopt.rig.library import load_rig
 from rigopt.rig.model import Rig
 
-#: Consecutive test frames resampled together (40 frames a scene give 4 blocks).
-BLOCK_SAMPLES = 10
 
 
 def load_design(path) -> Rig:
@@ -56,10 +55,11 @@ def load_design(path) -> Rig:
 
 
 def comparison_rigs(design: Rig, reference: Rig, calibration: Calibration | None = None) -> list[tuple[str, Rig]]:
-    """(role, rig): the design, the library's hand-designed rigs for its vehicle, the naive transfer; with the
-    ``calibration``, the naive transfer refined as a design is (``designer.refine_comparison``: the same
-    continuous stage, keeping what it sees of the reference's coverage), so that the comparison credits the
-    design's objective and not its extra refinement."""
+    """(role, rig): the design, the library's hand-designed rigs for its vehicle, the naive transfer (with the
+    ``calibration``, refined as a design is: ``designer.refine_comparison``, the same continuous stage,
+    keeping what it sees of the reference's coverage, so that the comparison credits the design's objective
+    and not its extra refinement) and the height-matched transfer (each camera at the mount nearest its
+    height: does matching heights alone explain the design's gain?)."""
     from rigopt.design.designer import default_spacing, mount_candidates, naive_transfer, refine_comparison
     from rigopt.design.problem import ReferenceRig, benchmark_rigs
     from rigopt.design.requirements import design_requirements
@@ -69,13 +69,17 @@ def comparison_rigs(design: Rig, reference: Rig, calibration: Calibration | None
     vehicle = load_vehicle(design.vehicle)
     settings = DesignSettings(symmetric=False, require="none")
     rigs = [("design", design)] + [("hand-designed", rig) for rig in benchmark_rigs(vehicle)]
-    naive = naive_transfer(vehicle, reference, mount_candidates(vehicle, settings), settings)
+    candidates = mount_candidates(vehicle, settings)
+    naive = naive_transfer(vehicle, reference, candidates, settings)
     if naive is not None and calibration is not None:
         requirements = design_requirements([ReferenceRig.on_own_vehicle(reference)], vehicle, settings)
         naive, _ = refine_comparison(naive, vehicle, reference, calibration, requirements,
                                      default_spacing(vehicle, settings), settings)
     if naive is not None:
         rigs.append(("naive transfer", naive))
+    height_matched = naive_transfer(vehicle, reference, candidates, settings, match="height")
+    if height_matched is not None:
+        rigs.append(("height-matched transfer", height_matched))
     return rigs
 
 
@@ -85,8 +89,8 @@ def validate_design(design: Rig, reference: str, family: str, data, calibration:
     """Measured and predicted drops of the reference-trained ``family`` detector on the design and its
     comparison rigs. Renders missing test splits into ``data``; returns a JSON-ready dict.
 
-    Each measured drop has a 95 % interval from resampling blocks of BLOCK_SAMPLES consecutive test
-    frames (the same draw for every rig); ``design_minus`` holds the design's drop minus each other rig's,
+    Each measured drop has a 95 % interval from resampling whole test scenes (the same draw for every rig);
+    ``design_minus`` holds the design's drop minus each other rig's,
     with its paired interval (below 0: the design loses less).
     """
     from rigopt.bench.generate import ego_mesh_lookup, generate_split, split_layout
@@ -112,8 +116,8 @@ def validate_design(design: Rig, reference: str, family: str, data, calibration:
     matched = match_on_rigs(checkpoint, data, test_rigs, device, family)
     maps = np.array([matched[name].evaluation().map for name in test_rigs])
     maps_visible = np.array([matched[name].evaluation(visible_only=True).map for name in test_rigs])
-    blocks = sample_blocks(RigSplit(data, reference_rig.name, TEST_SPLIT).samples, BLOCK_SAMPLES)
-    progress(f"bootstrapping the drops over {len(blocks)} blocks of test samples")
+    blocks = sample_blocks(RigSplit(data, reference_rig.name, TEST_SPLIT).samples)
+    progress(f"bootstrapping the drops over the {len(blocks)} test scenes")
     runs_matched = [matched[name] for name in test_rigs]
     resampled = resampled_maps(runs_matched, blocks, resamples, seed)
     resampled_visible = resampled_maps(runs_matched, blocks, resamples, seed, visible_only=True)
@@ -138,12 +142,12 @@ def validate_design(design: Rig, reference: str, family: str, data, calibration:
             "reference_mAP_visible": finite_or_none(maps_visible[0]),
             "test_scenes": len(scenes), "image_size": list(size), "rigs": entries,
             "design_minus": design_minus,
-            "bootstrap": {"resamples": resamples, "seed": seed, "blocks": len(blocks), "block_samples": BLOCK_SAMPLES}}
+            "bootstrap": {"resamples": resamples, "seed": seed, "unit": "scene", "blocks": len(blocks)}}
 
 
-def sample_blocks(samples, size: int) -> list[np.ndarray]:
-    """Indices into ``samples`` in runs of up to ``size`` consecutive frames of one scene: the resampling
-    unit, since neighbouring frames see nearly the same objects."""
+def sample_blocks(samples, size: int | None = None) -> list[np.ndarray]:
+    """Indices into ``samples`` in runs of consecutive frames of one scene, at most ``size`` long (None: whole
+    scenes): the resampling unit, since neighbouring frames see nearly the same objects."""
     blocks, start = [], 0
     for k in range(1, len(samples) + 1):
         if k == len(samples) or samples[k].scene != samples[start].scene or k - start == size:

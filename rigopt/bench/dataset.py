@@ -76,7 +76,9 @@ class TrainingSample:
     -> ego; T_world_ego (4, 4); boxes in the ego frame: centers (n, 3) m, sizes (n, 3) (length, width,
     height) m, yaws (n,) rad, classes (n,) int into CLASSES, visibility (n,) str tokens, instances (n,) str
     instance tokens (the same object across samples and, for rigopt's data, across rigs);
-    visible_fractions (n,) float in [0, 1] (NaN where the dataset does not record it), None when not read.
+    visible_fractions (n,) float in [0, 1] (NaN where the dataset does not record it), None when not read;
+    depths : {channel: path} of the renderer's depth maps (``generate.DEPTH_SCALE``), None when the dataset
+    has none.
     """
 
     token: str
@@ -93,6 +95,7 @@ class TrainingSample:
     visibility: np.ndarray
     instances: np.ndarray
     visible_fractions: np.ndarray | None = None
+    depths: dict | None = None
 
     @property
     def visible(self) -> np.ndarray:
@@ -146,13 +149,15 @@ def read_dataset(root, version: str | None = None) -> list[TrainingSample]:
 
     samples = []
     for sample in sorted(tables["sample"], key=lambda s: (scene_name.get(s["scene_token"], ""), s["timestamp"])):
-        images, intrinsics, extrinsics, T_world_ego = {}, {}, {}, None
+        images, depths, intrinsics, extrinsics, T_world_ego = {}, {}, {}, {}, None
         for record in data_by_sample.get(sample["token"], []):
             calibration = by_token["calibrated_sensor"][record["calibrated_sensor_token"]]
             channel = channel_of.get(calibration["sensor_token"])
             if channel is None:
                 continue
             images[channel] = root / record["filename"]
+            if record.get("depth_filename"):
+                depths[channel] = root / record["depth_filename"]
             intrinsics[channel] = np.asarray(calibration["camera_intrinsic"], dtype=float)
             extrinsics[channel] = _transform(calibration)
             T_world_ego = _transform(by_token["ego_pose"][record["ego_pose_token"]])
@@ -170,7 +175,7 @@ def read_dataset(root, version: str | None = None) -> list[TrainingSample]:
             sample["token"], scene_name.get(sample["scene_token"], ""), int(sample["timestamp"]), images, intrinsics,
             extrinsics, T_world_ego, centers, sizes, np.angle(np.exp(1j * (world_yaw - ego_yaw))), classes,
             np.array([b.get("visibility_token", "") for b in boxes]), np.array([b["instance_token"] for b in boxes]),
-            np.array([_fraction(b) for b in boxes], dtype=float)))
+            np.array([_fraction(b) for b in boxes], dtype=float), depths if len(depths) == len(images) else None))
     return samples
 
 

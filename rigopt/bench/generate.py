@@ -11,6 +11,10 @@ each box's visible fraction, measured on 26 surface points (corners, edge midpoi
 pulled 5 % inwards): of the points on faces turned towards some camera, the fraction that some camera sees
 unoccluded (the rendered pixel shows this box at the point's depth). It is kept as the nuScenes
 ``visibility_token`` and, exactly, as the record's ``visible_fraction`` (0: no camera sees the box).
+
+Beside each image the renderer's depth is kept, for depth supervision: ``depth/<CAM>/<token>.png``, 16-bit,
+depth along the optical axis in units of 1 / ``DEPTH_SCALE`` m (0: no surface, i.e. sky or behind the lens),
+named by the sample_data record's ``depth_filename`` (an addition to the nuScenes fields).
 """
 
 from __future__ import annotations
@@ -31,6 +35,14 @@ from rigopt.rig.formats.nuscenes import nuscenes_token, write_nuscenes_calibrati
 ANNOTATION_RANGE = 80.0
 #: Relative depth agreement for a surface point to count as the rendered pixel's surface.
 DEPTH_TOLERANCE = 0.05
+#: Depth map units per metre (1 cm steps; 655 m at most).
+DEPTH_SCALE = 100.0
+
+
+def depth_image(depth: np.ndarray) -> np.ndarray:
+    """(h, w) float depth (m; inf or <= 0 where no surface) -> (h, w) uint16 depth map (0: none)."""
+    scaled = np.where(np.isfinite(depth) & (depth > 0), np.round(depth * DEPTH_SCALE), 0)
+    return np.clip(scaled, 0, np.iinfo(np.uint16).max).astype(np.uint16)
 
 
 def _surface_points(boxes: Boxes) -> tuple[np.ndarray, np.ndarray]:
@@ -102,12 +114,15 @@ def scene_records(scene: Scene, rig: Rig, root: Path, size: tuple[int, int], ego
         for camera in rig.cameras:
             data_token = nuscenes_token("sample_data", f"{scene.name}/{k}/{camera.id}")
             filename = f"samples/{camera.id}/{data_token}.png"
+            depth_filename = f"depth/{camera.id}/{data_token}.png"
             with atomic_file(root / filename) as work:  # an image on disk is always complete
                 Image.fromarray(rendered[camera.id].rgb).save(work, format="PNG")
+            with atomic_file(root / depth_filename) as work:
+                Image.fromarray(depth_image(rendered[camera.id].depth)).save(work, format="PNG")
             tables["sample_data"].append({
                 "token": data_token, "sample_token": sample_tokens[k], "ego_pose_token": ego_token,
                 "calibrated_sensor_token": nuscenes_token("calibrated_sensor", camera.id), "filename": filename,
-                "fileformat": "png", "width": size[0], "height": size[1], "timestamp": frame.timestamp_us,
+                "depth_filename": depth_filename, "fileformat": "png", "width": size[0], "height": size[1], "timestamp": frame.timestamp_us,
                 "is_key_frame": True, "prev": "", "next": ""})
         boxes = scene.boxes_at(k)
         ego = frame.T_world_ego[:2, 3]

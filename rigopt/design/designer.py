@@ -467,9 +467,20 @@ def matching_costs(candidates: CandidateSet, reference: Rig, calibration: Calibr
     return lt * t + lr * r + lf * f
 
 
-def naive_transfer(vehicle: Vehicle, reference: Rig, candidates: CandidateSet, settings: DesignSettings) -> Rig | None:
+#: Heights (m) closer than this count as the same for the height-matched transfer.
+HEIGHT_STEP = 0.05
+
+
+def naive_transfer(vehicle: Vehicle, reference: Rig, candidates: CandidateSet, settings: DesignSettings,
+                   match: str = "position") -> Rig | None:
     """Each reference camera moved to the nearest mount point where it can face the same way (its yaw and
-    pitch on the grid, nearest catalogue lens), one camera per mount point; None if some camera finds none."""
+    pitch on the grid, nearest catalogue lens; where no mount allows its yaw, e.g. straight back past a
+    trailer, the nearest yaw some mount allows), one camera per mount point; None if some camera finds none.
+
+    ``match`` "position": nearest in 3D (the naive transfer); "height": the mount closest to the camera's
+    height (in steps of HEIGHT_STEP m), then nearest in plan (the height-matched transfer, which keeps
+    what RigCD's translation term weighs most on a taller vehicle and nothing else).
+    """
     cameras = []
     used: set[int] = set()
     lenses = np.unique(candidates.fovs)
@@ -477,14 +488,20 @@ def naive_transfer(vehicle: Vehicle, reference: Rig, candidates: CandidateSet, s
         yaw = np.arctan2(camera.forward[1], camera.forward[0])
         pitch = np.arcsin(np.clip(camera.forward[2], -1.0, 1.0))
         lens = lenses[np.argmin(np.abs(lenses - camera.fov))]
-        same_way = (np.abs(np.angle(np.exp(1j * (candidates.yaws - yaw)))) <= np.deg2rad(settings.yaw_step_deg) / 2
-                    + 1e-9) & (candidates.fovs == lens)
+        yaw_gap = np.where(candidates.fovs == lens, np.abs(np.angle(np.exp(1j * (candidates.yaws - yaw)))), np.inf)
+        yaw_gap = np.maximum(yaw_gap, np.deg2rad(settings.yaw_step_deg) / 2)  # the grid's nearest yaws are all "same"
+        same_way = yaw_gap <= yaw_gap.min(initial=np.inf) + 1e-9
         pitch_gap = np.abs(candidates.pitches - pitch)
         same_way &= pitch_gap <= pitch_gap[same_way].min(initial=np.inf) + 1e-9
         options = np.flatnonzero(same_way & ~np.isin(candidates.mount, list(used)))
         if len(options) == 0:
             return None
-        best = options[np.argmin(np.linalg.norm(candidates.positions[options] - camera.position, axis=1))]
+        offsets = candidates.positions[options] - camera.position
+        if match == "height":
+            best = options[np.lexsort((np.linalg.norm(offsets[:, :2], axis=1), np.round(np.abs(offsets[:, 2]) / HEIGHT_STEP)))[0]]
+        else:
+            best = options[np.argmin(np.linalg.norm(offsets, axis=1))]
         used.add(int(candidates.mount[best]))
         cameras.append(candidates.camera(best, camera.id))
-    return Rig(f"naive_{vehicle.name}_from_{reference.name}", vehicle.blueprint, tuple(cameras))
+    prefix = "naive" if match == "position" else "height_matched"
+    return Rig(f"{prefix}_{vehicle.name}_from_{reference.name}", vehicle.blueprint, tuple(cameras))

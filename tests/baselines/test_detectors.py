@@ -87,6 +87,59 @@ def test_rig_split_resize_scales_the_intrinsics_and_range_filters_boxes(tiny_dat
     assert float(torch.hypot(near.centers[:, 0], near.centers[:, 1]).max()) <= 20.0
 
 
+def test_batch_depths_are_the_renderers_depth_in_metres(tiny_data):
+    from rigopt.bench.render import render_rig
+    from rigopt.bench.scenes import split_scenes
+    from rigopt.rig.library import load_rig
+
+    from tests.baselines.conftest import TINY_FRAMES
+
+    split = RigSplit(tiny_data, "R5", "train")
+    assert split.has_depth
+    depths = split.batch([1]).depths
+    assert depths.shape == (1, 4, HEIGHT, WIDTH) and depths.dtype == torch.float32
+    rendered = render_rig(split_scenes("train", 1, TINY_FRAMES)[0], 1, load_rig("R5"), None, (WIDTH, HEIGHT))
+    for k, channel in enumerate(split.channels):
+        truth = rendered[channel].depth
+        surface = np.isfinite(truth) & (truth > 0)
+        assert surface.mean() > 0.3 and (~surface).any()  # ground and objects below, sky above
+        np.testing.assert_allclose(depths[0, k].numpy()[surface], truth[surface], atol=0.006)
+        assert (depths[0, k].numpy()[~surface] == 0).all()
+
+
+def test_lss_depth_targets_are_the_nearest_surface_of_each_patch():
+    config = model_config("lss", "tiny", depth_min=1.0, depth_max=25.0, depth_bins=6)  # 4 m bins
+    model = LSSDetector(config)
+    depth = torch.zeros(1, 12, 20)  # feature map 2 x 3 at stride 8 (the last row and column padded)
+    depth[0, :8, :8] = 30.0  # beyond depth_max: no target
+    depth[0, 3, 5] = 6.5  # a nearer surface in the same patch wins: bin (6.5 - 1) // 4 = 1
+    depth[0, :8, 8:16] = 20.9  # bin 4
+    depth[0, 8:, :8] = 0.5  # before depth_min: no target
+    depth[0, 8:, 8:16] = 0.0  # no surface at all
+    depth[0, 10, 17] = 24.9  # the padded corner cell: bin 5
+    bins = model.depth_bins(depth, (2, 3))
+    assert bins.tolist() == [[[1, 4, -1], [-1, -1, 5]]]
+
+
+def test_lss_learns_from_depth_only_when_the_data_has_it_and_the_weight_is_positive(tiny_data):
+    batch = RigSplit(tiny_data, "R5", "train").batch([0, 1])
+    no_depth = Batch(batch.images, batch.intrinsics, batch.cam_to_ego, batch.boxes, batch.tokens)
+    for config, data, supervised in ((model_config("lss", "tiny"), batch, True),
+                                     (model_config("lss", "tiny", depth_weight=0.0), batch, False),
+                                     (model_config("lss", "tiny"), no_depth, False)):
+        torch.manual_seed(0)
+        model = build_model(config)
+        outputs = model(data)
+        loss, parts = model.loss(outputs, data)
+        box_loss, _ = model.head.loss(outputs, data.boxes)
+        assert ("depth" in parts) == supervised
+        if supervised:
+            assert parts["depth"] > 0
+            assert loss.item() == pytest.approx(box_loss.item() + config.depth_weight * parts["depth"], rel=1e-5)
+        else:
+            assert loss.item() == pytest.approx(box_loss.item())
+
+
 def test_rig_split_on_a_folder_lacking_the_rig_names_the_rigs_there(tiny_data):
     with pytest.raises(DataError) as caught:
         RigSplit(tiny_data, "R9", "train")

@@ -147,6 +147,8 @@ def test_blocks_follow_scenes_and_hold_at_most_size_frames():
     blocks = sample_blocks(frames, 10)
     assert [list(b[[0, -1]]) for b in blocks] == [[0, 9], [10, 19], [20, 24], [25, 31]]
     np.testing.assert_array_equal(np.concatenate(blocks), np.arange(32))
+    scenes = sample_blocks(frames + [Frame("a")] * 3)  # whole scenes: a scene seen again later starts a new run
+    assert [len(b) for b in scenes] == [25, 7, 3]
 
 
 def test_relative_drops_and_intervals():
