@@ -150,14 +150,37 @@ def scene_records(scene: Scene, rig: Rig, root: Path, size: tuple[int, int], ego
     return tables
 
 
+def in_vehicle_frame(rig: Rig) -> tuple[Rig, str | None]:
+    """``rig`` with its positions measured from its vehicle's centre, the ego origin the benchmark renders from
+    (its ego meshes and the scenes' clearance are centred there), and a one-line note when it was moved or could
+    not be. A rig measured from another origin (an imported dataset rig: the rear axle) is moved with its
+    vehicle's axle position; one on a vehicle rigopt does not know is rendered from its own origin (and without
+    a body)."""
+    if rig.origin.is_benchmark:
+        return rig, None
+    from rigopt.vehicle.placement import known_vehicle, to_vehicle_centre
+
+    vehicle = known_vehicle(rig)
+    if vehicle is None:
+        return rig, (f"{rig.name}: positions are measured from the {rig.origin.describe()} of {rig.vehicle!r}, which "
+                     "rigopt does not know; rendered with that point as the ego origin")
+    moved, change = to_vehicle_centre(rig, vehicle)
+    return moved, change.describe()
+
+
 def generate_split(rigs: Sequence[Rig], scenes: Sequence[Scene], out, size: tuple[int, int], render_rig: Callable,
-                   ego_mesh_of: Callable, progress: Callable[[str], None] = lambda message: None) -> list[Path]:
+                   ego_mesh_of: Callable, progress: Callable[[str], None] = lambda message: None,
+                   note: Callable[[str], None] = lambda message: None) -> list[Path]:
     """Render every (rig, scene) pair not done yet and (re)assemble each rig's tables; returns the roots
-    ``<out>/<rig>/<split>``."""
+    ``<out>/<rig>/<split>``. Rigs are rendered from their vehicle's centre (:func:`in_vehicle_frame`; ``note``
+    gets each move)."""
     if not (len(size) == 2 and all(isinstance(v, int) and v > 0 for v in size)):
         raise RigoptError(f"image size must be two positive integers (width, height), got {size}")
     roots = []
     for rig in rigs:
+        rig, moved = in_vehicle_frame(rig)
+        if moved:
+            note(moved)
         for scene in scenes:
             root = Path(out) / rig.name / scene.split
             part = root / ".parts" / f"{scene.name}.json"

@@ -76,7 +76,9 @@ def generate_command(
             if "rendering" in message or "skipped" in message:
                 progress.advance(task)
 
-        roots = generate_split(loaded, scene_list, out, width_height, render_rig, ego_mesh_of, step)
+        roots = generate_split(loaded, scene_list, out, width_height, render_rig, ego_mesh_of, step,
+                               lambda message: status_console.print(f"rigopt: note: {message}", markup=False,
+                                                                    highlight=False, soft_wrap=True))
     console.print("wrote " + ", ".join(str(r) for r in roots))
 
 

@@ -164,8 +164,8 @@ class RigOrigin:
         The benchmark's (CARLA's) vehicle origin: the centre of the vehicle's bounding box in x and y, on
         the ground (z = 0). Every benchmark rig and every rigopt vehicle mesh uses it.
     kind : "rear_axle"
-        The point on the ground below the centre of the rear axle, the origin of nuScenes, Argoverse,
-        Waymo and DDAD ego frames.
+        The point on the ground below the centre of the rear axle, the origin of nuScenes, Waymo and DDAD
+        ego frames (Argoverse 2's lies at the axle's height above it; its importer lowers it to the ground).
     kind : "custom"
         ``point`` (3,) float m: the origin's position in the vehicle-centre frame.
 

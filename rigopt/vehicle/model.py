@@ -142,9 +142,10 @@ class Vehicle:
 
     @property
     def rear_axle(self) -> np.ndarray | None:
-        """(3,) float m: the point on the ground (z = 0) below the centre of the rear axle, the ego origin of
-        nuScenes, Argoverse, Waymo and DDAD; with a rear axle group (a tandem: every axle behind the
-        middle of the wheelbase) the group's midpoint. None when the vehicle's axles are unknown."""
+        """(3,) float m: the point on the ground (z = 0) below the centre of the rear axle, rigopt's rear-axle
+        origin (that of imported nuScenes, Argoverse 2, Waymo and DDAD rigs); with a rear axle group (a
+        tandem: every axle behind the middle of the wheelbase) the group's midpoint. None when the vehicle's
+        axles are unknown."""
         axles = self.axles
         if not axles:
             return None

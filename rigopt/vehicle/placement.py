@@ -1,8 +1,8 @@
 """Rigs on vehicles: converting a rig's reference point (its origin) and placing a rig on a vehicle.
 
 The benchmark measures camera positions from the vehicle's centre (CARLA's origin: the bounding box's centre
-in x and y, on the ground); nuScenes, Argoverse, Waymo and DDAD measure them from the rear axle on the
-ground (see :class:`rigopt.rig.model.RigOrigin`). Comparing rigs measured from different points mixes a
+in x and y, on the ground); imported nuScenes, Argoverse 2, Waymo and DDAD rigs measure them from the rear
+axle on the ground (see :class:`rigopt.rig.model.RigOrigin`). Comparing rigs measured from different points mixes a
 vehicle's rear overhang into every position term, so RigCD, ranking and design compare rigs in one frame:
 rigs that share an origin are compared as they are; otherwise each is converted to its vehicle's centre,
 which needs the vehicle (where its rear axle is). A rig whose vehicle rigopt does not know (an imported

@@ -1,5 +1,6 @@
 """The benchmark's nuScenes layout: written by generate_split, read back by read_dataset."""
 
+import json
 from dataclasses import dataclass
 
 import numpy as np
@@ -125,3 +126,37 @@ def test_reading_a_folder_without_tables_is_a_clear_error(tmp_path):
     (tmp_path / "v1.0-mini").mkdir()
     with pytest.raises(DataError, match="missing table"):
         read_dataset(tmp_path)
+
+
+def test_a_rear_axle_rig_is_rendered_from_its_vehicle_centre(tmp_path, scene, all_visible):
+    """An imported rig (rear-axle origin) is moved to its vehicle's centre, the ego frame of the renders and
+    the tables; one on an unknown vehicle is rendered from its own origin; both say so."""
+    from dataclasses import replace
+
+    from rigopt.rig.model import Rig, RigOrigin
+
+    base = load_rig("R1")
+    cameras = tuple(replace(c, position=c.position + np.array([1.43, 0.0, 0.0])) for c in base.cameras)
+    on_axle = Rig("axle", "etron", cameras, RigOrigin("rear_axle"))  # etron's rear axle: x = -1.43 m
+    unknown = Rig("unknown", "nuscenes", cameras, RigOrigin("rear_axle"))
+    seen, notes = {}, []
+
+    def recording_render(scene, k, rig, ego_mesh, size):
+        seen[rig.name] = rig
+        return fake_render_rig(scene, k, rig, ego_mesh, size)
+
+    generate_split([on_axle, unknown], [scene], tmp_path, (16, 9), recording_render, lambda r: None,
+                   note=notes.append)
+    assert seen["axle"].origin.is_benchmark
+    np.testing.assert_allclose([c.position for c in seen["axle"].cameras], [c.position for c in base.cameras],
+                               atol=1e-12)
+    assert seen["unknown"].same_as(unknown)
+    assert notes == ["axle: positions converted from the rear axle to the vehicle centre of etron (x -1.430 m)",
+                     "unknown: positions are measured from the rear axle of 'nuscenes', which rigopt does not know; "
+                     "rendered with that point as the ego origin"]
+    tables = tmp_path / "axle" / "mini" / "v1.0-mini"
+    sensor = {s["token"]: s["channel"] for s in json.loads((tables / "sensor.json").read_text())}
+    written = {sensor[r["sensor_token"]]: r["translation"]
+               for r in json.loads((tables / "calibrated_sensor.json").read_text())}
+    for camera in base.cameras:  # the tables are in the same frame as the renders
+        np.testing.assert_allclose(written[camera.id], camera.position, atol=1e-9)

@@ -5,8 +5,12 @@ Argoverse 2 (a log folder, or its ``calibration/`` folder; Apache Feather tables
     egovehicle_SE3_sensor.feather: sensor_name, qw, qx, qy, qz, tx_m, ty_m, tz_m   (R_ego_sensor, sensor in ego)
     intrinsics.feather:            sensor_name, fx_px, fy_px, cx_px, cy_px, k1, k2, k3, height_px, width_px
 
-  Camera (sensor) frames are optical (z forward, x right, y down); distortion is radial k1, k2, k3 only:
-  rigopt's radtan with p1 = p2 = 0. Only sensors listed in intrinsics.feather are cameras (lidars skipped).
+  Camera (sensor) frames are optical (z forward, x right, y down). The imagery is provided undistorted (the
+  av2 sensor guide; the av2 API's PinholeCamera uses fx, fy, cx, cy only), so the cameras are pinholes: the
+  k1, k2, k3 columns are checked but not applied. Only sensors listed in intrinsics.feather are cameras
+  (lidars skipped). The ego-vehicle frame's origin is the centre of the rear axle at the axle's height (the
+  guide's example annotations, whose tz_m is the box centre, put the ground 0.33-0.38 m below it): positions
+  are raised by ``AV2_ORIGIN_HEIGHT_M`` to rigopt's rear-axle origin on the ground.
 
 DGP / DDAD (a scene folder holding ``calibration/<key>.json`` and ``scene*.json``, or one calibration JSON)::
 
@@ -29,7 +33,8 @@ Waymo Open Dataset v2 (a ``camera_calibration`` Parquet file or a folder of them
   Waymo's camera frame is x forward along the optical axis, y left, z up: rigopt's body frame, so the
   extrinsic's rotation is ``R_vehicle_cam`` as it stands. Rolling shutter is not modelled.
 
-All three ego frames are ISO 8855 axes with their origin at the rear axle on the ground.
+All three ego frames are ISO 8855 axes with their origin below or at the centre of the rear axle: DDAD's and
+Waymo's on the ground, Argoverse 2's at the axle's height (see above).
 """
 
 from __future__ import annotations
@@ -50,6 +55,11 @@ AV2_POSES = "egovehicle_SE3_sensor.feather"
 AV2_INTRINSICS = "intrinsics.feather"
 AV2_POSE_COLUMNS = ("sensor_name", "qw", "qx", "qy", "qz", "tx_m", "ty_m", "tz_m")
 AV2_INTRINSIC_COLUMNS = ("sensor_name", "fx_px", "fy_px", "cx_px", "cy_px", "k1", "k2", "k3", "height_px", "width_px")
+
+#: Height (m) of the Argoverse 2 ego-vehicle origin (the rear axle's centre) above the ground: the ground lies
+#: 0.33-0.38 m below it (median 0.36) in the av2 sensor guide's example annotations, about the wheel radius
+#: (0.33 m) of its Ford Fusion Hybrid.
+AV2_ORIGIN_HEIGHT_M = 0.35
 
 DGP_IMAGE_SIZE = (1936, 1216)
 
@@ -102,6 +112,7 @@ def read_argoverse2(path, name: str | None = None, vehicle: str = "argoverse2",
     poses = _read_arrow(folder / AV2_POSES, AV2_POSE_COLUMNS, "Argoverse 2 sensor pose table", fix)
     intrinsics = _read_arrow(folder / AV2_INTRINSICS, AV2_INTRINSIC_COLUMNS, "Argoverse 2 intrinsics table", fix)
     pose_rows = {n: k for k, n in enumerate(poses["sensor_name"])}
+    raise_by = AV2_ORIGIN_HEIGHT_M if origin is None else 0.0  # with --origin the file's positions are from the ground
     cameras = []
     for k, sensor in enumerate(intrinsics["sensor_name"]):
         where = f"{folder / AV2_INTRINSICS}: row {k} ({sensor})"
@@ -113,15 +124,21 @@ def read_argoverse2(path, name: str | None = None, vehicle: str = "argoverse2",
         pose_where = f"{folder / AV2_POSES}: row {row} ({sensor})"
         q = unit_quaternion([poses[c][row] for c in ("qw", "qx", "qy", "qz")], f"{pose_where} qw, qx, qy, qz")
         t = numbers([poses[c][row] for c in ("tx_m", "ty_m", "tz_m")], (3,), f"{pose_where} tx_m, ty_m, tz_m")
-        fx, fy, cx, cy, k1, k2, k3 = numbers([intrinsics[c][k] for c in AV2_INTRINSIC_COLUMNS[1:8]], (7,), where)
+        fx, fy, cx, cy = numbers([intrinsics[c][k] for c in AV2_INTRINSIC_COLUMNS[1:5]], (4,), where)
+        numbers([intrinsics[c][k] for c in ("k1", "k2", "k3")], (3,), f"{where} k1, k2, k3")  # checked, not applied
         width = whole_number(intrinsics["width_px"][k], f"{where} width_px")
         height = whole_number(intrinsics["height_px"][k], f"{where} height_px")
-        lens = make_lens(where, width, height, fx, fy, cx, cy, "radtan", (k1, k2, 0.0, 0.0, k3))
-        cameras.append(make_camera(where, sensor, t, body_rotation(quaternion_rotation(q)), lens))
+        lens = make_lens(where, width, height, fx, fy, cx, cy)
+        position = t + np.array([0.0, 0.0, raise_by])
+        cameras.append(make_camera(where, sensor, position, body_rotation(quaternion_rotation(q)), lens))
     origin, note = _origin(origin, "Argoverse 2 ego-vehicle frame")
+    if raise_by:
+        note += (f"; its origin is at the rear axle's height, so positions are raised by {raise_by:.2f} m to the "
+                 "ground below it")
+    notes = (note, "Argoverse 2 imagery is undistorted: k1, k2, k3 are not applied (pinhole cameras)")
     default_name = path.name if folder != path else path.resolve().parent.name
     rig = make_rig(str(folder / AV2_INTRINSICS), name or default_name, vehicle, cameras, origin)
-    return Imported(rig, (note,))
+    return Imported(rig, notes)
 
 
 # ----------------------------------------------------------------------------------------------------- DGP

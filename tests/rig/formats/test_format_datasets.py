@@ -18,6 +18,7 @@ from rigopt.errors import RigFileError
 from rigopt.rig.formats.datasets import read_argoverse2, read_dgp, read_waymo, waymo_calibrations
 from rigopt.rig.formats.nuscenes import describe_calibrations, nuscenes_calibrations, read_nuscenes
 from rigopt.rig.formats.opencv import read_camchain
+from rigopt.rig.model import RigOrigin
 
 FIXTURES = Path(__file__).resolve().parents[2] / "fixtures" / "formats"
 
@@ -160,7 +161,9 @@ def test_argoverse2_ring_and_stereo_cameras(av2_log):
     imported = read_argoverse2(av2_log)
     rig = imported.rig
     assert [c.id for c in rig.cameras] == list(AV2_FOCAL)  # the lidar is skipped
-    assert imported.notes[0] == "origin: rear axle (Argoverse 2 ego-vehicle frame)"
+    assert imported.notes[0].startswith("origin: rear axle (Argoverse 2 ego-vehicle frame); its origin is at the "
+                                        "rear axle's height, so positions are raised by 0.35 m")
+    assert "undistorted" in imported.notes[1]
     assert rig.name == av2_log.name and rig.vehicle == "argoverse2"
     cameras = {c.id: c for c in rig.cameras}
     assert cameras["ring_front_center"].image_size == (1550, 2048)  # portrait
@@ -168,12 +171,15 @@ def test_argoverse2_ring_and_stereo_cameras(av2_log):
     assert cameras["ring_front_center"].forward[0] > 0.999
     assert cameras["ring_side_left"].forward[1] > 0.95 and cameras["ring_side_right"].forward[1] < -0.95
     assert cameras["ring_rear_left"].forward[0] < -0.4 and cameras["ring_rear_left"].forward[1] > 0.4
-    np.testing.assert_allclose(cameras["stereo_front_left"].position, [1.625085, 0.248148, 1.222831])
+    # the ego origin is at the rear axle's height; rigopt's rear-axle origin is on the ground below it
+    np.testing.assert_allclose(cameras["stereo_front_left"].position, [1.625085, 0.248148, 1.222831 + 0.35])
     lens = cameras["ring_front_center"].lens_model
-    assert lens.distortion == "radtan" and lens.coefficients == (-0.245, -0.212167, 0.0, 0.0, 0.328694)
+    assert lens.distortion == "none" and (lens.fx, lens.cx) == (1773.504272, 775.826693)  # undistorted imagery
     assert_fovs_derive_from_lenses(rig)
     assert cameras["ring_front_center"].fov < cameras["ring_front_left"].fov  # portrait: narrower horizontally
     assert read_argoverse2(av2_log / "calibration").rig.same_as(rig)
+    as_given = read_argoverse2(av2_log, origin=RigOrigin("rear_axle")).rig  # --origin: positions taken as they are
+    np.testing.assert_allclose(as_given.cameras[7].position, [1.625085, 0.248148, 1.222831])
 
 
 def test_argoverse2_missing_column_names_the_file(av2_log, tmp_path):
