@@ -24,7 +24,8 @@ class ModelConfig:
     denoising queries in training (0: none); azimuth_prior : PETR's cross-attention favours the tokens whose rays
     pass over each query's reference point; token_supervision : PETR's auxiliary loss on its image tokens
     (object centre and depth); depth_weight : weight of LSS's depth supervision from the renderer's depth maps
-    (0: none; used only where the data holds depth maps); image_size :
+    (0: none; used only where the data holds depth maps); bev_augment : train on randomly turned and mirrored
+    ego frames (``data.augment``); image_size :
     (width, height) pixels the images are resized to, None to keep them as stored.
     """
 
@@ -44,7 +45,8 @@ class ModelConfig:
     dn_groups: int = 3
     azimuth_prior: bool = True
     token_supervision: bool = True
-    depth_weight: float = 1.0
+    depth_weight: float = 0.0
+    bev_augment: bool = False
     image_size: tuple | None = None
     lr: float = 1e-3
     weight_decay: float = 1e-2

@@ -152,6 +152,25 @@ class RigSplit:
             yield self.batch(order[start:start + batch_size])
 
 
+def augment(batch: Batch, rng: np.random.Generator, max_yaw: float = np.pi / 8) -> Batch:
+    """``batch`` seen by a rotated and mirrored ego frame (BEVDet's bird's-eye augmentation), per sample: a
+    turn by U(-max_yaw, max_yaw) rad about z after mirroring x and y each with probability 1/2. The
+    calibration (cam_to_ego) and the boxes move together, so every image still shows its boxes where the
+    calibration says; the images and depth maps are unchanged."""
+    cam_to_ego, boxes = batch.cam_to_ego.clone(), []
+    for b, targets in enumerate(batch.boxes):
+        angle = rng.uniform(-max_yaw, max_yaw)
+        mirror = np.diag([rng.choice([-1.0, 1.0]), rng.choice([-1.0, 1.0]), 1.0])
+        turn = np.array([[np.cos(angle), -np.sin(angle), 0.0], [np.sin(angle), np.cos(angle), 0.0], [0.0, 0.0, 1.0]])
+        A = torch.tensor(turn @ mirror, dtype=cam_to_ego.dtype, device=cam_to_ego.device)
+        cam_to_ego[b, :, :3, :] = A @ cam_to_ego[b, :, :3, :]
+        heading = torch.stack([torch.cos(targets.yaws), torch.sin(targets.yaws), torch.zeros_like(targets.yaws)], 1)
+        heading = heading @ A.T
+        boxes.append(BoxTargets(targets.centers @ A.T, targets.sizes, torch.atan2(heading[:, 1], heading[:, 0]),
+                                targets.classes))
+    return Batch(batch.images, batch.intrinsics, cam_to_ego, boxes, batch.tokens, batch.depths)
+
+
 def _read_image(path, size: tuple[int, int], mode: str) -> np.ndarray:
     """An image file as an array at ``size`` (width, height): ``mode`` "RGB" (H, W, 3) uint8, resized
     bilinearly, or "I;16" (H, W) uint16 (a depth map), resized by nearest neighbour."""

@@ -27,7 +27,7 @@ from pathlib import Path
 from typing import Callable, Sequence
 
 from rigopt.baselines.config import ModelConfig
-from rigopt.errors import DataError, RigoptError
+from rigopt.errors import RigoptError
 
 TRAIN_SPLIT, TEST_SPLIT = "train", "test"
 
@@ -133,31 +133,13 @@ def transfer_matrix(data, rigs: Sequence[str], config: ModelConfig, out, runs=No
 
 
 def _rows_on_ray(address: str, data, todo, rigs, config: ModelConfig, runs, device, seed):
-    """Matrix rows as their Ray tasks finish, one task per training rig; ``address`` 'local' starts a Ray
-    instance on this machine."""
-    try:
-        import ray
-    except ImportError:
-        raise RigoptError("--ray needs the ray package: pip install ray") from None
-    try:
-        ray.init(address=None if address == "local" else address, ignore_reinit_error=True,
-                 include_dashboard=False, log_to_driver=False)
-    except Exception as error:  # ray raises ConnectionError and others for an unreachable cluster
-        raise RigoptError(f"--ray {address}: cannot connect to a Ray cluster ({error})") from None
+    """Matrix rows as their Ray tasks finish, one task per training rig (``bench.cluster.ray_tasks``)."""
+    from rigopt.bench.cluster import ray_tasks
+
+    calls = {rig: (str(Path(data).resolve()), rig, rigs, config, str(Path(runs).resolve()), device, seed)
+             for rig in todo}
     gpus = 1 if str(device).startswith("cuda") else 0
-    task = ray.remote(num_gpus=gpus)(train_and_test)
-    pending = {task.remote(str(Path(data).resolve()), rig, rigs, config, str(Path(runs).resolve()), device, seed): rig
-               for rig in todo}
-    while pending:
-        done, _ = ray.wait(list(pending), num_returns=1)
-        rig = pending.pop(done[0])
-        try:
-            row = ray.get(done[0])
-        except Exception as error:
-            cause = getattr(error, "cause", None)
-            if isinstance(cause, RigoptError):
-                raise type(cause)(str(cause)) from None
-            raise DataError(f"Ray task training on {rig} failed: {error}") from None
+    for _, row in ray_tasks(address, train_and_test, calls, gpus, what="training on"):
         yield row
 
 

@@ -5,7 +5,7 @@ step, loss, its terms, learning rate, elapsed seconds). Rerunning with the same 
 last finished epoch (log rows past it are dropped); asking for more epochs than were run continues.
 
 Determinism: weights are initialised from ``seed``; the sample order of epoch e is a permutation drawn
-from ``numpy.random.default_rng([seed, e])``; the learning rate is a pure function of the step (linear
+from ``numpy.random.default_rng([seed, e])`` (and step s's augmentation from ``[seed, e, s]``); the learning rate is a pure function of the step (linear
 warm-up, then cosine decay to 5 % over all epochs). So an interrupted and resumed run takes the same steps.
 A run extended to more epochs keeps its finished steps; its remaining steps follow the schedule of the new
 total, so it differs slightly from a run asked for that total from the start.
@@ -24,7 +24,7 @@ import numpy as np
 import torch
 
 from rigopt.baselines.config import ModelConfig
-from rigopt.baselines.data import RigSplit
+from rigopt.baselines.data import RigSplit, augment
 from rigopt.baselines.families import Detector
 from rigopt.baselines.models import build_model, check_compatible, load_checkpoint, resolve_device, save_checkpoint
 
@@ -90,6 +90,8 @@ def train(split: RigSplit, config: ModelConfig, folder, device: str = "cpu", see
                 rate = learning_rate(config, step, total_steps)
                 for group in optimizer.param_groups:
                     group["lr"] = rate
+                if config.bev_augment:
+                    batch = augment(batch, np.random.default_rng([seed, epoch, step]))
                 batch = batch.to(target)
                 loss, parts = model.loss(model(batch), batch)
                 optimizer.zero_grad(set_to_none=True)

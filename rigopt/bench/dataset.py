@@ -5,13 +5,16 @@ Layout of one rig's split (the root a nuScenes reader expects)::
     <root>/v1.0-<split>/{log,scene,sample,sample_data,sensor,calibrated_sensor,ego_pose,
                          sample_annotation,instance,category,visibility,attribute}.json
     <root>/samples/<CAM>/<sample_data token>.png
+    <root>/depth/<CAM>/<sample_data token>.png      16-bit depth maps (rigopt's data made since they exist)
 
 Conventions are nuScenes': ``ego_pose`` and ``sample_annotation`` are in the global (world) frame,
 quaternions are (w, x, y, z), annotation sizes are (width, length, height) metres, and a camera's
 ``calibrated_sensor`` maps its optical frame (z forward, x right, y down) into the ego frame. The reader
 serves rigopt's own data and the real benchmark's folders alike.
 
-One field is rigopt's own: each ``sample_annotation`` record of rigopt's data carries ``visible_fraction``,
+Two fields are rigopt's own. Each ``sample_data`` record of rigopt's data names its depth map in
+``depth_filename`` (depth along the optical axis in cm, 0 where no surface; ``generate.DEPTH_SCALE``). Each
+``sample_annotation`` record of rigopt's data carries ``visible_fraction``,
 the float in [0, 1] its ``visibility_token`` is binned from; 0 marks an object that no camera of the rig
 sees (nuScenes' lowest level, v0-40, cannot tell it from a barely visible one). nuScenes loaders ignore the
 extra key. A record without it (the real benchmark's data, or rigopt's data made before the field, when

@@ -170,33 +170,55 @@ def in_vehicle_frame(rig: Rig) -> tuple[Rig, str | None]:
 
 def generate_split(rigs: Sequence[Rig], scenes: Sequence[Scene], out, size: tuple[int, int], render_rig: Callable,
                    ego_mesh_of: Callable, progress: Callable[[str], None] = lambda message: None,
-                   note: Callable[[str], None] = lambda message: None) -> list[Path]:
+                   note: Callable[[str], None] = lambda message: None, ray_address: str | None = None) -> list[Path]:
     """Render every (rig, scene) pair not done yet and (re)assemble each rig's tables; returns the roots
     ``<out>/<rig>/<split>``. Rigs are rendered from their vehicle's centre (:func:`in_vehicle_frame`; ``note``
-    gets each move)."""
+    gets each move). With ``ray_address`` the pairs are Ray tasks (``bench.cluster``; ``out`` must be on
+    storage every node sees)."""
     if not (len(size) == 2 and all(isinstance(v, int) and v > 0 for v in size)):
         raise RigoptError(f"image size must be two positive integers (width, height), got {size}")
-    roots = []
+    placed = []
     for rig in rigs:
         rig, moved = in_vehicle_frame(rig)
         if moved:
             note(moved)
+        placed.append(rig)
+    todo = {}
+    for rig in placed:
         for scene in scenes:
             root = Path(out) / rig.name / scene.split
-            part = root / ".parts" / f"{scene.name}.json"
-            if part.is_file():
+            if (root / ".parts" / f"{scene.name}.json").is_file():
                 progress(f"{rig.name} / {scene.name}: done before, skipped")
-                continue
-            progress(f"{rig.name} / {scene.name}: rendering {len(scene.frames)} samples x {len(rig)} cameras")
-            records = scene_records(scene, rig, root, size, ego_mesh_of(rig), render_rig)
-            part.parent.mkdir(parents=True, exist_ok=True)
-            temporary = part.with_suffix(".tmp")
-            temporary.write_text(json.dumps(records))
-            temporary.replace(part)  # a part exists only once its scene is complete
+            else:
+                todo[(rig.name, scene.name)] = (scene, rig, root, size, render_rig, ego_mesh_of)
+    if ray_address:
+        from rigopt.bench.cluster import ray_tasks
+
+        progress(f"rendering {len(todo)} (rig, scene) pairs as Ray tasks")
+        for (rig_name, scene_name), _ in ray_tasks(ray_address, render_scene, todo, what="rendering of"):
+            progress(f"{rig_name} / {scene_name}: rendered")
+    else:
+        for (rig_name, scene_name), arguments in todo.items():
+            scene, rig = arguments[:2]
+            progress(f"{rig_name} / {scene_name}: rendering {len(scene.frames)} samples x {len(rig)} cameras")
+            render_scene(*arguments)
+    roots = []
+    for rig in placed:
         for split in sorted({scene.split for scene in scenes}):
-            root = Path(out) / rig.name / split
-            roots.append(assemble(root, rig, split, size))
+            roots.append(assemble(Path(out) / rig.name / split, rig, split, size))
     return roots
+
+
+def render_scene(scene: Scene, rig: Rig, root: Path, size: tuple[int, int], render_rig: Callable,
+                 ego_mesh_of: Callable) -> None:
+    """Render and annotate one (rig, scene) pair under ``root`` and leave its part, the mark of a finished
+    pair (written last, whole)."""
+    records = scene_records(scene, rig, root, size, ego_mesh_of(rig), render_rig)
+    part = root / ".parts" / f"{scene.name}.json"
+    part.parent.mkdir(parents=True, exist_ok=True)
+    temporary = part.with_suffix(".tmp")
+    temporary.write_text(json.dumps(records))
+    temporary.replace(part)
 
 
 def assemble(root: Path, rig: Rig, split: str, size: tuple[int, int]) -> Path:

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import List
+from typing import List, Optional
 
 import typer
 
@@ -45,6 +45,9 @@ def generate_command(
     size: str = typer.Option("160x90", help=f"Image size WIDTHxHEIGHT in pixels (at most {MAX_SIDE} a side)."),
     frames: int = typer.Option(40, min=1, help="Samples per scene (2 Hz)."),
     seed: int = typer.Option(0, min=0, help="Seed offset of the scenes (0 or more)."),
+    ray: Optional[str] = typer.Option(None, "--ray", help="Render each (rig, scene) pair as a task on the Ray cluster "
+                                                          "at this address ('local' starts one here); --out must "
+                                                          "be on storage every node sees."),
 ):
     """Render the same scenes under every rig and write images and nuScenes tables (resumable)."""
     from rich.progress import Progress
@@ -73,12 +76,12 @@ def generate_command(
 
         def step(message: str) -> None:
             progress.update(task, description=message)
-            if "rendering" in message or "skipped" in message:
+            if "rendering " in message or "skipped" in message or message.endswith("rendered"):
                 progress.advance(task)
 
         roots = generate_split(loaded, scene_list, out, width_height, render_rig, ego_mesh_of, step,
                                lambda message: status_console.print(f"rigopt: note: {message}", markup=False,
-                                                                    highlight=False, soft_wrap=True))
+                                                                    highlight=False, soft_wrap=True), ray)
     console.print("wrote " + ", ".join(str(r) for r in roots))
 
 

@@ -124,9 +124,9 @@ def test_lss_depth_targets_are_the_nearest_surface_of_each_patch():
 def test_lss_learns_from_depth_only_when_the_data_has_it_and_the_weight_is_positive(tiny_data):
     batch = RigSplit(tiny_data, "R5", "train").batch([0, 1])
     no_depth = Batch(batch.images, batch.intrinsics, batch.cam_to_ego, batch.boxes, batch.tokens)
-    for config, data, supervised in ((model_config("lss", "tiny"), batch, True),
+    for config, data, supervised in ((model_config("lss", "tiny", depth_weight=1.0), batch, True),
                                      (model_config("lss", "tiny", depth_weight=0.0), batch, False),
-                                     (model_config("lss", "tiny"), no_depth, False)):
+                                     (model_config("lss", "tiny", depth_weight=1.0), no_depth, False)):
         torch.manual_seed(0)
         model = build_model(config)
         outputs = model(data)
@@ -138,6 +138,29 @@ def test_lss_learns_from_depth_only_when_the_data_has_it_and_the_weight_is_posit
             assert loss.item() == pytest.approx(box_loss.item() + config.depth_weight * parts["depth"], rel=1e-5)
         else:
             assert loss.item() == pytest.approx(box_loss.item())
+
+
+def test_augmented_batches_keep_every_box_where_the_calibration_projects_it(tiny_data):
+    from rigopt.baselines.data import augment
+
+    batch = RigSplit(tiny_data, "R1", "train").batch([0, 1, 2, 3])
+    moved = augment(batch, np.random.default_rng(3))
+    assert moved.images is batch.images and moved.depths is batch.depths
+    changed = 0
+    for b in range(4):
+        before, after = batch.boxes[b], moved.boxes[b]
+        changed += int(not torch.allclose(before.centers, after.centers))
+        torch.testing.assert_close(after.centers.norm(dim=1), before.centers.norm(dim=1))  # turned, not moved
+        for k in range(batch.n_cameras):  # the centre in each camera's optical frame is unchanged
+            seen_before = torch.linalg.solve(batch.cam_to_ego[b, k], torch.cat([before.centers, torch.ones(len(before.centers), 1)], 1).T)
+            seen_after = torch.linalg.solve(moved.cam_to_ego[b, k], torch.cat([after.centers, torch.ones(len(after.centers), 1)], 1).T)
+            torch.testing.assert_close(seen_after, seen_before, atol=1e-4, rtol=1e-4)
+            # and so is the heading: a point 1 m ahead of the box along its yaw
+            ahead = lambda t: t.centers + torch.stack([torch.cos(t.yaws), torch.sin(t.yaws), torch.zeros_like(t.yaws)], 1)
+            tip_before = torch.linalg.solve(batch.cam_to_ego[b, k], torch.cat([ahead(before), torch.ones(len(before.yaws), 1)], 1).T)
+            tip_after = torch.linalg.solve(moved.cam_to_ego[b, k], torch.cat([ahead(after), torch.ones(len(after.yaws), 1)], 1).T)
+            torch.testing.assert_close(tip_after, tip_before, atol=1e-4, rtol=1e-4)
+    assert changed == 4
 
 
 def test_rig_split_on_a_folder_lacking_the_rig_names_the_rigs_there(tiny_data):

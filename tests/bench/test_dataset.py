@@ -160,3 +160,27 @@ def test_a_rear_axle_rig_is_rendered_from_its_vehicle_centre(tmp_path, scene, al
                for r in json.loads((tables / "calibrated_sensor.json").read_text())}
     for camera in base.cameras:  # the tables are in the same frame as the renders
         np.testing.assert_allclose(written[camera.id], camera.position, atol=1e-9)
+
+
+def test_generation_on_ray_writes_what_generation_here_writes(tmp_path, scene):
+    """Each (rig, scene) pair as a task of a local Ray instance: the same tables, images and depth maps."""
+    ray = pytest.importorskip("ray")
+    if ray.is_initialized():
+        pytest.skip("a Ray instance is already running in this process")
+    from rigopt.bench.render import render_rig
+
+    rigs = [load_rig("R5"), load_rig("R1-c6")]
+    here = generate_split(rigs, [scene], tmp_path / "here", (24, 14), render_rig, lambda r: None)
+    messages = []
+    try:
+        there = generate_split(rigs, [scene], tmp_path / "ray", (24, 14), render_rig, lambda r: None,
+                               messages.append, ray_address="local")
+    finally:
+        ray.shutdown()
+    assert sum(m.endswith("rendered") for m in messages) == 2
+    for a, b in zip(here, there):
+        files = sorted(p.relative_to(a) for p in a.rglob("*") if p.is_file())
+        assert files and files == sorted(p.relative_to(b) for p in b.rglob("*") if p.is_file())
+        assert any(str(f).startswith("depth/") for f in files)
+        for name in files:
+            assert (a / name).read_bytes() == (b / name).read_bytes(), name
