@@ -90,7 +90,8 @@ def validate_design(design: Rig, reference: str, family: str, data, calibration:
     comparison rigs. Renders missing test splits into ``data``; returns a JSON-ready dict.
 
     Each measured drop has a 95 % interval from resampling whole test scenes (the same draw for every rig);
-    ``design_minus`` holds the design's drop minus each other rig's,
+    ``bootstrap.measured_drops`` keeps each rig's resampled drops (the same draws, in the same order, for
+    every validation of this test split and seed); ``design_minus`` holds the design's drop minus each other rig's,
     with its paired interval (below 0: the design loses less).
     """
     from rigopt.bench.generate import ego_mesh_lookup, generate_split, split_layout
@@ -142,7 +143,9 @@ def validate_design(design: Rig, reference: str, family: str, data, calibration:
             "reference_mAP_visible": finite_or_none(maps_visible[0]),
             "test_scenes": len(scenes), "image_size": list(size), "rigs": entries,
             "design_minus": design_minus,
-            "bootstrap": {"resamples": resamples, "seed": seed, "unit": "scene", "blocks": len(blocks)}}
+            "bootstrap": {"resamples": resamples, "seed": seed, "unit": "scene", "blocks": len(blocks),
+                          "measured_drops": {name: [round(float(v), 4) if np.isfinite(v) else None for v in column]
+                                             for name, column in zip(names, resampled_drops[:, 1:].T)}}}
 
 
 def sample_blocks(samples, size: int | None = None) -> list[np.ndarray]:

@@ -14,12 +14,15 @@ from rigopt.errors import RigoptError
 
 
 def _rig_lookup(rigs_dir: Optional[Path]):
-    """Resolve a rig name: ``<rigs_dir>/<name>.json`` when given and present, else the library."""
+    """Resolve a rig name: ``<name>.json`` in ``rigs_dir`` or a folder below it (the shallowest) when given and
+    present, else the library."""
     from rigopt.rig.library import load_rig
 
     def lookup(name: str):
-        if rigs_dir is not None and (rigs_dir / f"{name}.json").is_file():
-            return load_rig(rigs_dir / f"{name}.json")
+        if rigs_dir is not None:
+            found = sorted(rigs_dir.rglob(f"{name}.json"), key=lambda path: len(path.parts))
+            if found:
+                return load_rig(found[0])
         return load_rig(name)
     return lookup
 
@@ -33,7 +36,7 @@ def calibrate_command(
     bootstrap: Optional[int] = typer.Option(None, min=0, help="Bootstrap resamples for the 95 % interval of rho "
                                                                "(default: the benchmark protocol's 1000)."),
     seed: Optional[int] = typer.Option(None, min=0, help="Seed of the bootstrap (default 0)."),
-    rigs: Optional[Path] = typer.Option(None, help="Folder of <rig>.json files for rigs not in the library."),
+    rigs: Optional[Path] = typer.Option(None, help="Folder of <rig>.json files (in it or below it) for rigs not in the library."),
     solver: str = typer.Option("lbfgsb", help="Whose beta is reported: lbfgsb (the benchmark's) or qp (cvxpy)."),
     metric: str = typer.Option("rigcd", "--metric", help=METRIC_HELP),
     test_on: Optional[Path] = typer.Option(None, "--test-on",

@@ -1,16 +1,19 @@
 """The cross-rig study of rigopt's torch baselines on its synthetic benchmark.
 
 Steps (each resumable; rerun the script to continue):
-  1. data:        render the train split (12 scenes) of the matrix rigs and the test split (4 scenes) of
+  1. data:        render the train split (48 scenes) of the matrix rigs and the test split (16 scenes) of
                   those and of the validation rigs, 160 x 90, under --data;
-  2. matrix:      per family, train on every matrix rig and test on every one (rigopt bench matrix);
-  3. calibration: RigCD calibrated on the measured synthetic transfer (rigopt calibrate), held-out rho;
-  4. agreement:   Spearman rho of synthetic against real relative drops on the same pairs;
-  5. validation:  the firetruck and hgv designs from R1 (rigopt validate);
-  6. report:      results/results.md from all of the above.
+  2. validation:  the R1 model of each family (seed 0 the matrix's, other seeds trained again) tested on
+                  the firetruck and hgv designs from R1 and their comparison rigs (rigopt validate);
+  3. matrix:      per family, train on every matrix rig and test on every one (rigopt bench matrix);
+  4. calibration: RigCD calibrated on the measured synthetic transfer (rigopt calibrate), held-out rho;
+  5. sim_to_real: the joint weights fitted on the synthetic transfer alone, judged on the real benchmark;
+  6. agreement:   Spearman rho of synthetic against real relative drops on the same pairs;
+  7. report:      results/results.md from all of the above.
 Writes results/ (matrices, loss logs, calibration, figures, tables, results.md); checkpoints stay under
---data. Usage: python studies/baselines/run.py --data DIR [--families lss petr] [--epochs 8]
-              [--steps data matrix calibration agreement validation] [--device cpu] [--seeds 0 1 2]
+--data. Usage: python studies/baselines/run.py --data DIR [--families lss] [--epochs 4]
+              [--steps data validation matrix calibration sim_to_real agreement report] [--device cpu]
+              [--seeds 0 1 2] [--ray ADDRESS]
 """
 
 from __future__ import annotations
@@ -30,12 +33,25 @@ RESULTS = HERE / "results"  # the readings: tables, calibration, logs
 #: results layout, the validation outputs, the validated design rigs.
 BASELINES = HERE.parents[1] / "baselines"
 TRANSFER, VALIDATION = BASELINES / "transfer", BASELINES / "validation"
+RIGS = BASELINES / "rigs"
 CONTROL = ["R1", "R1-r", "R1-t", "R1-f", "R1-c6", "R1-c10"]
-DIVERSE = ["R2", "R5", "R9"]
-DESIGNS = [BASELINES / "rigs" / "firetruck_from_R1.json", BASELINES / "rigs" / "hgv_from_R1.json"]
+DIVERSE = ["R2", "R3", "R4", "R5", "R6", "R7", "R8", "R9"]
+#: The real datasets' rigs (baselines/rigs/real/README.md) and the designs validated below.
+REAL = [RIGS / "real" / f"{name}.json" for name in ("nuscenes", "argoverse2", "waymo", "ddad")]
+DESIGNS = [RIGS / "firetruck_from_R1.json", RIGS / "hgv_from_R1.json"]
+#: The matrix's training (and test) rigs: counts 4 to 12, heights 0.5 to 3 m, FOVs 47 to 120 degrees, four
+#: vehicles, the real datasets' rigs and two designs.
+MATRIX = CONTROL + DIVERSE + REAL + DESIGNS
+TRAIN_SCENES, TEST_SCENES = 48, 16
+#: The real benchmark's measured transfer, beside the checkout.
+REAL_RESULTS = HERE.parents[2] / "shared" / "pccr" / "results"
 #: Each synthetic family against its real counterparts in the benchmark.
 COUNTERPARTS = {"lss": ["BEVDet", "BEVFusion"], "petr": ["PETR"]}
-STEPS = ("data", "matrix", "calibration", "agreement", "validation", "report")
+STEPS = ("data", "validation", "matrix", "calibration", "sim_to_real", "agreement", "report")
+
+
+def rig_name(rig) -> str:
+    return Path(rig).stem if str(rig).endswith(".json") else str(rig)
 
 
 def rigopt(*args: str) -> None:
@@ -44,23 +60,35 @@ def rigopt(*args: str) -> None:
     subprocess.run(command, check=True)
 
 
-def data_step(data: Path) -> None:
-    rigopt("bench", "generate", "--rigs", *CONTROL, *DIVERSE, "--split", "train", "--scenes", 12, "--out", data)
-    rigopt("bench", "generate", "--rigs", *CONTROL, *DIVERSE, "R6", *DESIGNS, "--split", "test", "--scenes", 4,
-           "--out", data)
+def data_step(data: Path, ray: str | None) -> None:
+    cluster = ["--ray", ray] if ray else []
+    rigopt("bench", "generate", "--rigs", *MATRIX, "--split", "train", "--scenes", TRAIN_SCENES, "--out", data,
+           *cluster)
+    rigopt("bench", "generate", "--rigs", *MATRIX, "--split", "test", "--scenes", TEST_SCENES, "--out", data, *cluster)
 
 
-def matrix_step(data: Path, family: str, epochs: int, device: str) -> None:
-    rigopt("bench", "matrix", "--data", data, "--rigs", *CONTROL, *DIVERSE, "--model", family, "--epochs", epochs,
-           "--device", device, "--out", TRANSFER)
+def matrix_step(data: Path, family: str, epochs: int, device: str, ray: str | None) -> None:
+    rigopt("bench", "matrix", "--data", data, "--rigs", *MATRIX, "--model", family, "--epochs", epochs,
+           "--device", device, "--out", TRANSFER, *(["--ray", ray] if ray else []))
     logs = RESULTS / "logs" / family
     logs.mkdir(parents=True, exist_ok=True)
-    for rig in CONTROL + DIVERSE:
+    for rig in map(rig_name, MATRIX):
         shutil.copy(data / "runs" / family / rig / "train_log.csv", logs / f"{rig}.csv")
 
 
 def calibration_step() -> None:
-    rigopt("calibrate", "--results", TRANSFER, "--out", RESULTS / "calibration")
+    rigopt("calibrate", "--results", TRANSFER, "--rigs", RIGS, "--out", RESULTS / "calibration")
+
+
+def sim_to_real_step() -> None:
+    """The joint weights fitted on the synthetic transfer alone, judged on the real benchmark's pairs."""
+    from rigopt.output import write_text_atomic
+
+    command = ["rigopt", "calibrate", "--results", str(TRANSFER), "--rigs", str(RIGS), "--test-on",
+               str(REAL_RESULTS), "--json"]
+    print("$", " ".join(command), flush=True)
+    output = subprocess.run(command, check=True, capture_output=True, text=True).stdout
+    write_text_atomic(RESULTS / "calibration" / "sim_to_real.json", output)
 
 
 def agreement_step() -> list[list]:
@@ -74,7 +102,7 @@ def agreement_step() -> list[list]:
 
     synthetic = read_transfer(TRANSFER).drops()
     real = read_transfer(data_dir("metrics") / "pccr_transfer.csv").drops()
-    rigs = CONTROL + DIVERSE
+    rigs = list(map(rig_name, MATRIX))
     real = real.select(np.isin(real.train, rigs) & np.isin(real.test, rigs))
     detectors = list(dict.fromkeys(real.model))
     header = ["family", "real detector", "counterpart", "pairs", "rho", "ci_low", "ci_high", "p_value", "mae"]
@@ -93,12 +121,12 @@ def agreement_step() -> list[list]:
 
 def validation_step(data: Path, family: str, device: str, epochs: int, seeds: list[int]) -> None:
     """rigopt validate of each design with the R1-trained model of ``family``; seed 0 is the matrix's run
-    (``<data>/runs``), other seeds train R1 again in ``<data>/runs-seed<S>`` (resumable)."""
+    (``<data>/runs``, trained here if the matrix has not run yet), other seeds train R1 again in
+    ``<data>/runs-seed<S>`` (resumable)."""
     for seed in seeds:
         runs = data / ("runs" if seed == 0 else f"runs-seed{seed}")
-        if seed:
-            rigopt("bench", "train", "--data", data, "--rig", "R1", "--model", family, "--epochs", epochs, "--seed",
-                   seed, "--device", device, "--runs", runs)
+        rigopt("bench", "train", "--data", data, "--rig", "R1", "--model", family, "--epochs", epochs, "--seed",
+               seed, "--device", device, "--runs", runs)
         for design in DESIGNS:
             suffix = "" if seed == 0 else f"_seed{seed}"
             rigopt("validate", design, "--ref", "R1", "--model", family, "--data", data, "--device", device,
@@ -107,7 +135,7 @@ def validation_step(data: Path, family: str, device: str, epochs: int, seeds: li
 
 def matrix_tables(family: str) -> tuple[list[list], list[list]]:
     """[header, *rows] of the mAP matrix and of the relative drops (trained on rows, tested on columns)."""
-    rigs = CONTROL + DIVERSE
+    rigs = list(map(rig_name, MATRIX))
     rows_map, rows_drop = [], []
     for train in rigs:
         path = TRANSFER / family / f"trained_on_{train}.json"
@@ -124,7 +152,7 @@ def matrix_tables(family: str) -> tuple[list[list], list[list]]:
 
 def training_table(family: str) -> list[list]:
     rows = []
-    for rig in CONTROL + DIVERSE:
+    for rig in map(rig_name, MATRIX):
         log = RESULTS / "logs" / family / f"{rig}.csv"
         if not log.is_file():
             continue
@@ -138,13 +166,45 @@ def training_table(family: str) -> list[list]:
 
 def seed_row(path: Path) -> list:
     """One validation file as [family, design, seed, own mAP, design drop, then the differences to the naive
-    transfer and to the hand-designed rig with their intervals]."""
+    transfer, the height-matched transfer and the hand-designed rig with their intervals]."""
     result = json.loads(path.read_text())
     seed = path.stem.partition("_seed")[2]
     design = next(e for e in result["rigs"] if e["role"] == "design")
     against = {e["role"]: [e["difference"], *e["ci"]] for e in result["design_minus"]}
     return [result["model"], design["rig"], int(seed or 0), result["reference_mAP"], design["measured_drop"],
-            *against.get("naive transfer", [None] * 3), *against.get("hand-designed", [None] * 3)]
+            *against.get("naive transfer", [None] * 3), *against.get("height-matched transfer", [None] * 3),
+            *against.get("hand-designed", [None] * 3)]
+
+
+def ordering_rows(family: str) -> list[list]:
+    """Does a lower predicted drop order the measured drops? Per training seed, Spearman rho between the
+    predicted and the measured drops over every validated rig of both vehicles, with a 95 % interval over the
+    resampled test scenes (the same scene draws for every rig) and the share of draws with rho > 0; then the
+    same for the measured drops averaged over the seeds."""
+    import numpy as np
+    from scipy.stats import spearmanr
+
+    by_seed: dict[int, list[dict]] = {}
+    for path in sorted(VALIDATION.glob(f"{family}_*.json")):
+        seed = int(path.stem.partition("_seed")[2] or 0)
+        by_seed.setdefault(seed, []).append(json.loads(path.read_text()))
+    rows, means = [], {}
+    for seed, results in sorted(by_seed.items()):
+        predicted, measured, draws = [], [], []
+        for result in results:
+            for entry in result["rigs"]:
+                predicted.append(entry["predicted_drop"])
+                measured.append(entry["measured_drop"])
+                draws.append(result["bootstrap"]["measured_drops"][entry["rig"]])
+                means.setdefault(entry["rig"], [entry["predicted_drop"], []])[1].append(entry["measured_drop"])
+        draws = np.array(draws, dtype=float).T  # (resamples, rigs)
+        rhos = np.array([spearmanr(predicted, d).statistic for d in draws if np.isfinite(d).all()])
+        rows.append([family, seed, len(predicted), spearmanr(predicted, measured).statistic,
+                     *np.percentile(rhos, [2.5, 97.5]), float((rhos > 0).mean())])
+    if len(by_seed) > 1:
+        pairs = [(p, float(np.mean(m))) for p, m in means.values() if len(m) == len(by_seed)]
+        rows.append([family, "mean of seeds", len(pairs), spearmanr(*zip(*pairs)).statistic, None, None, None])
+    return rows
 
 
 def report_step(families) -> None:
@@ -175,20 +235,25 @@ def report_step(families) -> None:
         table = read_csv(RESULTS / "agreement_real.csv")
         parts += ["## Yardstick: the real detectors against one another on the same pairs", "", markdown(table), ""]
     validations = sorted((VALIDATION).glob("*.json"))
+    ordering = [row for family in families for row in ordering_rows(family)]
+    if ordering:
+        parts += ["## Does a lower predicted drop order the measured drops? (all validated rigs, both vehicles)", "",
+                  markdown([["model", "seed", "rigs", "Spearman rho", "ci_low", "ci_high", "share of draws rho > 0"],
+                            *ordering]), ""]
     if validations:
         parts += ["## Validation across training seeds (design's drop minus the other rig's)", "",
                   markdown([["model", "design", "seed", "own mAP", "design drop", "- naive", "ci_low", "ci_high",
-                             "- hand-designed", "ci_low", "ci_high"],
+                             "- height-matched", "ci_low", "ci_high", "- hand-designed", "ci_low", "ci_high"],
                             *(seed_row(path) for path in validations)]), ""]
     for path in validations:
         result = json.loads(path.read_text())
         rows = [[e["role"], e["rig"], e["n_cameras"], e["mAP"], e["measured_drop"], *e["measured_drop_ci"],
-                 e["predicted_drop"], e["rigcd"]] for e in result["rigs"]]
+                 e.get("measured_drop_visible"), e["predicted_drop"], e["rigcd"]] for e in result["rigs"]]
         differences = [[f"design - {e['rig']}", e["role"], e["difference"], *e["ci"]] for e in result["design_minus"]]
         parts += [f"## Validation: {path.stem} ({result['model']} trained on {result['reference']}, own mAP "
                   f"{result['reference_mAP']:.3f})", "",
-                  markdown([["role", "rig", "cameras", "mAP", "measured drop", "ci_low", "ci_high", "predicted drop",
-                             "RigCD"], *rows]), "",
+                  markdown([["role", "rig", "cameras", "mAP", "measured drop", "ci_low", "ci_high",
+                             "visible-only drop", "predicted drop", "RigCD"], *rows]), "",
                   markdown([["difference", "other rig's role", "measured", "ci_low", "ci_high"], *differences]), ""]
     (RESULTS / "results.md").write_text("\n".join(parts))
 
@@ -196,22 +261,25 @@ def report_step(families) -> None:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--data", type=Path, required=True)
-    parser.add_argument("--families", nargs="+", default=["lss", "petr"])
-    parser.add_argument("--epochs", type=int, default=8)
+    parser.add_argument("--families", nargs="+", default=["lss"])
+    parser.add_argument("--epochs", type=int, default=4)
+    parser.add_argument("--ray", help="Ray cluster address for rendering and the matrix's training ('local': here)")
     parser.add_argument("--device", default="cpu")
-    parser.add_argument("--seeds", nargs="+", type=int, default=[0], help="training seeds of the validation step")
+    parser.add_argument("--seeds", nargs="+", type=int, default=[0, 1, 2], help="training seeds of the validation step")
     parser.add_argument("--steps", nargs="+", default=list(STEPS), choices=STEPS)
     args = parser.parse_args()
     RESULTS.mkdir(parents=True, exist_ok=True)
     if "data" in args.steps:
-        data_step(args.data)
+        data_step(args.data, args.ray)
     for family in args.families:
-        if "matrix" in args.steps:
-            matrix_step(args.data, family, args.epochs, args.device)
         if "validation" in args.steps:
             validation_step(args.data, family, args.device, args.epochs, args.seeds)
+        if "matrix" in args.steps:
+            matrix_step(args.data, family, args.epochs, args.device, args.ray)
     if "calibration" in args.steps:
         calibration_step()
+    if "sim_to_real" in args.steps:
+        sim_to_real_step()
     if "agreement" in args.steps:
         print(markdown(agreement_step()))
     if "report" in args.steps:

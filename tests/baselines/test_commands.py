@@ -114,7 +114,7 @@ def test_validate_renders_the_design_and_reports_measured_beside_predicted(train
     assert process.returncode == 0, process.stderr
     result = json.loads(process.stdout)
     roles = {entry["role"]: entry for entry in result["rigs"]}
-    assert set(roles) == {"design", "hand-designed", "naive transfer"}
+    assert set(roles) == {"design", "hand-designed", "naive transfer", "height-matched transfer"}
     assert roles["design"]["rig"] == "firetruck_from_R1" and roles["hand-designed"]["rig"] == "R6"
     for entry in result["rigs"]:
         assert (trained / entry["rig"] / "test" / "v1.0-test" / "sample.json").is_file()
@@ -123,14 +123,20 @@ def test_validate_renders_the_design_and_reports_measured_beside_predicted(train
     assert "reference_mAP_visible" in result
     assert result["reference"] == "R1" and result["test_scenes"] == 1 and result["image_size"] == [64, 36]
     by_rig = {entry["rig"]: entry for entry in result["rigs"]}
-    assert [e["role"] for e in result["design_minus"]] == ["hand-designed", "naive transfer"]
+    assert [e["role"] for e in result["design_minus"]] == ["hand-designed", "naive transfer", "height-matched transfer"]
     for entry in result["design_minus"]:
         design, other = roles["design"]["measured_drop"], by_rig[entry["rig"]]["measured_drop"]
         if None not in (design, other):
             assert entry["difference"] == pytest.approx(design - other)
         low, high = entry["ci"]
         assert low is None or low <= high
-    assert result["bootstrap"]["blocks"] >= 1 and result["bootstrap"]["resamples"] == 1000
+    bootstrap = result["bootstrap"]
+    assert bootstrap["unit"] == "scene" and bootstrap["blocks"] == 1 and bootstrap["resamples"] == 1000
+    for entry in result["rigs"]:  # one test scene: every draw is that scene, so every resampled drop is the drop
+        draws = bootstrap["measured_drops"][entry["rig"]]
+        assert len(draws) == 1000
+        if entry["measured_drop"] is not None:
+            assert draws == pytest.approx([entry["measured_drop"]] * 1000, abs=1e-4)
 
 
 @pytest.mark.parametrize("args, message", [

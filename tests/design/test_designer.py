@@ -7,6 +7,7 @@ against the RigCD of the rig it chose.
 
 from __future__ import annotations
 
+import dataclasses
 import re
 from dataclasses import FrozenInstanceError, replace
 from types import SimpleNamespace
@@ -152,6 +153,21 @@ def test_naive_transfer_keeps_each_reference_lens_on_the_catalogue(firetruck):
     lenses = np.asarray(firetruck.settings.fovs)
     for moved, original in zip(firetruck.result.comparisons.naive_transfer.rig.cameras, firetruck.reference.cameras):
         assert moved.fov == lenses[np.argmin(np.abs(lenses - original.fov))]
+
+
+def test_height_matched_transfer_keeps_each_camera_nearest_its_height(firetruck):
+    from rigopt.design.designer import HEIGHT_STEP, mount_candidates, naive_transfer
+
+    settings = dataclasses.replace(firetruck.settings, symmetric=False)
+    candidates = mount_candidates(firetruck.vehicle, settings)
+    naive = naive_transfer(firetruck.vehicle, firetruck.reference, candidates, settings)
+    matched = naive_transfer(firetruck.vehicle, firetruck.reference, candidates, settings, match="height")
+    assert matched.name.startswith("height_matched_") and len(matched) == len(firetruck.reference)
+    gap = lambda rig: np.array([abs(c.position[2] - r.position[2]) for c, r in zip(rig.cameras, firetruck.reference.cameras)])
+    assert (gap(matched) <= gap(naive) + HEIGHT_STEP).all() and gap(matched).sum() < gap(naive).sum()
+    for moved, original in zip(matched.cameras, firetruck.reference.cameras):  # facing as the reference camera
+        assert np.degrees(np.arccos(np.clip(moved.forward[:2] @ original.forward[:2] / np.linalg.norm(moved.forward[:2])
+                                            / np.linalg.norm(original.forward[:2]), -1, 1))) <= settings.yaw_step_deg / 2 + 1e-6
 
 
 def test_design_cameras_come_in_mirrored_pairs_or_sit_on_the_centreline(firetruck):
@@ -365,3 +381,22 @@ def test_the_naive_transfer_is_refined_as_the_design_is(firetruck):
         assert after < before  # accepted only when it lowers the calibrated RigCD
     else:
         assert after == pytest.approx(before, abs=1e-12)
+
+
+def test_naive_transfer_past_a_trailer_takes_the_nearest_yaw_a_mount_allows():
+    """No mount on the hgv may look straight back (the trailer): R1's rear camera takes the nearest yaw."""
+    from rigopt.design.designer import mount_candidates, naive_transfer
+    from rigopt.design.settings import DesignSettings
+    from rigopt.rig.library import load_rig
+    from rigopt.vehicle.library import load_vehicle
+
+    vehicle, reference = load_vehicle("hgv"), load_rig("R1")
+    settings = DesignSettings(symmetric=False, require="none")
+    candidates = mount_candidates(vehicle, settings)
+    allowed = np.abs(np.angle(np.exp(1j * (candidates.yaws - np.pi))))
+    assert allowed.min() > np.radians(settings.yaw_step_deg) / 2  # nothing faces straight back
+    naive = naive_transfer(vehicle, reference, candidates, settings)
+    assert naive is not None and len(naive) == len(reference)
+    rear = naive.cameras[[c.id for c in reference.cameras].index("CAM_BUMPER_BACK")]
+    assert abs(np.angle(np.exp(1j * (np.arctan2(rear.forward[1], rear.forward[0]) - np.pi)))) == pytest.approx(
+        allowed[candidates.fovs == rear.fov].min(), abs=1e-6)
