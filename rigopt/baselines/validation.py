@@ -45,7 +45,7 @@ def load_design(path) -> Rig:
         rig_path = path.with_name("rig.json")
         if not rig_path.is_file():
             try:
-                rig_path = Path(json.loads(path.read_text())["rig_file"])
+                rig_path = path.parent / json.loads(path.read_text())["rig_file"]  # relative to the report
             except (json.JSONDecodeError, UnicodeDecodeError, KeyError, TypeError):
                 raise RigFileError(f"{path}: a report without rig_file and no rig.json beside it") from None
     rig = load_rig(rig_path)

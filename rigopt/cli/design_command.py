@@ -178,7 +178,7 @@ def design_command(
         result = design_rig(target, references, calibration, settings, compare_with=benchmark_rigs(target),
                             progress=lambda message: spinner.update(message) or status.print(f"  {message}"))
     with atomic_folder(out, force=force) as work:
-        files = published(write_design_outputs(result, work, published_as=out), work, out)
+        files = published(write_design_outputs(result, work), work, out)
     summary = design_dict(result, files[0])
     if as_json:
         print_json(summary)

@@ -132,14 +132,12 @@ def design_dict(result: DesignResult, rig_file: Path | None) -> dict:
     }
 
 
-def write_design_outputs(result: DesignResult, out_dir, *, published_as=None) -> list[Path]:
+def write_design_outputs(result: DesignResult, out_dir) -> list[Path]:
     """Write rig.json (benchmark format), report.json, the pictures (with the regulation fields over the
     near-field blind zones, fields.png) and report.html (with the interactive 3D view of the design on its
     vehicle, the fields on the ground and the reference rig in grey when it sits on the same vehicle) into
-    ``out_dir``.
-
-    ``published_as``: the folder ``out_dir`` becomes once complete (when it is a temporary one, see
-    rigopt.output.atomic_folder); the reports name the rig file there.
+    ``out_dir``. The reports name the rig file relative to their folder (``rig.json``), so that a report
+    holds no machine path and stays valid where the folder is moved.
     """
     from rigopt.coverage.measures import coverage_report, ring_report
     from rigopt.report.coverage_figures import write_regions_figure, write_rings_figure
@@ -150,7 +148,7 @@ def write_design_outputs(result: DesignResult, out_dir, *, published_as=None) ->
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     rig_file = write_rig(result.design.rig, out_dir / "rig.json")
-    summary = design_dict(result, Path(published_as) / rig_file.name if published_as is not None else rig_file)
+    summary = design_dict(result, Path(rig_file.name))  # named relative to the report's folder: no machine paths
     report = out_dir / "report.json"
     report.write_text(json.dumps(json_ready(summary), indent=2) + "\n")
     vehicle, reference = result.vehicle, result.references[0]

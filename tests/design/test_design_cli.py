@@ -127,6 +127,7 @@ def test_benchmark_comparison_is_r6_and_the_design_predicts_less_drop(design_run
 def test_rig_file_is_in_the_out_folder(design_run):
     summary, out, _ = design_run
     assert os.path.samefile(summary["rig_file"], out / "rig.json")
+    assert json.loads((out / "report.json").read_text())["rig_file"] == "rig.json"  # no machine path in the file
 
 
 def test_rig_file_loads_for_the_firetruck(design_run):
