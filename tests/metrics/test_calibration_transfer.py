@@ -21,7 +21,7 @@ from in_process import run_rigopt
 
 REPO = Path(__file__).resolve().parents[2]
 REAL = REPO / "metrics" / "pccr_transfer.csv"
-SYNTHETIC = REPO / "baselines" / "transfer"
+SYNTHETIC = REPO / "baselines" / "v1" / "transfer"
 SYNTHETIC_RIGS = REPO / "baselines" / "rigs"
 RESAMPLES = 50
 
