@@ -207,8 +207,8 @@ def validate_command(
     rows = [[f"design - {e['rig']}", e["role"], _number(e["difference"]), _interval(e["ci"])]
             for e in result["design_minus"]]
     print_table(f"measured drop of the design minus the others (below 0: the design loses less); intervals from "
-                f"{result['bootstrap']['resamples']} paired resamples of {result['bootstrap']['blocks']} blocks of "
-                f"test frames", ["difference", "other rig's role", "value", "95 % interval"], rows)
+                f"{result['bootstrap']['resamples']} paired resamples of the {result['bootstrap']['blocks']} test "
+                f"scenes", ["difference", "other rig's role", "value", "95 % interval"], rows)
 
 
 def _visible_maps(out: Path, family: str, names: List[str]) -> dict:
