@@ -213,6 +213,47 @@ def ordering_rows(family: str) -> list[list]:
     return rows
 
 
+def term_rows(family: str) -> list[list]:
+    """Which of RigCD's terms orders the measured drops of the validated rigs? For every rig of the seed-0
+    validations (the comparison rigs rebuilt as ``rigopt validate`` builds them): its calibration features
+    against R1 (t m, r rad, f deg, count), the offset of its mean camera height from R1's (m), the measured
+    drop averaged over the seeds; then Spearman rho of each against that drop. Cached in
+    results/validation_terms.csv (delete it to recompute)."""
+    import numpy as np
+    from scipy.stats import spearmanr
+
+    from rigopt.baselines.validation import comparison_rigs, load_design
+    from rigopt.metrics.calibration import load_weights
+    from rigopt.metrics.ranking import predict_transfer
+    from rigopt.rig.library import load_rig
+
+    cache = RESULTS / "validation_terms.csv"
+    header = ["rig", "t", "r", "f", "count", "height offset", "predicted drop", "measured drop (mean of seeds)"]
+    if not cache.is_file():
+        reference, calibration = load_rig("R1"), load_weights("joint", "rigcd")
+        drops: dict[str, list[float]] = {}
+        for path in VALIDATION.glob(f"{family}_*.json"):
+            for entry in json.loads(path.read_text())["rigs"]:
+                drops.setdefault(entry["rig"], []).append(entry["measured_drop"])
+        rows, done = [], set()
+        for design in VALIDATED:
+            for _, rig in comparison_rigs(load_design(design), reference, calibration):
+                if rig.name in done or rig.name not in drops:
+                    continue
+                done.add(rig.name)
+                p = predict_transfer(reference, [rig], calibration)[0]
+                height = abs(np.mean([c.position[2] for c in rig.cameras])
+                             - np.mean([c.position[2] for c in reference.cameras]))
+                rows.append([rig.name, p.t, p.r, p.f, p.count, float(height), p.predicted_drop,
+                             float(np.mean(drops[rig.name]))])
+        write_csv(cache, header, rows)
+    rows = read_csv(cache)[1:]
+    measured = [row[-1] for row in rows]
+    rhos = ["Spearman rho with the measured drop",
+            *(spearmanr([row[k] for row in rows], measured).statistic for k in range(1, len(header) - 1)), 1.0]
+    return [header, *rows, rhos]
+
+
 def report_step(families) -> None:
     parts = ["# Synthetic cross-rig study: results", "",
              "Produced by `python studies/baselines/run.py`; read [the README](../README.md) for the protocol "
@@ -246,6 +287,9 @@ def report_step(families) -> None:
         parts += ["## Does a lower predicted drop order the measured drops? (all validated rigs, both vehicles)", "",
                   markdown([["model", "seed", "rigs", "Spearman rho", "ci_low", "ci_high", "share of draws rho > 0"],
                             *ordering]), ""]
+    if validations and "lss" in families:
+        parts += ["## RigCD's terms against the measured drops (validated rigs, LSS, drops averaged over seeds)", "",
+                  markdown(term_rows("lss")), ""]
     if validations:
         parts += ["## Validation across training seeds (design's drop minus the other rig's)", "",
                   markdown([["model", "design", "seed", "own mAP", "design drop", "- naive", "ci_low", "ci_high",
