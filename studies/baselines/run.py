@@ -132,8 +132,10 @@ def validation_step(data: Path, family: str, device: str, epochs: int, seeds: li
                seed, "--device", device, "--runs", runs)
         for design in VALIDATED:
             suffix = "" if seed == 0 else f"_seed{seed}"
+            out = VALIDATION / f"{family}_{design.stem}{suffix}.json"
             rigopt("validate", design, "--ref", "R1", "--model", family, "--data", data, "--device", device,
-                   "--runs", runs, "--out", VALIDATION / f"{family}_{design.stem}{suffix}.json")
+                   "--runs", runs, "--out", out)
+            out.write_text(out.read_text().replace(f"{Path(data).resolve()}/", "<data>/"))  # no machine paths
 
 
 def matrix_tables(family: str) -> tuple[list[list], list[list]]:
