@@ -190,7 +190,7 @@ def generate_split(rigs: Sequence[Rig], scenes: Sequence[Scene], out, size: tupl
             if (root / ".parts" / f"{scene.name}.json").is_file():
                 progress(f"{rig.name} / {scene.name}: done before, skipped")
             else:
-                todo[(rig.name, scene.name)] = (scene, rig, root, size, render_rig, ego_mesh_of)
+                todo[(rig.name, scene.name)] = (scene, rig, root, size, render_rig, ego_mesh_of(rig))
     if ray_address:
         from rigopt.bench.cluster import ray_tasks
 
@@ -210,10 +210,11 @@ def generate_split(rigs: Sequence[Rig], scenes: Sequence[Scene], out, size: tupl
 
 
 def render_scene(scene: Scene, rig: Rig, root: Path, size: tuple[int, int], render_rig: Callable,
-                 ego_mesh_of: Callable) -> None:
-    """Render and annotate one (rig, scene) pair under ``root`` and leave its part, the mark of a finished
-    pair (written last, whole)."""
-    records = scene_records(scene, rig, root, size, ego_mesh_of(rig), render_rig)
+                 ego_mesh) -> None:
+    """Render and annotate one (rig, scene) pair under ``root`` (``ego_mesh``: the body, None for none) and
+    leave its part, the mark of a finished pair (written last, whole). Takes plain values only, so that it
+    can run as a Ray task."""
+    records = scene_records(scene, rig, root, size, ego_mesh, render_rig)
     part = root / ".parts" / f"{scene.name}.json"
     part.parent.mkdir(parents=True, exist_ok=True)
     temporary = part.with_suffix(".tmp")

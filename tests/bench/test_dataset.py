@@ -162,23 +162,24 @@ def test_a_rear_axle_rig_is_rendered_from_its_vehicle_centre(tmp_path, scene, al
         np.testing.assert_allclose(written[camera.id], camera.position, atol=1e-9)
 
 
-def test_generation_on_ray_writes_what_generation_here_writes(tmp_path, scene):
-    """Each (rig, scene) pair as a task of a local Ray instance: the same tables, images and depth maps."""
+def test_generation_on_ray_writes_what_generation_here_writes(tmp_path):
+    """`rigopt bench generate --ray local`: each (rig, scene) pair a task of a local Ray instance (with the
+    command's own ego-mesh lookup and console), the same tables, images and depth maps as rendering here."""
     ray = pytest.importorskip("ray")
     if ray.is_initialized():
         pytest.skip("a Ray instance is already running in this process")
-    from rigopt.bench.render import render_rig
+    from tests.in_process import run_rigopt
 
-    rigs = [load_rig("R5"), load_rig("R1-c6")]
-    here = generate_split(rigs, [scene], tmp_path / "here", (24, 14), render_rig, lambda r: None)
-    messages = []
+    common = ["bench", "generate", "--rigs", "R5", "R1-c6", "--split", "mini", "--scenes", "1", "--frames", "1",
+              "--size", "24x14"]
+    assert run_rigopt(*common, "--out", tmp_path / "here").returncode == 0
     try:
-        there = generate_split(rigs, [scene], tmp_path / "ray", (24, 14), render_rig, lambda r: None,
-                               messages.append, ray_address="local")
+        outcome = run_rigopt(*common, "--out", tmp_path / "ray", "--ray", "local")
     finally:
         ray.shutdown()
-    assert sum(m.endswith("rendered") for m in messages) == 2
-    for a, b in zip(here, there):
+    assert outcome.returncode == 0, outcome.stderr
+    for rig in ("R5", "R1-c6"):
+        a, b = tmp_path / "here" / rig / "mini", tmp_path / "ray" / rig / "mini"
         files = sorted(p.relative_to(a) for p in a.rglob("*") if p.is_file())
         assert files and files == sorted(p.relative_to(b) for p in b.rglob("*") if p.is_file())
         assert any(str(f).startswith("depth/") for f in files)
