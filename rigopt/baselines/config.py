@@ -67,8 +67,8 @@ _PRESETS = {
     "tiny": dict(width=8, bev_channels=8, bev_cell=6.4, depth_bins=6, queries=12, decoder_layers=1, heads=2,
                  position_depths=4, dn_groups=1, batch_size=2, epochs=2),
     "small": dict(bev_augment=True),
-    "base": dict(bev_augment=True, width=64, bev_channels=96, bev_cell=0.8, depth_bins=60, queries=200, decoder_layers=6, heads=8,
-                 position_depths=32, batch_size=8, epochs=36),
+    "base": dict(bev_augment=True, width=64, bev_channels=96, bev_cell=0.8, depth_bins=60, queries=200,
+                 decoder_layers=6, heads=8, position_depths=32, batch_size=8, epochs=36),
 }
 
 

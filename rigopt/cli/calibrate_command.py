@@ -18,12 +18,12 @@ def _rig_lookup(rigs_dir: Optional[Path]):
     present, else the library."""
     from rigopt.rig.library import load_rig
 
+    files: dict[str, Path] = {}  # rig name -> its file, the shallowest of equal names; the folder read once
+    for path in sorted(rigs_dir.rglob("*.json"), key=lambda path: len(path.parts)) if rigs_dir is not None else ():
+        files.setdefault(path.stem, path)
+
     def lookup(name: str):
-        if rigs_dir is not None:
-            found = sorted(rigs_dir.rglob(f"{name}.json"), key=lambda path: len(path.parts))
-            if found:
-                return load_rig(found[0])
-        return load_rig(name)
+        return load_rig(files[name]) if name in files else load_rig(name)
     return lookup
 
 
@@ -36,7 +36,8 @@ def calibrate_command(
     bootstrap: Optional[int] = typer.Option(None, min=0, help="Bootstrap resamples for the 95 % interval of rho "
                                                                "(default: the benchmark protocol's 1000)."),
     seed: Optional[int] = typer.Option(None, min=0, help="Seed of the bootstrap (default 0)."),
-    rigs: Optional[Path] = typer.Option(None, help="Folder of <rig>.json files (in it or below it) for rigs not in the library."),
+    rigs: Optional[Path] = typer.Option(None, help="Folder of <rig>.json files (in it or below it) for rigs not in "
+                                                   "the library."),
     solver: str = typer.Option("lbfgsb", help="Whose beta is reported: lbfgsb (the benchmark's) or qp (cvxpy)."),
     metric: str = typer.Option("rigcd", "--metric", help=METRIC_HELP),
     test_on: Optional[Path] = typer.Option(None, "--test-on",

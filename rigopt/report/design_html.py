@@ -112,7 +112,8 @@ def render_design_html(summary: dict, figures: dict[str, bytes], scene: str | No
                for c in summary["cameras"]], numeric_from=4),
         "<p class=\"note\">RigCD of the reference to the design (unit weights): " + escape(
             "; ".join(f"{k} {v:.3f}" for k, v in summary["rigcd_breakdown"].items())) + ".</p>",
-        f'<p class="note">Rig file: {escape(summary["rig_file"])} beside this report (the benchmark\'s JSON format, CARLA frame).</p>',
+        f'<p class="note">Rig file: {escape(summary["rig_file"])} beside this report (the benchmark\'s JSON format, '
+        'CARLA frame).</p>',
     ]
     if summary.get("regions"):
         state = "required" if summary["regions_required"] else "reported, not required (--require to enforce)"

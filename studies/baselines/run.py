@@ -25,6 +25,7 @@ import shutil
 import subprocess
 from pathlib import Path
 
+from rigopt.output import write_text_atomic
 from rigopt.report.tables import markdown, read_csv, write_csv
 
 HERE = Path(__file__).resolve().parent
@@ -85,8 +86,6 @@ def calibration_step() -> None:
 
 def sim_to_real_step() -> None:
     """The joint weights fitted on the synthetic transfer alone, judged on the real benchmark's pairs."""
-    from rigopt.output import write_text_atomic
-
     command = ["rigopt", "calibrate", "--results", str(TRANSFER), "--rigs", str(RIGS), "--test-on",
                str(REAL_RESULTS), "--json"]
     print("$", " ".join(command), flush=True)
@@ -135,7 +134,7 @@ def validation_step(data: Path, family: str, device: str, epochs: int, seeds: li
             out = VALIDATION / f"{family}_{design.stem}{suffix}.json"
             rigopt("validate", design, "--ref", "R1", "--model", family, "--data", data, "--device", device,
                    "--runs", runs, "--out", out)
-            out.write_text(out.read_text().replace(f"{Path(data).resolve()}/", "<data>/"))  # no machine paths
+            write_text_atomic(out, out.read_text().replace(f"{Path(data).resolve()}/", "<data>/"))  # no machine paths
 
 
 def matrix_tables(family: str) -> tuple[list[list], list[list]]:
