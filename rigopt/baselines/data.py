@@ -75,10 +75,12 @@ def split_root(data, rig: str, split: str) -> Path:
 
 
 class RigSplit:
-    """The samples of ``<data>/<rig>/<split>``, images resized to ``image_size`` (width, height) if given."""
+    """The samples of ``<data>/<rig>/<split>``, images resized to ``image_size`` (width, height) if given;
+    batches carry the depth maps where every sample has them, unless ``depths`` is False (inference and
+    training without depth supervision need none, and skip decoding them)."""
 
     def __init__(self, data, rig: str, split: str, image_size: tuple[int, int] | None = None,
-                 max_range: float = np.inf):
+                 max_range: float = np.inf, depths: bool = True):
         self.root = split_root(data, rig, split)
         self.rig, self.split = rig, split
         self.samples: list[TrainingSample] = read_dataset(self.root)
@@ -97,7 +99,7 @@ class RigSplit:
                                        dtype=torch.float32)
         self.cam_to_ego = torch.tensor(np.stack([first.T_ego_cam[c] for c in self.channels]), dtype=torch.float32)
         self.max_range = max_range
-        self.has_depth = all(sample.depths for sample in self.samples)
+        self.has_depth = depths and all(sample.depths for sample in self.samples)
         self._images: dict[int, np.ndarray] = {}
         self._depths: dict[int, np.ndarray] = {}
 

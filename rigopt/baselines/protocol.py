@@ -15,8 +15,9 @@ Folders:
          before the fixed set hold only ``mAP`` and ``raw`` (then scored against the seen objects).
 
 A finished results file is skipped when the matrix is run again, and training resumes from its
-checkpoint, so an interrupted matrix picks up where it stopped. With a Ray address each training run
-(and its tests) is one Ray task; the data and runs folders must then be reachable by every worker.
+checkpoint, so an interrupted matrix picks up where it stopped. Training runs and test jobs can run in a
+local process pool (``workers``) or as Ray tasks (a Ray address; the data and runs folders must then be
+reachable by every worker).
 """
 
 from __future__ import annotations
@@ -46,7 +47,7 @@ def train_on(data, rig: str, config: ModelConfig, runs, device: str = "cpu", see
     from rigopt.baselines.data import RigSplit
     from rigopt.baselines.training import train
 
-    split = RigSplit(data, rig, TRAIN_SPLIT, config.image_size)
+    split = RigSplit(data, rig, TRAIN_SPLIT, config.image_size, depths=config.depth_weight > 0)
     return train(split, config, run_folder(runs, config.family, rig), device, seed, progress)
 
 
@@ -72,17 +73,46 @@ def match_on_rigs(checkpoint, data, rigs: Sequence[str], device: str = "cpu", fa
     from rigopt.baselines.models import load_checkpoint, model_from_checkpoint
 
     model, config = model_from_checkpoint(load_checkpoint(checkpoint, family))
-    return {rig: match_split(model, RigSplit(data, rig, split_name, config.image_size), device) for rig in rigs}
+    return {rig: match_split(model, RigSplit(data, rig, split_name, config.image_size, depths=False), device)
+            for rig in rigs}
 
 
-def train_and_test(data, trained_on: str, tests: Sequence[str], config: ModelConfig, runs, device: str = "cpu",
-                   seed: int = 0, progress: Callable = lambda epoch, step, steps, loss: None) -> dict:
-    """One row of the matrix: train on ``trained_on``, then its results on every rig of ``tests``."""
-    run = train_on(data, trained_on, config, runs, device, seed, progress)
-    metrics = evaluate_on_rigs(run.checkpoint, data, tests, device, config.family)
-    results = {test: {"metrics": metrics[test]} for test in tests}
-    return {"model": config.family, "trained_on": trained_on, "results": results,
-            "training": {"epochs": run.epochs, "seed": seed, "config": config.to_dict()}}
+def score_models_on(data, rig: str, checkpoints: dict, device: str = "cpu", family: str | None = None,
+                   split_name: str = TEST_SPLIT) -> dict:
+    """{name: metrics dict} of every checkpoint of ``checkpoints`` ({name: path}) on ``<data>/<rig>/<split_name>``;
+    the split's images are decoded once for all of them (once per image size the models take)."""
+    from rigopt.baselines.data import RigSplit
+    from rigopt.baselines.inference import match_split
+    from rigopt.baselines.models import load_checkpoint, model_from_checkpoint
+
+    splits, metrics = {}, {}
+    for name, checkpoint in checkpoints.items():
+        model, config = model_from_checkpoint(load_checkpoint(checkpoint, family))
+        if config.image_size not in splits:
+            splits[config.image_size] = RigSplit(data, rig, split_name, config.image_size, depths=False)
+        metrics[name] = match_split(model, splits[config.image_size], device).metrics()
+    return metrics
+
+
+def matrix_rows(data, trained: Sequence[str], tests: Sequence[str], family: str, runs, device: str = "cpu",
+                ray_address: str | None = None, workers: int = 1) -> list[dict]:
+    """The matrix rows (results file contents) of the models trained on each rig of ``trained`` (their runs
+    under ``runs``), each tested on every rig of ``tests``: one job per test rig, which decodes its split once
+    for every model (``bench.cluster.run_tasks``: here, in ``workers`` processes, or as Ray tasks)."""
+    from rigopt.bench.cluster import run_tasks
+    from rigopt.baselines.models import load_checkpoint
+
+    checkpoints = {rig: str((run_folder(runs, family, rig) / "checkpoint.pt").resolve()) for rig in trained}
+    calls = {test: (str(Path(data).resolve()), test, checkpoints, device, family) for test in tests}
+    gpus = 1 if str(device).startswith("cuda") else 0
+    by_test = dict(run_tasks(score_models_on, calls, ray_address, workers, gpus, what="testing on"))
+    rows = []
+    for rig in trained:
+        state = load_checkpoint(checkpoints[rig], family)
+        rows.append({"model": family, "trained_on": rig,
+                     "results": {test: {"metrics": by_test[test][rig]} for test in tests},
+                     "training": {"epochs": state["epoch"], "seed": state["seed"], "config": state["config"]}})
+    return rows
 
 
 def write_results(out, row: dict) -> Path:
@@ -106,13 +136,18 @@ def check_splits(data, rigs: Sequence[str]) -> None:
 def transfer_matrix(data, rigs: Sequence[str], config: ModelConfig, out, runs=None, device: str = "cpu",
                     seed: int = 0, ray_address: str | None = None,
                     progress: Callable[[str], None] = lambda message: None,
-                    step_progress: Callable = lambda epoch, step, steps, loss: None) -> list[Path]:
+                    step_progress: Callable = lambda epoch, step, steps, loss: None, workers: int = 1) -> list[Path]:
     """Train on every rig of ``rigs``, test on all of them, and write one results file per training rig.
 
-    Rows whose results file exists are kept as they are. ``progress(message)`` tells of each row and, when
-    run locally, ``step_progress(epoch, step, total_steps, loss)`` of each training step. Returns the
-    results files in ``rigs`` order.
+    Rows whose results file exists are kept as they are. First every missing row's model is trained (or its
+    finished run loaded), then all are tested, one job per test rig (:func:`matrix_rows`); jobs run here one
+    after another, in ``workers`` processes of this machine (sharing ``device``: several small runs keep one
+    GPU busier than one), or as Ray tasks with ``ray_address``. ``progress(message)`` tells of each training
+    and row and, when run here in order, ``step_progress(epoch, step, total_steps, loss)`` of each training
+    step. Returns the results files in ``rigs`` order.
     """
+    from rigopt.bench.cluster import run_tasks
+
     rigs = list(dict.fromkeys(rigs))
     if not rigs:
         raise RigoptError("the matrix needs at least one rig (--rigs R1 R1-c6 ...)")
@@ -122,25 +157,19 @@ def transfer_matrix(data, rigs: Sequence[str], config: ModelConfig, out, runs=No
     for rig in rigs:
         if rig not in todo:
             progress(f"{config.family} trained on {rig}: results exist, kept")
-    rows = (_rows_on_ray(ray_address, data, todo, rigs, config, runs, device, seed) if ray_address else
-            (train_and_test(data, rig, rigs, config, runs, device, seed, step_progress) for rig in todo))
-    for row in rows:
+    parallel = bool(ray_address) or (workers > 1 and len(todo) > 1)
+    # Jobs get absolute paths (a Ray worker's folder is not ours) and no step callback (it cannot travel).
+    calls = {rig: (str(Path(data).resolve()), rig, config, str(runs.resolve()), device, seed,
+                   *(() if parallel else (step_progress,))) for rig in todo}
+    gpus = 1 if str(device).startswith("cuda") else 0
+    for rig, run in run_tasks(train_on, calls, ray_address, workers, gpus, what="training on"):
+        progress(f"{config.family} trained on {rig}: {run.epochs} epochs, {run.steps_now} steps now")
+    for row in matrix_rows(data, todo, rigs, config.family, runs, device, ray_address, workers) if todo else []:
         write_results(out, row)
         own = row["results"][row["trained_on"]]["metrics"]["mAP"]
         progress(f"{config.family} trained on {row['trained_on']}: done, mAP on its own test split "
                  + ("n/a" if own is None else f"{own:.3f}"))
     return [results_path(out, config.family, rig) for rig in rigs]
-
-
-def _rows_on_ray(address: str, data, todo, rigs, config: ModelConfig, runs, device, seed):
-    """Matrix rows as their Ray tasks finish, one task per training rig (``bench.cluster.ray_tasks``)."""
-    from rigopt.bench.cluster import ray_tasks
-
-    calls = {rig: (str(Path(data).resolve()), rig, rigs, config, str(Path(runs).resolve()), device, seed)
-             for rig in todo}
-    gpus = 1 if str(device).startswith("cuda") else 0
-    for _, row in ray_tasks(address, train_and_test, calls, gpus, what="training on"):
-        yield row
 
 
 def configured(config: ModelConfig, epochs: int | None) -> ModelConfig:

@@ -1,7 +1,9 @@
-"""Running independent jobs as Ray tasks (``--ray ADDRESS``): rendering (rig, scene) pairs, training rigs.
+"""Running independent jobs in parallel: rendering (rig, scene) pairs, training rigs.
 
-Every task reads and writes the benchmark folder itself, so on a cluster of several machines that folder
-must be on storage every node sees (the same path everywhere). 'local' starts a Ray instance on this machine.
+Two ways, one interface (:func:`run_tasks`): ``--workers N`` runs the jobs in N processes on this machine,
+``--ray ADDRESS`` as Ray tasks on a cluster. Every job reads and writes the benchmark folder itself, so on a
+cluster of several machines that folder must be on storage every node sees (the same path everywhere). Ray's
+'local' starts a Ray instance on this machine.
 """
 
 from __future__ import annotations
@@ -9,6 +11,47 @@ from __future__ import annotations
 from typing import Callable, Hashable, Iterator
 
 from rigopt.errors import DataError, RigoptError
+
+
+def run_tasks(function: Callable, calls: dict[Hashable, tuple], ray_address: str | None = None, workers: int = 1,
+              gpus: float = 0, what: str = "task") -> Iterator[tuple[Hashable, object]]:
+    """``function(*calls[key])`` for every key, yielded as (key, result) as the jobs finish: as Ray tasks with
+    ``ray_address`` (each asking for ``gpus`` GPUs), else in ``workers`` local processes, else here in order."""
+    if ray_address:
+        yield from ray_tasks(ray_address, function, calls, gpus, what)
+    elif workers > 1 and len(calls) > 1:
+        yield from process_tasks(workers, function, calls, what)
+    else:
+        for key, arguments in calls.items():
+            yield key, function(*arguments)
+
+
+def process_tasks(workers: int, function: Callable, calls: dict[Hashable, tuple],
+                  what: str = "task") -> Iterator[tuple[Hashable, object]]:
+    """Run ``function(*calls[key])`` in a pool of ``workers`` fresh (spawned) processes on this machine; yields
+    (key, result) as the jobs finish. A job's RigoptError is raised again as itself; any other failure as a
+    DataError naming the ``what`` of its key. Spawned, not forked: a worker may use CUDA."""
+    import multiprocessing
+    from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+
+    context = multiprocessing.get_context("spawn")
+    with ProcessPoolExecutor(max_workers=min(workers, len(calls)), mp_context=context) as pool:
+        pending = {pool.submit(function, *arguments): key for key, arguments in calls.items()}
+        try:
+            while pending:
+                done, _ = wait(pending, return_when=FIRST_COMPLETED)
+                for future in done:
+                    key = pending.pop(future)
+                    try:
+                        result = future.result()
+                    except RigoptError:
+                        raise
+                    except Exception as error:
+                        raise DataError(f"{what} {key} failed in a worker process: {error}") from None
+                    yield key, result
+        finally:
+            for future in pending:
+                future.cancel()
 
 
 def ray_tasks(address: str, function: Callable, calls: dict[Hashable, tuple], gpus: float = 0,

@@ -137,8 +137,7 @@ def render_camera(scene: Scene, frame_index: int, camera: Camera, ego_mesh: trim
     t_box, box_index = t_box.ravel(), box_index.ravel()
     t_ego, normal_ego = np.full(h * w, np.inf), np.zeros((h * w, 3))
     if ego_mesh is not None and len(ego_mesh.faces):
-        t_ego, normal_ego = _ego_hits(ego_mesh, camera.position, body @ camera.rotation.T,
-                                      np.minimum(t_ground, t_box))
+        t_ego, normal_ego = _ego_view(ego_mesh, camera, model, body)
     candidates = np.stack([t_ground, t_box, t_ego])  # (3, h*w)
     kind = np.argmin(candidates, axis=0)
     t = candidates[kind, np.arange(h * w)]
@@ -270,6 +269,26 @@ def _box_hits(boxes: Boxes, origin, dirs: np.ndarray, R_world_cam, model: Camera
             depth[rows, cols] = t_best
             index[rows, cols] = np.where(np.isfinite(t_best), ids[sel][best], -1)
     return depth, index
+
+
+_EGO_CACHE: dict[tuple, tuple] = {}
+
+
+def _ego_view(mesh: trimesh.Trimesh, camera: Camera, model: CameraModel, body: np.ndarray):
+    """The body as ``camera`` sees it: depth (h*w,) float (inf: none) and hit normals (h*w, 3), ego frame, of
+    the rays ``body`` (h*w, 3) camera frame. Body and camera are fixed in the ego frame, so every frame of a
+    scene sees the same: cast once per camera, then cached (holding the mesh keeps its id from being reused).
+    A body hit behind a nearer ground or box loses the nearest-surface choice, so casting without that
+    limit changes no pixel."""
+    key = (id(mesh), camera.position.tobytes(), camera.rotation.tobytes(), model.intrinsic_matrix().tobytes(),
+           str(model.distortion), np.asarray(model.coefficients).tobytes(), float(model.width), float(model.height))
+    cached = _EGO_CACHE.get(key)
+    if cached is None or cached[0] is not mesh:
+        if len(_EGO_CACHE) >= 16:  # a rig has a few cameras; a new scene task brings a new mesh object
+            _EGO_CACHE.pop(next(iter(_EGO_CACHE)))
+        hits = _ego_hits(mesh, camera.position, body @ camera.rotation.T, np.full(len(body), np.inf))
+        cached = _EGO_CACHE[key] = (mesh, *hits)
+    return cached[1], cached[2]
 
 
 def _ego_hits(mesh: trimesh.Trimesh, position, dirs: np.ndarray, limit: np.ndarray):

@@ -131,6 +131,8 @@ def matrix_command(
     runs: Optional[Path] = typer.Option(None, "--runs", help=RUNS_HELP),
     ray: Optional[str] = typer.Option(None, "--ray", help="Run each training as a task on the Ray cluster at this "
                                                           "address ('local' starts one here)."),
+    workers: int = typer.Option(1, "--workers", min=1, help="Train (and test) this many rigs at once in processes "
+                                                           "on this machine, sharing --device."),
 ):
     """Train on every rig, test on every rig, write the benchmark's results layout (resumable)."""
     require_torch()
@@ -147,7 +149,7 @@ def matrix_command(
     names = [n.strip() for text in [*rigs, *(more or [])] for n in text.split(",") if n.strip()]
     with training_bar(f"{config.family} matrix") as step:
         transfer_matrix(data, names, config, out, runs, device, seed, ray,
-                        lambda message: console.print(message), step)
+                        lambda message: console.print(message), step, workers)
     table = read_transfer(out)
     value = {(m, a, b): v for m, a, b, v in zip(table.model, table.train, table.test, table.map)}
     rows = [[a, *(_number(value.get((config.family, a, b))) for b in names)] for a in names]

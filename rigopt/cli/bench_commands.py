@@ -48,6 +48,8 @@ def generate_command(
     ray: Optional[str] = typer.Option(None, "--ray", help="Render each (rig, scene) pair as a task on the Ray cluster "
                                                           "at this address ('local' starts one here); --out must "
                                                           "be on storage every node sees."),
+    workers: int = typer.Option(1, "--workers", min=1, help="Render the (rig, scene) pairs in this many processes "
+                                                           "on this machine (one per core)."),
 ):
     """Render the same scenes under every rig and write images and nuScenes tables (resumable)."""
     from rich.progress import Progress
@@ -81,7 +83,7 @@ def generate_command(
 
         roots = generate_split(loaded, scene_list, out, width_height, render_rig, ego_mesh_of, step,
                                lambda message: status_console.print(f"rigopt: note: {message}", markup=False,
-                                                                    highlight=False, soft_wrap=True), ray)
+                                                                    highlight=False, soft_wrap=True), ray, workers)
     console.print("wrote " + ", ".join(str(r) for r in roots))
 
 

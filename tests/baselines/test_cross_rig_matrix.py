@@ -71,7 +71,7 @@ def test_matrix_writes_one_results_file_per_training_rig(matrix):
         state = load_checkpoint(runs / "lss" / rig / "checkpoint.pt", family="lss")
         assert state["rig"] == rig and state["epoch"] == 1
     assert len(state["channels"]) == 4  # R5's run
-    assert len(messages) == 2 and all("done" in m for m in messages)
+    assert sum("done" in m for m in messages) == 2 and sum("1 epochs" in m for m in messages) == 2
 
 
 def test_results_hold_the_checkpoints_own_metrics(matrix, tiny_data):
@@ -96,6 +96,18 @@ def test_transfer_reader_reads_the_results_folder_back(matrix):
     assert table.own_map() == {("lss", r): expected[r, r] for r in RIGS}
 
 
+def test_matrix_in_worker_processes_gives_the_same_results(matrix, tiny_data, tmp_path):
+    """Two worker processes: the trainings run in parallel, then each test rig is its own job; the numbers are
+    those of the matrix run in order (same seeds, same checkpoints' steps)."""
+    out, _, _, _ = matrix
+    parallel, messages = tmp_path / "results", []
+    paths = transfer_matrix(tiny_data, RIGS, tiny_one_epoch(), parallel, runs=tmp_path / "runs",
+                            progress=messages.append, workers=2)
+    assert paths == [parallel / "lss" / f"trained_on_{rig}.json" for rig in RIGS]
+    assert check_results_files(parallel) == check_results_files(out)
+    assert sum("done" in m for m in messages) == 2
+
+
 def test_rerun_keeps_finished_rows_and_does_not_retrain(matrix, tiny_data, monkeypatch):
     out, runs, paths, _ = matrix
     files = [*paths, *(runs / "lss" / rig / name for rig in RIGS for name in ("checkpoint.pt", "train_log.csv"))]
@@ -104,7 +116,7 @@ def test_rerun_keeps_finished_rows_and_does_not_retrain(matrix, tiny_data, monke
     def no_training(*args, **kwargs):
         raise AssertionError("a finished row was trained again")
 
-    monkeypatch.setattr(protocol, "train_and_test", no_training)
+    monkeypatch.setattr(protocol, "train_on", no_training)
     messages = []
     again = transfer_matrix(tiny_data, RIGS, tiny_one_epoch(), out, runs=runs, progress=messages.append)
     assert again == paths
@@ -160,4 +172,4 @@ def test_matrix_on_ray(tiny_data, tmp_path):
         assert load_checkpoint(runs / "lss" / rig / "checkpoint.pt")["rig"] == rig
     table = read_transfer(out)
     assert {(a, b): float(v) for a, b, v in zip(table.train, table.test, table.map)} == values
-    assert len(messages) == 2 and all("done" in m for m in messages)
+    assert sum("done" in m for m in messages) == 2
