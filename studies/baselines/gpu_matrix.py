@@ -68,8 +68,11 @@ def render_and_train(args, timings: dict) -> list[str]:
     def start_training() -> None:
         while queue and sum(p.poll() is None for _, p in training) < args.train_jobs:
             rig = queue.pop(0)
-            command = ["rigopt", "bench", "train", "--data", str(args.data), "--rig", rig, "--model", FAMILY,
-                       "--epochs", str(args.epochs), "--device", args.device]
+            # rigopt bench train's own call, in a process the deadline can stop
+            command = [sys.executable, "-c", "import sys; from rigopt.baselines.config import model_config; "
+                       "from rigopt.baselines.protocol import train_on; "
+                       "train_on(sys.argv[1], sys.argv[2], model_config('lss', epochs=int(sys.argv[3])), "
+                       "sys.argv[1] + '/runs', sys.argv[4])", str(args.data), rig, str(args.epochs), args.device]
             log = open(args.data / f"train-{rig}.log", "w")
             training.append((rig, subprocess.Popen(command, stdout=log, stderr=subprocess.STDOUT)))
 
@@ -158,8 +161,8 @@ def pack(args, timings: dict) -> Path:
     for log in (args.data / "runs" / FAMILY).glob("*/train_log.csv"):
         shutil.copy(log, logs / f"{log.parent.name}.csv")
     timings["training"] = training_throughput(args.data)
-    timings["settings"] = {k: (str(v) if isinstance(v, Path) else v) for k, v in vars(args).items()
-                           if k not in ("data", "pack")}
+    timings["settings"] = {k: v for k, v in vars(args).items() if k not in ("data", "pack", "transfer", "results")}
+    timings["settings"]["rigs"] = list(map(rig_name, args.rigs))
     save(args, timings)
     args.pack.mkdir(parents=True, exist_ok=True)
     archive = args.pack / "matrix.tar.gz"
