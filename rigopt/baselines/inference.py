@@ -22,7 +22,7 @@ TOP_K = 100
 
 
 @torch.no_grad()
-def predict(model: Detector, split: RigSplit, device: str = "cpu", batch_size: int = 4,
+def predict(model: Detector, split: RigSplit, device: str = "cpu", batch_size: int = 16,
             top_k: int = TOP_K, progress=lambda done, total: None) -> list[SamplePrediction]:
     """The ``top_k`` highest-scoring detections of every sample of ``split``, within EVAL_RANGE."""
     target = resolve_device(device)
@@ -36,7 +36,7 @@ def predict(model: Detector, split: RigSplit, device: str = "cpu", batch_size: i
     return predictions
 
 
-def match_split(model: Detector, split: RigSplit, device: str = "cpu", batch_size: int = 4,
+def match_split(model: Detector, split: RigSplit, device: str = "cpu", batch_size: int = 16,
                 progress=lambda done, total: None) -> MatchedDetections:
     """``model``'s detections on ``split`` matched to its ground truth (within EVAL_RANGE), indexed by the
     split's sample tokens in split order."""

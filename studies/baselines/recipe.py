@@ -3,8 +3,9 @@
 
 Each variant changes one thing of the row it names: the number of training scenes (12 or 48, the first
 scenes of the train split), the bird's-eye augmentation, the depth supervision weight, the steps (epochs x
-samples / batch 4). Usage (resumable; --data must hold R1's train split of 48 scenes with depth maps and
-its test split of 16)::
+samples / batch size); g4 and g16 ask whether batches of 16 (a quarter of the steps, the GPU's cost being
+per step) train as well as batches of 4 on the GPU matrix's data. Usage (resumable; --data must hold R1's
+train split of 48 scenes with depth maps and its test split of 16, or for g4 and g16 the GPU matrix's R1)::
 
     python studies/baselines/recipe.py --data DIR [--variants e0 e2 ...] [--threads 1]
 
@@ -28,8 +29,11 @@ VARIANTS = {
     "s0": (48, dict(bev_augment=True, epochs=4)),
     "e5": (48, dict(bev_augment=True, epochs=4, depth_weight=0.3)),
     "ext8": (48, dict(bev_augment=True, epochs=8)),
+    # the GPU matrix's data (gpu_matrix.py: 28 train scenes of 20 samples; test 16 scenes of 20)
+    "g4": (28, dict(bev_augment=True, epochs=12)),
+    "g16": (28, dict(bev_augment=True, epochs=12, batch_size=16, lr=2e-3)),
 }
-HEADER = ["variant", "train scenes", "bev augment", "depth weight", "steps", "mAP fixed", "mAP visible",
+HEADER = ["variant", "train scenes", "bev augment", "depth weight", "steps", "batch", "mAP fixed", "mAP visible",
           "train minutes"]
 
 
@@ -51,7 +55,7 @@ def run_variant(data: Path, name: str) -> list:
     matched = match_split(model, RigSplit(data, "R1", "test", max_range=config.bev_range))
     steps = config.epochs * -(-len(split) // config.batch_size)
     log = (data / "recipe-runs" / name / "train_log.csv").read_text().strip().splitlines()
-    return [name, scenes, config.bev_augment, config.depth_weight, steps, matched.evaluation().map,
+    return [name, scenes, config.bev_augment, config.depth_weight, steps, config.batch_size, matched.evaluation().map,
             matched.evaluation(visible_only=True).map, float(log[-1].split(",")[-1]) / 60]
 
 
@@ -66,6 +70,7 @@ def main() -> None:
     torch.set_num_threads(args.threads)
     out = HERE / "results" / "recipe.csv"
     rows = {row[0]: row for row in read_csv(out)[1:]} if out.is_file() else {}
+    rows = {name: row if len(row) == len(HEADER) else [*row[:5], 4, *row[5:]] for name, row in rows.items()}
     for name in args.variants:
         rows[name] = run_variant(args.data, name)
         write_csv(out, HEADER, [rows[n] for n in VARIANTS if n in rows])
