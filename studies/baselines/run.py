@@ -72,7 +72,7 @@ def data_step(data: Path, ray: str | None) -> None:
 
 
 def matrix_step(data: Path, family: str, epochs: int, device: str, ray: str | None) -> None:
-    rigopt("bench", "matrix", "--data", data, "--rigs", *MATRIX, "--model", family, "--epochs", epochs,
+    rigopt("bench", "matrix", "--data", data, "--rigs", *map(rig_name, MATRIX), "--model", family, "--epochs", epochs,
            "--device", device, "--out", TRANSFER, *(["--ray", ray] if ray else []))
     logs = RESULTS / "logs" / family
     logs.mkdir(parents=True, exist_ok=True)
