@@ -488,3 +488,56 @@ def test_azimuth_bias_is_zero_along_the_ray_over_the_query_and_falls_off_per_cel
     behind = torch.logit(torch.tensor([[[(-20.0 + r) / (2 * r), 0.5]]]))
     torch.testing.assert_close(model.azimuth_bias(behind, (origin, azimuth, width), 0)[0, 0].detach(),
                                -0.5 * ((math.pi - angle.abs()) / 0.8) ** 2, atol=1e-4, rtol=1e-4)
+
+
+def _reference_head_loss(head, outputs: dict, boxes: list) -> torch.Tensor:
+    """The centre head's loss written the plain way, one sample, one box and one class at a time: the oracle
+    of the batched ``CenterHead.loss``."""
+    from rigopt.baselines.center_head import focal_heatmap_loss
+
+    total_heat, total_reg, n_boxes = 0.0, 0.0, 0
+    for b, sample_boxes in enumerate(boxes):
+        target = torch.zeros(head.n_classes, head.grid, head.grid)
+        for j in range(len(sample_boxes.classes)):
+            centre, size = sample_boxes.centers[j], sample_boxes.sizes[j]
+            ix, iy = (int(math.floor((float(v) + head.bev_range) / head.cell)) for v in centre[:2])
+            if not (0 <= ix < head.grid and 0 <= iy < head.grid):
+                continue
+            sigma = max(0.25 * float(size[:2].max()) / head.cell, 0.8)
+            for x in range(head.grid):
+                for y in range(head.grid):
+                    value = math.exp(-((x - ix) ** 2 + (y - iy) ** 2) / (2 * sigma**2))
+                    c = int(sample_boxes.classes[j])
+                    target[c, x, y] = max(float(target[c, x, y]), value)
+            offset = [(float(centre[0]) + head.bev_range) / head.cell - ix,
+                      (float(centre[1]) + head.bev_range) / head.cell - iy]
+            yaw = float(sample_boxes.yaws[j])
+            wanted = torch.tensor([*offset, float(centre[2]), *torch.log(size.clamp(min=0.05)).tolist(),
+                                   math.sin(yaw), math.cos(yaw)])
+            total_reg += float((outputs["regression"][b, :, ix, iy] - wanted).abs().sum())
+            n_boxes += 1
+        total_heat += float(focal_heatmap_loss(outputs["heatmap"][b], target))
+    return (total_heat + total_reg) / max(n_boxes, 1)
+
+
+def test_batched_centre_head_loss_equals_the_per_box_reference():
+    """Two samples: overlapping boxes of one class, boxes of two classes, one outside the grid, an empty
+    sample; the batched loss equals the plain per-box computation."""
+    torch.manual_seed(0)
+    model = build_model(model_config("lss", "tiny"))
+    head = model.head
+    g = head.grid
+    outputs = {"heatmap": torch.randn(3, head.n_classes, g, g), "regression": torch.randn(3, 8, g, g)}
+    boxes = [BoxTargets(torch.tensor([[3.0, -4.0, 0.8], [4.0, -4.5, 0.9], [-20.0, 10.0, 1.0], [500.0, 0.0, 0.0]]),
+                        torch.tensor([[4.6, 1.9, 1.7], [4.5, 1.8, 1.6], [11.0, 2.9, 3.4], [1.0, 1.0, 1.0]]),
+                        torch.tensor([0.3, -0.2, 1.5, 0.0]), torch.tensor([0, 0, 2, 1])),
+             BoxTargets(torch.zeros(0, 3), torch.zeros(0, 3), torch.zeros(0), torch.zeros(0, dtype=torch.long)),
+             BoxTargets(torch.tensor([[-8.0, -8.0, 0.9]]), torch.tensor([[0.7, 0.7, 1.75]]), torch.tensor([2.0]),
+                        torch.tensor([5]))]
+    loss, parts = head.loss(outputs, boxes)
+    assert loss.item() == pytest.approx(_reference_head_loss(head, outputs, boxes), rel=1e-5)
+    heatmap, sample, cells, _ = head.targets(boxes)
+    assert sample.tolist() == [0, 0, 0, 2]  # the box outside the grid is left out
+    assert heatmap.shape == (3, head.n_classes, g, g) and float(heatmap[1].max()) == 0.0
+    assert all(float(heatmap[s, c, x, y]) == 1.0 for s, c, (x, y) in zip(sample.tolist(), [0, 0, 2, 5],
+                                                                         cells.tolist()))
