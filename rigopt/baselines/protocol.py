@@ -102,6 +102,8 @@ def matrix_rows(data, trained: Sequence[str], tests: Sequence[str], family: str,
     from rigopt.bench.cluster import run_tasks
     from rigopt.baselines.models import load_checkpoint
 
+    if not trained:
+        return []
     checkpoints = {rig: str((run_folder(runs, family, rig) / "checkpoint.pt").resolve()) for rig in trained}
     calls = {test: (str(Path(data).resolve()), test, checkpoints, device, family) for test in tests}
     gpus = 1 if str(device).startswith("cuda") else 0
@@ -164,7 +166,7 @@ def transfer_matrix(data, rigs: Sequence[str], config: ModelConfig, out, runs=No
     gpus = 1 if str(device).startswith("cuda") else 0
     for rig, run in run_tasks(train_on, calls, ray_address, workers, gpus, what="training on"):
         progress(f"{config.family} trained on {rig}: {run.epochs} epochs, {run.steps_now} steps now")
-    for row in matrix_rows(data, todo, rigs, config.family, runs, device, ray_address, workers) if todo else []:
+    for row in matrix_rows(data, todo, rigs, config.family, runs, device, ray_address, workers):
         write_results(out, row)
         own = row["results"][row["trained_on"]]["metrics"]["mAP"]
         progress(f"{config.family} trained on {row['trained_on']}: done, mAP on its own test split "
