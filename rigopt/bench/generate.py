@@ -30,6 +30,7 @@ from rigopt.bench.scene_model import CLASSES, Boxes, Scene
 from rigopt.errors import RigoptError
 from rigopt.output import atomic_file, atomic_folder
 from rigopt.rig.model import Rig
+from rigopt.vehicle.placement import in_vehicle_frame
 from rigopt.rig.formats.nuscenes import nuscenes_token, write_nuscenes_calibration
 
 ANNOTATION_RANGE = 80.0
@@ -150,24 +151,6 @@ def scene_records(scene: Scene, rig: Rig, root: Path, size: tuple[int, int], ego
                             "nbr_samples": len(scene.frames), "first_sample_token": sample_tokens[0],
                             "last_sample_token": sample_tokens[-1], "description": scene.road.kind})
     return tables
-
-
-def in_vehicle_frame(rig: Rig) -> tuple[Rig, str | None]:
-    """``rig`` with its positions measured from its vehicle's centre, the ego origin the benchmark renders from
-    (its ego meshes and the scenes' clearance are centred there), and a one-line note when it was moved or could
-    not be. A rig measured from another origin (an imported dataset rig: the rear axle) is moved with its
-    vehicle's axle position; one on a vehicle rigopt does not know is rendered from its own origin (and without
-    a body)."""
-    if rig.origin.is_benchmark:
-        return rig, None
-    from rigopt.vehicle.placement import known_vehicle, to_vehicle_centre
-
-    vehicle = known_vehicle(rig)
-    if vehicle is None:
-        return rig, (f"{rig.name}: positions are measured from the {rig.origin.describe()} of {rig.vehicle!r}, which "
-                     "rigopt does not know; rendered with that point as the ego origin")
-    moved, change = to_vehicle_centre(rig, vehicle)
-    return moved, change.describe()
 
 
 def generate_split(rigs: Sequence[Rig], scenes: Sequence[Scene], out, size: tuple[int, int], render_rig: Callable,

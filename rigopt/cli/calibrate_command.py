@@ -8,23 +8,16 @@ from typing import Optional
 
 import typer
 
-from rigopt.cli.app import FORCE_HELP, app, console, print_json, print_table
+from rigopt.cli.app import FORCE_HELP, app, console, note, print_json, print_table
 from rigopt.cli.metric_commands import METRIC_HELP
 from rigopt.errors import RigoptError
 
 
 def _rig_lookup(rigs_dir: Optional[Path]):
-    """Resolve a rig name: ``<name>.json`` in ``rigs_dir`` or a folder below it (the shallowest) when given and
-    present, else the library."""
-    from rigopt.rig.library import load_rig
+    """The results' rigs by name (``--rigs`` folder first), as the benchmark measured them (notes on stderr)."""
+    from rigopt.vehicle.placement import benchmark_rig_lookup
 
-    files: dict[str, Path] = {}  # rig name -> its file, the shallowest of equal names; the folder read once
-    for path in sorted(rigs_dir.rglob("*.json"), key=lambda path: len(path.parts)) if rigs_dir is not None else ():
-        files.setdefault(path.stem, path)
-
-    def lookup(name: str):
-        return load_rig(files[name]) if name in files else load_rig(name)
-    return lookup
+    return benchmark_rig_lookup(rigs_dir, note)
 
 
 @app.command("calibrate")

@@ -181,3 +181,41 @@ def comparable_rigs(rigs: Sequence[Rig], vehicle: Vehicle | None = None) -> tupl
         placed.append(rig)
     same, more = common_frame(placed)
     return same, changes + more
+
+
+def in_vehicle_frame(rig: Rig) -> tuple[Rig, str | None]:
+    """``rig`` with its positions measured from its vehicle's centre, the ego origin the benchmark renders and
+    measures from (its ego meshes and the scenes' clearance are centred there), and a one-line note when it was
+    moved or could not be. A rig measured from another origin (an imported dataset rig: the rear axle) is
+    moved with its vehicle's axle position; one on a vehicle rigopt does not know keeps its own origin."""
+    if rig.origin.is_benchmark:
+        return rig, None
+    vehicle = known_vehicle(rig)
+    if vehicle is None:
+        return rig, (f"{rig.name}: positions are measured from the {rig.origin.describe()} of {rig.vehicle!r}, which "
+                     "rigopt does not know; kept with that point as the ego origin")
+    moved, change = to_vehicle_centre(rig, vehicle)
+    return moved, change.describe()
+
+
+def benchmark_rig_lookup(folder=None, note: Callable[[str], None] = lambda message: None) -> Callable[[str], Rig]:
+    """``lookup(name)``: the rig of measured transfer results named ``name``, as the benchmark measured it: the
+    file ``<name>.json`` in ``folder`` or a folder below it (the shallowest) when given and present, else the
+    library; moved to its vehicle's centre (:func:`in_vehicle_frame`, ``note`` told of each move), the frame
+    ``rigopt bench generate`` renders in. Each rig is loaded once."""
+    from pathlib import Path
+
+    from rigopt.rig.library import load_rig
+
+    files: dict[str, Path] = {}  # rig name -> its file, the shallowest of equal names; the folder read once
+    for path in sorted(Path(folder).rglob("*.json"), key=lambda path: len(path.parts)) if folder is not None else ():
+        files.setdefault(path.stem, path)
+    loaded: dict[str, Rig] = {}
+
+    def lookup(name: str) -> Rig:
+        if name not in loaded:
+            loaded[name], moved = in_vehicle_frame(load_rig(files[name]) if name in files else load_rig(name))
+            if moved:
+                note(moved)
+        return loaded[name]
+    return lookup

@@ -47,10 +47,11 @@ TRAIN_CALL = ("import sys; from rigopt.baselines.config import model_config; "
 def render(args, timings: dict) -> None:
     """Phase 1: every (rig, split, scene) not rendered yet, then each split's tables."""
     from rigopt.bench.cluster import run_tasks
-    from rigopt.bench.generate import assemble, ego_mesh_lookup, in_vehicle_frame, render_scene
+    from rigopt.bench.generate import assemble, ego_mesh_lookup, render_scene
     from rigopt.bench.render import render_rig
     from rigopt.bench.scenes import split_scenes
     from rigopt.rig.library import load_rig
+    from rigopt.vehicle.placement import in_vehicle_frame
 
     started = time.perf_counter()
     rigs = [in_vehicle_frame(load_rig(rig))[0] for rig in args.rigs]

@@ -153,7 +153,7 @@ def test_a_rear_axle_rig_is_rendered_from_its_vehicle_centre(tmp_path, scene, al
     assert seen["unknown"].same_as(unknown)
     assert notes == ["axle: positions converted from the rear axle to the vehicle centre of etron (x -1.430 m)",
                      "unknown: positions are measured from the rear axle of 'nuscenes', which rigopt does not know; "
-                     "rendered with that point as the ego origin"]
+                     "kept with that point as the ego origin"]
     tables = tmp_path / "axle" / "mini" / "v1.0-mini"
     sensor = {s["token"]: s["channel"] for s in json.loads((tables / "sensor.json").read_text())}
     written = {sensor[r["sensor_token"]]: r["translation"]
