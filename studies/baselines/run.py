@@ -255,6 +255,23 @@ def term_rows(family: str) -> list[list]:
     return [header, *rows, rhos]
 
 
+def null_summary() -> list[list]:
+    """[header, *rows] of ``null_calibration.py``'s yardstick: per rig set and real detector, the median and the
+    5th and 95th percentiles over seeds of the held-out rho of joint weights fitted on random drops, and their
+    median bounded-drop MAE."""
+    import numpy as np
+
+    rows = read_csv(RESULTS / "null_calibration.csv")[1:]
+    table = [["rig set", "real detector", "rho median", "rho 5 %", "rho 95 %", "MAE median", "seeds"]]
+    for rig_set in dict.fromkeys(r[0] for r in rows):
+        for detector in dict.fromkeys(r[2] for r in rows):
+            mine = [r for r in rows if r[0] == rig_set and r[2] == detector]
+            rho, mae = np.array([float(r[3]) for r in mine]), np.array([float(r[4]) for r in mine])
+            table.append([rig_set, detector, *np.percentile(rho, [50, 5, 95]).tolist(), float(np.median(mae)),
+                          len(mine)])
+    return table
+
+
 def report_step(families) -> None:
     parts = ["# Synthetic cross-rig study: results", "",
              "Produced by `python studies/baselines/run.py`; read [the README](../README.md) for the protocol "
@@ -282,6 +299,9 @@ def report_step(families) -> None:
     if (RESULTS / "agreement_real.csv").is_file():
         table = read_csv(RESULTS / "agreement_real.csv")
         parts += ["## Yardstick: the real detectors against one another on the same pairs", "", markdown(table), ""]
+    if (RESULTS / "null_calibration.csv").is_file():
+        parts += ["## Yardstick for sim-to-real: joint weights fitted on random drops, judged on the real held-out "
+                  "pairs (null_calibration.py)", "", markdown(null_summary()), ""]
     validations = sorted((VALIDATION).glob("*.json"))
     ordering = [row for family in families for row in ordering_rows(family)]
     if ordering:
