@@ -1,0 +1,38 @@
+"""studies/baselines/gpu_matrix.py end to end on the CPU at toy size: it renders, trains (in processes it can
+stop), tests by test rig and packs; the rows are the benchmark's results layout and the archive holds them."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import tarfile
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("torch")
+
+SCRIPT = Path(__file__).resolve().parents[2] / "studies" / "baselines" / "gpu_matrix.py"
+
+
+def test_one_pass_on_two_rigs(tmp_path):
+    transfer, results, pack = tmp_path / "transfer", tmp_path / "results", tmp_path / "pack"
+    done = subprocess.run([sys.executable, str(SCRIPT), "--data", str(tmp_path / "data"), "--pack", str(pack),
+                           "--rigs", "R5", "R1-c6", "--train-scenes", "1", "--test-scenes", "1", "--frames", "2",
+                           "--epochs", "1", "--batch", "2", "--render-workers", "2", "--train-jobs", "2",
+                           "--eval-workers", "1", "--device", "cpu", "--transfer", str(transfer),
+                           "--results", str(results)], capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr[-2000:]
+    for rig in ("R5", "R1-c6"):
+        row = json.loads((transfer / "lss" / f"trained_on_{rig}.json").read_text())
+        assert row["trained_on"] == rig and set(row["results"]) == {"R5", "R1-c6"}
+        assert row["training"]["epochs"] == 1 and row["training"]["config"]["batch_size"] == 2
+        assert 0.0 <= row["results"][rig]["metrics"]["mAP"] <= 1.0
+    timings = json.loads((results / "gpu_matrix_timings.json").read_text())
+    assert sorted(timings["trained"]) == ["R1-c6", "R5"]
+    assert timings["render_camera_images"] == (4 + 6) * 2 * 2  # cameras x scenes (train + test) x frames
+    assert {r["rig"] for r in timings["training"]} == {"R5", "R1-c6"}
+    with tarfile.open(pack / "matrix.tar.gz") as archive:
+        names = set(archive.getnames())
+    assert {"transfer/trained_on_R5.json", "logs/R1-c6.csv", "gpu_matrix_timings.json"} <= names
