@@ -37,6 +37,10 @@ def calibrate_command(
                                            help="Other measured transfer (e.g. the real benchmark's results) on "
                                                 "which the joint calibration fitted on --results is judged, beside "
                                                 "that data's own calibration: key 'test_on' of the JSON."),
+    null: int = typer.Option(0, "--null", min=0, help="With --test-on: also fit this many joint calibrations on "
+                                                       "--results' pairs with random drops and judge them the same "
+                                                       "way, the bar a calibration must clear to have learned from "
+                                                       "the measurements (key 'null' of 'test_on'; ~10 s each)."),
     out: Optional[Path] = typer.Option(None, help="Folder for the JSON, pairs CSV, weights and figures."),
     force: bool = typer.Option(False, "--force", help=FORCE_HELP),
     as_json: bool = typer.Option(False, "--json", help="Print the JSON report instead of tables."),
@@ -48,6 +52,9 @@ def calibrate_command(
     from rigopt.output import atomic_folder, check_out_folder, published
     from rigopt.report.calibration_tables import study_dict, write_study_tables
 
+    if null and test_on is None:
+        raise RigoptError("--null judges chance calibrations on other measured transfer: give --test-on too "
+                          "(e.g. --test-on ../shared/pccr/results)")
     if out is not None:
         check_out_folder(out, force=force)
     bootstrap = DEFAULT_BOOTSTRAP if bootstrap is None else bootstrap
@@ -67,6 +74,12 @@ def calibrate_command(
         transfer = calibration_on(study.joint.fit.calibration, target, control_rigs, _rig_lookup(rigs), bootstrap,
                                   seed, solver)
         report["test_on"] = {"results": str(test_on), **transfer_dict(transfer, study.joint.fit)}
+        if null:
+            from rigopt.metrics.protocol import null_yardstick
+
+            yardstick = null_yardstick(table, target, null, control_rigs, _rig_lookup(rigs), solver, metric)
+            figures = {m: e["heldout"]["rho"] for m, e in report["test_on"]["models"].items()}
+            report["test_on"]["null"] = {"seeds": null, "models": yardstick.summary(figures)}
     if out is not None:
         from rigopt.report.calibration_figures import write_calibration_figures
 
@@ -90,6 +103,11 @@ def _print_transfer(test: dict) -> None:
                 [[m, e["heldout"]["rho"], _ci(e["heldout"]["ci"]), e["heldout"]["mae"], e["bounded"]["heldout"]["mae"],
                   e["own_per_detector"]["heldout"]["rho"], e["own_joint"]["heldout"]["rho"]]
                  for m, e in test["models"].items()])
+    if "null" in test:
+        print_table(f"Yardstick: {test['null']['seeds']} joint calibrations fitted on random drops over the same "
+                    "pairs, judged the same way (held-out rho)",
+                    ["model", "median", "5th percentile", "95th percentile", "share reaching the fit's rho"],
+                    [[m, e["median"], e["p5"], e["p95"], e["share_reaching"]] for m, e in test["null"]["models"].items()])
 
 
 def _check_cross_rig_pairs(table, control_rigs: tuple[str, ...], source: Path) -> None:

@@ -281,11 +281,14 @@ class CalibrationTransfer:
 
 def calibration_on(calibration: Calibration, table: TransferTable, control_rigs: Sequence[str] = CONTROL_RIGS,
                    rig_lookup: Callable[[str], Rig] = load_rig, resamples: int = DEFAULT_BOOTSTRAP,
-                   seed: int = DEFAULT_SEED, solver: str = "lbfgsb") -> CalibrationTransfer:
+                   seed: int = DEFAULT_SEED, solver: str = "lbfgsb",
+                   own: CalibrationStudy | None = None) -> CalibrationTransfer:
     """Judge ``calibration`` (fitted elsewhere) on the measured transfer ``table``: per detector, Spearman rho
     and MAE of its linear prediction, and the bounded drop's accuracy, on the table's control and held-out
-    pairs; with the table's own protocol study (same control rigs) to compare with."""
-    own = calibrate(table, control_rigs, rig_lookup, resamples, seed, solver, calibration.metric)
+    pairs; with the table's own protocol study (same control rigs; ``own`` if already computed) to compare
+    with."""
+    if own is None:
+        own = calibrate(table, control_rigs, rig_lookup, resamples, seed, solver, calibration.metric)
     drops = table.drops()
     rig_names = list(dict.fromkeys(drops.train.tolist() + drops.test.tolist()))
     rigs = [_named(rig_lookup(name), name) for name in rig_names]
@@ -299,3 +302,52 @@ def calibration_on(calibration: Calibration, table: TransferTable, control_rigs:
         models.append(ModelReliability(model, *_split_reliability(subset, resamples, seed),
                                        bounded_accuracy(subset, subset.control), bounded_accuracy(subset, ~subset.control)))
     return CalibrationTransfer(calibration, tuple(models), own)
+
+
+def null_transfer(table: TransferTable, rng: np.random.Generator) -> TransferTable:
+    """``table``'s pairs measured by chance: each (model, training rig)'s own mAP kept, every other pair's
+    relative drop drawn uniformly in [0, 1] (mAP = own x (1 - drop)). A calibration fitted on it knows
+    RigCD's structure and nothing of the measurements."""
+    own = table.own_map()
+    base = np.array([own.get((m, a), np.nan) for m, a in zip(table.model, table.train)])
+    drop = np.where(table.train == table.test, 0.0, rng.uniform(0.0, 1.0, len(base)))
+    return TransferTable(table.model, table.train, table.test, np.where(np.isfinite(base), base * (1 - drop),
+                                                                         table.map))
+
+
+@dataclass(frozen=True)
+class NullYardstick:
+    """How joint calibrations fitted on ``null_transfer`` copies of the source table (``seeds`` of them) fare
+    on the target's held-out pairs: ``heldout_rho`` {target detector: (seeds,) Spearman rho}."""
+
+    seeds: int
+    heldout_rho: dict
+
+    def summary(self, figures: dict | None = None) -> dict:
+        """Per detector: median, 5th and 95th percentile of the null rhos and, for ``figures`` {detector:
+        rho} (a calibration's own held-out rho), the share of null fits that reach it."""
+        out = {}
+        for model, rhos in self.heldout_rho.items():
+            rhos = np.asarray(rhos, dtype=float)
+            entry = {"median": float(np.median(rhos)), "p5": float(np.percentile(rhos, 5)),
+                     "p95": float(np.percentile(rhos, 95))}
+            if figures is not None and model in figures:
+                entry["share_reaching"] = float(np.mean(rhos >= figures[model]))
+            out[model] = entry
+        return out
+
+
+def null_yardstick(source: TransferTable, target: TransferTable, seeds: int,
+                   control_rigs: Sequence[str] = CONTROL_RIGS, rig_lookup: Callable[[str], Rig] = load_rig,
+                   solver: str = "lbfgsb", metric: str = "rigcd") -> NullYardstick:
+    """The held-out rho on ``target`` of joint calibrations fitted on ``seeds`` chance copies of ``source``
+    (:func:`null_transfer`, seeds 0 ..): what RigCD's structure alone gives, the bar a calibration fitted on
+    ``source`` must clear to have learned from its measurements."""
+    own = calibrate(target, control_rigs, rig_lookup, 0, DEFAULT_SEED, solver, metric)
+    rhos: dict[str, list] = {}
+    for seed in range(seeds):
+        chance = null_transfer(source, np.random.default_rng(seed))
+        fit = calibrate(chance, control_rigs, rig_lookup, 0, DEFAULT_SEED, solver, metric).joint.fit.calibration
+        for model in calibration_on(fit, target, control_rigs, rig_lookup, 0, DEFAULT_SEED, solver, own).models:
+            rhos.setdefault(model.model, []).append(model.heldout.rho)
+    return NullYardstick(seeds, {model: np.array(values) for model, values in rhos.items()})

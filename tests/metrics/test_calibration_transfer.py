@@ -69,3 +69,49 @@ def test_calibrate_test_on_reports_the_synthetic_fit_beside_the_benchmarks_own()
         assert round(entry["own_per_detector"]["heldout"]["rho"], 3) == published[model]
         assert -1.0 <= entry["heldout"]["rho"] <= 1.0 and entry["heldout"]["n"] > 0
     assert test["weights"]["n"] > 0  # fitted on the synthetic control pairs
+
+
+def test_null_transfer_keeps_the_pairs_and_own_maps_and_draws_chance_drops():
+    from rigopt.metrics.protocol import null_transfer
+
+    table = read_transfer(SYNTHETIC)
+    chance = null_transfer(table, np.random.default_rng(3))
+    assert (chance.model == table.model).all() and (chance.train == table.train).all()
+    assert (chance.test == table.test).all()
+    assert chance.own_map() == table.own_map()
+    drops = chance.drops()
+    off = drops.train != drops.test
+    assert ((drops.delta[off] >= 0) & (drops.delta[off] <= 1)).all() and np.std(drops.delta[off]) > 0.2
+    again = null_transfer(table, np.random.default_rng(3))
+    assert (again.map == chance.map).all()  # seeded
+    assert not np.allclose(null_transfer(table, np.random.default_rng(4)).map, chance.map)
+
+
+def test_null_yardstick_is_the_transferred_rho_of_fits_on_chance_copies(real_study):
+    """One chance copy of the synthetic table, fitted and judged by hand, gives the yardstick's first value;
+    the summary's share counts the null rhos that reach a figure."""
+    from rigopt.metrics.protocol import NullYardstick, null_transfer, null_yardstick
+    from rigopt.vehicle.placement import benchmark_rig_lookup
+
+    lookup = benchmark_rig_lookup(SYNTHETIC_RIGS)
+    source, target = read_transfer(SYNTHETIC), read_transfer(REAL)
+    yardstick = null_yardstick(source, target, 1, rig_lookup=lookup)
+    chance = null_transfer(source, np.random.default_rng(0))
+    fit = calibrate(chance, rig_lookup=lookup, resamples=0).joint.fit.calibration
+    by_hand = {m.model: m.heldout.rho for m in calibration_on(fit, target, rig_lookup=lookup, resamples=0).models}
+    assert {m: float(r[0]) for m, r in yardstick.heldout_rho.items()} == pytest.approx(by_hand, abs=1e-12)
+    summary = NullYardstick(4, {"A": np.array([0.1, 0.2, 0.3, 0.4])}).summary({"A": 0.25})
+    assert summary["A"]["share_reaching"] == 0.5 and summary["A"]["median"] == pytest.approx(0.25)
+
+
+def test_calibrate_null_reports_the_yardstick_and_needs_test_on():
+    outcome = run_rigopt("calibrate", "--results", str(SYNTHETIC), "--rigs", str(SYNTHETIC_RIGS),
+                         "--test-on", str(REAL), "--bootstrap", "0", "--null", "1", "--json")
+    assert outcome.returncode == 0, outcome.stderr
+    test = json.loads(outcome.stdout)["test_on"]
+    assert test["null"]["seeds"] == 1 and set(test["null"]["models"]) == set(test["models"])
+    for model, entry in test["null"]["models"].items():
+        assert entry["median"] == entry["p5"] == entry["p95"]  # one chance fit
+        assert entry["share_reaching"] == float(entry["median"] >= test["models"][model]["heldout"]["rho"])
+    refused = run_rigopt("calibrate", "--results", str(SYNTHETIC), "--null", "3")
+    assert refused.returncode == 2 and refused.stderr.count("rigopt: error:") == 1 and "--test-on" in refused.stderr
