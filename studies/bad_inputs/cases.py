@@ -285,6 +285,8 @@ CASES: list[tuple[str, list[str], str]] = [
     ("coverage --require none with others", ["coverage", "R1", "--require", "none,r158"], "stands alone"),
     ("calibrate --test-on missing", ["calibrate", "--results", "{repo}/metrics/pccr_transfer.csv", "--test-on",
                                      "{tmp}/no-such-results"], "no-such-results"),
+    ("calibrate --null without --test-on", ["calibrate", "--results", "{repo}/metrics/pccr_transfer.csv", "--null",
+                                            "5"], "--test-on"),
     ("design --require unknown preset", ["design", "--vehicle", "firetruck", "--ref", "R1", "--require", "r15",
                                          "--out", "{tmp}/d-require"], "r15"),
     ("design --cost-weight negative", ["design", "--vehicle", "firetruck", "--ref", "R1", "--cost-weight", "-1",
