@@ -16,7 +16,7 @@ Measured on an H200 with 16 cores (docs/baselines_study.md): rendering alone ran
 both. Batches of 16 lose 0.04 mAP against 4 at the same epochs (``recipe.py`` g4, g16), so 4 stays the
 default. Rendering and training resume as ``run.py``'s do. Usage:
   python studies/baselines/gpu_matrix.py --data DIR --pack DIR [--train-scenes 28] [--test-scenes 16]
-         [--frames 20] [--epochs 12] [--batch 4] [--render-workers 16] [--train-jobs 16] [--eval-workers 16]
+         [--frames 20] [--epochs 12] [--batch 4] [--render-workers 16] [--train-jobs 16] [--eval-workers 20]
          [--device cuda] [--deadline SECONDS] [--pack-only]
 (``--train-jobs 20`` trains every rig at once: about 3.4 GB of GPU memory each, so an H200's 139 GB.)
 """
@@ -168,7 +168,7 @@ def main() -> None:
     parser.add_argument("--batch", type=int, default=4, help="batch size (learning rate 1e-3 x sqrt(batch / 4))")
     parser.add_argument("--render-workers", type=int, default=16)
     parser.add_argument("--train-jobs", type=int, default=16)
-    parser.add_argument("--eval-workers", type=int, default=16)
+    parser.add_argument("--eval-workers", type=int, default=20)
     parser.add_argument("--device", default="cuda")
     parser.add_argument("--deadline", type=float, help="seconds from the start after which trainings are stopped")
     parser.add_argument("--pack-only", action="store_true")
