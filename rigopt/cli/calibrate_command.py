@@ -13,13 +13,6 @@ from rigopt.cli.metric_commands import METRIC_HELP
 from rigopt.errors import RigoptError
 
 
-def _rig_lookup(rigs_dir: Optional[Path]):
-    """The results' rigs by name (``--rigs`` folder first), as the benchmark measured them (notes on stderr)."""
-    from rigopt.vehicle.placement import benchmark_rig_lookup
-
-    return benchmark_rig_lookup(rigs_dir, note)
-
-
 @app.command("calibrate")
 def calibrate_command(
     results: Path = typer.Option(..., help="Measured transfer: a benchmark results folder "
@@ -51,6 +44,7 @@ def calibrate_command(
     from rigopt.metrics.transfer import read_transfer
     from rigopt.output import atomic_folder, check_out_folder, published
     from rigopt.report.calibration_tables import study_dict, write_study_tables
+    from rigopt.vehicle.placement import benchmark_rig_lookup
 
     if null and test_on is None:
         raise RigoptError("--null judges chance calibrations on other measured transfer: give --test-on too "
@@ -65,19 +59,21 @@ def calibrate_command(
     target = read_transfer(test_on) if test_on is not None else None  # bad input is an error before any work
     if target is not None:
         _check_cross_rig_pairs(target, control_rigs, test_on)
-    study = calibrate(table, control_rigs, _rig_lookup(rigs), bootstrap, seed, solver, metric)
+    # the results' rigs by name (--rigs first), as the benchmark measured them; one lookup, so each note once
+    lookup = benchmark_rig_lookup(rigs, note)
+    study = calibrate(table, control_rigs, lookup, bootstrap, seed, solver, metric)
     report = study_dict(study)
     if test_on is not None:
         from rigopt.metrics.protocol import calibration_on
         from rigopt.report.calibration_tables import transfer_dict
 
-        transfer = calibration_on(study.joint.fit.calibration, target, control_rigs, _rig_lookup(rigs), bootstrap,
+        transfer = calibration_on(study.joint.fit.calibration, target, control_rigs, lookup, bootstrap,
                                   seed, solver)
         report["test_on"] = {"results": str(test_on), **transfer_dict(transfer, study.joint.fit)}
         if null:
             from rigopt.metrics.protocol import null_yardstick
 
-            yardstick = null_yardstick(table, target, null, control_rigs, _rig_lookup(rigs), solver, metric)
+            yardstick = null_yardstick(table, target, null, control_rigs, lookup, solver, metric)
             figures = {m: e["heldout"]["rho"] for m, e in report["test_on"]["models"].items()}
             report["test_on"]["null"] = {"seeds": null, "models": yardstick.summary(figures)}
     if out is not None:

@@ -2,7 +2,8 @@
 
 The same kind of data, training runs and results as ``run.py --steps data matrix``, in three phases that
 each keep every core busy:
-  1. render: every (rig, split, scene) of the matrix rigs in a pool of ``--render-workers`` processes;
+  1. render: every (rig, split, scene) of the matrix rigs in a pool of ``--render-workers`` processes
+     (``generate_split``, as ``rigopt bench generate --workers``);
   2. train: every rig, ``--train-jobs`` runs at once on the one GPU (a run of this small model is bound by
      its Python side, one core each, so many runs share the GPU); with ``--deadline`` the runs
      unfinished by then are stopped and left out;
@@ -47,31 +48,30 @@ TRAIN_CALL = ("import sys; from rigopt.baselines.config import model_config; "
 
 
 def render(args, timings: dict) -> None:
-    """Phase 1: every (rig, split, scene) not rendered yet, then each split's tables."""
-    from rigopt.bench.cluster import run_tasks
-    from rigopt.bench.generate import assemble, ego_mesh_lookup, render_scene
+    """Phase 1: every (rig, split, scene) not rendered yet in one pool (``generate_split``), then the tables."""
+    from rigopt.bench.generate import ego_mesh_lookup, generate_split
     from rigopt.bench.render import render_rig
     from rigopt.bench.scenes import split_scenes
     from rigopt.rig.library import load_rig
-    from rigopt.vehicle.placement import in_vehicle_frame
 
     started = time.perf_counter()
-    rigs = [in_vehicle_frame(load_rig(rig))[0] for rig in args.rigs]
-    ego_mesh_of = ego_mesh_lookup(print)
-    splits = {"train": split_scenes("train", args.train_scenes, args.frames),
-              "test": split_scenes("test", args.test_scenes, args.frames)}
-    calls = {(rig.name, split, scene.name): (scene, rig, args.data / rig.name / split, SIZE, render_rig,
-                                             ego_mesh_of(rig))
-             for split in splits for rig in rigs for scene in splits[split]
-             if not (args.data / rig.name / split / ".parts" / f"{scene.name}.json").is_file()}
-    for done, _ in enumerate(run_tasks(render_scene, calls, workers=args.render_workers, what="rendering of"), 1):
-        if done % 100 == 0:
-            print(f"[{time.perf_counter() - started:6.0f} s] rendered {done} of {len(calls)}", flush=True)
-    for rig in rigs:
-        for split in splits:
-            assemble(args.data / rig.name / split, rig, split, SIZE)
+    rigs = [load_rig(rig) for rig in args.rigs]
+    scenes = split_scenes("train", args.train_scenes, args.frames) + split_scenes("test", args.test_scenes,
+                                                                                  args.frames)
+    cameras, frames = {rig.name: len(rig) for rig in rigs}, {scene.name: len(scene.frames) for scene in scenes}
+    rendered = []
+
+    def progress(message: str) -> None:
+        if message.endswith(": rendered"):
+            rig, scene = message.removesuffix(": rendered").split(" / ")
+            rendered.append(cameras[rig] * frames[scene])
+            if len(rendered) % 100 == 0:
+                print(f"[{time.perf_counter() - started:6.0f} s] rendered {len(rendered)} pairs", flush=True)
+
+    generate_split(rigs, scenes, args.data, SIZE, render_rig, ego_mesh_lookup(print), progress, print,
+                   workers=args.render_workers)
     timings["render_s"] = round(time.perf_counter() - started, 1)
-    timings["render_camera_images"] = sum(len(arguments[1]) * len(arguments[0].frames) for arguments in calls.values())
+    timings["render_camera_images"] = sum(rendered)
     save(args, timings)
 
 
