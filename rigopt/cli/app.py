@@ -66,13 +66,13 @@ PLACE_HELP = ("Vehicle (name, alias or blueprint) to place rigs on whose own veh
 
 
 def print_table(title: str, columns: list[str], rows: list[list]) -> None:
-    """Print a rich table; numbers are right-aligned with 3 decimals, text left-aligned."""
+    """Print a rich table; numbers are right-aligned with 3 decimals, text left-aligned, None as '-'."""
     table = Table(title=title)
     first = rows[0] if rows else [None] * len(columns)
     for column, sample in zip(columns, first):
         table.add_column(column, justify="right" if isinstance(sample, (int, float)) else "left")
     for row in rows:
-        table.add_row(*(f"{v:.3f}" if isinstance(v, float) else str(v) for v in row))
+        table.add_row(*(f"{v:.3f}" if isinstance(v, float) else "-" if v is None else str(v) for v in row))
     console.print(table)
 
 

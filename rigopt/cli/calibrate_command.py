@@ -17,8 +17,13 @@ from rigopt.errors import RigoptError
 def calibrate_command(
     results: Path = typer.Option(..., help="Measured transfer: a benchmark results folder "
                                            "(<model>/trained_on_<rig>.json) or a CSV model,train_rig,test_rig,mAP."),
-    control: Optional[str] = typer.Option(None, help="Comma-separated control rigs (the calibration set); default: "
-                                                     "the benchmark's (R1 and its five variants)."),
+    control: Optional[str] = typer.Option(None, help="Comma-separated control rigs of --results (the calibration "
+                                                     "set), or 'all' (every rig: fit on every pair, no held-out "
+                                                     "pair); default: the benchmark's (R1 and its five variants)."),
+    test_control: Optional[str] = typer.Option(None, "--test-control",
+                                               help="With --test-on: its control rigs (the rest of its pairs are the "
+                                                    "held-out pairs the fit is judged on); default: the "
+                                                    "benchmark's."),
     bootstrap: Optional[int] = typer.Option(None, min=0, help="Bootstrap resamples for the 95 % interval of rho "
                                                                "(default: the benchmark protocol's 1000)."),
     seed: Optional[int] = typer.Option(None, min=0, help="Seed of the bootstrap (default 0)."),
@@ -53,12 +58,16 @@ def calibrate_command(
         check_out_folder(out, force=force)
     bootstrap = DEFAULT_BOOTSTRAP if bootstrap is None else bootstrap
     seed = DEFAULT_SEED if seed is None else seed
-    control_rigs = CONTROL_RIGS if control is None else tuple(r.strip() for r in control.split(",") if r.strip())
+    if test_control is not None and test_on is None:
+        raise RigoptError("--test-control names the control rigs of --test-on's data: give --test-on too "
+                          "(e.g. --test-on ../shared/pccr/results)")
     table = read_transfer(results)
+    control_rigs = _control_rigs(control, table, CONTROL_RIGS)
     _check_cross_rig_pairs(table, control_rigs, results)
     target = read_transfer(test_on) if test_on is not None else None  # bad input is an error before any work
     if target is not None:
-        _check_cross_rig_pairs(target, control_rigs, test_on)
+        target_control = _control_rigs(test_control, target, CONTROL_RIGS)
+        _check_cross_rig_pairs(target, target_control, test_on)
     # the results' rigs by name (--rigs first), as the benchmark measured them; one lookup, so each note once
     lookup = benchmark_rig_lookup(rigs, note)
     study = calibrate(table, control_rigs, lookup, bootstrap, seed, solver, metric)
@@ -67,13 +76,14 @@ def calibrate_command(
         from rigopt.metrics.protocol import calibration_on
         from rigopt.report.calibration_tables import transfer_dict
 
-        transfer = calibration_on(study.joint.fit.calibration, target, control_rigs, lookup, bootstrap,
+        transfer = calibration_on(study.joint.fit.calibration, target, target_control, lookup, bootstrap,
                                   seed, solver)
-        report["test_on"] = {"results": str(test_on), **transfer_dict(transfer, study.joint.fit)}
+        report["test_on"] = {"results": str(test_on), "control_rigs": list(target_control),
+                             **transfer_dict(transfer, study.joint.fit)}
         if null:
             from rigopt.metrics.protocol import null_yardstick
 
-            yardstick = null_yardstick(table, target, null, control_rigs, lookup, solver, metric)
+            yardstick = null_yardstick(table, target, null, control_rigs, lookup, solver, metric, target_control)
             figures = {m: e["heldout"]["rho"] for m, e in report["test_on"]["models"].items()}
             report["test_on"]["null"] = {"seeds": null, "models": yardstick.summary(figures)}
     if out is not None:
@@ -104,6 +114,16 @@ def _print_transfer(test: dict) -> None:
                     "pairs, judged the same way (held-out rho)",
                     ["model", "median", "5th percentile", "95th percentile", "share reaching the fit's rho"],
                     [[m, e["median"], e["p5"], e["p95"], e["share_reaching"]] for m, e in test["null"]["models"].items()])
+
+
+def _control_rigs(names: str | None, table, default: tuple[str, ...]) -> tuple[str, ...]:
+    """The control rigs named by a --control value: comma-separated names, 'all' (every rig of ``table``) or
+    ``default``."""
+    if names is None:
+        return default
+    if names.strip().lower() == "all":
+        return tuple(dict.fromkeys(table.train.tolist() + table.test.tolist()))
+    return tuple(r.strip() for r in names.split(",") if r.strip())
 
 
 def _check_cross_rig_pairs(table, control_rigs: tuple[str, ...], source: Path) -> None:

@@ -79,6 +79,8 @@ class BoundedAccuracy:
 
 
 def bounded_accuracy(pairs: "PairPredictions", mask: np.ndarray) -> BoundedAccuracy:
+    if not mask.any():  # e.g. no held-out pair when every rig is a control rig
+        return BoundedAccuracy(float("nan"), float("nan"), float("nan"), 0)
     error = pairs.drop[mask] - pairs.delta[mask]
     inside = (pairs.low[mask] <= pairs.delta[mask]) & (pairs.delta[mask] <= pairs.high[mask])
     covered = float(inside.mean()) if np.isfinite(pairs.low[mask]).all() and mask.any() else float("nan")
@@ -339,15 +341,18 @@ class NullYardstick:
 
 def null_yardstick(source: TransferTable, target: TransferTable, seeds: int,
                    control_rigs: Sequence[str] = CONTROL_RIGS, rig_lookup: Callable[[str], Rig] = load_rig,
-                   solver: str = "lbfgsb", metric: str = "rigcd") -> NullYardstick:
+                   solver: str = "lbfgsb", metric: str = "rigcd",
+                   target_control: Sequence[str] | None = None) -> NullYardstick:
     """The held-out rho on ``target`` of joint calibrations fitted on ``seeds`` chance copies of ``source``
     (:func:`null_transfer`, seeds 0 ..): what RigCD's structure alone gives, the bar a calibration fitted on
-    ``source`` must clear to have learned from its measurements."""
-    own = calibrate(target, control_rigs, rig_lookup, 0, DEFAULT_SEED, solver, metric)
+    ``source`` must clear to have learned from its measurements. The fits use ``source``'s ``control_rigs``;
+    ``target``'s held-out pairs are those outside ``target_control`` (default: ``control_rigs``)."""
+    target_control = control_rigs if target_control is None else target_control
+    own = calibrate(target, target_control, rig_lookup, 0, DEFAULT_SEED, solver, metric)
     rhos: dict[str, list] = {}
     for seed in range(seeds):
         chance = null_transfer(source, np.random.default_rng(seed))
         fit = calibrate(chance, control_rigs, rig_lookup, 0, DEFAULT_SEED, solver, metric).joint.fit.calibration
-        for model in calibration_on(fit, target, control_rigs, rig_lookup, 0, DEFAULT_SEED, solver, own).models:
+        for model in calibration_on(fit, target, target_control, rig_lookup, 0, DEFAULT_SEED, solver, own).models:
             rhos.setdefault(model.model, []).append(model.heldout.rho)
     return NullYardstick(seeds, {model: np.array(values) for model, values in rhos.items()})

@@ -287,6 +287,8 @@ CASES: list[tuple[str, list[str], str]] = [
                                      "{tmp}/no-such-results"], "no-such-results"),
     ("calibrate --null without --test-on", ["calibrate", "--results", "{repo}/metrics/pccr_transfer.csv", "--null",
                                             "5"], "--test-on"),
+    ("calibrate --test-control without --test-on", ["calibrate", "--results", "{repo}/metrics/pccr_transfer.csv",
+                                                    "--test-control", "R1,R1-r"], "--test-on"),
     ("design --require unknown preset", ["design", "--vehicle", "firetruck", "--ref", "R1", "--require", "r15",
                                          "--out", "{tmp}/d-require"], "r15"),
     ("design --cost-weight negative", ["design", "--vehicle", "firetruck", "--ref", "R1", "--cost-weight", "-1",

@@ -115,3 +115,26 @@ def test_calibrate_null_reports_the_yardstick_and_needs_test_on():
         assert entry["share_reaching"] == float(entry["median"] >= test["models"][model]["heldout"]["rho"])
     refused = run_rigopt("calibrate", "--results", str(SYNTHETIC), "--null", "3")
     assert refused.returncode == 2 and refused.stderr.count("rigopt: error:") == 1 and "--test-on" in refused.stderr
+
+
+def test_control_all_fits_on_every_pair_and_the_target_keeps_the_benchmarks_control_rigs():
+    """--control all: the synthetic fit uses every pair of --results (none held out there), while --test-on's
+    held-out pairs stay those outside the benchmark's control rigs unless --test-control names others."""
+    common = ["calibrate", "--results", str(SYNTHETIC), "--rigs", str(SYNTHETIC_RIGS), "--test-on", str(REAL),
+              "--bootstrap", "0", "--json"]
+    default = json.loads(run_rigopt(*common).stdout)
+    every = run_rigopt(*common, "--control", "all")
+    assert every.returncode == 0, every.stderr
+    report = json.loads(every.stdout)
+    pairs = len(read_transfer(SYNTHETIC).drops().delta)
+    assert report["joint"]["weights"]["n"] == pairs > default["joint"]["weights"]["n"]
+    assert all(entry["heldout"]["n"] == 0 and entry["heldout"]["rho"] is None for entry in report["models"].values())
+    test = report["test_on"]
+    assert test["control_rigs"] == default["test_on"]["control_rigs"] == ["R1", "R1-c10", "R1-c6", "R1-f", "R1-r", "R1-t"]
+    for model, entry in test["models"].items():
+        assert entry["heldout"]["n"] == default["test_on"]["models"][model]["heldout"]["n"]
+        assert entry["own_joint"] == default["test_on"]["models"][model]["own_joint"]
+    fewer = json.loads(run_rigopt(*common, "--test-control", "R1,R1-r,R1-t").stdout)["test_on"]
+    assert fewer["control_rigs"] == ["R1", "R1-r", "R1-t"]
+    for model, entry in fewer["models"].items():
+        assert entry["heldout"]["n"] > default["test_on"]["models"][model]["heldout"]["n"]

@@ -20,6 +20,7 @@ def test_one_pass_on_two_rigs(tmp_path):
     transfer, results, pack = tmp_path / "transfer", tmp_path / "results", tmp_path / "pack"
     done = subprocess.run([sys.executable, str(SCRIPT), "--data", str(tmp_path / "data"), "--pack", str(pack),
                            "--rigs", "R5", "R1-c6", "--train-scenes", "1", "--test-scenes", "1", "--frames", "2",
+                           "--test-frames", "1",
                            "--epochs", "1", "--batch", "2", "--render-workers", "2", "--train-jobs", "2",
                            "--eval-workers", "1", "--device", "cpu", "--transfer", str(transfer),
                            "--results", str(results)], capture_output=True, text=True, timeout=600)
@@ -31,7 +32,7 @@ def test_one_pass_on_two_rigs(tmp_path):
         assert 0.0 <= row["results"][rig]["metrics"]["mAP"] <= 1.0
     timings = json.loads((results / "gpu_matrix_timings.json").read_text())
     assert sorted(timings["trained"]) == ["R1-c6", "R5"]
-    assert timings["render_camera_images"] == (4 + 6) * 2 * 2  # cameras x scenes (train + test) x frames
+    assert timings["render_camera_images"] == (4 + 6) * (2 + 1)  # cameras x (train frames + test frames)
     assert {r["rig"] for r in timings["training"]} == {"R5", "R1-c6"}
     with tarfile.open(pack / "matrix.tar.gz") as archive:
         names = set(archive.getnames())
