@@ -95,11 +95,16 @@ NULL_SEEDS = 20
 def sim_to_real_step() -> None:
     """The joint weights fitted on the synthetic transfer alone, judged on the real benchmark's held-out pairs,
     beside NULL_SEEDS fits on random drops over the same pairs (the yardstick)."""
-    for name, (_, control) in SIM_TO_REAL.items():
+    running = {}
+    for name, (_, control) in SIM_TO_REAL.items():  # side by side: one core each
         command = ["rigopt", "calibrate", "--results", str(TRANSFER), "--rigs", str(RIGS), *control, "--test-on",
                    str(REAL_RESULTS), "--null", str(NULL_SEEDS), "--json"]
         print("$", " ".join(command), flush=True)
-        output = subprocess.run(command, check=True, capture_output=True, text=True).stdout
+        running[name] = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    for name, process in running.items():
+        output, errors = process.communicate()
+        if process.returncode != 0:
+            raise SystemExit(f"sim_to_real: {name}: rigopt calibrate failed:\n{errors}")
         write_text_atomic(RESULTS / "calibration" / name, output)
 
 
