@@ -82,7 +82,7 @@ def matrix_step(data: Path, family: str, epochs: int, device: str, ray: str | No
 
 
 def calibration_step() -> None:
-    rigopt("calibrate", "--results", TRANSFER, "--rigs", RIGS, "--out", RESULTS / "calibration")
+    rigopt("calibrate", "--results", TRANSFER, "--rigs", RIGS, "--out", RESULTS / "calibration", "--force")
 
 
 #: The two fits judged on the real benchmark: on the synthetic control pairs (the benchmark's protocol), and on
