@@ -44,7 +44,7 @@ def calibrate_command(
     as_json: bool = typer.Option(False, "--json", help="Print the JSON report instead of tables."),
 ):
     """Fit calibrated RigCD (or RigCD+) per detector and jointly; report reliability on control and held-out pairs."""
-    from rigopt.metrics.protocol import CONTROL_RIGS, calibrate
+    from rigopt.metrics.protocol import calibrate
     from rigopt.metrics.reliability import DEFAULT_BOOTSTRAP, DEFAULT_SEED
     from rigopt.metrics.transfer import read_transfer
     from rigopt.output import atomic_folder, check_out_folder, published
@@ -62,11 +62,11 @@ def calibrate_command(
         raise RigoptError("--test-control names the control rigs of --test-on's data: give --test-on too "
                           "(e.g. --test-on ../shared/pccr/results)")
     table = read_transfer(results)
-    control_rigs = _control_rigs(control, table, CONTROL_RIGS)
+    control_rigs = _control_rigs(control, table)
     _check_cross_rig_pairs(table, control_rigs, results)
     target = read_transfer(test_on) if test_on is not None else None  # bad input is an error before any work
     if target is not None:
-        target_control = _control_rigs(test_control, target, CONTROL_RIGS)
+        target_control = _control_rigs(test_control, target)
         _check_cross_rig_pairs(target, target_control, test_on)
     # the results' rigs by name (--rigs first), as the benchmark measured them; one lookup, so each note once
     lookup = benchmark_rig_lookup(rigs, note)
@@ -116,11 +116,13 @@ def _print_transfer(test: dict) -> None:
                     [[m, e["median"], e["p5"], e["p95"], e["share_reaching"]] for m, e in test["null"]["models"].items()])
 
 
-def _control_rigs(names: str | None, table, default: tuple[str, ...]) -> tuple[str, ...]:
-    """The control rigs named by a --control value: comma-separated names, 'all' (every rig of ``table``) or
-    ``default``."""
+def _control_rigs(names: str | None, table) -> tuple[str, ...]:
+    """The control rigs named by a --control value: comma-separated names, 'all' (every rig of ``table``) or,
+    without a value, the benchmark's."""
+    from rigopt.metrics.protocol import CONTROL_RIGS
+
     if names is None:
-        return default
+        return CONTROL_RIGS
     if names.strip().lower() == "all":
         return tuple(dict.fromkeys(table.train.tolist() + table.test.tolist()))
     return tuple(r.strip() for r in names.split(",") if r.strip())

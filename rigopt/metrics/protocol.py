@@ -83,7 +83,7 @@ def bounded_accuracy(pairs: "PairPredictions", mask: np.ndarray) -> BoundedAccur
         return BoundedAccuracy(float("nan"), float("nan"), float("nan"), 0)
     error = pairs.drop[mask] - pairs.delta[mask]
     inside = (pairs.low[mask] <= pairs.delta[mask]) & (pairs.delta[mask] <= pairs.high[mask])
-    covered = float(inside.mean()) if np.isfinite(pairs.low[mask]).all() and mask.any() else float("nan")
+    covered = float(inside.mean()) if np.isfinite(pairs.low[mask]).all() else float("nan")
     return BoundedAccuracy(float(np.mean(np.abs(error))), float(np.sqrt(np.mean(error ** 2))), covered, int(mask.sum()))
 
 
