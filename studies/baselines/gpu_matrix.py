@@ -6,7 +6,7 @@ each keep every core busy:
      (``generate_split``, as ``rigopt bench generate --workers``);
   2. train: every rig, ``--train-jobs`` runs at once on the one GPU (a run of this small model is bound by
      its Python side, one core each, so many runs share the GPU); with ``--deadline`` the runs
-     unfinished by then are stopped and left out;
+     unfinished by then are stopped and tested from their last finished epoch (their rows record how many);
   3. test: every trained model on every rig, one job per test rig (``protocol.matrix_rows``); rows written
      to ``--transfer`` in the benchmark's layout;
 then pack the results, the training logs and the timings (seconds per phase, throughput) into one archive,
@@ -80,7 +80,7 @@ def render(args, timings: dict) -> None:
 
 def train(args, timings: dict) -> list[str]:
     """Phase 2: every rig's training, ``--train-jobs`` at once; returns the rigs whose run finished."""
-    started = time.perf_counter()
+    started = sampled = time.perf_counter()
     queue, running, finished = list(map(rig_name, args.rigs)), [], []
     while queue or running:
         while queue and len(running) < args.train_jobs:
@@ -93,16 +93,45 @@ def train(args, timings: dict) -> list[str]:
             running.remove((rig, process))
             (finished.append(rig) if process.returncode == 0 else print(f"{rig}: training failed", flush=True))
         if past(args.deadline, args.started) and running:
+            stopped = timings.setdefault("stopped_at_deadline", {})
             for rig, process in running:
-                print(f"{rig}: training stopped at the deadline", flush=True)
                 process.kill()
                 process.wait()
+                epochs = finished_epochs(args.data, rig)
+                print(f"{rig}: training stopped at the deadline after {epochs} epochs", flush=True)
+                stopped[rig] = epochs
+                if epochs:  # tested from its last epoch's checkpoint; its row records the epochs it had
+                    finished.append(rig)
             break
+        if time.perf_counter() - sampled > 15:
+            sample, sampled = gpu_sample(time.perf_counter() - started), time.perf_counter()
+            if sample:
+                timings.setdefault("gpu_samples", []).append(sample)
         time.sleep(1)
     timings["train_s"] = round(time.perf_counter() - started, 1)
     timings["trained"] = finished
     save(args, timings)
     return finished
+
+
+def finished_epochs(data: Path, rig: str) -> int:
+    """Epochs in a run's checkpoint (0 without one)."""
+    from rigopt.baselines.models import load_checkpoint
+    from rigopt.baselines.protocol import run_folder
+
+    checkpoint = run_folder(data / "runs", FAMILY, rig) / "checkpoint.pt"
+    return int(load_checkpoint(checkpoint, FAMILY)["epoch"]) if checkpoint.is_file() else 0
+
+
+def gpu_sample(seconds: float) -> dict:
+    """GPU memory in use (MiB) and utilisation (%) now, by nvidia-smi; empty where there is none."""
+    try:
+        line = subprocess.run(["nvidia-smi", "--query-gpu=memory.used,utilization.gpu", "--format=csv,noheader,nounits"],
+                              capture_output=True, text=True, timeout=10).stdout.split("\n")[0]
+        memory, utilisation = (float(v) for v in line.split(","))
+    except (OSError, ValueError, subprocess.SubprocessError):
+        return {}
+    return {"s": round(seconds), "memory_mib": memory, "utilisation_pct": utilisation}
 
 
 def past(deadline: float | None, started: float) -> bool:
