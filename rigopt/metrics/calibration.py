@@ -2,7 +2,7 @@
 
 Features of a pair (A, B) are the unit-weight RigCD components ``x = (t, r, f, count)`` (m, rad, deg, -).
 The model ``delta_hat = beta . x`` with ``beta >= 0`` is fitted by least squares twice: with L-BFGS-B
-from ``beta0 = (0.5, 0.5, 0.5, 0.5)`` (the benchmark's method) and as a convex QP with cvxpy + HiGHS,
+from ``beta0 = (0.5, 0.5, 0.5, 0.5)`` (the benchmark's method) and as a convex QP with cvxpy + HiGHS (Clarabel where HiGHS fails),
 whose optimum certifies the first (they must agree). The fit is reported as
 
     avg = (beta_t + beta_r + beta_f) / 3,  K = avg + beta_count,  alpha = avg / K,  lambda_x = beta_x / avg
@@ -188,15 +188,20 @@ def fit_lbfgsb(features: np.ndarray, delta: np.ndarray) -> np.ndarray:
 
 
 def fit_qp(features: np.ndarray, delta: np.ndarray) -> np.ndarray:
-    """The same least squares with beta >= 0 as a convex QP (cvxpy + HiGHS, active set: exact zeros)."""
+    """The same least squares with beta >= 0 as a convex QP: cvxpy + HiGHS (active set: exact zeros), or
+    Clarabel (interior point) where HiGHS fails, as its QP solver does on some well-posed problems."""
     import cvxpy as cp
 
     beta = cp.Variable(features.shape[1], nonneg=True)
     problem = cp.Problem(cp.Minimize(cp.sum_squares(features @ beta - delta)))
-    problem.solve(solver=cp.HIGHS)
-    if problem.status != cp.OPTIMAL:
-        raise RigoptError(f"the calibration QP did not solve to optimality (status {problem.status})")
-    return np.maximum(beta.value, 0.0)
+    for solver in (cp.HIGHS, cp.CLARABEL):
+        try:
+            problem.solve(solver=solver)
+        except cp.error.SolverError:
+            continue
+        if problem.status == cp.OPTIMAL:
+            return np.maximum(beta.value, 0.0)
+    raise RigoptError(f"the calibration QP did not solve to optimality (status {problem.status})")
 
 
 def fit_calibration(features: np.ndarray, delta: np.ndarray, name: str, solver: str = "lbfgsb") -> CalibrationFit:

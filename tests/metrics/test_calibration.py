@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from scipy.optimize import nnls
 
-from rigopt.errors import DataError, UnknownNameError
+from rigopt.errors import DataError, RigoptError, UnknownNameError
 from rigopt.metrics.calibration import (
     fit_calibration,
     fit_lbfgsb,
@@ -124,6 +124,35 @@ def test_unconstrained_optimum_is_recovered_when_feasible():
     y = x @ beta  # exact fit, all positive
     assert fit_qp(x, y) == pytest.approx(beta, abs=1e-7)
     assert fit_lbfgsb(x, y) == pytest.approx(beta, abs=1e-5)
+
+
+def _failing(monkeypatch, failing: set[str]):
+    """Make cvxpy's solve raise SolverError for the solvers named in ``failing`` (as HiGHS's QP does on some
+    well-posed least-squares problems)."""
+    import cvxpy as cp
+
+    solve = cp.Problem.solve
+
+    def patched(problem, *args, solver=None, **kwargs):
+        if solver in failing:
+            raise cp.error.SolverError(f"Solver {solver!r} failed.")
+        return solve(problem, *args, solver=solver, **kwargs)
+
+    monkeypatch.setattr(cp.Problem, "solve", patched)
+
+
+def test_qp_falls_back_to_clarabel_where_highs_fails(monkeypatch):
+    rng = np.random.default_rng(3)
+    x, y = rng.uniform(0, 2, (60, 4)), rng.uniform(-0.2, 1.0, 60)
+    _failing(monkeypatch, {"HIGHS"})
+    assert objective(fit_qp(x, y), x, y) == pytest.approx(objective(nnls(x, y)[0], x, y), rel=1e-6)
+    assert fit_qp(x, y) == pytest.approx(nnls(x, y)[0], abs=1e-5)
+
+
+def test_qp_that_no_solver_solves_is_a_rigopt_error(monkeypatch):
+    _failing(monkeypatch, {"HIGHS", "CLARABEL"})
+    with pytest.raises(RigoptError, match="did not solve"):
+        fit_qp(np.eye(4), np.ones(4))
 
 
 def test_fit_calibration_without_pairs_raises_data_error():
