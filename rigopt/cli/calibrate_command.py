@@ -105,9 +105,11 @@ def calibrate_command(
 
 def _print_transfer(test: dict) -> None:
     print_table(f"The joint calibration fitted on --results, judged on {test['results']} (held-out pairs)",
-                ["model", "rho", "CI", "MAE (linear)", "MAE (bounded)", "own: rho per detector", "own: rho joint"],
+                ["model", "rho", "CI", "MAE (linear)", "MAE (bounded)", "own: rho per detector", "own: rho joint",
+                 "gain over own joint (CI)"],
                 [[m, e["heldout"]["rho"], _ci(e["heldout"]["ci"]), e["heldout"]["mae"], e["bounded"]["heldout"]["mae"],
-                  e["own_per_detector"]["heldout"]["rho"], e["own_joint"]["heldout"]["rho"]]
+                  e["own_per_detector"]["heldout"]["rho"], e["own_joint"]["heldout"]["rho"],
+                  _gain(e["own_joint"]["rho_gain"])]
                  for m, e in test["models"].items()])
     if "null" in test:
         print_table(f"Yardstick: {test['null']['seeds']} joint calibrations fitted on random drops over the same "
@@ -166,3 +168,7 @@ def _print_tables(report: dict) -> None:
 
 def _ci(ci) -> str:
     return "-" if None in ci else f"[{ci[0]:.3f}, {ci[1]:.3f}]"
+
+
+def _gain(gain: dict) -> str:
+    return "-" if gain["value"] is None else f"{gain['value']:+.3f} {_ci(gain['ci'])}"

@@ -23,7 +23,7 @@ from rigopt.metrics.calibration import (UNIT_LAMBDAS, Calibration, CalibrationFi
 from rigopt.metrics.matched_fit import fit_rematched
 from rigopt.metrics.prediction import LinkChoice, choose_link, domain_of
 from rigopt.metrics.reliability import (DEFAULT_BOOTSTRAP, DEFAULT_SEED, Reliability, drop_ranks, finite_or_none,
-                                        reliability, spearman)
+                                        reliability, rho_gain, spearman)
 from rigopt.metrics.transfer import TransferDrops, TransferTable
 from rigopt.rig.library import load_rig
 from rigopt.rig.model import Rig
@@ -274,11 +274,14 @@ class CalibrationTransfer:
 
     ``models``: per target detector, the source's joint calibration on the target's pairs (ModelReliability:
     control and held-out pairs of the target's control rigs, linear and bounded); ``own``: the target's own
-    protocol study (its per-detector and joint fits on its control pairs)."""
+    protocol study (its per-detector and joint fits on its control pairs); ``gains``: per detector, the
+    held-out rho of ``calibration`` minus that of each own fit (``"own_per_detector"``, ``"own_joint"``) on
+    the same held-out pairs, as (gain, low, high) with a paired bootstrap's 95 % interval."""
 
     calibration: Calibration
     models: tuple[ModelReliability, ...]
     own: CalibrationStudy
+    gains: dict
 
 
 def calibration_on(calibration: Calibration, table: TransferTable, control_rigs: Sequence[str] = CONTROL_RIGS,
@@ -303,7 +306,23 @@ def calibration_on(calibration: Calibration, table: TransferTable, control_rigs:
         subset = PairPredictions(*(getattr(pairs, f)[mine] for f in PairPredictions.__dataclass_fields__))
         models.append(ModelReliability(model, *_split_reliability(subset, resamples, seed),
                                        bounded_accuracy(subset, subset.control), bounded_accuracy(subset, ~subset.control)))
-    return CalibrationTransfer(calibration, tuple(models), own)
+    own_fits = {"own_per_detector": {m.model: m.pairs for m in own.models}, "own_joint": own.joint.pairs}
+    gains = {model.model: {name: _heldout_rho_gain(pairs, fits, model.model, resamples, seed)
+                           for name, fits in own_fits.items()} for model in models}
+    return CalibrationTransfer(calibration, tuple(models), own, gains)
+
+
+def _heldout_rho_gain(pairs: PairPredictions, other, model: str, resamples: int, seed: int):
+    """rho_gain of ``pairs``' predictions over ``other``'s (a PairPredictions, or {model: PairPredictions}) on
+    ``model``'s held-out pairs, matched by (training rig, test rig); NaNs where ``other`` lacks the model."""
+    other = other.get(model) if isinstance(other, dict) else other
+    if other is None:
+        return float("nan"), float("nan"), float("nan")
+    theirs = {(t, s): p for m, t, s, p in zip(other.model, other.train, other.test, other.predicted) if m == model}
+    held = [k for k in range(len(pairs.delta)) if pairs.model[k] == model and not pairs.control[k]
+            and (pairs.train[k], pairs.test[k]) in theirs]
+    other_predicted = np.array([theirs[(pairs.train[k], pairs.test[k])] for k in held])
+    return rho_gain(pairs.predicted[held], other_predicted, pairs.delta[held], resamples, seed)
 
 
 def null_transfer(table: TransferTable, rng: np.random.Generator) -> TransferTable:

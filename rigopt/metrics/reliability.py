@@ -64,6 +64,27 @@ def bootstrap_rho(predicted: np.ndarray, observed: np.ndarray, resamples: int = 
     return float(low), float(high)
 
 
+def rho_gain(predicted: np.ndarray, other: np.ndarray, observed: np.ndarray, resamples: int = DEFAULT_BOOTSTRAP,
+             seed: int = DEFAULT_SEED) -> tuple[float, float, float]:
+    """(gain, low, high): Spearman rho of ``predicted`` (n,) against ``observed`` (n,) minus that of ``other``
+    (n,), the same pairs' other prediction, with its 95 % interval over paired resamples of the pairs (both
+    predictions judged on the same resample: the interval of the difference, not of either rho)."""
+    predicted, other, observed = (np.asarray(v, dtype=float) for v in (predicted, other, observed))
+    gain = spearman(predicted, observed)[0] - spearman(other, observed)[0]
+    n = len(observed)
+    if n < 3 or resamples <= 0 or not np.isfinite(gain):
+        return gain, float("nan"), float("nan")
+    index = np.random.default_rng(seed).integers(0, n, (resamples, n))
+    a, b, o = predicted[index], other[index], observed[index]  # (resamples, n)
+    usable = (np.ptp(a, axis=1) > 0) & (np.ptp(b, axis=1) > 0) & (np.ptp(o, axis=1) > 0)
+    if not usable.any():
+        return gain, float("nan"), float("nan")
+    ranks = rankdata(o[usable], axis=1)
+    gains = (_pearson_rows(rankdata(a[usable], axis=1), ranks) - _pearson_rows(rankdata(b[usable], axis=1), ranks))
+    low, high = np.percentile(gains, [2.5, 97.5])
+    return float(gain), float(low), float(high)
+
+
 def _pearson_rows(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Pearson correlation of each row of a (m, n) with the same row of b (m, n) -> (m,)."""
     a = a - a.mean(axis=1, keepdims=True)

@@ -72,21 +72,23 @@ def study_dict(study: CalibrationStudy) -> dict:
 def transfer_dict(transfer, source_fit: CalibrationFit) -> dict:
     """A CalibrationTransfer as JSON: per target detector the transferred calibration's ``control`` and
     ``heldout`` agreement (linear prediction: rho, CI, MAE, RMSE) and ``bounded`` accuracy, beside the target's
-    own per-detector and joint calibrations on the same pairs (``own_per_detector``, ``own_joint``);
-    ``weights``: those of ``source_fit``, the fit that was transferred."""
-    own_models = {m.model: m for m in transfer.own.models}
-    own_joint = {r.model: r for r in transfer.own.joint.models}
+    own per-detector and joint calibrations on the same pairs (``own_per_detector``, ``own_joint``), each with
+    ``rho_gain``: the transferred calibration's held-out rho minus its own, ``{"value", "ci"}`` (paired
+    bootstrap); ``weights``: those of ``source_fit``, the fit that was transferred."""
+    own = {"own_per_detector": {m.model: m for m in transfer.own.models},
+           "own_joint": {r.model: r for r in transfer.own.joint.models}}
+
+    def own_entry(name: str, model: str) -> dict:
+        fit, (gain, low, high) = own[name][model], transfer.gains[model][name]
+        return {"heldout": fit.heldout.to_dict(), "bounded": bounded_dict(fit.bounded_control, fit.bounded_heldout),
+                "rho_gain": {"value": finite_or_none(gain), "ci": [finite_or_none(low), finite_or_none(high)]}}
+
     return {
         "weights": weights_dict(source_fit),
         "models": {r.model: {
             "control": r.control.to_dict(), "heldout": r.heldout.to_dict(),
             "bounded": bounded_dict(r.bounded_control, r.bounded_heldout),
-            "own_per_detector": {"heldout": own_models[r.model].heldout.to_dict(),
-                                 "bounded": bounded_dict(own_models[r.model].bounded_control,
-                                                         own_models[r.model].bounded_heldout)},
-            "own_joint": {"heldout": own_joint[r.model].heldout.to_dict(),
-                          "bounded": bounded_dict(own_joint[r.model].bounded_control,
-                                                  own_joint[r.model].bounded_heldout)},
+            **{name: own_entry(name, r.model) for name in own},
         } for r in transfer.models},
     }
 

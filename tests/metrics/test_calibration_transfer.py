@@ -58,6 +58,22 @@ def test_the_transferred_rho_is_spearman_of_the_prediction_on_the_held_out_pairs
         assert result.heldout.rho == pytest.approx(rho, abs=1e-12)
 
 
+def test_the_rho_gain_over_an_own_fit_is_the_difference_of_their_held_out_rhos(real_study):
+    table = read_transfer(REAL)
+    other = real_study.models[0].fit.calibration  # BEVDet's own fit, judged on every detector
+    transfer = calibration_on(other, table, resamples=RESAMPLES, own=real_study)
+    own_joint = {m.model: m for m in real_study.joint.models}
+    own = {m.model: m for m in real_study.models}
+    for result in transfer.models:
+        gains = transfer.gains[result.model]
+        joint_gain, low, high = gains["own_joint"]
+        assert joint_gain == pytest.approx(result.heldout.rho - own_joint[result.model].heldout.rho, abs=1e-12)
+        assert low <= joint_gain <= high
+        per_detector_gain = gains["own_per_detector"][0]
+        assert per_detector_gain == pytest.approx(result.heldout.rho - own[result.model].heldout.rho, abs=1e-12)
+    assert transfer.gains["BEVDet"]["own_per_detector"] == (0.0, 0.0, 0.0)  # the same fit on the same pairs
+
+
 def test_calibrate_test_on_reports_the_synthetic_fit_beside_the_benchmarks_own():
     outcome = run_rigopt("calibrate", "--results", str(SYNTHETIC), "--rigs", str(SYNTHETIC_RIGS),
                          "--test-on", str(REAL), "--bootstrap", "50", "--json")
@@ -68,6 +84,9 @@ def test_calibrate_test_on_reports_the_synthetic_fit_beside_the_benchmarks_own()
     for model, entry in test["models"].items():
         assert round(entry["own_per_detector"]["heldout"]["rho"], 3) == published[model]
         assert -1.0 <= entry["heldout"]["rho"] <= 1.0 and entry["heldout"]["n"] > 0
+        gain = entry["own_joint"]["rho_gain"]
+        assert gain["value"] == pytest.approx(entry["heldout"]["rho"] - entry["own_joint"]["heldout"]["rho"], abs=1e-12)
+        assert gain["ci"][0] <= gain["value"] <= gain["ci"][1]
     assert test["weights"]["n"] > 0  # fitted on the synthetic control pairs
 
 
@@ -133,7 +152,8 @@ def test_control_all_fits_on_every_pair_and_the_target_keeps_the_benchmarks_cont
     assert test["control_rigs"] == default["test_on"]["control_rigs"] == ["R1", "R1-c10", "R1-c6", "R1-f", "R1-r", "R1-t"]
     for model, entry in test["models"].items():
         assert entry["heldout"]["n"] == default["test_on"]["models"][model]["heldout"]["n"]
-        assert entry["own_joint"] == default["test_on"]["models"][model]["own_joint"]
+        theirs = default["test_on"]["models"][model]["own_joint"]
+        assert (entry["own_joint"]["heldout"], entry["own_joint"]["bounded"]) == (theirs["heldout"], theirs["bounded"])
     fewer = json.loads(run_rigopt(*common, "--test-control", "R1,R1-r,R1-t").stdout)["test_on"]
     assert fewer["control_rigs"] == ["R1", "R1-r", "R1-t"]
     for model, entry in fewer["models"].items():

@@ -13,7 +13,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 from scipy.stats import spearmanr
 
-from rigopt.metrics.reliability import bootstrap_rho, drop_ranks, reliability, spearman
+from rigopt.metrics.reliability import bootstrap_rho, drop_ranks, reliability, rho_gain, spearman
 
 
 def loop_bootstrap(predicted, observed, resamples, seed):
@@ -148,3 +148,32 @@ def test_drop_ranks_largest_drop_is_rank_one():
 
 def test_drop_ranks_average_ties():
     assert drop_ranks([0.5, 0.2, 0.5, 0.1, 0.2, 0.2]).tolist() == [1.5, 4.0, 1.5, 6.0, 4.0, 4.0]
+
+
+def _rho_gain_by_loop(a, b, o, resamples, seed):
+    """The paired bootstrap written plainly: one resample at a time, scipy's Spearman on each side."""
+    index = np.random.default_rng(seed).integers(0, len(o), (resamples, len(o)))
+    gains = [spearmanr(a[i], o[i]).statistic - spearmanr(b[i], o[i]).statistic for i in index]
+    return np.percentile(gains, [2.5, 97.5])
+
+
+def test_rho_gain_is_the_difference_of_the_two_rhos_with_a_paired_interval():
+    rng = np.random.default_rng(7)
+    observed = rng.normal(size=80)
+    better, worse = observed + rng.normal(0, 0.3, 80), observed + rng.normal(0, 1.5, 80)
+    gain, low, high = rho_gain(better, worse, observed, 200, 3)
+    assert gain == pytest.approx(spearman(better, observed)[0] - spearman(worse, observed)[0], abs=1e-12)
+    assert [low, high] == pytest.approx(_rho_gain_by_loop(better, worse, observed, 200, 3), abs=1e-12)
+    assert 0 < low < gain < high  # a clearly better prediction: the interval excludes 0
+
+
+def test_rho_gain_of_a_prediction_over_itself_is_exactly_zero():
+    rng = np.random.default_rng(1)
+    observed, predicted = rng.normal(size=30), rng.normal(size=30)
+    assert rho_gain(predicted, predicted, observed, 100, 0) == (0.0, 0.0, 0.0)
+
+
+def test_rho_gain_of_the_reversed_prediction_is_two():
+    observed = np.arange(10.0)
+    gain, low, high = rho_gain(observed, -observed, observed, 100, 0)
+    assert gain == pytest.approx(2.0) and low == pytest.approx(2.0) and high == pytest.approx(2.0)
