@@ -7,13 +7,16 @@ Steps (each resumable; rerun the script to continue):
                   the firetruck and hgv designs from R1 and their comparison rigs (rigopt validate);
   3. matrix:      per family, train on every matrix rig and test on every one (rigopt bench matrix);
   4. calibration: RigCD calibrated on the measured synthetic transfer (rigopt calibrate), held-out rho;
-  5. sim_to_real: the joint weights fitted on the synthetic transfer alone (its control pairs; every pair),
-                  judged on the real benchmark's held-out pairs beside 20 fits on random drops;
-  6. agreement:   Spearman rho of synthetic against real relative drops on the same pairs;
-  7. report:      results/results.md from all of the above.
+  5. sim_to_real: the joint weights fitted on the synthetic transfer alone (its control pairs; every pair; the
+                  pairs of the rigs outside the real held-out set), judged on the real benchmark's held-out pairs beside 20 fits on random drops;
+  6. ship:        the fit on the pairs of the rigs the real benchmark does not hold out, as the named
+                  calibration sim-lss (metrics/weights*/), for rigcd and rigcd+, where it beats the benchmark's
+                  joint calibration on the real held-out pairs of the family's counterparts (BEVDet, BEVFusion);
+  7. agreement:   Spearman rho of synthetic against real relative drops on the same pairs;
+  8. report:      results/results.md from all of the above.
 Writes results/ (matrices, loss logs, calibration, figures, tables, results.md); checkpoints stay under
 --data. Usage: python studies/baselines/run.py --data DIR [--families lss] [--epochs 4]
-              [--steps data validation matrix calibration sim_to_real agreement report] [--device cpu]
+              [--steps data validation matrix calibration sim_to_real ship agreement report] [--device cpu]
               [--seeds 0 1 2] [--ray ADDRESS]
 """
 
@@ -52,7 +55,7 @@ TRAIN_SCENES, TEST_SCENES = 48, 16
 REAL_RESULTS = HERE.parents[2] / "shared" / "pccr" / "results"
 #: Each synthetic family against its real counterparts in the benchmark.
 COUNTERPARTS = {"lss": ["BEVDet", "BEVFusion"], "petr": ["PETR"]}
-STEPS = ("data", "validation", "matrix", "calibration", "sim_to_real", "agreement", "report")
+STEPS = ("data", "validation", "matrix", "calibration", "sim_to_real", "ship", "agreement", "report")
 
 
 def rig_name(rig) -> str:
@@ -85,19 +88,33 @@ def calibration_step() -> None:
     rigopt("calibrate", "--results", TRANSFER, "--rigs", RIGS, "--out", RESULTS / "calibration", "--force")
 
 
-#: The two fits judged on the real benchmark: on the synthetic control pairs (the benchmark's protocol), and on
-#: every synthetic pair (--control all: the matrix's 20 rigs, what it was rendered for).
-SIM_TO_REAL = {"sim_to_real.json": ("control pairs", []),
-               "sim_to_real_all.json": ("every pair", ["--control", "all"])}
+#: The fits judged on the real benchmark: on the synthetic control pairs (the benchmark's protocol); on every
+#: synthetic pair (--control all: the matrix's 20 rigs, what it was rendered for); and on the pairs of the rigs
+#: the real benchmark holds out none of (its held-out rigs R2-R9 left out of the fit: rigs it has never seen).
+SIM_TO_REAL = {"sim_to_real.json": ("control pairs", lambda: []),
+               "sim_to_real_all.json": ("every pair", lambda: ["--control", "all"]),
+               "sim_to_real_unseen.json": ("pairs without the real held-out rigs",
+                                           lambda: ["--control", ",".join(rigs_unseen_by_real_fit())])}
 NULL_SEEDS = 20
+
+
+def rigs_unseen_by_real_fit() -> list[str]:
+    """The matrix's rigs that are not among the real benchmark's held-out rigs (its rigs outside its control
+    rigs): a fit on their pairs has seen none of the rigs of the real held-out pairs."""
+    from rigopt.metrics.protocol import CONTROL_RIGS
+    from rigopt.metrics.transfer import read_transfer
+
+    real = read_transfer(REAL_RESULTS)
+    held_out = set(real.train.tolist() + real.test.tolist()) - set(CONTROL_RIGS)
+    return [rig for rig in map(rig_name, MATRIX) if rig not in held_out]
 
 
 def sim_to_real_step() -> None:
     """The joint weights fitted on the synthetic transfer alone, judged on the real benchmark's held-out pairs,
     beside NULL_SEEDS fits on random drops over the same pairs (the yardstick)."""
     running = {}
-    for name, (_, control) in SIM_TO_REAL.items():  # side by side: one core each
-        command = ["rigopt", "calibrate", "--results", str(TRANSFER), "--rigs", str(RIGS), *control, "--test-on",
+    for name, (_, control) in SIM_TO_REAL.items():  # side by side
+        command = ["rigopt", "calibrate", "--results", str(TRANSFER), "--rigs", str(RIGS), *control(), "--test-on",
                    str(REAL_RESULTS), "--null", str(NULL_SEEDS), "--json"]
         print("$", " ".join(command), flush=True)
         running[name] = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
@@ -123,8 +140,67 @@ def sim_to_real_rows() -> list[list]:
             rows.append([fit, test["weights"]["n"], model, held["n"], held["rho"], *held["ci"], held["mae"],
                          entry["bounded"]["heldout"]["mae"], null.get("median"), null.get("p95"),
                          null.get("share_reaching"), entry["own_per_detector"]["heldout"]["rho"],
-                         entry["own_joint"]["heldout"]["rho"]])
+                         entry["own_joint"]["heldout"]["rho"], gain_text(entry["own_joint"]["rho_gain"])])
     return rows
+
+
+#: The named calibration shipped from the synthetic transfer, and where it ships (per metric).
+SHIPPED_NAME = "sim-lss"
+SHIPPED_FOLDERS = {"rigcd": "weights", "rigcd+": "weights-plus"}
+
+
+def ship_step() -> None:
+    """Fit on the pairs of ``rigs_unseen_by_real_fit()`` (per metric) and ship it as ``SHIPPED_NAME`` where it
+    beats the benchmark's joint calibration on the real held-out pairs of every counterpart of the lss family
+    (``beats``); where it does not, say so and ship nothing."""
+    import tempfile
+
+    for metric, folder in SHIPPED_FOLDERS.items():
+        with tempfile.TemporaryDirectory() as work:
+            out = Path(work) / "calibration"
+            command = ["rigopt", "calibrate", "--metric", metric, "--results", str(TRANSFER), "--rigs", str(RIGS),
+                       "--control", ",".join(rigs_unseen_by_real_fit()), "--test-on", str(REAL_RESULTS),
+                       "--out", str(out), "--json"]
+            print("$", " ".join(command), flush=True)
+            test = json.loads(subprocess.run(command, check=True, capture_output=True, text=True).stdout)["test_on"]
+            weights = json.loads((out / "weights" / "joint.json").read_text())
+        verdicts = {model: beats(test["models"][model]) for model in COUNTERPARTS["lss"]}
+        for model, reasons in verdicts.items():
+            print(f"{metric} {model}: " + ("beats the benchmark's joint calibration" if not reasons else "; ".join(reasons)))
+        if any(verdicts.values()):
+            print(f"{metric}: {SHIPPED_NAME} not shipped")
+            continue
+        weights["name"] = SHIPPED_NAME
+        weights["source"] = ("joint fit on the synthetic LSS-style transfer (baselines/transfer/lss) over the pairs of "
+                             f"{', '.join(rigs_unseen_by_real_fit())}; on the real benchmark's held-out pairs: " + "; ".join(
+                                 f"{m} rho {test['models'][m]['heldout']['rho']:.3f} vs the benchmark's joint "
+                                 f"{test['models'][m]['own_joint']['heldout']['rho']:.3f}" for m in test["models"]))
+        path = HERE.parents[1] / "metrics" / folder / f"{SHIPPED_NAME}.json"
+        write_text_atomic(path, json.dumps(weights, indent=2) + "\n")
+        print("wrote", path)
+
+
+def beats(entry: dict) -> list[str]:
+    """Why a transferred calibration's entry (one real detector of calibrate --test-on's JSON) does not beat the
+    benchmark's joint calibration on the held-out pairs; empty where it does: a rho gain whose paired interval
+    lies above 0, and a lower MAE of the linear prediction and of the bounded drop."""
+    own, gain = entry["own_joint"], entry["own_joint"]["rho_gain"]
+    reasons = []
+    if gain["ci"][0] is None or gain["ci"][0] <= 0:
+        reasons.append(f"rho gain {gain['value']:+.3f}, interval {gain['ci']} not above 0")
+    for name, mine, theirs in (("linear", entry["heldout"]["mae"], own["heldout"]["mae"]),
+                               ("bounded", entry["bounded"]["heldout"]["mae"], own["bounded"]["heldout"]["mae"])):
+        if mine >= theirs:
+            reasons.append(f"{name} MAE {mine:.3f} not below {theirs:.3f}")
+    return reasons
+
+
+def gain_text(gain: dict) -> str:
+    """'+0.047 [0.003, 0.096]': a rho gain with its interval."""
+    if gain["value"] is None:
+        return "-"
+    low, high = gain["ci"]
+    return f"{gain['value']:+.3f}" + ("" if low is None else f" [{low:+.3f}, {high:+.3f}]")
 
 
 def agreement_step() -> list[list]:
@@ -326,11 +402,13 @@ def report_step(families) -> None:
     transferred = sim_to_real_rows()
     if transferred:
         parts += ["## Calibrated in simulation, judged on the real benchmark's held-out pairs", "",
-                  "Joint weights fitted on the synthetic transfer alone (on its control pairs, or on every pair); "
-                  f"null: {NULL_SEEDS} fits on random drops over the same pairs; own: the benchmark's calibrations.",
+                  "Joint weights fitted on the synthetic transfer alone (on its control pairs, on every pair, or on "
+                  "the pairs of the rigs outside the real held-out set); "
+                  f"null: {NULL_SEEDS} fits on random drops over the same pairs; own: the benchmark's calibrations; "
+                  "gain: rho minus the own joint's on the same pairs, paired-bootstrap 95 % interval.",
                   "", markdown([["fit on", "fit pairs", "real detector", "held-out pairs", "rho", "ci_low", "ci_high",
                                  "MAE linear", "MAE bounded", "null median", "null p95", "null share reaching",
-                                 "own per detector", "own joint"], *transferred]), ""]
+                                 "own per detector", "own joint", "gain over own joint"], *transferred]), ""]
     if (RESULTS / "agreement.csv").is_file():
         table = read_csv(RESULTS / "agreement.csv")
         parts += ["## Agreement with the benchmark's real transfer (Spearman rho of relative drops)", "",
@@ -390,6 +468,8 @@ def main() -> None:
         calibration_step()
     if "sim_to_real" in args.steps:
         sim_to_real_step()
+    if "ship" in args.steps:
+        ship_step()
     if "agreement" in args.steps:
         print(markdown(agreement_step()))
     if "report" in args.steps:

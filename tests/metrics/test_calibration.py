@@ -251,7 +251,7 @@ def test_knocked_out_unknown_component_raises():
 
 
 def test_shipped_weight_names():
-    assert set(shipped_weight_names()) == {*MODELS, "joint"}
+    assert set(shipped_weight_names()) == {*MODELS, "joint", "sim-lss"}
 
 
 @pytest.mark.parametrize("name", [*MODELS, "joint"])

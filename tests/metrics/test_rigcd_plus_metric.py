@@ -35,7 +35,7 @@ def plus_study():
 def test_both_metrics_ship_the_same_names():
     assert METRICS == ("rigcd", "rigcd+")
     assert shipped_weight_names("rigcd+") == shipped_weight_names("rigcd") == sorted(
-        ["BEVDet", "BEVFusion", "Fast-BEV", "PETR", "joint"])
+        ["BEVDet", "BEVFusion", "Fast-BEV", "PETR", "joint", "sim-lss"])
 
 
 @pytest.mark.parametrize("name", ["BEVDet", "BEVFusion", "Fast-BEV", "PETR", "joint"])
