@@ -10,7 +10,10 @@ each keep every core busy:
   3. test: every trained model on every rig, one job per test rig (``protocol.matrix_rows``); rows written
      to ``--transfer`` in the benchmark's layout;
 then pack the results, the training logs and the timings (seconds per phase, throughput) into one archive,
-``--pack``/matrix.tar.gz (``--pack-only`` packs what an interrupted run left).
+``--pack``/matrix.tar.gz (``--pack-only`` packs what an interrupted run left), and the trained weights (without
+optimiser state, 2.5 MB a rig) into ``--pack``/models-<k>.tar, five rigs each (a lease returns files of 16 MiB
+at most). Where a lease ends before the test phase, ``--models-from PACK`` tests those weights elsewhere: it
+renders the test split only, unpacks the models into ``--data``/runs and runs phase 3.
 
 Measured on an H200 with 16 cores (docs/baselines_study.md): rendering alone ran 125,000 camera images in
 155 s with 13 workers; overlapping rendering and training (an earlier version of this script) starved
@@ -18,7 +21,7 @@ both. Batches of 16 lose 0.04 mAP against 4 at the same epochs (``recipe.py`` g4
 default. Rendering and training resume as ``run.py``'s do. Usage:
   python studies/baselines/gpu_matrix.py --data DIR --pack DIR [--train-scenes 28] [--test-scenes 16]
          [--frames 20] [--test-frames N] [--epochs 12] [--batch 4] [--render-workers 16] [--train-jobs 16] [--eval-workers 20]
-         [--device cuda] [--deadline SECONDS] [--pack-only]
+         [--device cuda] [--deadline SECONDS] [--pack-only] [--models-from PACK]
 (``--train-jobs 20`` trains every rig at once: about 3.4 GB of GPU memory each, so an H200's 139 GB.)
 On a CPU (``--device cpu``, one thread per process: ``OMP_NUM_THREADS=1``, ``--train-jobs`` = cores) the same
 script runs a smaller recipe; the committed matrix's (docs/baselines_study.md) took 24 train scenes of 16
@@ -59,8 +62,8 @@ def render(args, timings: dict) -> None:
 
     started = time.perf_counter()
     rigs = [load_rig(rig) for rig in args.rigs]
-    scenes = split_scenes("train", args.train_scenes, args.frames) + split_scenes(
-        "test", args.test_scenes, args.test_frames or args.frames)
+    scenes = [] if args.models_from else split_scenes("train", args.train_scenes, args.frames)
+    scenes += split_scenes("test", args.test_scenes, args.test_frames or args.frames)
     cameras, frames = {rig.name: len(rig) for rig in rigs}, {scene.name: len(scene.frames) for scene in scenes}
     rendered = []
 
@@ -169,6 +172,58 @@ def training_throughput(data: Path, batch: int) -> list[dict]:
     return rows
 
 
+MODELS_PER_ARCHIVE = 5
+
+
+def pack_models(args) -> list[Path]:
+    """Every run's weights (its checkpoint without the optimiser state) as ``<rig>.pt`` in
+    ``--pack``/models-<k>.tar, MODELS_PER_ARCHIVE rigs each."""
+    import io
+
+    import torch
+
+    from rigopt.baselines.models import load_checkpoint
+    from rigopt.baselines.protocol import run_folder
+
+    rigs = [rig for rig in map(rig_name, args.rigs) if (run_folder(args.data / "runs", FAMILY, rig) / "checkpoint.pt").is_file()]
+    archives = []
+    for k in range(0, len(rigs), MODELS_PER_ARCHIVE):
+        archive = args.pack / f"models-{k // MODELS_PER_ARCHIVE}.tar"
+        with tarfile.open(archive, "w") as tar:
+            for rig in rigs[k:k + MODELS_PER_ARCHIVE]:
+                state = load_checkpoint(run_folder(args.data / "runs", FAMILY, rig) / "checkpoint.pt", FAMILY)
+                state.pop("optimizer", None)
+                buffer = io.BytesIO()
+                torch.save(state, buffer)
+                info = tarfile.TarInfo(f"{rig}.pt")
+                info.size = buffer.tell()
+                buffer.seek(0)
+                tar.addfile(info, buffer)
+        archives.append(archive)
+    return archives
+
+
+def unpack_models(args) -> list[str]:
+    """The weights of ``--models-from``/models-*.tar as ``--data``/runs/<family>/<rig>/checkpoint.pt; returns the
+    rigs, in ``--rigs`` order, that have one."""
+    from rigopt.baselines.protocol import run_folder
+
+    archives = sorted(args.models_from.glob("models-*.tar"))
+    if not archives:
+        raise SystemExit(f"--models-from {args.models_from}: no models-*.tar there (gpu_matrix.py packs them)")
+    unpacked = set()
+    for archive in archives:
+        with tarfile.open(archive) as tar:
+            for member in tar.getmembers():
+                rig = Path(member.name).stem
+                if member.isfile() and member.name == f"{rig}.pt":
+                    folder = run_folder(args.data / "runs", FAMILY, rig)
+                    folder.mkdir(parents=True, exist_ok=True)
+                    (folder / "checkpoint.pt").write_bytes(tar.extractfile(member).read())
+                    unpacked.add(rig)
+    return [rig for rig in map(rig_name, args.rigs) if rig in unpacked]
+
+
 def pack(args, timings: dict) -> Path:
     """The results, the logs (copied to results/logs) and the timings in ``<pack>/matrix.tar.gz``."""
     import shutil
@@ -205,6 +260,7 @@ def main() -> None:
     parser.add_argument("--device", default="cuda")
     parser.add_argument("--deadline", type=float, help="seconds from the start after which trainings are stopped")
     parser.add_argument("--pack-only", action="store_true")
+    parser.add_argument("--models-from", type=Path, help="test the weights a lease packed there (models-*.tar)")
     parser.add_argument("--rigs", nargs="+", default=MATRIX, help="default: run.py's matrix rigs")
     parser.add_argument("--transfer", type=Path, default=TRANSFER, help="results folder (default: baselines/transfer)")
     parser.add_argument("--results", type=Path, default=RESULTS, help="readings folder (default: the study's results)")
@@ -215,12 +271,15 @@ def main() -> None:
     timings = json.loads(stored.read_text()) if args.pack_only and stored.is_file() else {}
     if not args.pack_only:
         timings["settings"] = {k: v for k, v in vars(args).items() if k not in (
-            "data", "pack", "transfer", "results", "rigs", "started", "pack_only")}
+            "data", "pack", "transfer", "results", "rigs", "started", "pack_only", "models_from")}
         timings["settings"]["rigs"] = list(map(rig_name, args.rigs))
+        timings["settings"]["models_from"] = str(args.models_from) if args.models_from else None
         render(args, timings)
-        evaluate(args, train(args, timings), timings)
+        evaluate(args, unpack_models(args) if args.models_from else train(args, timings), timings)
         timings["total_s"] = round(time.perf_counter() - args.started, 1)
     print("packed", pack(args, timings))
+    if not args.models_from:
+        print("packed", *pack_models(args))
 
 
 if __name__ == "__main__":

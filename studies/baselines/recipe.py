@@ -29,6 +29,7 @@ VARIANTS = {
     "s0": (48, dict(bev_augment=True, epochs=4)),
     "e5": (48, dict(bev_augment=True, epochs=4, depth_weight=0.3)),
     "ext8": (48, dict(bev_augment=True, epochs=8)),
+    "ext16": (48, dict(bev_augment=True, epochs=16)),
     # the GPU matrix's data (gpu_matrix.py: 28 train scenes of 20 samples; test 16 scenes of 20)
     "g4": (28, dict(bev_augment=True, epochs=12)),
     "g16": (28, dict(bev_augment=True, epochs=12, batch_size=16, lr=2e-3)),
