@@ -2,8 +2,8 @@
 
 Features of a pair (A, B) are the unit-weight RigCD components ``x = (t, r, f, count)`` (m, rad, deg, -).
 The model ``delta_hat = beta . x`` with ``beta >= 0`` is fitted by least squares twice: with L-BFGS-B
-from ``beta0 = (0.5, 0.5, 0.5, 0.5)`` (the benchmark's method) and as a convex QP with cvxpy + HiGHS (Clarabel where HiGHS fails),
-whose optimum certifies the first (they must agree). The fit is reported as
+from ``beta0 = (0.5, 0.5, 0.5, 0.5)`` (the benchmark's method) and as a convex QP with cvxpy + HiGHS
+(Clarabel where HiGHS fails), whose optimum certifies the first (they must agree). The fit is reported as
 
     avg = (beta_t + beta_r + beta_f) / 3,  K = avg + beta_count,  alpha = avg / K,  lambda_x = beta_x / avg
     delta_hat = K (alpha (lt x_t + lr x_r + lf x_f) + (1 - alpha) x_count)
