@@ -45,14 +45,19 @@ def load_rig(name_or_path) -> Rig:
     """A rig from a library name (case-insensitive) or a path to a benchmark rig file.
 
     A string that names a library rig wins over a file of the same name in the working directory
-    only when no such file exists; paths ending in ``.json`` are always read as files.
+    only when no such file exists; paths ending in ``.json`` are always read as files. A folder is never a
+    rig file: a library name stays that rig where a folder of that name lies in the working directory
+    (``rigopt bench generate`` makes one per rig).
     """
     if isinstance(name_or_path, Rig):
         return name_or_path
     text = str(name_or_path)
     path = Path(text)
-    if path.suffix.lower() == ".json" or path.exists():
+    if path.suffix.lower() == ".json" or path.is_file():
         if not path.is_file():
             raise RigFileError(f"{path}: no such rig file (library rigs: {', '.join(rig_names())})")
         return read_rig(path)
+    if path.is_dir() and text.lower() not in {name.lower() for name in rig_names()}:
+        raise RigFileError(f"{path}: a folder, not a rig file; give a rig JSON file or a library rig "
+                           f"({', '.join(rig_names())})")
     return library_rig(text)

@@ -107,3 +107,11 @@ def test_a_folder_is_not_a_rig_file(tmp_path):
     (tmp_path / "folder").mkdir()
     with pytest.raises(RigFileError):
         load_rig("folder")
+
+
+def test_a_folder_named_like_a_library_rig_leaves_the_name_to_the_library(tmp_path):
+    # rigopt bench generate --out . makes a folder per rig; the next command naming R1 must still get R1.
+    (tmp_path / "R1").mkdir()
+    assert Path("R1").is_dir()  # the working directory is tmp_path
+    assert load_rig("R1").same_as(library_rig("R1"))
+    assert load_rig("r1").same_as(library_rig("R1"))
