@@ -306,16 +306,17 @@ def calibration_on(calibration: Calibration, table: TransferTable, control_rigs:
         subset = PairPredictions(*(getattr(pairs, f)[mine] for f in PairPredictions.__dataclass_fields__))
         models.append(ModelReliability(model, *_split_reliability(subset, resamples, seed),
                                        bounded_accuracy(subset, subset.control), bounded_accuracy(subset, ~subset.control)))
-    own_fits = {"own_per_detector": {m.model: m.pairs for m in own.models}, "own_joint": own.joint.pairs}
-    gains = {model.model: {name: _heldout_rho_gain(pairs, fits, model.model, resamples, seed)
-                           for name, fits in own_fits.items()} for model in models}
+    per_detector = {m.model: m.pairs for m in own.models}
+    gains = {m.model: {name: _heldout_rho_gain(pairs, other, m.model, resamples, seed)
+                       for name, other in (("own_per_detector", per_detector.get(m.model)),
+                                           ("own_joint", own.joint.pairs))}
+             for m in models}
     return CalibrationTransfer(calibration, tuple(models), own, gains)
 
 
-def _heldout_rho_gain(pairs: PairPredictions, other, model: str, resamples: int, seed: int):
-    """rho_gain of ``pairs``' predictions over ``other``'s (a PairPredictions, or {model: PairPredictions}) on
-    ``model``'s held-out pairs, matched by (training rig, test rig); NaNs where ``other`` lacks the model."""
-    other = other.get(model) if isinstance(other, dict) else other
+def _heldout_rho_gain(pairs: PairPredictions, other: PairPredictions | None, model: str, resamples: int, seed: int):
+    """rho_gain of ``pairs``' predictions over ``other``'s on ``model``'s held-out pairs, matched by (training
+    rig, test rig); NaNs without ``other`` (the target's own study lacks the model)."""
     if other is None:
         return float("nan"), float("nan"), float("nan")
     theirs = {(t, s): p for m, t, s, p in zip(other.model, other.train, other.test, other.predicted) if m == model}

@@ -51,17 +51,8 @@ def bootstrap_rho(predicted: np.ndarray, observed: np.ndarray, resamples: int = 
 
     Resamples whose observed or predicted values are constant are skipped; (nan, nan) if none remain.
     """
-    n = len(observed)
-    if n < 3 or resamples <= 0:
-        return float("nan"), float("nan")
-    index = np.random.default_rng(seed).integers(0, n, (resamples, n))
-    p, o = predicted[index], observed[index]  # (resamples, n)
-    usable = (np.ptp(p, axis=1) > 0) & (np.ptp(o, axis=1) > 0)
-    if not usable.any():
-        return float("nan"), float("nan")
-    rhos = _pearson_rows(rankdata(p[usable], axis=1), rankdata(o[usable], axis=1))  # Spearman = Pearson of ranks
-    low, high = np.percentile(rhos, [2.5, 97.5])
-    return float(low), float(high)
+    rhos = _resampled_rhos([np.asarray(predicted)], np.asarray(observed), resamples, seed)
+    return _interval(rhos[0]) if rhos is not None else (float("nan"), float("nan"))
 
 
 def rho_gain(predicted: np.ndarray, other: np.ndarray, observed: np.ndarray, resamples: int = DEFAULT_BOOTSTRAP,
@@ -71,18 +62,32 @@ def rho_gain(predicted: np.ndarray, other: np.ndarray, observed: np.ndarray, res
     predictions judged on the same resample: the interval of the difference, not of either rho)."""
     predicted, other, observed = (np.asarray(v, dtype=float) for v in (predicted, other, observed))
     gain = spearman(predicted, observed)[0] - spearman(other, observed)[0]
+    rhos = _resampled_rhos([predicted, other], observed, resamples, seed) if np.isfinite(gain) else None
+    return (gain, *(_interval(rhos[0] - rhos[1]) if rhos is not None else (float("nan"), float("nan"))))
+
+
+def _resampled_rhos(predictions: list[np.ndarray], observed: np.ndarray, resamples: int,
+                    seed: int) -> np.ndarray | None:
+    """Spearman rho (k, m) of each of k predictions (n,) against ``observed`` (n,) on the same m resamples of
+    the pairs with replacement, those where no side is constant; None if there are none (or n < 3)."""
     n = len(observed)
-    if n < 3 or resamples <= 0 or not np.isfinite(gain):
-        return gain, float("nan"), float("nan")
+    if n < 3 or resamples <= 0:
+        return None
     index = np.random.default_rng(seed).integers(0, n, (resamples, n))
-    a, b, o = predicted[index], other[index], observed[index]  # (resamples, n)
-    usable = (np.ptp(a, axis=1) > 0) & (np.ptp(b, axis=1) > 0) & (np.ptp(o, axis=1) > 0)
+    sides = [p[index] for p in predictions]  # each (resamples, n)
+    o = observed[index]
+    usable = np.ptp(o, axis=1) > 0
+    for side in sides:
+        usable &= np.ptp(side, axis=1) > 0
     if not usable.any():
-        return gain, float("nan"), float("nan")
-    ranks = rankdata(o[usable], axis=1)
-    gains = (_pearson_rows(rankdata(a[usable], axis=1), ranks) - _pearson_rows(rankdata(b[usable], axis=1), ranks))
-    low, high = np.percentile(gains, [2.5, 97.5])
-    return float(gain), float(low), float(high)
+        return None
+    ranks = rankdata(o[usable], axis=1)  # Spearman = Pearson of ranks
+    return np.stack([_pearson_rows(rankdata(side[usable], axis=1), ranks) for side in sides])
+
+
+def _interval(values: np.ndarray) -> tuple[float, float]:
+    low, high = np.percentile(values, [2.5, 97.5])
+    return float(low), float(high)
 
 
 def _pearson_rows(a: np.ndarray, b: np.ndarray) -> np.ndarray:

@@ -129,8 +129,8 @@ def finished_epochs(data: Path, rig: str) -> int:
 def gpu_sample(seconds: float) -> dict:
     """GPU memory in use (MiB) and utilisation (%) now, by nvidia-smi; empty where there is none."""
     try:
-        line = subprocess.run(["nvidia-smi", "--query-gpu=memory.used,utilization.gpu", "--format=csv,noheader,nounits"],
-                              capture_output=True, text=True, timeout=10).stdout.split("\n")[0]
+        query = ["nvidia-smi", "--query-gpu=memory.used,utilization.gpu", "--format=csv,noheader,nounits"]
+        line = subprocess.run(query, capture_output=True, text=True, timeout=10).stdout.split("\n")[0]
         memory, utilisation = (float(v) for v in line.split(","))
     except (OSError, ValueError, subprocess.SubprocessError):
         return {}
@@ -185,13 +185,15 @@ def pack_models(args) -> list[Path]:
     from rigopt.baselines.models import load_checkpoint
     from rigopt.baselines.protocol import run_folder
 
-    rigs = [rig for rig in map(rig_name, args.rigs) if (run_folder(args.data / "runs", FAMILY, rig) / "checkpoint.pt").is_file()]
+    runs = args.data / "runs"
+    checkpoints = {rig: run_folder(runs, FAMILY, rig) / "checkpoint.pt" for rig in map(rig_name, args.rigs)}
+    rigs = [rig for rig, checkpoint in checkpoints.items() if checkpoint.is_file()]
     archives = []
     for k in range(0, len(rigs), MODELS_PER_ARCHIVE):
         archive = args.pack / f"models-{k // MODELS_PER_ARCHIVE}.tar"
         with tarfile.open(archive, "w") as tar:
             for rig in rigs[k:k + MODELS_PER_ARCHIVE]:
-                state = load_checkpoint(run_folder(args.data / "runs", FAMILY, rig) / "checkpoint.pt", FAMILY)
+                state = load_checkpoint(checkpoints[rig], FAMILY)
                 state.pop("optimizer", None)
                 buffer = io.BytesIO()
                 torch.save(state, buffer)

@@ -8,7 +8,8 @@ Steps (each resumable; rerun the script to continue):
   3. matrix:      per family, train on every matrix rig and test on every one (rigopt bench matrix);
   4. calibration: RigCD calibrated on the measured synthetic transfer (rigopt calibrate), held-out rho;
   5. sim_to_real: the joint weights fitted on the synthetic transfer alone (its control pairs; every pair; the
-                  pairs of the rigs outside the real held-out set), judged on the real benchmark's held-out pairs beside 20 fits on random drops;
+                  pairs of the rigs outside the real held-out set), judged on the real benchmark's held-out
+                  pairs beside 20 fits on random drops;
   6. ship:        the fit on the pairs of the rigs the real benchmark does not hold out, as the named
                   calibration sim-lss (metrics/weights*/), for rigcd and rigcd+, where it beats the benchmark's
                   joint calibration on the real held-out pairs of the family's counterparts (BEVDet, BEVFusion);
@@ -144,9 +145,8 @@ def sim_to_real_rows() -> list[list]:
     return rows
 
 
-#: The named calibration shipped from the synthetic transfer, and where it ships (per metric).
+#: The named calibration shipped from the synthetic transfer (in metrics/, per metric's WEIGHTS_FOLDERS).
 SHIPPED_NAME = "sim-lss"
-SHIPPED_FOLDERS = {"rigcd": "weights", "rigcd+": "weights-plus"}
 
 
 def ship_step() -> None:
@@ -155,24 +155,28 @@ def ship_step() -> None:
     (``beats``); where it does not, say so and ship nothing."""
     import tempfile
 
-    for metric, folder in SHIPPED_FOLDERS.items():
+    from rigopt.metrics.calibration import WEIGHTS_FOLDERS
+
+    unseen = rigs_unseen_by_real_fit()
+    for metric, folder in WEIGHTS_FOLDERS.items():
         with tempfile.TemporaryDirectory() as work:
             out = Path(work) / "calibration"
             command = ["rigopt", "calibrate", "--metric", metric, "--results", str(TRANSFER), "--rigs", str(RIGS),
-                       "--control", ",".join(rigs_unseen_by_real_fit()), "--test-on", str(REAL_RESULTS),
+                       "--control", ",".join(unseen), "--test-on", str(REAL_RESULTS),
                        "--out", str(out), "--json"]
             print("$", " ".join(command), flush=True)
             test = json.loads(subprocess.run(command, check=True, capture_output=True, text=True).stdout)["test_on"]
             weights = json.loads((out / "weights" / "joint.json").read_text())
         verdicts = {model: beats(test["models"][model]) for model in COUNTERPARTS["lss"]}
         for model, reasons in verdicts.items():
-            print(f"{metric} {model}: " + ("beats the benchmark's joint calibration" if not reasons else "; ".join(reasons)))
+            verdict = "; ".join(reasons) or "beats the benchmark's joint calibration"
+            print(f"{metric} {model}: {verdict}")
         if any(verdicts.values()):
             print(f"{metric}: {SHIPPED_NAME} not shipped")
             continue
         weights["name"] = SHIPPED_NAME
         weights["source"] = ("joint fit on the synthetic LSS-style transfer (baselines/transfer/lss) over the pairs of "
-                             f"{', '.join(rigs_unseen_by_real_fit())}; on the real benchmark's held-out pairs: " + "; ".join(
+                             f"{', '.join(unseen)}; on the real benchmark's held-out pairs: " + "; ".join(
                                  f"{m} rho {test['models'][m]['heldout']['rho']:.3f} vs the benchmark's joint "
                                  f"{test['models'][m]['own_joint']['heldout']['rho']:.3f}" for m in test["models"]))
         path = HERE.parents[1] / "metrics" / folder / f"{SHIPPED_NAME}.json"
