@@ -52,6 +52,9 @@ VALIDATED = DESIGNS + [RIGS / "firetruck_from_R1_no_fields.json"]
 #: vehicles, the real datasets' rigs and two designs.
 MATRIX = CONTROL + DIVERSE + REAL + DESIGNS
 TRAIN_SCENES, TEST_SCENES = 48, 16
+#: Epochs of the v2 recipe (recipe.py's s0): its validation outputs are baselines/validation/*.json; a longer
+#: schedule's go to baselines/validation/epochs<E>/ and its runs to <data>/runs-epochs<E>[-seed<S>].
+RECIPE_EPOCHS = 4
 #: The real benchmark's measured transfer, beside the checkout.
 REAL_RESULTS = HERE.parents[2] / "shared" / "pccr" / "results"
 #: Each synthetic family against its real counterparts in the benchmark.
@@ -235,17 +238,26 @@ def agreement_step() -> list[list]:
     return write_csv(RESULTS / "agreement.csv", header, rows)
 
 
+def validation_folder(epochs: int) -> Path:
+    """Where the validation outputs of R1 models trained ``epochs`` epochs go (see RECIPE_EPOCHS)."""
+    return VALIDATION if epochs == RECIPE_EPOCHS else VALIDATION / f"epochs{epochs}"
+
+
 def validation_step(data: Path, family: str, device: str, epochs: int, seeds: list[int]) -> None:
-    """rigopt validate of each design with the R1-trained model of ``family``; seed 0 is the matrix's run
-    (``<data>/runs``, trained here if the matrix has not run yet), other seeds train R1 again in
-    ``<data>/runs-seed<S>`` (resumable)."""
+    """rigopt validate of each design with the R1-trained model of ``family``; at the recipe's epochs seed 0 is
+    the matrix's run (``<data>/runs``, trained here if the matrix has not run yet) and other seeds train R1
+    again in ``<data>/runs-seed<S>``; a longer schedule trains in ``<data>/runs-epochs<E>[-seed<S>]``
+    (resumable)."""
+    folder = validation_folder(epochs)
+    folder.mkdir(parents=True, exist_ok=True)
     for seed in seeds:
-        runs = data / ("runs" if seed == 0 else f"runs-seed{seed}")
+        name = "runs" if epochs == RECIPE_EPOCHS else f"runs-epochs{epochs}"
+        runs = data / (name if seed == 0 else f"{name}-seed{seed}")
         rigopt("bench", "train", "--data", data, "--rig", "R1", "--model", family, "--epochs", epochs, "--seed",
                seed, "--device", device, "--runs", runs)
         for design in VALIDATED:
             suffix = "" if seed == 0 else f"_seed{seed}"
-            out = VALIDATION / f"{family}_{design.stem}{suffix}.json"
+            out = folder / f"{family}_{design.stem}{suffix}.json"
             rigopt("validate", design, "--ref", "R1", "--model", family, "--data", data, "--device", device,
                    "--runs", runs, "--out", out)
             write_text_atomic(out, out.read_text().replace(f"{Path(data).resolve()}/", "<data>/"))  # no machine paths
@@ -294,16 +306,16 @@ def seed_row(path: Path) -> list:
             *against.get("hand-designed", [None] * 3)]
 
 
-def ordering_rows(family: str) -> list[list]:
+def ordering_rows(family: str, folder: Path = VALIDATION) -> list[list]:
     """Does a lower predicted drop order the measured drops? Per training seed, Spearman rho between the
-    predicted and the measured drops over every validated rig of both vehicles, with a 95 % interval over the
-    resampled test scenes (the same scene draws for every rig) and the share of draws with rho > 0; then the
-    same for the measured drops averaged over the seeds."""
+    predicted and the measured drops over every validated rig of both vehicles (the validations in ``folder``),
+    with a 95 % interval over the resampled test scenes (the same scene draws for every rig) and the share of
+    draws with rho > 0; then the same for the measured drops averaged over the seeds."""
     import numpy as np
     from scipy.stats import spearmanr
 
     by_seed: dict[int, list[dict]] = {}
-    for path in sorted(VALIDATION.glob(f"{family}_*.json")):
+    for path in sorted(folder.glob(f"{family}_*.json")):
         seed = int(path.stem.partition("_seed")[2] or 0)
         by_seed.setdefault(seed, []).append(json.loads(path.read_text()))
     rows, means = [], {}
@@ -369,6 +381,42 @@ def term_rows(family: str) -> list[list]:
     return [header, *rows, rhos]
 
 
+def schedule_rows(family: str) -> list[list]:
+    """[header, *rows]: the seed-0 validation at the recipe's epochs beside longer schedules
+    (baselines/validation/epochs<E>/): per rig its predicted drop and the measured fixed-set drop [95 %
+    interval] and visible-only drop of each schedule; then the own mAP (fixed set) and the ordering rho."""
+    folders = {RECIPE_EPOCHS: VALIDATION, **{int(f.name[len("epochs"):]): f for f in VALIDATION.glob("epochs*")}}
+    folders = dict(sorted(folders.items()))
+    entries: dict[int, dict[str, dict]] = {}
+    own: dict[int, float] = {}
+    for epochs, folder in folders.items():
+        for path in sorted(folder.glob(f"{family}_*.json")):
+            if "_seed" in path.stem:
+                continue
+            result = json.loads(path.read_text())
+            own[epochs] = result["reference_mAP"]
+            for entry in result["rigs"]:
+                entries.setdefault(epochs, {}).setdefault(entry["rig"], entry)
+    if len(entries) < 2:
+        return []
+    rigs = [rig for rig in entries[RECIPE_EPOCHS] if all(rig in e for e in entries.values())]
+    header = ["rig", "predicted drop", *(f"{what}, {e} epochs" for e in entries for what in ("drop", "ci", "visible"))]
+    rows = []
+    for rig in rigs:
+        row = [rig, entries[RECIPE_EPOCHS][rig]["predicted_drop"]]
+        for by_rig in entries.values():
+            e = by_rig[rig]
+            low, high = e["measured_drop_ci"]
+            row += [e["measured_drop"], f"[{low:.3f}, {high:.3f}]", e.get("measured_drop_visible")]
+        rows.append(row)
+    rows.append(["own mAP (fixed set)", None, *(v for e in entries for v in (own[e], None, None))])
+    orderings = {e: ordering_rows(family, folders[e]) for e in entries}
+    rows.append(["Spearman rho, predicted vs measured", None,
+                 *(v for e in entries for v in (orderings[e][0][3], f"[{orderings[e][0][4]:.3f}, "
+                                                                   f"{orderings[e][0][5]:.3f}]", None))])
+    return [header, *rows]
+
+
 def null_summary() -> list[list]:
     """[header, *rows] of ``null_calibration.py``'s yardstick: per rig set and real detector, the median and the
     5th and 95th percentiles over seeds of the held-out rho of joint weights fitted on random drops."""
@@ -429,6 +477,10 @@ def report_step(families) -> None:
         parts += ["## Does a lower predicted drop order the measured drops? (all validated rigs, both vehicles)", "",
                   markdown([["model", "seed", "rigs", "Spearman rho", "ci_low", "ci_high", "share of draws rho > 0"],
                             *ordering]), ""]
+    schedules = schedule_rows("lss") if "lss" in families else []
+    if schedules:
+        parts += ["## Validation with longer training (seed 0): measured drops as the detector gets stronger", "",
+                  markdown(schedules), ""]
     if validations and "lss" in families:
         parts += ["## RigCD's terms against the measured drops (validated rigs, LSS, drops averaged over seeds)", "",
                   markdown(term_rows("lss")), ""]
@@ -454,7 +506,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--data", type=Path, required=True)
     parser.add_argument("--families", nargs="+", default=["lss"])
-    parser.add_argument("--epochs", type=int, default=4)
+    parser.add_argument("--epochs", type=int, default=RECIPE_EPOCHS)
     parser.add_argument("--ray", help="Ray cluster address for rendering and the matrix's training ('local': here)")
     parser.add_argument("--device", default="cpu")
     parser.add_argument("--seeds", nargs="+", type=int, default=[0, 1, 2], help="training seeds of the validation step")
