@@ -473,6 +473,8 @@ def report_step(families) -> None:
                   "pairs (null_calibration.py)", "", markdown(null_summary()), ""]
     validations = sorted((VALIDATION).glob("*.json"))
     ordering = [row for family in families for row in ordering_rows(family)]
+    ordering += [[f"{row[0]}, {folder.name}", *row[1:]] for family in families
+                 for folder in sorted(VALIDATION.glob("epochs*")) for row in ordering_rows(family, folder)]
     if ordering:
         parts += ["## Does a lower predicted drop order the measured drops? (all validated rigs, both vehicles)", "",
                   markdown([["model", "seed", "rigs", "Spearman rho", "ci_low", "ci_high", "share of draws rho > 0"],
