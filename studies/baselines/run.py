@@ -243,6 +243,12 @@ def validation_folder(epochs: int) -> Path:
     return VALIDATION if epochs == RECIPE_EPOCHS else VALIDATION / f"epochs{epochs}"
 
 
+def validation_folders() -> dict[int, Path]:
+    """{epochs: validation_folder(epochs)} of every schedule validated so far: the recipe's, then by epochs."""
+    longer = {int(folder.name.removeprefix("epochs")): folder for folder in VALIDATION.glob("epochs*")}
+    return {RECIPE_EPOCHS: VALIDATION, **dict(sorted(longer.items()))}
+
+
 def validation_step(data: Path, family: str, device: str, epochs: int, seeds: list[int]) -> None:
     """rigopt validate of each design with the R1-trained model of ``family``; at the recipe's epochs seed 0 is
     the matrix's run (``<data>/runs``, trained here if the matrix has not run yet) and other seeds train R1
@@ -250,8 +256,8 @@ def validation_step(data: Path, family: str, device: str, epochs: int, seeds: li
     (resumable)."""
     folder = validation_folder(epochs)
     folder.mkdir(parents=True, exist_ok=True)
+    name = "runs" if epochs == RECIPE_EPOCHS else f"runs-epochs{epochs}"
     for seed in seeds:
-        name = "runs" if epochs == RECIPE_EPOCHS else f"runs-epochs{epochs}"
         runs = data / (name if seed == 0 else f"{name}-seed{seed}")
         rigopt("bench", "train", "--data", data, "--rig", "R1", "--model", family, "--epochs", epochs, "--seed",
                seed, "--device", device, "--runs", runs)
@@ -385,8 +391,7 @@ def schedule_rows(family: str) -> list[list]:
     """[header, *rows]: the seed-0 validation at the recipe's epochs beside longer schedules
     (baselines/validation/epochs<E>/): per rig its predicted drop and the measured fixed-set drop [95 %
     interval] and visible-only drop of each schedule; then the own mAP (fixed set) and the ordering rho."""
-    folders = {RECIPE_EPOCHS: VALIDATION, **{int(f.name[len("epochs"):]): f for f in VALIDATION.glob("epochs*")}}
-    folders = dict(sorted(folders.items()))
+    folders = validation_folders()
     entries: dict[int, dict[str, dict]] = {}
     own: dict[int, float] = {}
     for epochs, folder in folders.items():
@@ -472,9 +477,8 @@ def report_step(families) -> None:
         parts += ["## Yardstick for sim-to-real: joint weights fitted on random drops, judged on the real held-out "
                   "pairs (null_calibration.py)", "", markdown(null_summary()), ""]
     validations = sorted((VALIDATION).glob("*.json"))
-    ordering = [row for family in families for row in ordering_rows(family)]
-    ordering += [[f"{row[0]}, {folder.name}", *row[1:]] for family in families
-                 for folder in sorted(VALIDATION.glob("epochs*")) for row in ordering_rows(family, folder)]
+    ordering = [[family if folder == VALIDATION else f"{family}, {folder.name}", *row[1:]] for family in families
+                for folder in validation_folders().values() for row in ordering_rows(family, folder)]
     if ordering:
         parts += ["## Does a lower predicted drop order the measured drops? (all validated rigs, both vehicles)", "",
                   markdown([["model", "seed", "rigs", "Spearman rho", "ci_low", "ci_high", "share of draws rho > 0"],
