@@ -387,6 +387,18 @@ def term_rows(family: str) -> list[list]:
     return [header, *rows, rhos]
 
 
+def own_map_rows(family: str) -> list[list]:
+    """[header, *rows]: the R1 model's own mAP (fixed set, visible only) per schedule and training seed, read
+    from each seed's first validation output (every design's output of one model holds the same figures)."""
+    rows = {}
+    for epochs, folder in validation_folders().items():
+        for path in sorted(folder.glob(f"{family}_*.json")):
+            seed = int(path.stem.rsplit("_seed", 1)[1]) if "_seed" in path.stem else 0
+            result = json.loads(path.read_text())
+            rows.setdefault((epochs, seed), [epochs, seed, result["reference_mAP"], result.get("reference_mAP_visible")])
+    return [["epochs", "seed", "own mAP (fixed set)", "own mAP (visible only)"], *(rows[k] for k in sorted(rows))]
+
+
 def schedule_rows(family: str) -> list[list]:
     """[header, *rows]: the seed-0 validation at the recipe's epochs beside longer schedules
     (baselines/validation/epochs<E>/): per rig its predicted drop and the measured fixed-set drop [95 %
@@ -483,6 +495,10 @@ def report_step(families) -> None:
         parts += ["## Does a lower predicted drop order the measured drops? (all validated rigs, both vehicles)", "",
                   markdown([["model", "seed", "rigs", "Spearman rho", "ci_low", "ci_high", "share of draws rho > 0"],
                             *ordering]), ""]
+    own_maps = own_map_rows("lss") if "lss" in families else []
+    if len(own_maps) > 1:
+        parts += ["## Own mAP of the validated R1 models (lss, tested on R1's 16 test scenes)", "",
+                  markdown(own_maps), ""]
     schedules = schedule_rows("lss") if "lss" in families else []
     if schedules:
         parts += ["## Validation with longer training (seed 0): measured drops as the detector gets stronger", "",

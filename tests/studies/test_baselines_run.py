@@ -1,5 +1,6 @@
 """studies/baselines/run.py's readings of the validation outputs: the recipe's validations and a longer
-schedule's (baselines/validation/epochs<E>/) side by side, seed 0 only, with the ordering rho of each."""
+schedule's (baselines/validation/epochs<E>/) side by side, seed 0 only, with the ordering rho of each;
+the own mAP per schedule and seed."""
 
 from __future__ import annotations
 
@@ -61,3 +62,15 @@ def test_schedule_rows_put_seed_zero_of_each_schedule_side_by_side(run):
 def test_schedule_rows_are_empty_without_a_longer_schedule(run):
     write_validation(run.VALIDATION / "lss_design.json", 0.18, {"a": (0.2, 0.1), "b": (0.5, 0.4)})
     assert run.schedule_rows("lss") == []
+
+
+def test_own_map_rows_list_each_schedule_and_seed_once(run):
+    drops = {"a": (0.2, 0.1), "b": (0.5, 0.4)}
+    write_validation(run.VALIDATION / "lss_design.json", 0.18, drops)
+    write_validation(run.VALIDATION / "lss_other.json", 0.18, drops)
+    write_validation(run.VALIDATION / "lss_design_seed2.json", 0.17, drops)
+    write_validation(run.VALIDATION / "epochs16" / "lss_design_seed1.json", 0.26, drops)
+
+    header, *rows = run.own_map_rows("lss")
+    assert header[:3] == ["epochs", "seed", "own mAP (fixed set)"]
+    assert [row[:3] for row in rows] == [[run.RECIPE_EPOCHS, 0, 0.18], [run.RECIPE_EPOCHS, 2, 0.17], [16, 1, 0.26]]
