@@ -300,14 +300,18 @@ def training_table(family: str) -> list[list]:
     return [["rig", "epochs", "steps", "loss epoch 1", "loss last epoch", "minutes"], *rows]
 
 
+def validation_seed(path: Path) -> int:
+    """The training seed of a validation output, from its name (``<family>_<design>[_seed<S>].json``)."""
+    return int(path.stem.partition("_seed")[2] or 0)
+
+
 def seed_row(path: Path) -> list:
     """One validation file as [family, design, seed, own mAP, design drop, then the differences to the naive
     transfer, the height-matched transfer and the hand-designed rig with their intervals]."""
     result = json.loads(path.read_text())
-    seed = path.stem.partition("_seed")[2]
     design = next(e for e in result["rigs"] if e["role"] == "design")
     against = {e["role"]: [e["difference"], *e["ci"]] for e in result["design_minus"]}
-    return [result["model"], design["rig"], int(seed or 0), result["reference_mAP"], design["measured_drop"],
+    return [result["model"], design["rig"], validation_seed(path), result["reference_mAP"], design["measured_drop"],
             *against.get("naive transfer", [None] * 3), *against.get("height-matched transfer", [None] * 3),
             *against.get("hand-designed", [None] * 3)]
 
@@ -322,8 +326,7 @@ def ordering_rows(family: str, folder: Path = VALIDATION) -> list[list]:
 
     by_seed: dict[int, list[dict]] = {}
     for path in sorted(folder.glob(f"{family}_*.json")):
-        seed = int(path.stem.partition("_seed")[2] or 0)
-        by_seed.setdefault(seed, []).append(json.loads(path.read_text()))
+        by_seed.setdefault(validation_seed(path), []).append(json.loads(path.read_text()))
     rows, means = [], {}
     for seed, results in sorted(by_seed.items()):
         predicted, measured, draws, seen = [], [], [], set()
@@ -393,9 +396,10 @@ def own_map_rows(family: str) -> list[list]:
     rows = {}
     for epochs, folder in validation_folders().items():
         for path in sorted(folder.glob(f"{family}_*.json")):
-            seed = int(path.stem.rsplit("_seed", 1)[1]) if "_seed" in path.stem else 0
-            result = json.loads(path.read_text())
-            rows.setdefault((epochs, seed), [epochs, seed, result["reference_mAP"], result.get("reference_mAP_visible")])
+            seed = validation_seed(path)
+            if (epochs, seed) not in rows:
+                result = json.loads(path.read_text())
+                rows[epochs, seed] = [epochs, seed, result["reference_mAP"], result.get("reference_mAP_visible")]
     return [["epochs", "seed", "own mAP (fixed set)", "own mAP (visible only)"], *(rows[k] for k in sorted(rows))]
 
 
@@ -408,7 +412,7 @@ def schedule_rows(family: str) -> list[list]:
     own: dict[int, float] = {}
     for epochs, folder in folders.items():
         for path in sorted(folder.glob(f"{family}_*.json")):
-            if "_seed" in path.stem:
+            if validation_seed(path):
                 continue
             result = json.loads(path.read_text())
             own[epochs] = result["reference_mAP"]
