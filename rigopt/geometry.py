@@ -12,11 +12,21 @@ frame: ``d_vehicle = R_vehicle_cam @ d_cam``.
 Camera optical frame (pinhole, OpenCV, nuScenes): z forward, x right, y down.
 ``R_cam_optical`` maps optical directions into the camera body frame.
 
-CARLA frame (the PCCR benchmark's files): x forward, y right, z up (left-handed); rotations as
-``[pitch, yaw, roll]`` degrees with ``R_carla = Rz(yaw) @ Ry(-pitch) @ Rx(roll)`` (right-handed
-elementary rotations, yaw > 0 turns right, pitch > 0 tilts up). Going to ISO 8855 is a reflection
-``S = diag(1, -1, 1)``: ``t_iso = S t_carla`` and ``R_iso = S R_carla S``. Distances and geodesic angles
-are invariant under that conjugation, so metrics are the same in either frame.
+CARLA frame (the PCCR benchmark's files, CARLA spawn lists): x forward, y right, z up (left-handed);
+rotations as ``[pitch, yaw, roll]`` degrees. CARLA's own ``Rotation::RotateVector`` (LibCarla
+``geom/Rotation.h``) applies ``R_carla = Rz(yaw) @ Ry(-pitch) @ Rx(-roll)`` (right-handed elementary
+rotations written in CARLA's axes; its third row is ``(sp, -cp sr, cp cr)``): yaw > 0 turns right, pitch > 0
+tilts up, roll > 0 turns the camera's top to the right. Going to ISO 8855 is a reflection
+``S = diag(1, -1, 1)``: ``t_iso = S t_carla`` and ``R_iso = S R_carla S = Rz(-yaw) @ Ry(-pitch) @ Rx(roll)``.
+Distances and geodesic angles are invariant under that conjugation, so metrics are the same in either frame.
+(rigopt before this convention was checked against CARLA's formula wrote and read roll with the opposite
+sign; docs/formats.md lists the files that affects.)
+
+URDF (ROS REP 103): ``rpy`` are fixed-axis roll, pitch, yaw, ``R = Rz(yaw) @ Ry(pitch) @ Rx(roll)`` in the
+ISO axes (:func:`rotation_from_rpy`, :func:`rpy_from_rotation`).
+
+This module is the one owner of these conventions: readers, writers, the renderer and the reports convert
+through the functions below and nowhere else.
 
 Angles are radians inside rigopt; degrees appear only at the file and CLI edges (and in FOVs).
 """
@@ -71,8 +81,8 @@ def yaw_pitch_roll_from_rotation(rotation):
     (-pi, pi], pitch in [-pi/2, pi/2]. At pitch = +-pi/2 roll is set to 0 (gimbal lock).
     """
     r = np.asarray(rotation, dtype=float)
-    pitch = np.arcsin(np.clip(r[..., 2, 0], -1.0, 1.0))
     cos_p = np.hypot(r[..., 0, 0], r[..., 1, 0])
+    pitch = np.arctan2(r[..., 2, 0], cos_p)  # well conditioned near +-pi/2, where arcsin is not
     locked = cos_p < 1e-12
     yaw = np.where(locked, np.arctan2(-r[..., 0, 1], r[..., 1, 1]), np.arctan2(r[..., 1, 0], r[..., 0, 0]))
     roll = np.where(locked, 0.0, np.arctan2(r[..., 2, 1], r[..., 2, 2]))
@@ -93,8 +103,8 @@ def carla_to_iso(location, rotation_deg):
     """
     location = np.asarray(location, dtype=float)
     pitch, yaw, roll = np.moveaxis(np.deg2rad(np.asarray(rotation_deg, dtype=float)), -1, 0)
-    # S Rz(a) S = Rz(-a), S Ry(a) S = Ry(a), S Rx(a) S = Rx(-a): the reflection flips yaw and roll.
-    return location * np.array([1.0, -1.0, 1.0]), rotation_from_yaw_pitch_roll(-yaw, pitch, -roll)
+    # S Rz(a) S = Rz(-a), S Ry(a) S = Ry(a), S Rx(a) S = Rx(-a): the reflection flips yaw and CARLA's -roll.
+    return location * np.array([1.0, -1.0, 1.0]), rotation_from_yaw_pitch_roll(-yaw, pitch, roll)
 
 
 def iso_to_carla(position, rotation):
@@ -105,9 +115,27 @@ def iso_to_carla(position, rotation):
     degrees, yaw and roll in (-180, 180]).
     """
     yaw, pitch, roll = yaw_pitch_roll_from_rotation(rotation)
-    angles = np.stack([np.rad2deg(pitch), -np.rad2deg(yaw), -np.rad2deg(roll)], axis=-1)
+    angles = np.stack([np.rad2deg(pitch), -np.rad2deg(yaw), np.rad2deg(roll)], axis=-1)
     location = np.asarray(position, dtype=float) * np.array([1.0, -1.0, 1.0])
     return location, wrap_degrees(angles)
+
+
+def rotation_from_rpy(roll, pitch, yaw):
+    """URDF's fixed-axis ``rpy`` -> rotation ``Rz(yaw) @ Ry(pitch) @ Rx(roll)``.
+
+    roll, pitch, yaw : (...,) float, radians (ROS: pitch > 0 tilts the x axis down). Returns (..., 3, 3) float.
+    """
+    return rot_z(yaw) @ rot_y(pitch) @ rot_x(roll)
+
+
+def rpy_from_rotation(rotation):
+    """Inverse of :func:`rotation_from_rpy`: (3, 3) float -> (roll, pitch, yaw) floats in radians.
+
+    The same decomposition as :func:`yaw_pitch_roll_from_rotation` (ROS's pitch is rigopt's -pitch); at
+    gimbal lock (pitch = +-pi/2) all of the turn goes into yaw.
+    """
+    yaw, pitch, roll = yaw_pitch_roll_from_rotation(rotation)
+    return float(roll), float(-pitch) + 0.0, float(yaw)
 
 
 def wrap_degrees(angle_deg):

@@ -37,7 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from rigopt.errors import RigFileError, RigoptError
-from rigopt.geometry import R_CAM_OPTICAL, rot_x, rot_y, rot_z
+from rigopt.geometry import R_CAM_OPTICAL, rotation_from_rpy, rpy_from_rotation
 from rigopt.rig.formats.common import (Exported, Imported, format_number, make_camera, make_lens, make_rig, numbers,
                                        origin_note, read_text, warn_not_carried, warn_origin, whole_number)
 from rigopt.rig.model import Rig, RigOrigin
@@ -46,19 +46,6 @@ OPTICAL_SUFFIX = "_optical_frame"
 #: rpy of the fixed joint from a camera body link to its optical frame (REP 103).
 OPTICAL_RPY = (-math.pi / 2, 0.0, -math.pi / 2)
 FIX = "write a URDF with <gazebo reference=LINK><sensor type=\"camera\"> blocks (rigopt export --format urdf)"
-
-
-def rotation_from_rpy(roll, pitch, yaw) -> np.ndarray:
-    """URDF's fixed-axis rpy (radians) -> (3, 3) rotation ``Rz(yaw) Ry(pitch) Rx(roll)``."""
-    return rot_z(yaw) @ rot_y(pitch) @ rot_x(roll)
-
-
-def rpy_from_rotation(r: np.ndarray) -> tuple[float, float, float]:
-    """Inverse of :func:`rotation_from_rpy`; pitch by atan2 (well conditioned near +-90 deg)."""
-    pitch = math.atan2(-r[2, 0], math.hypot(r[0, 0], r[1, 0]))
-    if math.hypot(r[0, 0], r[1, 0]) < 1e-12:  # gimbal lock: put all of the turn into yaw
-        return 0.0, pitch, math.atan2(-r[0, 1], r[1, 1])
-    return math.atan2(r[2, 1], r[2, 2]), pitch, math.atan2(r[1, 0], r[0, 0])
 
 
 def _text(values) -> str:

@@ -53,3 +53,62 @@ def test_real_rigs_sit_on_the_roof_and_look_level():
         for camera in read_rig(REAL / f"{dataset}.json").cameras:
             assert 1.45 < camera.position[2] < 2.2, (dataset, camera.id)
             assert abs(camera.forward[2]) < np.sin(np.radians(5.0)), (dataset, camera.id)
+
+
+def _raw_extrinsics() -> dict:
+    """{dataset: {camera: R_ego_camera (3, 3)}} as the datasets' files give them (write_sources.py's values),
+    the camera frame being x forward along the optical axis, y left, z up (Waymo's own; the optical frames of
+    nuScenes and Argoverse 2 turned into it with the fixed optical-to-body matrix)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("write_sources", REAL / "write_sources.py")
+    sources = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(sources)
+
+    def quaternion(w, x, y, z):  # scalar-first unit quaternion -> matrix, written out independently of rigopt
+        n = np.linalg.norm([w, x, y, z])
+        w, x, y, z = w / n, x / n, y / n, z / n
+        return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                         [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                         [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
+
+    body_from_optical = sources.OPTICAL_IN_BODY
+    return {
+        "nuscenes": {c: quaternion(*q) @ body_from_optical.T for c, (_, q, _) in sources.NUSCENES.items()},
+        "argoverse2": {c: quaternion(*pose[:4]) @ body_from_optical.T for c, pose in sources.AV2_POSES.items()},
+        "waymo": {name: sources.yaw_matrix(yaw) for name, yaw, _, _ in sources.WAYMO_CAMERAS.values()},
+        "ddad": {c: sources.yaw_matrix(yaw) for c, yaw in sources.DDAD_CAMERAS.items()},
+    }
+
+
+def _carla_rotate_vector(pitch_deg, yaw_deg, roll_deg) -> np.ndarray:
+    """CARLA's Rotation::RotateVector matrix (LibCarla geom/Rotation.h), in CARLA's axes (y right)."""
+    cp, sp = np.cos(np.radians(pitch_deg)), np.sin(np.radians(pitch_deg))
+    cy, sy = np.cos(np.radians(yaw_deg)), np.sin(np.radians(yaw_deg))
+    cr, sr = np.cos(np.radians(roll_deg)), np.sin(np.radians(roll_deg))
+    return np.array([[cp * cy, cy * sp * sr - sy * cr, -cy * sp * cr - sy * sr],
+                     [cp * sy, sy * sp * sr + cy * cr, -sy * sp * cr + cy * sr],
+                     [sp, -cp * sr, cp * cr]])
+
+
+@pytest.mark.parametrize("dataset", list(IMPORTS))
+def test_carla_export_of_an_imported_real_rig_reproduces_its_raw_extrinsics(dataset, tmp_path):
+    """Import the raw calibration, export it as a CARLA spawn list, and rotate the camera's axes with CARLA's own
+    formula: the result is the raw camera-to-ego rotation (taken to CARLA's y-right axes) to 1e-9."""
+    import json
+
+    args, _ = IMPORTS[dataset]
+    rig_file, spawn_list = tmp_path / "rig.json", tmp_path / "spawn.json"
+    assert run_rigopt("import", *args, "--out", rig_file, cwd=REAL).returncode == 0
+    result = run_rigopt("export", rig_file, "--format", "carla", "--out", spawn_list)
+    assert result.returncode == 0, result.stderr
+    sensors = {s["id"]: s["transform"]["rotation"] for s in json.loads(spawn_list.read_text())["sensors"]}
+    flip = np.diag([1.0, -1.0, 1.0])  # ISO (y left) <-> CARLA (y right), on the vehicle and on the camera
+    raw = _raw_extrinsics()[dataset]
+    assert sorted(sensors) == sorted(raw)
+    for camera, r_ego_camera in raw.items():
+        angles = sensors[camera]
+        carla = _carla_rotate_vector(angles["pitch"], angles["yaw"], angles["roll"])
+        np.testing.assert_allclose(carla, flip @ r_ego_camera @ flip, rtol=0, atol=1e-9, err_msg=camera)
+    if dataset in ("nuscenes", "argoverse2"):  # real calibrations: every camera has some roll
+        assert max(abs(a["roll"]) for a in sensors.values()) > 0.1
