@@ -26,14 +26,14 @@ def check_command(
     from rigopt.mounting.rules import check_rig
     from rigopt.rig.library import load_rig
     from rigopt.vehicle.library import load_vehicle
-    from rigopt.vehicle.placement import known_vehicle, to_vehicle_centre
+    from rigopt.vehicle.placement import known_vehicle, place_rig
 
     loaded = load_rig(rig)
     on = load_vehicle(vehicle) if vehicle is not None else known_vehicle(loaded)
     if on is None:
         raise RigoptError(f"rig {loaded.name!r} is on {loaded.vehicle!r}, which is not a rigopt vehicle; add --vehicle "
                           "NAME to check it on one (see rigopt vehicles)")
-    loaded, change = to_vehicle_centre(loaded, on)
+    loaded, change = place_rig(loaded, on, refuse_inside=False)  # check reports cameras inside the body itself
     if change is not None:
         note(change.describe())
     result = check_rig(loaded, on, mount_rules(min_height, no_trailer))
@@ -86,9 +86,14 @@ def vehicle_show_command(
     from rigopt.report.vehicle_figures import write_vehicle_figure
     from rigopt.rig.library import load_rig
     from rigopt.vehicle.library import load_vehicle
+    from rigopt.vehicle.placement import place_rig
 
     out = check_out_file(out, suffixes=PICTURE_SUFFIXES)
-    vehicle, drawn = load_vehicle(name), load_rig(rig) if rig else None
+    vehicle, drawn = load_vehicle(name), None
+    if rig:
+        drawn, change = place_rig(load_rig(rig), vehicle, refuse_inside=False)
+        if change is not None:
+            note(change.describe())
     with atomic_file(out) as work:
         write_vehicle_figure(vehicle, work, drawn)
     console.print(f"wrote {out}")

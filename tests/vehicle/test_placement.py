@@ -123,3 +123,23 @@ def test_coverage_and_design_refuse_a_rig_on_an_unknown_vehicle_before_any_work(
         outcome = run_rigopt(*args)
         assert outcome.returncode == 2 and "not a rigopt vehicle" in outcome.stderr
         assert not (tmp_path / "d").exists()
+
+
+def test_vehicle_show_draws_a_rear_axle_rig_where_its_centre_form_is(etron, tmp_path):
+    """One placement everywhere: ``vehicle show --rig`` of R1 measured from the rear axle draws the same picture as
+    R1 itself (the rear-axle form used to be drawn 1.43 m forward on the etron)."""
+    from matplotlib.image import imread
+
+    from rigopt.rig.pccr_format import write_rig
+
+    rear = write_rig(shifted(load_rig("R1"), etron.rear_axle, RigOrigin("rear_axle")), tmp_path / "R1.json")
+    pictures = {}
+    for label, rig in (("centre", "R1"), ("rear", rear)):
+        pictures[label] = tmp_path / f"{label}.png"
+        result = run_rigopt("vehicle", "show", "etron", "--rig", rig, "--out", pictures[label])
+        assert result.returncode == 0, result.stderr
+    assert "rear axle" in result.stderr  # the conversion is said
+    np.testing.assert_array_equal(imread(pictures["centre"]), imread(pictures["rear"]))
+    far = write_rig(shifted(load_rig("R1"), [1.0, 0.0, 0.0], RigOrigin("vehicle_centre")), tmp_path / "far.json")
+    assert run_rigopt("vehicle", "show", "etron", "--rig", far, "--out", tmp_path / "far.png").returncode == 0
+    assert not np.array_equal(imread(pictures["centre"]), imread(tmp_path / "far.png"))  # the test can fail
