@@ -46,20 +46,48 @@ def parse_image_sizes(text: str) -> dict:
     return sizes
 
 
-ORIGIN_HELP = ("Where the file's positions are measured from: vehicle_centre or rear_axle (default: the format's "
-               "own, see docs/formats.md).")
+ORIGIN_HELP = ("Where the file's positions are measured from: vehicle_centre, rear_axle, or custom (a point given by "
+               "--origin-offset); default: the format's own, see docs/formats.md.")
+ORIGIN_OFFSET_HELP = ("With --origin custom: X,Y,Z metres from the vehicle centre on the ground (ISO 8855: x forward, "
+                      "y left, z up) to the point the file's positions are measured from.")
+ORIGIN_KINDS = ("vehicle_centre", "rear_axle", "custom")
 OUT_HELP = "Rig file to write (rigopt's rig JSON)."
 IMPORT_FORCE_HELP = "Replace an existing --out file."
 
 
-def _origin(text):
+def _origin(text: str | None, offset: str | None):
+    """The RigOrigin of ``--origin`` and ``--origin-offset`` (None when neither is given: the format's own)."""
     from rigopt.rig.model import RigOrigin
 
     if text is None:
+        if offset is not None:
+            raise RigoptError("--origin-offset needs --origin custom (it places the custom origin)")
         return None
-    if text not in ("vehicle_centre", "rear_axle"):
-        raise RigoptError(f"--origin must be vehicle_centre or rear_axle, got {text!r}")
-    return RigOrigin(text)
+    if text not in ORIGIN_KINDS:
+        raise RigoptError(f"--origin must be one of {', '.join(ORIGIN_KINDS)}, got {text!r}")
+    if text != "custom":
+        if offset is not None:
+            raise RigoptError(f"--origin-offset goes with --origin custom, not --origin {text}; drop one")
+        return RigOrigin(text)
+    if offset is None:
+        raise RigoptError("--origin custom needs --origin-offset X,Y,Z: the origin's place in metres from the vehicle "
+                          "centre on the ground (x forward, y left, z up), e.g. --origin-offset -1.4,0,0.3")
+    return RigOrigin("custom", parse_origin_offset(offset))
+
+
+def parse_origin_offset(text: str) -> tuple[float, float, float]:
+    """``"-1.4,0,0.3"`` -> (-1.4, 0.0, 0.3) metres; raises RigoptError on anything but three finite numbers."""
+    import math
+
+    parts = text.split(",")
+    try:
+        values = tuple(float(p) for p in parts)
+    except ValueError:
+        values = ()
+    if len(values) != 3 or not all(math.isfinite(v) for v in values):
+        raise RigoptError(f"--origin-offset must be three numbers X,Y,Z in metres (x forward, y left, z up), e.g. "
+                          f"-1.4,0,0.3; got {text!r}")
+    return values
 
 
 def _check_vehicle(vehicle):
@@ -131,6 +159,7 @@ def import_nuscenes_command(
     vehicle: Optional[str] = typer.Option(None, help="The rigopt vehicle the rig is on (default: nuscenes)."),
     name: Optional[str] = typer.Option(None, help="The rig's name (default: the log's or the folder's)."),
     origin: Optional[str] = typer.Option(None, help=ORIGIN_HELP),
+    origin_offset: Optional[str] = typer.Option(None, "--origin-offset", help=ORIGIN_OFFSET_HELP),
     force: bool = typer.Option(False, "--force", help=IMPORT_FORCE_HELP),
     as_json: bool = typer.Option(False, "--json", help="Print JSON instead of a summary."),
 ):
@@ -144,8 +173,36 @@ def import_nuscenes_command(
         return
     out = _check_out(out, force, False)
     _check_vehicle(vehicle)
-    imported = read_nuscenes(directory, sizes, calibration, log, scene, name, vehicle or "nuscenes", _origin(origin))
+    imported = read_nuscenes(directory, sizes, calibration, log, scene, name, vehicle or "nuscenes", _origin(origin, origin_offset))
     _finish_import(imported, out, as_json, "nuscenes")
+
+
+@import_app.command("argoverse1")
+def import_argoverse1_command(
+    path: Path = typer.Argument(..., help="Argoverse 1 log folder (holding vehicle_calibration_info.json) or the "
+                                          "file itself."),
+    out: Optional[Path] = typer.Option(None, "--out", help=OUT_HELP),
+    cameras: str = typer.Option("ring", help="ring (the seven ring cameras) or all (and the two stereo cameras)."),
+    raw_lens: bool = typer.Option(False, "--raw-lens", help="Keep the lenses' radial distortion (radtan k1, k2, 0, 0, "
+                                                            "k3) instead of the pinholes of the undistorted images."),
+    axle_height: Optional[float] = typer.Option(None, help="The rear axle's height above the ground in metres, by "
+                                                           "which positions are raised (default: 0.328, the Ford "
+                                                           "Fusion Hybrid's tyre radius)."),
+    vehicle: Optional[str] = typer.Option(None, help="The rigopt vehicle the rig is on (default: argoverse1)."),
+    name: Optional[str] = typer.Option(None, help="The rig's name (default: the log folder's)."),
+    origin: Optional[str] = typer.Option(None, help=ORIGIN_HELP),
+    origin_offset: Optional[str] = typer.Option(None, "--origin-offset", help=ORIGIN_OFFSET_HELP),
+    force: bool = typer.Option(False, "--force", help=IMPORT_FORCE_HELP),
+    as_json: bool = typer.Option(False, "--json", help="Print JSON instead of a summary."),
+):
+    """Read a rig from Argoverse 1 calibration (vehicle_calibration_info.json of argoverse-api)."""
+    from rigopt.rig.formats.argoverse1 import read_argoverse1
+
+    out = _check_out(out, force, False)
+    _check_vehicle(vehicle)
+    imported = read_argoverse1(path, name, vehicle or "argoverse1", _origin(origin, origin_offset), axle_height,
+                               cameras, raw_lens)
+    _finish_import(imported, out, as_json, "argoverse1")
 
 
 @import_app.command("argoverse2")
@@ -155,6 +212,7 @@ def import_argoverse2_command(
     vehicle: Optional[str] = typer.Option(None, help="The rigopt vehicle the rig is on (default: argoverse2)."),
     name: Optional[str] = typer.Option(None, help="The rig's name (default: the log folder's)."),
     origin: Optional[str] = typer.Option(None, help=ORIGIN_HELP),
+    origin_offset: Optional[str] = typer.Option(None, "--origin-offset", help=ORIGIN_OFFSET_HELP),
     force: bool = typer.Option(False, "--force", help=IMPORT_FORCE_HELP),
     as_json: bool = typer.Option(False, "--json", help="Print JSON instead of a summary."),
 ):
@@ -163,7 +221,7 @@ def import_argoverse2_command(
 
     out = _check_out(out, force, False)
     _check_vehicle(vehicle)
-    _finish_import(read_argoverse2(path, name, vehicle or "argoverse2", _origin(origin)), out, as_json, "argoverse2")
+    _finish_import(read_argoverse2(path, name, vehicle or "argoverse2", _origin(origin, origin_offset)), out, as_json, "argoverse2")
 
 
 @import_app.command("dgp")
@@ -177,6 +235,7 @@ def import_dgp_command(
     vehicle: Optional[str] = typer.Option(None, help="The rigopt vehicle the rig is on (default: dgp)."),
     name: Optional[str] = typer.Option(None, help="The rig's name (default: the scene folder's)."),
     origin: Optional[str] = typer.Option(None, help=ORIGIN_HELP),
+    origin_offset: Optional[str] = typer.Option(None, "--origin-offset", help=ORIGIN_OFFSET_HELP),
     force: bool = typer.Option(False, "--force", help=IMPORT_FORCE_HELP),
     as_json: bool = typer.Option(False, "--json", help="Print JSON instead of a summary."),
 ):
@@ -189,12 +248,13 @@ def import_dgp_command(
         return
     out = _check_out(out, force, False)
     _check_vehicle(vehicle)
-    _finish_import(read_dgp(path, size, calibration, name, vehicle or "dgp", _origin(origin)), out, as_json, "dgp")
+    _finish_import(read_dgp(path, size, calibration, name, vehicle or "dgp", _origin(origin, origin_offset)), out, as_json, "dgp")
 
 
 @import_app.command("waymo")
 def import_waymo_command(
-    path: Path = typer.Argument(..., help="Waymo v2 camera_calibration Parquet file, or a folder of them."),
+    path: Path = typer.Argument(..., help="Waymo v2 camera_calibration Parquet file or v1 Frame .tfrecord file, or "
+                                          "a folder of them."),
     out: Optional[Path] = typer.Option(None, "--out", help=OUT_HELP),
     segment: Optional[str] = typer.Option(None, help="Take this segment's calibration (key.segment_context_name)."),
     calibration: Optional[int] = typer.Option(None, help="Take the K-th distinct calibration (0-based; --list)."),
@@ -202,10 +262,11 @@ def import_waymo_command(
     vehicle: Optional[str] = typer.Option(None, help="The rigopt vehicle the rig is on (default: waymo)."),
     name: Optional[str] = typer.Option(None, help="The rig's name (default: the segment's)."),
     origin: Optional[str] = typer.Option(None, help=ORIGIN_HELP),
+    origin_offset: Optional[str] = typer.Option(None, "--origin-offset", help=ORIGIN_OFFSET_HELP),
     force: bool = typer.Option(False, "--force", help=IMPORT_FORCE_HELP),
     as_json: bool = typer.Option(False, "--json", help="Print JSON instead of a summary."),
 ):
-    """Read a rig from the Waymo Open Dataset v2 camera_calibration component."""
+    """Read a rig from the Waymo Open Dataset: v2 camera_calibration (Parquet) or v1 Frame TFRecords."""
     from rigopt.rig.formats.datasets import read_waymo, waymo_calibrations
 
     if list_:
@@ -215,7 +276,7 @@ def import_waymo_command(
         return
     out = _check_out(out, force, False)
     _check_vehicle(vehicle)
-    imported = read_waymo(path, calibration, segment, name, vehicle or "waymo", _origin(origin))
+    imported = read_waymo(path, calibration, segment, name, vehicle or "waymo", _origin(origin, origin_offset))
     _finish_import(imported, out, as_json, "waymo")
 
 
@@ -226,6 +287,7 @@ def import_opencv_command(
     vehicle: Optional[str] = typer.Option(None, help="The rigopt vehicle the rig is on (default: opencv)."),
     name: Optional[str] = typer.Option(None, help="The rig's name (default: the file's stem)."),
     origin: Optional[str] = typer.Option(None, help=ORIGIN_HELP),
+    origin_offset: Optional[str] = typer.Option(None, "--origin-offset", help=ORIGIN_OFFSET_HELP),
     force: bool = typer.Option(False, "--force", help=IMPORT_FORCE_HELP),
     as_json: bool = typer.Option(False, "--json", help="Print JSON instead of a summary."),
 ):
@@ -234,7 +296,7 @@ def import_opencv_command(
 
     out = _check_out(out, force, False)
     _check_vehicle(vehicle)
-    _finish_import(read_camchain(path, name, vehicle or "opencv", _origin(origin)), out, as_json, "opencv")
+    _finish_import(read_camchain(path, name, vehicle or "opencv", _origin(origin, origin_offset)), out, as_json, "opencv")
 
 
 @import_app.command("urdf")
@@ -244,6 +306,7 @@ def import_urdf_command(
     vehicle: Optional[str] = typer.Option(None, help="The rigopt vehicle the rig is on (default: urdf)."),
     name: Optional[str] = typer.Option(None, help="The rig's name (default: the robot's name)."),
     origin: Optional[str] = typer.Option(None, help=ORIGIN_HELP),
+    origin_offset: Optional[str] = typer.Option(None, "--origin-offset", help=ORIGIN_OFFSET_HELP),
     force: bool = typer.Option(False, "--force", help=IMPORT_FORCE_HELP),
     as_json: bool = typer.Option(False, "--json", help="Print JSON instead of a summary."),
 ):
@@ -252,7 +315,7 @@ def import_urdf_command(
 
     out = _check_out(out, force, False)
     _check_vehicle(vehicle)
-    _finish_import(read_urdf(path, name, vehicle or "urdf", _origin(origin)), out, as_json, "urdf")
+    _finish_import(read_urdf(path, name, vehicle or "urdf", _origin(origin, origin_offset)), out, as_json, "urdf")
 
 
 @import_app.command("carla")
@@ -262,6 +325,7 @@ def import_carla_command(
     vehicle: Optional[str] = typer.Option(None, help="The rigopt vehicle the rig is on (default: the file's)."),
     name: Optional[str] = typer.Option(None, help="The rig's name (default: the file's)."),
     origin: Optional[str] = typer.Option(None, help=ORIGIN_HELP),
+    origin_offset: Optional[str] = typer.Option(None, "--origin-offset", help=ORIGIN_OFFSET_HELP),
     force: bool = typer.Option(False, "--force", help=IMPORT_FORCE_HELP),
     as_json: bool = typer.Option(False, "--json", help="Print JSON instead of a summary."),
 ):
@@ -270,7 +334,7 @@ def import_carla_command(
 
     out = _check_out(out, force, False)
     _check_vehicle(vehicle)
-    _finish_import(read_carla(path, name, vehicle, _origin(origin)), out, as_json, "carla")
+    _finish_import(read_carla(path, name, vehicle, _origin(origin, origin_offset)), out, as_json, "carla")
 
 
 @app.command("export")

@@ -6,7 +6,7 @@ carry) or raise a RigoptError when a camera cannot be written at all.
 """
 
 #: Formats ``rigopt import`` reads and ``rigopt export`` writes.
-IMPORT_FORMATS = ("nuscenes", "argoverse2", "dgp", "waymo", "opencv", "urdf", "carla")
+IMPORT_FORMATS = ("nuscenes", "argoverse1", "argoverse2", "dgp", "waymo", "opencv", "urdf", "carla")
 EXPORT_FORMATS = ("nuscenes", "urdf", "opencv", "carla")
 #: What ``rigopt export --out`` is for each format: a folder, or a file with one of these extensions.
 EXPORT_SUFFIXES = {"nuscenes": None, "urdf": (".urdf", ".xml"), "opencv": (".yaml", ".yml"), "carla": (".json",)}

@@ -1,4 +1,5 @@
-"""Calibration files of Argoverse 2, DGP (DDAD) and Waymo Open Dataset v2 read into :class:`Rig` (import only).
+"""Calibration files of Argoverse 2, DGP (DDAD) and Waymo Open Dataset (v2 and v1) read into :class:`Rig` (import
+only).
 
 Argoverse 2 (a log folder, or its ``calibration/`` folder; Apache Feather tables)::
 
@@ -33,6 +34,11 @@ Waymo Open Dataset v2 (a ``camera_calibration`` Parquet file or a folder of them
   Waymo's camera frame is x forward along the optical axis, y left, z up: rigopt's body frame, so the
   extrinsic's rotation is ``R_vehicle_cam`` as it stands. Rolling shutter is not modelled.
 
+Waymo Open Dataset v1 (``Frame`` TFRecord files, ``*.tfrecord``, or a folder of them): each frame's
+``context.camera_calibrations`` hold the same numbers as v2's table (:mod:`rigopt.rig.formats.waymo_v1` reads
+them) and ``context.name`` is the segment; both versions build their cameras with one function, so the same
+calibration gives the same rig.
+
 All three ego frames are ISO 8855 axes with their origin below or at the centre of the rear axle: DDAD's and
 Waymo's on the ground, Argoverse 2's at the axle's height (see above).
 """
@@ -47,6 +53,8 @@ from rigopt.errors import RigFileError
 from rigopt.rig.formats.common import (Imported, body_rotation, choose_calibration, make_camera, make_lens,
                                        make_rig, numbers, origin_note, quaternion_rotation, read_json, rotation_matrix,
                                        same_cameras, unit_quaternion, whole_number)
+from rigopt.rig.formats.tfrecord import looks_like_tfrecord
+from rigopt.rig.formats.waymo_v1 import frame_contexts
 from rigopt.rig.model import RigOrigin
 
 REAR_AXLE = RigOrigin("rear_axle")
@@ -65,14 +73,30 @@ DGP_IMAGE_SIZE = (1936, 1216)
 
 WAYMO_CAMERAS = {1: "FRONT", 2: "FRONT_LEFT", 3: "FRONT_RIGHT", 4: "SIDE_LEFT", 5: "SIDE_RIGHT"}
 WAYMO = "[CameraCalibrationComponent]."
-WAYMO_COLUMNS = ("key.segment_context_name", "key.camera_name",
-                 *(f"{WAYMO}intrinsic.{k}" for k in ("f_u", "f_v", "c_u", "c_v", "k1", "k2", "p1", "p2", "k3")),
+WAYMO_INTRINSIC = ("f_u", "f_v", "c_u", "c_v", "k1", "k2", "p1", "p2", "k3")
+WAYMO_COLUMNS = ("key.segment_context_name", "key.camera_name", *(f"{WAYMO}intrinsic.{k}" for k in WAYMO_INTRINSIC),
                  f"{WAYMO}extrinsic.transform", f"{WAYMO}width", f"{WAYMO}height")
 
 
 def _origin(origin: RigOrigin | None, frame: str) -> tuple[RigOrigin, str]:
     origin = origin or REAR_AXLE
     return origin, origin_note(origin, frame if origin == REAR_AXLE else "--origin")
+
+
+def axle_height_origin(origin: RigOrigin | None, frame: str, height_m: float, source: str = ""
+                       ) -> tuple[RigOrigin, str, float]:
+    """The origin, its stderr note and the height (m) to add to every z for an ego frame whose origin is the rear
+    axle's centre at the axle's height (Argoverse 1 and 2): rigopt's rear-axle origin is on the ground below it.
+
+    origin : the user's ``--origin`` (None: the format's own); with one, the file's positions are taken as they are
+    (raised by 0). height_m : the axle's height above the ground; source : words after the note saying where it
+    comes from, e.g. " (--axle-height)".
+    """
+    if origin is not None:
+        return origin, origin_note(origin, "--origin"), 0.0
+    note = (f"{origin_note(REAR_AXLE, frame)}; its origin is at the rear axle's height, so positions are raised by "
+            f"{height_m:.3g} m to the ground below it{source}")
+    return REAR_AXLE, note, float(height_m)
 
 
 def _read_arrow(path: Path, columns: tuple[str, ...], what: str, fix: str, parquet: bool = False) -> dict:
@@ -112,7 +136,7 @@ def read_argoverse2(path, name: str | None = None, vehicle: str = "argoverse2",
     poses = _read_arrow(folder / AV2_POSES, AV2_POSE_COLUMNS, "Argoverse 2 sensor pose table", fix)
     intrinsics = _read_arrow(folder / AV2_INTRINSICS, AV2_INTRINSIC_COLUMNS, "Argoverse 2 intrinsics table", fix)
     pose_rows = {n: k for k, n in enumerate(poses["sensor_name"])}
-    raise_by = AV2_ORIGIN_HEIGHT_M if origin is None else 0.0  # with --origin the file's positions are from the ground
+    origin, note, raise_by = axle_height_origin(origin, "Argoverse 2 ego-vehicle frame", AV2_ORIGIN_HEIGHT_M)
     cameras = []
     for k, sensor in enumerate(intrinsics["sensor_name"]):
         where = f"{folder / AV2_INTRINSICS}: row {k} ({sensor})"
@@ -131,10 +155,6 @@ def read_argoverse2(path, name: str | None = None, vehicle: str = "argoverse2",
         lens = make_lens(where, width, height, fx, fy, cx, cy)
         position = t + np.array([0.0, 0.0, raise_by])
         cameras.append(make_camera(where, sensor, position, body_rotation(quaternion_rotation(q)), lens))
-    origin, note = _origin(origin, "Argoverse 2 ego-vehicle frame")
-    if raise_by:
-        note += (f"; its origin is at the rear axle's height, so positions are raised by {raise_by:.2f} m to the "
-                 "ground below it")
     notes = (note, "Argoverse 2 imagery is undistorted: k1, k2, k3 are not applied (pinhole cameras)")
     default_name = path.name if folder != path else path.resolve().parent.name
     rig = make_rig(str(folder / AV2_INTRINSICS), name or default_name, vehicle, cameras, origin)
@@ -271,50 +291,97 @@ def _dgp_cameras(file: Path, sizes: dict, image_size) -> tuple[tuple, list[str]]
 # --------------------------------------------------------------------------------------------------- Waymo
 
 
+WAYMO_FILES = "a Waymo v2 camera_calibration Parquet file or folder, or Waymo v1 Frame .tfrecord files (or their folder)"
+
+
 def _waymo_files(path: Path) -> list[Path]:
+    """The Parquet (v2) and TFRecord (v1) files of ``path``: itself, or a folder's (its camera_calibration/)."""
     if path.is_file():
         return [path]
     if path.is_dir():
         folder = path / "camera_calibration" if (path / "camera_calibration").is_dir() else path
-        files = sorted(folder.glob("*.parquet"))
+        files = sorted(folder.glob("*.parquet")) + sorted(folder.glob("*.tfrecord"))
         if files:
             return files
-        raise RigFileError(f"{folder}: holds no .parquet file; pass a Waymo v2 camera_calibration file or folder")
-    raise RigFileError(f"{path}: no such file or directory; pass a Waymo v2 camera_calibration file or folder")
+        raise RigFileError(f"{folder}: holds no .parquet or .tfrecord file; pass {WAYMO_FILES}")
+    raise RigFileError(f"{path}: no such file or directory; pass {WAYMO_FILES}")
+
+
+def _is_v1(file: Path) -> bool:
+    """A v1 Frame TFRecord: by its suffix, or (any other name) a first record whose length CRC matches."""
+    return file.suffix in (".tfrecord", ".tfrecords") or (file.suffix != ".parquet" and looks_like_tfrecord(file))
+
+
+def _waymo_camera(where: str, number: int, intrinsic, transform, width, height):
+    """One Waymo camera (v1 and v2 alike): CameraName ``number``, intrinsic (9: f_u, f_v, c_u, c_v, k1, k2, p1,
+    p2, k3), transform (16, row-major camera -> vehicle; Waymo's camera frame is rigopt's body frame), image size."""
+    values = numbers(intrinsic, (9,), f"{where} intrinsic (f_u, f_v, c_u, c_v, k1, k2, p1, p2, k3)")
+    t = numbers(transform, (16,), f"{where} extrinsic.transform (16 numbers, row-major)").reshape(4, 4)
+    if not np.allclose(t[3], [0.0, 0.0, 0.0, 1.0], atol=1e-9):
+        raise RigFileError(f"{where}: extrinsic.transform's last row must be [0, 0, 0, 1]")
+    rotation = rotation_matrix(t[:3, :3], f"{where} extrinsic.transform rotation")
+    lens = make_lens(where, whole_number(width, f"{where} width"), whole_number(height, f"{where} height"),
+                     *values[:4], "radtan", values[4:])
+    return make_camera(where, WAYMO_CAMERAS[number], t[:3, 3], rotation, lens)
+
+
+def _add_camera(cameras: list, camera, segment: str, where: str) -> None:
+    if any(c.id == camera.id for c in cameras):
+        raise RigFileError(f"{where}: segment {segment} lists {camera.id} twice")
+    cameras.append(camera)
+
+
+def _waymo_v2_segments(file: Path, segments: dict[str, list]) -> None:
+    """Add the cameras of a v2 camera_calibration table to ``segments`` (segment name -> cameras)."""
+    fix = "use the camera_calibration component of the Waymo Open Dataset v2"
+    table = _read_arrow(file, WAYMO_COLUMNS, "Waymo v2 camera_calibration table", fix, parquet=True)
+    for k in range(len(table["key.camera_name"])):
+        segment = table["key.segment_context_name"][k]
+        number = table["key.camera_name"][k]
+        where = f"{file}: row {k}"
+        if not isinstance(segment, str) or number not in WAYMO_CAMERAS:
+            raise RigFileError(f"{where}: key.segment_context_name must be text and key.camera_name one of "
+                               f"{sorted(WAYMO_CAMERAS)}, got {segment!r}, {number!r}")
+        where = f"{where} ({WAYMO_CAMERAS[number]})"
+        camera = _waymo_camera(where, number, [table[f"{WAYMO}intrinsic.{key}"][k] for key in WAYMO_INTRINSIC],
+                               table[f"{WAYMO}extrinsic.transform"][k], table[f"{WAYMO}width"][k],
+                               table[f"{WAYMO}height"][k])
+        _add_camera(segments.setdefault(segment, []), camera, segment, where)
+
+
+def _waymo_v1_segments(file: Path, segments: dict[str, list]) -> None:
+    """Add the cameras of each distinct frame context of a v1 TFRecord to ``segments``; a segment whose frames
+    disagree gets one entry per calibration, the later ones named "SEGMENT (record K)"."""
+    for context in frame_contexts(file):
+        cameras: list = []
+        for entry in context.calibrations:
+            if entry.camera not in WAYMO_CAMERAS:
+                known = ", ".join(f"{k} {name}" for k, name in WAYMO_CAMERAS.items())
+                raise RigFileError(f"{entry.where}: camera name {entry.camera!r} is not a Waymo camera ({known})")
+            where = f"{entry.where} ({WAYMO_CAMERAS[entry.camera]})"
+            camera = _waymo_camera(where, entry.camera, entry.intrinsic, entry.transform, entry.width, entry.height)
+            _add_camera(cameras, camera, context.segment, where)
+        name = context.segment
+        if name in segments and not same_cameras(_in_waymo_order(segments[name]), _in_waymo_order(cameras)):
+            name = f"{context.segment} (record {context.record})"
+        segments.setdefault(name, cameras)
+
+
+def _in_waymo_order(cameras) -> tuple:
+    order = {name: k for k, name in WAYMO_CAMERAS.items()}
+    return tuple(sorted(cameras, key=lambda c: order[c.id]))
 
 
 def waymo_segments(path) -> list[tuple[str, tuple]]:
-    """(segment name, cameras) of every segment in a camera_calibration file or folder, in file order."""
+    """(segment name, cameras) of every segment in Waymo v2 camera_calibration Parquet or v1 Frame TFRecord files
+    (a file or a folder), in file order."""
     segments: dict[str, list] = {}
     for file in _waymo_files(Path(path)):
-        fix = "use the camera_calibration component of the Waymo Open Dataset v2"
-        table = _read_arrow(file, WAYMO_COLUMNS, "Waymo v2 camera_calibration table", fix, parquet=True)
-        for k in range(len(table["key.camera_name"])):
-            segment = table["key.segment_context_name"][k]
-            number = table["key.camera_name"][k]
-            where = f"{file}: row {k}"
-            if not isinstance(segment, str) or number not in WAYMO_CAMERAS:
-                raise RigFileError(f"{where}: key.segment_context_name must be text and key.camera_name one of "
-                                   f"{sorted(WAYMO_CAMERAS)}, got {segment!r}, {number!r}")
-            camera_id = WAYMO_CAMERAS[number]
-            where = f"{where} ({camera_id})"
-            values = numbers([table[f"{WAYMO}intrinsic.{key}"][k] for key in
-                              ("f_u", "f_v", "c_u", "c_v", "k1", "k2", "p1", "p2", "k3")], (9,), f"{where} intrinsic")
-            transform = table[f"{WAYMO}extrinsic.transform"][k]
-            t = numbers(transform, (16,), f"{where} extrinsic.transform (16 numbers, row-major)").reshape(4, 4)
-            if not np.allclose(t[3], [0.0, 0.0, 0.0, 1.0], atol=1e-9):
-                raise RigFileError(f"{where}: extrinsic.transform's last row must be [0, 0, 0, 1]")
-            rotation = rotation_matrix(t[:3, :3], f"{where} extrinsic.transform rotation")
-            width = whole_number(table[f"{WAYMO}width"][k], f"{where} width")
-            height = whole_number(table[f"{WAYMO}height"][k], f"{where} height")
-            lens = make_lens(where, width, height, *values[:4], "radtan", values[4:])
-            camera = make_camera(where, camera_id, t[:3, 3], rotation, lens)
-            cameras = segments.setdefault(segment, [])
-            if any(c.id == camera_id for c in cameras):
-                raise RigFileError(f"{where}: segment {segment} lists {camera_id} twice")
-            cameras.append(camera)
-    order = {name: k for k, name in WAYMO_CAMERAS.items()}
-    return [(segment, tuple(sorted(cameras, key=lambda c: order[c.id]))) for segment, cameras in segments.items()]
+        if _is_v1(file):
+            _waymo_v1_segments(file, segments)
+        else:
+            _waymo_v2_segments(file, segments)
+    return [(segment, _in_waymo_order(cameras)) for segment, cameras in segments.items()]
 
 
 def waymo_calibrations(path) -> list[dict]:
@@ -332,7 +399,8 @@ def waymo_calibrations(path) -> list[dict]:
 
 def read_waymo(path, calibration: int | None = None, segment: str | None = None, name: str | None = None,
                vehicle: str = "waymo", origin: RigOrigin | None = None) -> Imported:
-    """Read the cameras of Waymo v2 camera_calibration: one segment's, or the K-th distinct calibration."""
+    """Read the cameras of Waymo v2 camera_calibration or v1 Frame TFRecords: one segment's, or the K-th distinct
+    calibration."""
     groups = waymo_calibrations(path)
     if segment is not None:
         chosen = next((g for g in groups if segment in g["segments"]), None)
