@@ -21,6 +21,7 @@ CAMERA = '[[cameras]]\nname = "cam"\nwidth = 1280\nheight = 960\nfx = 1000\nfy =
 def make_fixtures(tmp: Path) -> dict[str, str]:
     """Write the files the cases refer to under ``tmp``; returns the environment the cases run in."""
     from rigopt.cli import run
+    from rigopt.rig.formats.tfrecord import tfrecord_record
     from rigopt.vehicle.library import load_vehicle
 
     tmp.mkdir(parents=True, exist_ok=True)
@@ -73,6 +74,14 @@ def make_fixtures(tmp: Path) -> dict[str, str]:
         "av2/calibration/intrinsics.feather": "not a feather table",
         "av2/calibration/egovehicle_SE3_sensor.feather": "not a feather table",
         "waymo/camera_calibration.parquet": "not a parquet file",
+        "av1/vehicle_calibration_info.json": json.dumps({"camera_data_": [{"key": "image_raw_roof_camera",
+                                                                           "value": {}}]}),
+        "waymo_v1_text.tfrecord": "a text file, not a TFRecord\n",
+        "waymo_v1_truncated.tfrecord": tfrecord_record(b"\x0a" * 100)[:40],
+        "waymo_v1_bad_crc.tfrecord": tfrecord_record(b"frame")[:-4] + b"\x00\x00\x00\x00",
+        "waymo_v1_no_cameras.tfrecord": tfrecord_record(b""),
+        # Frame.context (1) -> camera_calibrations (2) -> name (1) = 9, not a CameraName
+        "waymo_v1_camera_9.tfrecord": tfrecord_record(b"\x0a\x04\x12\x02\x08\x09"),
         "nuscenes_two/sensor.json": json.dumps([{"token": "s", "channel": "CAM_FRONT", "modality": "camera"}]),
         "nuscenes_two/calibrated_sensor.json": json.dumps([
             {"token": f"c{k}", "sensor_token": "s", "translation": [1.0 + k, 0.0, 1.5], "rotation": [0.5, -0.5, 0.5, -0.5],
@@ -373,8 +382,35 @@ CASES: list[tuple[str, list[str], str]] = [
      "not a readable"),
     ("import argoverse2 missing folder", ["import", "argoverse2", f"{T}/none", "--out", f"{T}/r.json"],
      "no such directory"),
+    ("import --origin custom without offset", ["import", "carla", f"{T}/carla_no_sensors.json", "--out",
+                                               f"{T}/r.json", "--origin", "custom"], "--origin-offset X,Y,Z"),
+    ("import --origin-offset without custom", ["import", "carla", f"{T}/carla_no_sensors.json", "--out",
+                                               f"{T}/r.json", "--origin-offset", "1,0,0"], "--origin custom"),
+    ("import --origin-offset malformed", ["import", "carla", f"{T}/carla_no_sensors.json", "--out", f"{T}/r.json",
+                                          "--origin", "custom", "--origin-offset", "1;0;0"], "three numbers"),
+    ("import argoverse1 missing file", ["import", "argoverse1", f"{T}/none", "--out", f"{T}/r.json"],
+     "no such file"),
+    ("import argoverse1 unknown camera", ["import", "argoverse1", f"{T}/av1", "--out", f"{T}/r.json"],
+     "not an Argoverse 1 camera"),
+    ("import argoverse1 --cameras unknown", ["import", "argoverse1", f"{T}/av1", "--out", f"{T}/r.json",
+                                             "--cameras", "stereo"], "--cameras"),
+    ("import argoverse1 --axle-height with --origin", ["import", "argoverse1", f"{T}/av1", "--out", f"{T}/r.json",
+                                                       "--origin", "rear_axle", "--axle-height", "0.3"],
+     "--axle-height"),
+    ("import argoverse1 --axle-height -1", ["import", "argoverse1", f"{T}/av1", "--out", f"{T}/r.json",
+                                            "--axle-height", "-1"], "--axle-height"),
     ("import dgp skew", ["import", "dgp", f"{T}/dgp", "--out", f"{T}/r.json"], "skew"),
     ("import waymo not parquet", ["import", "waymo", f"{T}/waymo", "--out", f"{T}/r.json"], "not a readable"),
+    ("import waymo v1 not a TFRecord", ["import", "waymo", f"{T}/waymo_v1_text.tfrecord", "--out", f"{T}/r.json"],
+     "not a TFRecord"),
+    ("import waymo v1 truncated record", ["import", "waymo", f"{T}/waymo_v1_truncated.tfrecord", "--out",
+                                          f"{T}/r.json"], "truncated"),
+    ("import waymo v1 bad CRC", ["import", "waymo", f"{T}/waymo_v1_bad_crc.tfrecord", "--out", f"{T}/r.json"],
+     "CRC"),
+    ("import waymo v1 no camera calibrations", ["import", "waymo", f"{T}/waymo_v1_no_cameras.tfrecord", "--out",
+                                                f"{T}/r.json"], "no camera calibrations"),
+    ("import waymo v1 unknown camera", ["import", "waymo", f"{T}/waymo_v1_camera_9.tfrecord", "--out",
+                                        f"{T}/r.json"], "camera name 9"),
     ("import opencv bad YAML", ["import", "opencv", f"{T}/camchain_bad.yaml", "--out", f"{T}/r.json"],
      "not valid YAML"),
     ("import opencv no cam0", ["import", "opencv", f"{T}/camchain_no_cam0.yaml", "--out", f"{T}/r.json"], "cam0"),
