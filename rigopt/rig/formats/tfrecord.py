@@ -71,13 +71,13 @@ def _zeros_operator(length: int) -> tuple[list[int], list[int], list[int], list[
 
 
 def _register_blocked(register: int, data) -> int:
-    """As :func:`_register_bytewise`, fast on long data: the data is cut into blocks of about sqrt(n) bytes whose
+    """As :func:`_register_bytewise`, fast on long data: the data is cut into blocks of about sqrt(n) / 8 bytes whose
     registers (from zero) are computed side by side, then chained: register(r, A + B) = Z_|B|(register(r, A)) xor
     register(0, B), Z_|B| being the register after |B| zero bytes (linear in r)."""
     view = memoryview(data).cast("B")
     if len(view) < BLOCKED_CRC_MIN_BYTES:
         return _register_bytewise(register, view)
-    block = 1 << (len(view).bit_length() // 2)
+    block = 1 << max(6, len(view).bit_length() // 2 - 3)  # about sqrt(n) / 8: 256 bytes for 5 MB (fastest measured)
     head = len(view) % block
     register = _register_bytewise(register, view[:head])
     columns = np.frombuffer(view, dtype=np.uint8, offset=head).reshape(-1, block).T.copy()  # (block, count)
