@@ -2,7 +2,7 @@
 
 Layers, lowest first; parts in one layer are independent of each other:
 
-    errors  ->  resources, geometry, output  ->  camera, raycast  ->  rig  ->  metrics | vehicle  ->  mounting
+    errors  ->  resources, geometry, output, quiet  ->  camera, raycast  ->  rig  ->  metrics | vehicle  ->  mounting
     ->  coverage  ->  design | bench  ->  baselines  ->  report  ->  cli
 
 Every ``import rigopt...`` counts, including imports inside functions (lazy imports are still
@@ -21,7 +21,7 @@ PACKAGE = Path(__file__).resolve().parents[1] / "rigopt"
 
 LAYERS = (
     {"errors"},
-    {"resources", "geometry", "output"},
+    {"resources", "geometry", "output", "quiet"},
     {"camera", "raycast"},
     {"rig"},
     {"metrics", "vehicle"},

@@ -12,7 +12,7 @@ from rigopt.cli.app import (FORCE_HELP, MIN_HEIGHT_HELP, NO_TRAILER_HELP, app, m
                             note_fallback, print_json, print_table)
 from rigopt.cli.metric_commands import METRIC_HELP
 from rigopt.design.defaults import BENCHMARK_IMAGE_SIZE as DEFAULT_IMAGE_SIZE
-from rigopt.design.defaults import DEFAULT_LENSES, DEFAULT_PITCHES_DEG, DEFAULT_YAW_STEP_DEG
+from rigopt.design.defaults import DEFAULT_LENSES, DEFAULT_MAX_NODES, DEFAULT_PITCHES_DEG, DEFAULT_YAW_STEP_DEG
 from rigopt.errors import RigoptError
 
 
@@ -100,8 +100,12 @@ def design_command(
     min_coverage: int = typer.Option(0, min=0, help="Cameras every ring sector needs, beyond the reference's "
                                                     "coverage."),
     min_overlap: int = typer.Option(0, min=0, help="Cameras needed where the reference sees a sector twice (e.g. 2)."),
-    time_limit: float = typer.Option(60.0, callback=more_than(0, " s"),
-                                     help="MILP time limit (s); the best design found is returned."),
+    max_nodes: int = typer.Option(DEFAULT_MAX_NODES, "--max-nodes", min=1, max=10_000_000,
+                                  help="MILP work limit in branch-and-bound nodes: the same design on any machine; "
+                                       "a design not proven best within it is an error."),
+    time_limit: Optional[float] = typer.Option(None, callback=more_than(0, " s"),
+                                               help="Accept a time-boxed MILP answer (s), reported with its gap; "
+                                                    "it may differ between machines (default: none)."),
     min_height: Optional[float] = typer.Option(None, "--min-height", min=0.0, max=5.0,
                                                help=MIN_HEIGHT_HELP),
     no_trailer: bool = typer.Option(False, "--no-trailer", help=NO_TRAILER_HELP),
@@ -158,7 +162,7 @@ def design_command(
         cameras=parse_camera_count(cameras), lenses=lenses, fov_range=fov_range,
         zones=tuple(z.strip() for z in zones.split(",")) if zones else None,
         pitches_deg=pitches, yaw_step_deg=yaw_step, spacing=spacing,
-        min_coverage=min_coverage, min_overlap=min_overlap, time_limit=time_limit,
+        min_coverage=min_coverage, min_overlap=min_overlap, max_nodes=max_nodes, time_limit=time_limit,
         rules=mount_rules(min_height, no_trailer), symmetric=False if asymmetric else None, cost_weight=cost_weight,
         require=require)
     references = [_reference(name.strip(), ref_vehicle) for name in ref.split(",") if name.strip()]

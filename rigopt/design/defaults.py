@@ -11,3 +11,6 @@ DEFAULT_YAW_STEP_DEG = 10.0
 RANGE_STEP = 10.0
 #: The benchmark's image size (width, height) px, as ``rigopt.rig.model.DEFAULT_IMAGE_SIZE`` (tested equal).
 BENCHMARK_IMAGE_SIZE = (1280, 720)
+#: Branch-and-bound nodes the selection MILP may explore (``--max-nodes``): a work limit, never a clock, so that
+#: the same input gives the same design on any machine at any load.
+DEFAULT_MAX_NODES = 20000

@@ -27,7 +27,9 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sparse
 
+from rigopt.design.defaults import DEFAULT_MAX_NODES
 from rigopt.errors import RigoptError
+from rigopt.quiet import quiet_highs
 
 
 class DesignInfeasible(RigoptError):
@@ -116,16 +118,19 @@ def _matching(cp, x, cost: np.ndarray, n_cameras: int, alpha: float, count_choic
 
 
 def select_cameras(cost, sees: np.ndarray, required: np.ndarray, mount: np.ndarray, n_cameras: int | tuple[int, int],
-                   alpha: float, clash_pairs=(), time_limit: float = 60.0, mip_gap: float = 1e-4,
+                   alpha: float, clash_pairs=(), max_nodes: int = DEFAULT_MAX_NODES, mip_gap: float = 1e-4,
                    mirror: np.ndarray | None = None, mount_cost: np.ndarray | None = None,
-                   cost_weight: float = 0.0) -> Selection:
+                   cost_weight: float = 0.0, time_limit: float | None = None) -> Selection:
     """Solve the selection MILP above.
 
     cost : (n, R) float raw-unit matching costs, or a list of them (one per reference rig: the fleet mode,
     which minimises the largest calibrated RigCD over the references); sees : (n, q) bool; required : (q,)
     int cameras needed per sector point; mount : (n,) int mount point of each candidate; n_cameras : a count,
     or a (low, high) range at or above every reference's camera count, solved at once (the count a variable
-    of the MILP: with N >= R the objective stays linear); clash_pairs :
+    of the MILP: with N >= R the objective stays linear); max_nodes : the branch-and-bound nodes HiGHS may
+    explore, a work limit (one thread, a fixed seed), so the same input gives the same selection on any machine
+    at any load; time_limit : seconds, only for a time-boxed answer a user asked for (it may differ between
+    machines; status ``time_limit``); clash_pairs :
     (p, 2) int mount points whose housings collide; mirror : (n,) int each candidate's mirror image among
     the n (itself on the centreline), or None for no symmetry; mount_cost : (n,) float relative mounting cost
     of each candidate, weighted by ``cost_weight`` per reference camera in the objective (w / R sum m_c x_c,
@@ -176,11 +181,16 @@ def select_cameras(cost, sees: np.ndarray, required: np.ndarray, mount: np.ndarr
     if cost_weight and mount_cost is not None:
         penalty = cost_weight / n_ref * (np.asarray(mount_cost, dtype=float) @ x)
     problem = cp.Problem(cp.Minimize(objective + penalty), constraints)
+    options = {"mip_rel_gap": float(mip_gap), "mip_max_nodes": int(max_nodes), "threads": 1, "random_seed": 0,
+               "output_flag": False}  # output_flag: no banner on either stream
+    if time_limit is not None:
+        options["time_limit"] = float(time_limit)
+    quiet_highs()
     start = time.perf_counter()
     try:
-        with warnings.catch_warnings():  # a time-limited solve warns "may be inaccurate": its status says so
+        with warnings.catch_warnings():  # a limited solve warns "may be inaccurate": its status says so
             warnings.simplefilter("ignore", UserWarning)
-            problem.solve(solver=cp.HIGHS, time_limit=float(time_limit), mip_rel_gap=float(mip_gap))
+            problem.solve(solver=cp.HIGHS, **options)
     except cp.error.SolverError as error:
         raise RigoptError(f"the MIP solver failed ({error}); is highspy installed? pip install highspy") from None
     seconds = time.perf_counter() - start
@@ -190,18 +200,35 @@ def select_cameras(cost, sees: np.ndarray, required: np.ndarray, mount: np.ndarr
                                "requirements; allow more cameras (--cameras), more zones, wider lenses or lower "
                                f"the coverage requirement{' (or design without symmetry: --asymmetric)' if pairs else ''}")
     chosen = np.flatnonzero(x.value > 0.5) if x.value is not None else np.zeros(0, dtype=int)
-    if not low <= len(chosen) <= high:  # stopped (time limit) before finding any feasible selection
-        raise RigoptError(f"the MIP solver found no feasible design within the time limit of {time_limit:g} s "
-                          f"(status {problem.status}); raise --time-limit")
+    stopped = _stopped_by(problem, max_nodes)
+    if not low <= len(chosen) <= high:  # stopped at a limit before finding any feasible selection
+        raise RigoptError(f"the MIP solver found no feasible design within {_limit_words(max_nodes, time_limit)} "
+                          f"(status {problem.status}); raise {'--time-limit' if stopped == 'time_limit' else '--max-nodes'}")
     matched = []
     for (y, _, _), c in zip(matchings, costs):
         pairs = y.value.reshape(n, c.shape[1]) > 0.5
         matched.append(np.array([int(np.argmax(pairs[k])) if pairs[k].any() else -1 for k in chosen]))
     gap = _gap(problem)
-    status = "optimal" if problem.status == cp.OPTIMAL else "time_limit" if problem.status == cp.USER_LIMIT else problem.status
+    status = "optimal" if problem.status == cp.OPTIMAL else stopped or problem.status
     rigcd_value = float(objective.value) if len(matchings) > 1 else float(matchings[0][2].value)
     cost_term = float(penalty.value) if hasattr(penalty, "value") else 0.0
     return Selection(chosen, matched[0], rigcd_value, status, gap, seconds, n, tuple(matched), cost_term)
+
+
+def _stopped_by(problem, max_nodes: int) -> str | None:
+    """"node_limit" or "time_limit" when HiGHS stopped at a limit before proving the gap, else None."""
+    import cvxpy as cp
+
+    if problem.status != cp.USER_LIMIT:
+        return None
+    info = problem.solver_stats.extra_stats if problem.solver_stats else None
+    nodes = getattr(info, "mip_node_count", None)
+    return "node_limit" if nodes is not None and nodes >= max_nodes else "time_limit"
+
+
+def _limit_words(max_nodes: int, time_limit: float | None) -> str:
+    nodes = f"{max_nodes} branch-and-bound nodes"
+    return nodes if time_limit is None else f"{nodes} or {time_limit:g} s"
 
 
 def _gap(problem) -> float:

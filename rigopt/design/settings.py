@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, Sequence
 import numpy as np
 
 from rigopt.camera import DISTORTION_COEFFICIENTS, Lens
-from rigopt.design.defaults import DEFAULT_LENSES, DEFAULT_PITCHES_DEG, DEFAULT_YAW_STEP_DEG, RANGE_STEP
+from rigopt.design.defaults import DEFAULT_LENSES, DEFAULT_MAX_NODES, DEFAULT_PITCHES_DEG, DEFAULT_YAW_STEP_DEG, RANGE_STEP
 from rigopt.errors import DataError, RigoptError, not_utf8
 from rigopt.rig.model import DEFAULT_IMAGE_SIZE, Camera
 
@@ -213,8 +213,12 @@ class DesignSettings:
     """Pruning: the candidates that see the most required field points, offered to the MILP."""
     coverage_mounts: int = 80
     """About how many mount points offer every orientation for coverage (the coverage pool)."""
-    time_limit: float = 60.0
-    """MILP time limit (s); the best selection found within it is returned."""
+    max_nodes: int = DEFAULT_MAX_NODES
+    """MILP work limit: branch-and-bound nodes (one thread, fixed seed). A design the MILP has not proven best
+    within it (relative gap above ``mip_gap``) is an error, unless ``time_limit`` asks for a time-boxed answer."""
+    time_limit: float | None = None
+    """Seconds: a time-boxed MILP whose best selection is returned with its gap (it may differ between machines
+    and loads); None (the default) solves to ``mip_gap`` within ``max_nodes``."""
     mip_gap: float = 1e-4
     """MILP relative optimality gap at which HiGHS stops."""
     refine: bool = True

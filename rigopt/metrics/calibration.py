@@ -192,6 +192,9 @@ def fit_qp(features: np.ndarray, delta: np.ndarray) -> np.ndarray:
     Clarabel (interior point) where HiGHS fails, as its QP solver does on some well-posed problems."""
     import cvxpy as cp
 
+    from rigopt.quiet import quiet_highs
+
+    quiet_highs()
     beta = cp.Variable(features.shape[1], nonneg=True)
     problem = cp.Problem(cp.Minimize(cp.sum_squares(features @ beta - delta)))
     for solver in (cp.HIGHS, cp.CLARABEL):

@@ -6,8 +6,6 @@ depth (as the mount rules, :mod:`rigopt.mounting.rules`, mount a camera). Metres
 
 from __future__ import annotations
 
-import logging
-from contextlib import contextmanager
 
 import numpy as np
 import trimesh
@@ -15,6 +13,7 @@ import trimesh
 from rigopt.errors import RigoptError
 from rigopt.mounting.practice import practical
 from rigopt.mounting.rules import MountRules, housing_fits
+from rigopt.quiet import quiet_trimesh
 from rigopt.vehicle.model import Vehicle
 from rigopt.vehicle.symmetry import mirror_points
 
@@ -132,7 +131,7 @@ def _zone_samples(vehicle: Vehicle, spacing: float, zones, seed: int, rules: Mou
             continue
         part = mesh.submesh([faces], append=True)
         count = max(1, int(np.ceil(part.area / spacing**2 * 2)))
-        with _quiet_trimesh():  # it logs a warning when rejection leaves fewer samples than asked for
+        with quiet_trimesh():  # it logs a warning when rejection leaves fewer samples than asked for
             samples, index = trimesh.sample.sample_surface_even(part, count, radius=spacing, seed=seed)
         normal = part.face_normals[index]
         points.append(samples + normal * rules.housing[2] / 2.0)
@@ -175,7 +174,7 @@ def _raised_points(vehicle: Vehicle, zone_name: str, spacing: float, seed: int, 
         return np.zeros((0, 3)), np.zeros((0, 3))
     part = mesh.submesh([np.flatnonzero(faces)], append=True)
     count = max(1, int(np.ceil(part.area / spacing**2 * 2)))
-    with _quiet_trimesh():
+    with quiet_trimesh():
         samples, index = trimesh.sample.sample_surface_even(part, count, radius=spacing, seed=seed)
     lowest = rules.max_distance + rules.housing[2] / 2.0
     heights = np.unique(np.clip(np.append(np.arange(0.25, zone.raised_max, 0.25), zone.raised_max), lowest, None))
@@ -204,14 +203,3 @@ def _raised_ok(vehicle: Vehicle, points, names, axes, surface, rules: MountRules
                                  rules.housing, rules.penetration_tolerance)
         ok[k] = not collides(housing, body)
     return ok
-
-
-@contextmanager
-def _quiet_trimesh():
-    logger = logging.getLogger("trimesh")
-    level = logger.level
-    logger.setLevel(logging.ERROR)
-    try:
-        yield
-    finally:
-        logger.setLevel(level)

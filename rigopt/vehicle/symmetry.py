@@ -17,6 +17,7 @@ import numpy as np
 import trimesh
 
 from rigopt.geometry import geodesic_distance
+from rigopt.quiet import quiet_trimesh
 
 #: Largest 99th-percentile mirror distance (m) of a body that counts as symmetric (about a housing's width).
 SYMMETRY_TOLERANCE_M = 0.10
@@ -47,7 +48,8 @@ class MirrorSymmetry:
 
 def mirror_symmetry(mesh: trimesh.Trimesh, samples: int = SYMMETRY_SAMPLES, seed: int = 1) -> MirrorSymmetry:
     """Measure the mirror symmetry of ``mesh`` (vehicle frame, m) across y = 0."""
-    points, _ = trimesh.sample.sample_surface_even(mesh, samples, seed=seed)
+    with quiet_trimesh():  # fewer than ``samples`` evenly spread points is fine
+        points, _ = trimesh.sample.sample_surface_even(mesh, samples, seed=seed)
     distance = trimesh.proximity.closest_point(mesh, points @ MIRROR)[1]
     return MirrorSymmetry(float(np.percentile(distance, 99)), float(distance.max()))
 

@@ -73,7 +73,7 @@ def test_a_design_from_a_catalogue_keeps_each_cameras_lens(tmp_path):
     (tmp_path / "cameras.toml").write_text(TOML)
     out = tmp_path / "design"
     result = run_rigopt("design", "--vehicle", "tt", "--ref", "R1", "--cameras-file", tmp_path / "cameras.toml",
-                        "--pitch", "0", "--yaw-step", "30", "--spacing", "0.3", "--time-limit", "30", "--json",
+                        "--pitch", "0", "--yaw-step", "30", "--spacing", "0.3", "--json",
                         "--out", out)
     assert result.returncode == 0, result.stderr
     summary = json.loads(result.stdout)

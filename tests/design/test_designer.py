@@ -292,7 +292,7 @@ def test_front_zone_only_leaves_the_rear_unseen(box_car):
 
 def test_triple_coverage_with_narrow_lenses_is_infeasible(box_car):
     """8 cameras of 30 deg cannot see every ring sector three times."""
-    settings = DesignSettings(min_coverage=3, lenses=(30.0,), yaw_step_deg=30.0, time_limit=30.0)
+    settings = DesignSettings(min_coverage=3, lenses=(30.0,), yaw_step_deg=30.0)
     with pytest.raises(DesignInfeasible) as error:
         design_rig(box_car, r1_on_its_vehicle(), load_weights("joint"), settings)
     message = str(error.value)
