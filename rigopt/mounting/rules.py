@@ -9,7 +9,8 @@ A camera is valid on a vehicle when
   3. its near view frustum (from ``near`` to ``frustum_range`` metres, the image shrunk by
      ``frustum_margin`` of each half-angle) does not intersect the body;
   4. its foot point and surface normal lie in one of the vehicle's zones;
-  5. its housing does not collide with another camera's housing;
+  5. its housing does not collide with another camera's housing (cameras of one module, ``Camera.module``,
+     share a housing and do not clash with each other);
   6. mounting practice allows its lens position (:mod:`rigopt.mounting.practice`: not on a wheel, tyre or
      arch, not below the minimum lens height, not in a keep-out such as locker doors or a coupled trailer).
 The lens sits at the housing's centre, so a well-mounted camera is ``housing[2] / 2`` off the surface.
@@ -33,7 +34,7 @@ import numpy as np
 from rigopt import raycast
 from rigopt.mounting.practice import MountPractice, keep_out_boxes, practice_problems
 from rigopt.mounting.shapes import body_object, collides, frustum_object, housing_object, surface_frame
-from rigopt.rig.model import Rig
+from rigopt.rig.model import Camera, Rig
 from rigopt.vehicle.model import Vehicle, Zone
 
 
@@ -182,9 +183,14 @@ def check_rig(rig: Rig, vehicle: Vehicle, rules: MountRules = MountRules()) -> R
         zone = mount.zone.name if mount is not None else zones[k]
         if zone is None:
             problems.append("outside every mounting zone")
-        clashes = [other.id for j, other in enumerate(rig.cameras) if j != k and
+        clashes = [other.id for j, other in enumerate(rig.cameras) if j != k and not _one_module(camera, other) and
                    (collides(housings[k], housings[j]) or (j in posts and collides(housings[k], posts[j])))]
         if clashes:
             problems.append(f"housing collides with {', '.join(clashes)}")
         checks.append(CameraCheck(camera.id, not problems, distance, zone, tuple(problems)))
     return RigCheck(rig.name, vehicle.name, tuple(checks))
+
+
+def _one_module(a: Camera, b: Camera) -> bool:
+    """True when two cameras share a module (one housing: a roof cluster, a stereo pair)."""
+    return a.module is not None and a.module == b.module

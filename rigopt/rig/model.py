@@ -73,6 +73,14 @@ class Camera:
         ``fov`` and ``image_size`` (an ideal pinhole given as a lens is stored as None, so a camera has one
         form). :attr:`lens_model` gives the lens either way. Build a camera from a real
         lens with :meth:`Camera.with_lens`, which derives ``fov`` and ``image_size`` from it.
+    module : str or None
+        Name of the camera module (one housing) it shares with other cameras of the rig: a roof cluster, a
+        stereo pair. Cameras of one module are one part to the mount rules (their housings do not clash with
+        each other); None for a camera in a housing of its own.
+
+    Names (``id``, ``zone``, ``module``) are printable text: no control characters or terminal escapes, so
+    that they print and serialise (XML, JSON, tables) as they are. Positions lie within
+    ``MAX_POSITION_M`` of the origin in every coordinate.
     """
 
     id: str
@@ -82,12 +90,18 @@ class Camera:
     image_size: tuple[int, int] = DEFAULT_IMAGE_SIZE
     zone: str | None = None
     lens: Lens | None = None
+    module: str | None = None
 
     def __post_init__(self):
-        if not isinstance(self.id, str) or not self.id:
-            raise RigFileError(f"camera id must be a non-empty string, got {self.id!r}")
+        _check_name(self.id, "camera id")
         what = f"camera {self.id!r}"
+        for key in ("zone", "module"):
+            if getattr(self, key) is not None:
+                _check_name(getattr(self, key), f"{what} {key}")
         object.__setattr__(self, "position", _frozen_array(self.position, (3,), f"{what} position"))
+        if np.max(np.abs(self.position)) > MAX_POSITION_M:
+            raise RigFileError(f"{what} position {self.position.tolist()} is more than {MAX_POSITION_M:g} m from the "
+                               "rig's origin; positions are metres in the vehicle frame (check the file's units)")
         rotation = _frozen_array(self.rotation, (3, 3), f"{what} rotation")
         if not is_rotation(rotation):
             raise RigFileError(f"{what} rotation is not a proper rotation matrix (orthonormal, det +1)")
@@ -114,9 +128,10 @@ class Camera:
         object.__setattr__(self, "image_size", (int(size[0]), int(size[1])))
 
     @classmethod
-    def with_lens(cls, id: str, position, rotation, lens: Lens, zone: str | None = None) -> "Camera":
+    def with_lens(cls, id: str, position, rotation, lens: Lens, zone: str | None = None,
+                  module: str | None = None) -> "Camera":
         """A camera with a real lens: ``fov`` and ``image_size`` derived from it."""
-        return cls(id, position, rotation, lens.hfov, lens.image_size, zone, lens)
+        return cls(id, position, rotation, lens.hfov, lens.image_size, zone, lens, module)
 
     @property
     def lens_model(self) -> Lens:
@@ -137,8 +152,22 @@ class Camera:
             and abs(self.fov - other.fov) <= atol
             and self.image_size == other.image_size
             and self.zone == other.zone
+            and self.module == other.module
             and _same_lens(self.lens, other.lens, atol)
         )
+
+
+#: Largest distance (m) of a camera from its rig's origin, per coordinate: cameras are on their vehicle.
+MAX_POSITION_M = 1000.0
+
+
+def _check_name(value, what: str) -> None:
+    """A name must be non-empty printable text (no control characters, no terminal escape sequences)."""
+    if not isinstance(value, str) or not value:
+        raise RigFileError(f"{what} must be a non-empty string, got {value!r}")
+    if not value.isprintable():
+        raise RigFileError(f"{what} {value!r} holds control characters; use printable characters only "
+                           "(letters, digits, punctuation, spaces)")
 
 
 def _same_lens(a: Lens | None, b: Lens | None, atol: float) -> bool:

@@ -10,7 +10,8 @@ File layout::
 any multiple of 360 apart; ``fov`` horizontal, degrees. Other keys (the benchmark's ``lidar``) are
 ignored. rigopt adds optional keys, written only when they differ from the benchmark's defaults:
 
-- per camera: ``image_size`` ``[width, height]`` (default 1280 x 720), ``zone``, and for a real lens
+- per camera: ``image_size`` ``[width, height]`` (default 1280 x 720), ``zone``, ``module`` (the camera
+  module, one housing, it shares with other cameras: a roof cluster, a stereo pair), and for a real lens
   ``"intrinsics": {"fx": .., "fy": .., "cx": .., "cy": ..}`` (px) with
   ``"distortion": {"model": "radtan" | "fisheye", "coefficients": [...]}`` (OpenCV order: k1, k2, p1, p2,
   k3; fisheye k1..k4). With intrinsics, ``fov`` is the lens's derived horizontal FOV (checked on reading).
@@ -64,10 +65,9 @@ def _camera_from_dict(entry, index: int, source: str) -> Camera:
     missing = [k for k in ("id", "location", "rotation", "fov") if k not in entry]
     if missing:
         raise RigFileError(f"{where} ({entry.get('id', 'no id')}) is missing {missing}")
-    location = _numbers(entry["location"], 3, f"{where} ({entry['id']}) 'location' [x, y, z] metres")
-    if max(abs(v) for v in location) > MAX_LOCATION_M:
-        raise RigFileError(f"{where} ({entry['id']}) 'location' {location} is more than {MAX_LOCATION_M:g} m from "
-                           "the vehicle origin; rig files give metres in the vehicle frame")
+    if not isinstance(entry["id"], str) or not entry["id"]:
+        raise RigFileError(f"{where} 'id' must be a non-empty string, got {entry['id']!r}")
+    location = _numbers(entry["location"], 3, f"{where} ({entry['id']!r}) 'location' [x, y, z] metres")
     rotation = _numbers(entry["rotation"], 3, f"{where} ({entry['id']}) 'rotation' [pitch, yaw, roll] degrees")
     fov = _numbers([entry["fov"]], 1, f"{where} ({entry['id']}) 'fov' degrees")[0]
     size = entry.get("image_size", DEFAULT_IMAGE_SIZE)
@@ -75,7 +75,8 @@ def _camera_from_dict(entry, index: int, source: str) -> Camera:
         raise RigFileError(f"{where} ({entry['id']}) 'image_size' must be [width, height] in pixels, got {size!r}")
     position, rotation_matrix = carla_to_iso(location, rotation)
     lens = _lens_from(entry, size, f"{where} ({entry['id']})")
-    return Camera(str(entry["id"]), position, rotation_matrix, fov, tuple(size), entry.get("zone"), lens)
+    return Camera(entry["id"], position, rotation_matrix, fov, tuple(size), entry.get("zone"), lens,
+                  entry.get("module"))
 
 
 def _lens_from(entry: dict, size, where: str) -> Lens | None:
@@ -111,10 +112,6 @@ def _origin_from(value, source: str) -> RigOrigin:
                        f"(metres, CARLA frame), got {value!r}")
 
 
-#: Largest camera coordinate a rig file may give (m): a camera is on its vehicle, not kilometres away.
-MAX_LOCATION_M = 1000.0
-
-
 def _numbers(values, count: int, what: str) -> list[float]:
     if not isinstance(values, (list, tuple)) or len(values) != count:
         raise RigFileError(f"{what}: expected {count} number(s), got {values!r}")
@@ -143,6 +140,8 @@ def rig_to_dict(rig: Rig) -> dict:
             entry["image_size"] = list(camera.image_size)
         if camera.zone is not None:
             entry["zone"] = camera.zone
+        if camera.module is not None:
+            entry["module"] = camera.module
         if camera.lens is not None:
             lens = camera.lens
             entry["intrinsics"] = dict(zip(("fx", "fy", "cx", "cy"), _rounded([lens.fx, lens.fy, lens.cx, lens.cy])))

@@ -8,6 +8,8 @@ is 8 x 6 x 6 cm, so a well-mounted lens is 3 cm off the surface.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -260,6 +262,17 @@ def test_two_cameras_2cm_apart_collide(box_car):
     assert not a.valid and not b.valid
     assert mentions(a, "collides") and "B" in a.problems[-1]
     assert mentions(b, "collides") and "A" in b.problems[-1]
+
+
+def test_two_cameras_of_one_module_share_a_housing(box_car):
+    """A stereo pair or a roof cluster: cameras of one module do not clash with each other, but still do with a
+    camera outside the module."""
+    a, b = (replace(camera(k, p), module="stereo") for k, p in (("A", FRONT), ("B", [2.03, 0.02, 1.0])))
+    assert check(box_car, a, b).valid
+    c = camera("C", [2.03, -0.02, 1.0])
+    result = check(box_car, a, b, c)
+    assert not result.valid and mentions(result.cameras[2], "collides")
+    assert [n for n in ("A", "B") if n in result.cameras[2].problems[-1]] == ["A", "B"]
 
 
 def test_two_cameras_20cm_apart_are_valid(box_car):

@@ -99,6 +99,13 @@ INVALID_CAMERAS = {
     "empty id": dict(id=""),
     "id not a string": dict(id=7),
     "id None": dict(id=None),
+    "id with a terminal escape": dict(id="CAM\x1b[31mRED"),
+    "id with a newline": dict(id="CAM\nFRONT"),
+    "id with a NUL": dict(id="CAM\x00"),
+    "zone with a control character": dict(zone="roof\x07"),
+    "module empty": dict(module=""),
+    "module not a string": dict(module=3),
+    "position 1000 km away": dict(position=[1.0e6, 0.0, 1.0]),
 }
 
 
@@ -218,3 +225,9 @@ def test_rig_same_as_compares_name_vehicle_and_count():
     assert not rig.same_as(Rig("r", "vehicle.b", rig.cameras))
     assert not rig.same_as(Rig("r", "vehicle.a", rig.cameras[:1]))
     assert not rig.same_as(Rig("r", "vehicle.a", rig.cameras[::-1]))
+
+
+def test_printable_names_in_any_script_are_accepted():
+    """Printable text is not only ASCII: accented and non-Latin names are fine."""
+    camera = _camera(id="Kamera vorn ü 前", zone="dach", module="roof cluster")
+    assert camera.id == "Kamera vorn ü 前" and camera.module == "roof cluster"

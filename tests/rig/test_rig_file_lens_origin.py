@@ -68,3 +68,28 @@ def test_an_unknown_origin_is_refused_with_the_accepted_forms():
     data["origin"] = "front_axle"
     with pytest.raises(RigFileError, match="rear_axle"):
         rig_from_dict(data, "bad", "bad.json")
+
+
+def test_camera_modules_round_trip_and_only_when_present():
+    r1 = load_rig("R1")
+    paired = Rig("paired", r1.vehicle, tuple(c if k > 1 else Camera(c.id, c.position, c.rotation, c.fov, c.image_size,
+                                                                     c.zone, c.lens, "front_pair")
+                                             for k, c in enumerate(r1.cameras)))
+    data = rig_to_dict(paired)
+    assert [c.get("module") for c in data["cameras"]][:3] == ["front_pair", "front_pair", None]
+    assert rig_from_dict(json.loads(json.dumps(data)), "paired").same_as(paired)
+    assert not paired.same_as(r1)  # the module is part of a camera
+
+
+@pytest.mark.parametrize("change, message", [
+    ({"id": None}, "'id' must be a non-empty string"),
+    ({"id": 7}, "'id' must be a non-empty string"),
+    ({"id": "CAM\u001b[2J"}, "control characters"),
+    ({"module": 4}, "module must be a non-empty string"),
+    ({"location": [1.0e6, 0.0, 1.0]}, "more than 1000 m"),
+])
+def test_bad_camera_names_and_far_cameras_are_refused(change, message):
+    data = rig_to_dict(load_rig("R1"))
+    data["cameras"][0].update(change)
+    with pytest.raises(RigFileError, match=message.replace("[", r"\[")):
+        rig_from_dict(data, "bad", "bad.json")

@@ -25,6 +25,7 @@ Layout (argoverse-api's ``argoverse/utils/calibration.py`` reads it; its issues 
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from pathlib import Path
 
 from rigopt.errors import RigFileError, RigoptError
@@ -130,6 +131,11 @@ def read_argoverse1(path, name: str | None = None, vehicle: str = "argoverse1", 
     if rectified:
         notes.append(f"left out {', '.join(rectified)}: rectified copies of the stereo cameras' images")
     default_name = file.parent.resolve().name
+    stereo_pair = [k for k, c in enumerate(rig_cameras) if c.id in STEREO_CAMERAS]
+    if len(stereo_pair) == 2:  # the stereo pair is one module: a 0.30 m bar behind the windscreen
+        for k in stereo_pair:
+            rig_cameras[k] = replace(rig_cameras[k], module="stereo_front")
+        notes.append("module stereo_front: stereo_front_left, stereo_front_right (one stereo bar)")
     rig = make_rig(str(file), name or default_name, vehicle, rig_cameras, origin)
     return Imported(rig, tuple(notes))
 

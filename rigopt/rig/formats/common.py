@@ -18,7 +18,7 @@ image. Writers give the numbers back unchanged, so round trips are exact.
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -168,6 +168,36 @@ def make_camera(where: str, camera_id: str, position, rotation, lens: Lens) -> C
         raise RigFileError(f"{where}: {error}") from None
 
 
+def in_modules(cameras, within_m: float, name: str) -> tuple[tuple[Camera, ...], list[str]]:
+    """``cameras`` with the groups whose lenses lie within ``within_m`` of each other (chained) put in one camera
+    module each (``Camera.module``: one housing), named ``name`` (``name_1``, ``name_2``, ... for several), and
+    a note per module for stderr. Cameras far from every other keep no module."""
+    cameras = list(cameras)
+    group = list(range(len(cameras)))
+
+    def root(k):
+        while group[k] != k:
+            k = group[k]
+        return k
+
+    for a in range(len(cameras)):
+        for b in range(a + 1, len(cameras)):
+            if np.linalg.norm(cameras[a].position - cameras[b].position) <= within_m:
+                group[root(b)] = root(a)
+    members: dict[int, list[int]] = {}
+    for k in range(len(cameras)):
+        members.setdefault(root(k), []).append(k)
+    modules = [m for m in members.values() if len(m) > 1]
+    notes = []
+    for number, module in enumerate(modules, 1):
+        label = name if len(modules) == 1 else f"{name}_{number}"
+        for k in module:
+            cameras[k] = replace(cameras[k], module=label)
+        notes.append(f"module {label}: {', '.join(cameras[k].id for k in module)} (lenses within {within_m:g} m of "
+                     "each other share one housing)")
+    return tuple(cameras), notes
+
+
 def make_rig(where: str, name: str, vehicle: str, cameras, origin: RigOrigin) -> Rig:
     """A rig; its complaints (no camera, repeated ids) name ``where``."""
     try:
@@ -210,7 +240,7 @@ def format_number(value: float) -> str:
 
 
 def warn_not_carried(rig: Rig, format_name: str, carries_name: bool, carries_vehicle: bool) -> list[str]:
-    """Warnings for the rig-level things ``format_name`` does not carry (name, vehicle, zones)."""
+    """Warnings for the rig-level things ``format_name`` does not carry (name, vehicle, zones, modules)."""
     lost, options = [], []
     if not carries_name:
         lost.append(f"the rig's name {rig.name!r}")
@@ -221,6 +251,9 @@ def warn_not_carried(rig: Rig, format_name: str, carries_name: bool, carries_veh
     zoned = [c.id for c in rig.cameras if c.zone is not None]
     if zoned:
         lost.append(f"the mounting zones of {len(zoned)} camera(s)")
+    grouped = [c.id for c in rig.cameras if c.module is not None]
+    if grouped:
+        lost.append(f"the camera modules of {len(grouped)} camera(s)")
     if not lost:
         return []
     again = f"; give {' and '.join(options)} on import" if options else ""

@@ -50,9 +50,9 @@ from pathlib import Path
 import numpy as np
 
 from rigopt.errors import RigFileError
-from rigopt.rig.formats.common import (Imported, body_rotation, choose_calibration, make_camera, make_lens,
-                                       make_rig, numbers, origin_note, quaternion_rotation, read_json, rotation_matrix,
-                                       same_cameras, unit_quaternion, whole_number)
+from rigopt.rig.formats.common import (Imported, body_rotation, choose_calibration, in_modules, make_camera,
+                                       make_lens, make_rig, numbers, origin_note, quaternion_rotation, read_json,
+                                       rotation_matrix, same_cameras, unit_quaternion, whole_number)
 from rigopt.rig.formats.tfrecord import looks_like_tfrecord
 from rigopt.rig.formats.waymo_v1 import frame_contexts
 from rigopt.rig.model import RigOrigin
@@ -71,6 +71,8 @@ AV2_ORIGIN_HEIGHT_M = 0.35
 
 DGP_IMAGE_SIZE = (1936, 1216)
 
+#: Waymo's cameras sit in one roof cluster: lenses this close (m, chained) are imported as one camera module.
+WAYMO_CLUSTER_M = 0.3
 WAYMO_CAMERAS = {1: "FRONT", 2: "FRONT_LEFT", 3: "FRONT_RIGHT", 4: "SIDE_LEFT", 5: "SIDE_RIGHT"}
 WAYMO = "[CameraCalibrationComponent]."
 WAYMO_INTRINSIC = ("f_u", "f_v", "c_u", "c_v", "k1", "k2", "p1", "p2", "k3")
@@ -411,5 +413,6 @@ def read_waymo(path, calibration: int | None = None, segment: str | None = None,
     else:
         chosen = choose_calibration(groups, calibration, str(path), "--calibration K or --segment NAME")
     origin, note = _origin(origin, "Waymo vehicle frame")
-    rig = make_rig(str(path), name or (segment or chosen["segments"][0]), vehicle, chosen["cameras"], origin)
-    return Imported(rig, (note, "rolling shutter is not modelled: cameras are taken as global shutter"))
+    cameras, module_notes = in_modules(chosen["cameras"], WAYMO_CLUSTER_M, "roof_cluster")
+    rig = make_rig(str(path), name or (segment or chosen["segments"][0]), vehicle, cameras, origin)
+    return Imported(rig, (note, *module_notes, "rolling shutter is not modelled: cameras are taken as global shutter"))

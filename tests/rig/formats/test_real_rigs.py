@@ -112,3 +112,10 @@ def test_carla_export_of_an_imported_real_rig_reproduces_its_raw_extrinsics(data
         np.testing.assert_allclose(carla, flip @ r_ego_camera @ flip, rtol=0, atol=1e-9, err_msg=camera)
     if dataset in ("nuscenes", "argoverse2"):  # real calibrations: every camera has some roll
         assert max(abs(a["roll"]) for a in sensors.values()) > 0.1
+
+
+def test_waymo_roof_cluster_is_one_camera_module():
+    """Waymo's five cameras share one roof housing: imported as one module, they do not clash with each other."""
+    rig = read_rig(REAL / "waymo.json")
+    assert {c.module for c in rig.cameras} == {"roof_cluster"}
+    assert all(c.module is None for c in read_rig(REAL / "nuscenes.json").cameras)  # 0.5-1.7 m apart
