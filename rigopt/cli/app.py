@@ -40,6 +40,20 @@ def note(message: str) -> None:
     typer.echo(f"rigopt: note: {message}", err=True)
 
 
+def note_vehicle(rig, vehicle, change=None) -> None:
+    """One note naming the vehicle a command put ``rig`` on and where its positions are measured from, e.g.
+    'nuscenes: on renault_zoe (nuScenes' Renault Zoe), positions from the rear axle, converted to the vehicle
+    centre (x -1.385 m)'. ``rig``: as loaded (its own origin); ``vehicle``: the rigopt Vehicle; ``change``: the
+    OriginChange made, None when the positions were kept."""
+    car = f"{vehicle.name} ({vehicle.spec.title})" if vehicle.spec.title else vehicle.name
+    if change is None:
+        note(f"{rig.name}: on {car}, positions from the {rig.origin.describe()}")
+        return
+    moved = ", ".join(f"{axis} {value:+.3f} m" for axis, value in zip("xyz", change.offset) if abs(value) > 5e-4)
+    note(f"{rig.name}: on {car}, positions from the {change.source.describe()}, converted to the "
+         f"{change.target.describe()} ({moved or 'no shift'})")
+
+
 def note_fallback(calibration) -> None:
     """Say so when a calibration is a fallback (its fit kept no geometric term, e.g. Fast-BEV's)."""
     if calibration.fallback:
@@ -84,6 +98,15 @@ def more_than(low: float, unit: str = "", high: float = math.inf):
         if not math.isfinite(value) or not low < value <= high:
             upper = f" and at most {high:g}{unit}" if math.isfinite(high) else ""
             raise typer.BadParameter(f"must be a number more than {low:g}{unit}{upper}, got {value:g}")
+        return value
+    return check
+
+
+def finite(option: str):
+    """An option callback that refuses NaN and inf at parse time (typer's min/max let them through)."""
+    def check(value):
+        if value is not None and not math.isfinite(value):
+            raise typer.BadParameter(f"{option} must be a finite number, got {value:g}")
         return value
     return check
 

@@ -8,7 +8,7 @@ from typing import Optional
 
 import typer
 
-from rigopt.cli.app import FORCE_HELP, app, console, note, print_json, print_table
+from rigopt.cli.app import FORCE_HELP, app, console, note_vehicle, print_json, print_table
 
 
 #: The --require option's help (also for other commands that take regulation fields).
@@ -20,14 +20,14 @@ REQUIRE_HELP = ("Regulation fields every camera-visible point of which is checke
 
 
 def _placed(rig_name: str, vehicle: Optional[str]):
-    """The rig on ``vehicle`` (or its own), origin converted to the vehicle's centre (noted), cameras inside
-    the body refused; and that vehicle."""
+    """The rig on ``vehicle`` (or its own), origin converted to the vehicle's centre, cameras inside the body
+    refused; and that vehicle. A note names the vehicle and the origin used."""
     from rigopt.rig.library import load_rig
     from rigopt.vehicle.placement import rig_on_vehicle
 
-    rig, on, change = rig_on_vehicle(load_rig(rig_name), vehicle)
-    if change is not None:
-        note(change.describe())
+    loaded = load_rig(rig_name)
+    rig, on, change = rig_on_vehicle(loaded, vehicle)
+    note_vehicle(loaded, on, change)
     return rig, on
 
 

@@ -7,7 +7,7 @@ from typing import List, Optional
 
 import typer
 
-from rigopt.cli.app import PLACE_HELP, app, note, note_fallback, print_json, print_table
+from rigopt.cli.app import PLACE_HELP, app, note, note_fallback, note_vehicle, print_json, print_table
 from rigopt.errors import RigoptError
 
 WEIGHTS_HELP = "Calibrated weights: a shipped name (BEVDet, BEVFusion, Fast-BEV, PETR, joint) or a weights JSON file."
@@ -108,16 +108,17 @@ def rank_command(
 
 
 def _comparable(names: List[str], vehicle: Optional[str]):
-    """The rigs ``names`` in one frame (:func:`rigopt.vehicle.placement.comparable_rigs`), each origin change
-    reported as a note; returns (rigs, changes)."""
+    """The rigs ``names`` in one frame (:func:`rigopt.vehicle.placement.comparable_rigs`); each rig whose positions
+    were converted gets a note naming the vehicle and origins used; returns (rigs, changes)."""
     from rigopt.rig.library import load_rig
     from rigopt.vehicle.library import load_vehicle
     from rigopt.vehicle.placement import comparable_rigs
 
-    rigs, changes = comparable_rigs([load_rig(name) for name in names],
-                                    load_vehicle(vehicle) if vehicle is not None else None)
+    loaded = [load_rig(name) for name in names]
+    rigs, changes = comparable_rigs(loaded, load_vehicle(vehicle) if vehicle is not None else None)
+    by_name = {rig.name: rig for rig in loaded}
     for change in changes:
-        note(change.describe())
+        note_vehicle(by_name[change.rig], load_vehicle(change.vehicle), change)
     return rigs, changes
 
 

@@ -9,7 +9,7 @@ from typing import Optional
 import typer
 
 from rigopt.cli.app import (MIN_HEIGHT_HELP, NO_TRAILER_HELP, PICTURE_SUFFIXES, app, console, mount_rules, note,
-                            print_json, print_table, vehicle_app)
+                            note_vehicle, print_json, print_table, vehicle_app)
 from rigopt.errors import RigoptError
 
 
@@ -33,10 +33,9 @@ def check_command(
     if on is None:
         raise RigoptError(f"rig {loaded.name!r} is on {loaded.vehicle!r}, which is not a rigopt vehicle; add --vehicle "
                           "NAME to check it on one (see rigopt vehicles)")
-    loaded, change = place_rig(loaded, on, refuse_inside=False)  # check reports cameras inside the body itself
-    if change is not None:
-        note(change.describe())
-    result = check_rig(loaded, on, mount_rules(min_height, no_trailer))
+    placed, change = place_rig(loaded, on, refuse_inside=False)  # check reports cameras inside the body itself
+    note_vehicle(loaded, on, change)
+    result = check_rig(placed, on, mount_rules(min_height, no_trailer))
     if as_json:
         print_json({"rig": result.rig, "vehicle": result.vehicle,
                     "cameras": [{**asdict(c), "problems": list(c.problems)} for c in result.cameras]})

@@ -1,6 +1,9 @@
-"""The vehicles rigopt knows: the four built in (``vehicles/<name>/vehicle.toml``) and the user's own.
+"""The vehicles rigopt knows: the built-in ones (``vehicles/<name>/vehicle.toml``: the benchmark's four CARLA
+vehicles and the cars of the nuScenes, Argoverse and Waymo datasets) and the user's own.
 
-A vehicle is found by its name, an alias or its CARLA blueprint, case-insensitively. User vehicles live
+A vehicle is found by its name, an alias or its CARLA blueprint, case-insensitively. The datasets' cars carry
+the vehicle names rigopt's importers write by default as aliases (``nuscenes``, ``argoverse2``, ``waymo``), so
+that an imported rig is on its own car. User vehicles live
 in ``$RIGOPT_HOME/vehicles/<name>/`` (default ``~/.rigopt``), written by ``rigopt vehicle add``. A user
 vehicle whose spec cannot be read is skipped (see :func:`broken_user_vehicles`), so that it never breaks the
 look-up of any other vehicle; asked for by its own name, it is reported with its problem.

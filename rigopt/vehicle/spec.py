@@ -4,6 +4,7 @@ Everything is in the ISO 8855 vehicle frame (x forward, y left, z up; metres, or
 vehicle origin on the ground). A spec file::
 
     name = "etron"
+    title = "Audi e-tron"                  # optional: the vehicle in words, for messages
     blueprint = "vehicle.audi.etron"       # the CARLA blueprint the benchmark's rigs name
     aliases = ["suv"]
     box = [4.8557, 2.0328, 1.6494]         # CARLA bounding box length, width, height (m), for checks
@@ -147,7 +148,7 @@ class VehicleSpec:
     """A vehicle: ``name``, CARLA ``blueprint``, ``aliases``, ``box`` (length, width, height) m, solids,
     zones, the file it came from, ``axles`` (x m) and ``wheels``: wheel descriptions that are not solids
     (the ``[[wheels]]`` tables of a user vehicle, whose mesh holds the wheels already); ``category`` the UN
-    vehicle category it names (None: not given)."""
+    vehicle category it names (None: not given); ``title`` the vehicle in words for messages (None: not given)."""
 
     name: str
     blueprint: str
@@ -161,6 +162,7 @@ class VehicleSpec:
     keep_outs: tuple[KeepOutSpec, ...] = ()
     min_lens_height: float | None = None
     category: str | None = None
+    title: str | None = None
 
 
 def read_toml(path, what: str) -> dict:
@@ -203,8 +205,9 @@ def spec_from_dict(data: dict, source: str = "<spec>") -> VehicleSpec:
     if min_height is not None and min_height < 0:
         raise DataError(f"{source}: 'min_lens_height' is a height above the ground in metres, >= 0, got {min_height}")
     category = reader.category(data) if "category" in data else None
+    title = reader.text(data, "title") if "title" in data else None
     return VehicleSpec(name, blueprint, tuple(aliases), box, solids, zones, source, tuple(float(a) for a in axles),
-                       wheels, keep_outs, min_height, category)
+                       wheels, keep_outs, min_height, category, title)
 
 
 class _Reader:

@@ -138,7 +138,7 @@ def test_a_rear_axle_rig_is_rendered_from_its_vehicle_centre(tmp_path, scene, al
     base = load_rig("R1")
     cameras = tuple(replace(c, position=c.position + np.array([1.43, 0.0, 0.0])) for c in base.cameras)
     on_axle = Rig("axle", "etron", cameras, RigOrigin("rear_axle"))  # etron's rear axle: x = -1.43 m
-    unknown = Rig("unknown", "nuscenes", cameras, RigOrigin("rear_axle"))
+    unknown = Rig("unknown", "lab_car", cameras, RigOrigin("rear_axle"))
     seen, notes = {}, []
 
     def recording_render(scene, k, rig, ego_mesh, size):
@@ -152,7 +152,7 @@ def test_a_rear_axle_rig_is_rendered_from_its_vehicle_centre(tmp_path, scene, al
                                atol=1e-12)
     assert seen["unknown"].same_as(unknown)
     assert notes == ["axle: positions converted from the rear axle to the vehicle centre of etron (x -1.430 m)",
-                     "unknown: positions are measured from the rear axle of 'nuscenes', which rigopt does not know; "
+                     "unknown: positions are measured from the rear axle of 'lab_car', which rigopt does not know; "
                      "kept with that point as the ego origin"]
     tables = tmp_path / "axle" / "mini" / "v1.0-mini"
     sensor = {s["token"]: s["channel"] for s in json.loads((tables / "sensor.json").read_text())}

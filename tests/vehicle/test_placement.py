@@ -77,7 +77,7 @@ def test_common_frame_keeps_rigs_that_share_an_origin_and_converts_mixed_ones(et
 
 def test_a_rig_on_an_unknown_vehicle_needs_a_vehicle_before_mixing_origins(etron):
     r1 = load_rig("R1")
-    imported = shifted(r1, etron.rear_axle, RigOrigin("rear_axle"), vehicle="nuscenes", name="nusc")
+    imported = shifted(r1, etron.rear_axle, RigOrigin("rear_axle"), vehicle="lab_car", name="nusc")
     with pytest.raises(RigoptError, match="--vehicle"):
         common_frame([r1, imported])
     rigs, changes = comparable_rigs([r1, imported], etron)
@@ -101,7 +101,7 @@ def imported_rig(tmp_path_factory):
 
     etron = load_vehicle("etron")
     path = tmp_path_factory.mktemp("rigs") / "nusc.json"
-    write_rig(shifted(load_rig("R1"), etron.rear_axle, RigOrigin("rear_axle"), vehicle="nuscenes", name="nusc"), path)
+    write_rig(shifted(load_rig("R1"), etron.rear_axle, RigOrigin("rear_axle"), vehicle="lab_car", name="nusc"), path)
     return path
 
 
@@ -110,7 +110,8 @@ def test_rigcd_command_reports_the_origin_conversion_it_applied(imported_rig):
     assert refused.returncode == 2 and "--vehicle" in refused.stderr and "rear axle" in refused.stderr
     outcome = run_rigopt("rigcd", "R1", str(imported_rig), "--vehicle", "etron", "--json")
     assert outcome.returncode == 0, outcome.stderr
-    assert "rigopt: note: nusc: positions converted from the rear axle to the vehicle centre of etron" in outcome.stderr
+    assert ("rigopt: note: nusc: on etron, positions from the rear axle, converted to the vehicle centre (x -1.430 m)"
+            in outcome.stderr)
     data = json.loads(outcome.stdout)
     assert data["rigcd"] == pytest.approx(0.0, abs=1e-12)
     assert data["origin_changes"] == [{"rig": "nusc", "vehicle": "etron", "from": "rear_axle", "to": "vehicle_centre",
