@@ -21,22 +21,24 @@ REQUIRE_HELP = ("Regulation fields every camera-visible point of which is checke
 
 def _placed(rig_name: str, vehicle: Optional[str]):
     """The rig on ``vehicle`` (or its own), origin converted to the vehicle's centre, cameras inside the body
-    refused; and that vehicle. A note names the vehicle and the origin used."""
+    refused; that vehicle; and the note naming the vehicle and origin used (a callable, called once the command
+    has succeeded: bad input gets its one error line alone)."""
+    from functools import partial
+
     from rigopt.rig.library import load_rig
     from rigopt.vehicle.placement import rig_on_vehicle
 
     loaded = load_rig(rig_name)
     rig, on, change = rig_on_vehicle(loaded, vehicle)
-    note_vehicle(loaded, on, change)
-    return rig, on
+    return rig, on, partial(note_vehicle, loaded, on, change)
 
 
 def _report(rig_name: str, vehicle: Optional[str]):
-    """The rig placed as by :func:`_placed`, and its coverage report."""
+    """The rig placed as by :func:`_placed`, its coverage report and its note."""
     from rigopt.coverage.measures import coverage_report
 
-    rig, on = _placed(rig_name, vehicle)
-    return rig, coverage_report(rig, on)
+    rig, on, announce = _placed(rig_name, vehicle)
+    return rig, coverage_report(rig, on), announce
 
 
 @app.command("coverage")
@@ -62,14 +64,14 @@ def coverage_command(
     from rigopt.output import check_out_folder
 
     out_dir = check_out_folder(out, force=force) if out is not None else None
-    loaded, on = _placed(rig, vehicle)
+    loaded, on, announce = _placed(rig, vehicle)
     presets = parse_require(require, on)
     report = coverage_report(loaded, on)
     regions = region_coverage(loaded, on, presets, backend=report.settings.backend,
                               max_range=report.settings.max_range)
     other = comparison = None
     if compare is not None:
-        _, other = _report(compare, None)
+        _, other, announce_other = _report(compare, None)
         comparison = compare_coverage(other, report)  # differences: RIG minus --compare
     data = report_dict(report)
     data["regions"] = regions_dict(regions)
@@ -77,6 +79,9 @@ def coverage_command(
         data["compare"] = comparison_dict(comparison)
 
     written = _write_out(out_dir, force, report, loaded, other, comparison, regions, on) if out_dir is not None else []
+    announce()
+    if compare is not None:
+        announce_other()
     message = f"wrote {', '.join(p.name for p in written)} to {out_dir}"
     if as_json:
         print_json(data)

@@ -66,6 +66,7 @@ def rigcd_command(
     if weights is None:  # the distance with the definition's unit weights, the drop from the default calibration
         unit = predict_transfer(rig_a, [rig_b], None)[0]
         p = replace(p, rigcd=unit.rigcd, match=unit.match)
+    _note_changes((rig_a, rig_b), changes)
     data = {"a": p.reference, "b": p.rig, **{k: v for k, v in p.to_dict().items() if k not in ("reference", "rig")},
             "weights": weights or f"{DEFAULT_WEIGHTS} (default)", "origin_changes": [c.as_dict() for c in changes]}
     if as_json:
@@ -94,8 +95,9 @@ def rank_command(
     from rigopt.metrics.ranking import rank_candidates
 
     calibration = load_weights(weights, metric)
-    (reference, *others), _ = _comparable([ref, *candidates], vehicle)
+    (reference, *others), changes = _comparable([ref, *candidates], vehicle)
     ranked = rank_candidates(reference, others, calibration)
+    _note_changes((reference, *others), changes)
     if as_json:
         print_json([p.to_dict() for p in ranked])
         return
@@ -108,18 +110,23 @@ def rank_command(
 
 
 def _comparable(names: List[str], vehicle: Optional[str]):
-    """The rigs ``names`` in one frame (:func:`rigopt.vehicle.placement.comparable_rigs`); each rig whose positions
-    were converted gets a note naming the vehicle and origins used; returns (rigs, changes)."""
+    """The rigs ``names`` in one frame (:func:`rigopt.vehicle.placement.comparable_rigs`) and the origin changes
+    made; :func:`_note_changes` says them once the command has succeeded."""
     from rigopt.rig.library import load_rig
     from rigopt.vehicle.library import load_vehicle
     from rigopt.vehicle.placement import comparable_rigs
 
-    loaded = [load_rig(name) for name in names]
-    rigs, changes = comparable_rigs(loaded, load_vehicle(vehicle) if vehicle is not None else None)
-    by_name = {rig.name: rig for rig in loaded}
+    return comparable_rigs([load_rig(name) for name in names], load_vehicle(vehicle) if vehicle is not None else None)
+
+
+def _note_changes(rigs, changes) -> None:
+    """A note per converted rig naming the vehicle and the origins used (``rigs`` as :func:`_comparable` gave
+    them, in one frame; the names are the rigs' own)."""
+    from rigopt.vehicle.library import load_vehicle
+
+    by_name = {rig.name: rig for rig in rigs}
     for change in changes:
         note_vehicle(by_name[change.rig], load_vehicle(change.vehicle), change)
-    return rigs, changes
 
 
 def _interval(p) -> str:

@@ -34,8 +34,8 @@ def check_command(
         raise RigoptError(f"rig {loaded.name!r} is on {loaded.vehicle!r}, which is not a rigopt vehicle; add --vehicle "
                           "NAME to check it on one (see rigopt vehicles)")
     placed, change = place_rig(loaded, on, refuse_inside=False)  # check reports cameras inside the body itself
-    note_vehicle(loaded, on, change)
     result = check_rig(placed, on, mount_rules(min_height, no_trailer))
+    note_vehicle(loaded, on, change)
     if as_json:
         print_json({"rig": result.rig, "vehicle": result.vehicle,
                     "cameras": [{**asdict(c), "problems": list(c.problems)} for c in result.cameras]})

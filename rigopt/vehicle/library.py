@@ -70,7 +70,8 @@ def find_spec(name: str) -> VehicleSpec:
         if folder.lower() == wanted:
             raise UnknownNameError(f"user vehicle {folder!r} cannot be read: {problem}; fix its vehicle.toml or "
                                    f"add it again with rigopt vehicle add {folder} --mesh FILE --force")
-    raise unknown_name("vehicle", name, [f"{s.name} ({s.blueprint})" for s in specs])
+    listed = [s.name if s.blueprint == s.name else f"{s.name} ({s.blueprint})" for s in specs]
+    raise unknown_name("vehicle", name, listed)
 
 
 @lru_cache(maxsize=16)
