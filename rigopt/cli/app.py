@@ -40,6 +40,13 @@ def note(message: str) -> None:
     typer.echo(f"rigopt: note: {message}", err=True)
 
 
+def print_next(*steps: str) -> None:
+    """What to run or open next after a command wrote something: one ``next: ...`` line each on stdout (never
+    with --json, whose stdout is JSON only)."""
+    for step in steps:
+        console.print(f"next: {step}", highlight=False, markup=False, soft_wrap=True)
+
+
 def note_vehicle(rig, vehicle, change=None) -> None:
     """One note naming the vehicle a command put ``rig`` on and where its positions are measured from, e.g.
     'nuscenes: on renault_zoe (nuScenes' Renault Zoe), positions from the rear axle, converted to the vehicle
@@ -102,11 +109,11 @@ def more_than(low: float, unit: str = "", high: float = math.inf):
     return check
 
 
-def finite(option: str):
+def finite():
     """An option callback that refuses NaN and inf at parse time (typer's min/max let them through)."""
     def check(value):
         if value is not None and not math.isfinite(value):
-            raise typer.BadParameter(f"{option} must be a finite number, got {value:g}")
+            raise typer.BadParameter(f"must be a finite number, got {value:g}")
         return value
     return check
 

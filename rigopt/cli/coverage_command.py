@@ -8,7 +8,8 @@ from typing import Optional
 
 import typer
 
-from rigopt.cli.app import FORCE_HELP, app, console, note_vehicle, print_json, print_table
+from rigopt.cli.app import FORCE_HELP, app, console, note_vehicle, print_json, print_next, print_table
+from rigopt.errors import RigoptError
 
 
 #: The --require option's help (also for other commands that take regulation fields).
@@ -41,6 +42,20 @@ def _report(rig_name: str, vehicle: Optional[str]):
     return rig, coverage_report(rig, on), announce
 
 
+def _refuse_blind(report, rig, vehicle) -> None:
+    """A rig that sees nothing on any ring is an error with the mount check's reasons (a camera pressed
+    against the body sees only the body), not a 0 % answer."""
+    if any(ring.covered_frac > 0 for ring in report.rings):
+        return
+    from rigopt.mounting.rules import check_rig
+
+    reasons = [f"{c.id}: {'; '.join(c.problems)}" for c in check_rig(rig, vehicle).cameras if c.problems]
+    raise RigoptError(f"{rig.name} on {vehicle.name} sees nothing on any ring"
+                      + (f": {' | '.join(reasons)}" if reasons else "")
+                      + f"; run rigopt check {rig.name} for the mount checks and move the cameras onto the surface, "
+                        "facing away from the body")
+
+
 @app.command("coverage")
 def coverage_command(
     rig: str = typer.Argument(..., help="Library rig name or rig file."),
@@ -67,6 +82,7 @@ def coverage_command(
     loaded, on, announce = _placed(rig, vehicle)
     presets = parse_require(require, on)
     report = coverage_report(loaded, on)
+    _refuse_blind(report, loaded, on)
     regions = region_coverage(loaded, on, presets, backend=report.settings.backend,
                               max_range=report.settings.max_range)
     other = comparison = None
@@ -91,6 +107,9 @@ def coverage_command(
     _print_tables(data, report_dict(other) if other is not None else None)
     if written:
         console.print(message)
+        print_next(f"open {out_dir / 'report.html'} (the coverage page: rings, bird's-eye map, blind zone, 3D view)")
+    else:
+        print_next(f"rigopt coverage {rig} --out FOLDER (the same as figures and an HTML page)")
 
 
 def _write_out(out_dir: Path, force: bool, report, rig, other, comparison, regions=(), vehicle=None) -> list[Path]:

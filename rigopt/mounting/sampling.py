@@ -146,13 +146,21 @@ def _mountable(vehicle: Vehicle, points, normals, names, raised, rules: MountRul
     """(n,) bool: the samples the mount checks will place in the same zone (near edges the nearest surface of
     the lens can be a neighbouring face with another normal), at the intended distance, with the housing
     fitting, off the wheels, high enough and out of the keep-outs. Raises when none is."""
+    if len(points) == 0:
+        raise RigoptError(f"no mount point was sampled on {vehicle.name}'s zones: the spacing is wider than the "
+                          "zones themselves; lower --spacing (the default is sized to the vehicle)")
     surface = vehicle.surface(points)
     on_surface = ~np.isin(names, sorted(raised))
     agrees = np.array(vehicle.zone_names(surface.foot, surface.normal)) == names
     agrees &= np.abs(surface.distance - rules.housing[2] / 2.0) < 1e-3
     agrees &= housing_fits(vehicle, surface.foot, surface.normal, rules)
     agrees = np.where(on_surface, agrees, _raised_ok(vehicle, points, names, normals, surface, rules))
+    fitting = agrees.copy()
     agrees &= practical(vehicle, points, rules.practice)  # off wheels, high enough, out of the keep-outs
+    floor = rules.practice.height_floor(vehicle)
+    if fitting.any() and not agrees.any() and rules.practice.enabled and points[fitting, 2].max() < floor:
+        raise RigoptError(f"no mount point of {vehicle.name} is as high as the minimum lens height {floor:.2f} m "
+                          f"(--min-height); the highest lies {points[fitting, 2].max():.2f} m up: lower --min-height")
     if not agrees.any():
         known = sorted({z.name for z in vehicle.zones})
         raise RigoptError(f"the zones {sorted(zones) if zones else known} of {vehicle.name} hold no surface "

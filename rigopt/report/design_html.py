@@ -34,7 +34,7 @@ def _match_text(camera: dict) -> str:
 
 
 def _interval_text(entry: dict) -> str:
-    return "-" if entry.get("interval") is None else "{:.2f} to {:.2f}".format(*entry["interval"])
+    return "-" if entry.get("interval") is None else "[{:.2f}, {:.2f}]".format(*entry["interval"])
 
 
 def _extrapolation_text(entry: dict) -> str:
@@ -80,14 +80,16 @@ def render_design_html(summary: dict, figures: dict[str, bytes], scene: str | No
         "calibration's 90 % prediction interval; a rig beyond the calibration pairs' features extrapolates, and its "
         "prediction is less certain than the interval says.</p>",
         "<h2>Predicted transfer and coverage</h2>",
-        table(["rig", "cameras", "predicted drop", "90 % interval", "RigCD", "coverage", "meets coverage",
+        table(["rig", "cameras", "predicted drop", "90 % interval", f"{summary['metric']} ({summary['weights']} weights)",
+               "coverage", "meets coverage",
                "extrapolates"],
               [[escape(r[0]), str(r[1]), num(r[2], 3), escape(r[3]), num(r[4], 3), pct(r[5]),
                 "yes" if r[6] else "no", escape(r[7])] for r in rows]),
+        *(f'<p class="note">{escape(line)}.</p>' for line in summary.get("notes", ())),
     ]
     if len(summary["per_reference"]) > 1:
         parts += ["<h2>Each reference rig</h2>",
-                  table(["reference", "predicted drop", "RigCD"],
+                  table(["reference", "predicted drop", f"{summary['metric']} ({summary['weights']} weights)"],
                         [[escape(p["reference"]), num(p["predicted_drop"], 3), num(p["rigcd"], 3)]
                          for p in summary["per_reference"]])]
     parts += [
@@ -131,7 +133,18 @@ def render_design_html(summary: dict, figures: dict[str, bytes], scene: str | No
     if figures:
         parts.append("<h2>Pictures</h2>")
         parts += [image(figures[name], name, _CAPTIONS.get(name, name)) for name in _CAPTIONS if name in figures]
+    parts += ["<h2>Next steps</h2>", "<p>In this folder:</p>", "<ul>",
+              *(f"<li><code>{escape(command)}</code>: {escape(why)}</li>" for command, why in NEXT_STEPS), "</ul>"]
     return page(f"Design for {summary['vehicle']} from {summary['reference']}", parts)
+
+
+#: What to run next in a design's folder (the report lists them; the command prints them with full paths).
+NEXT_STEPS = (
+    ("rigopt check rig.json", "every mount rule, camera by camera"),
+    ("rigopt coverage rig.json --out coverage", "rings, blind zone and regulation fields as a page of its own"),
+    ("rigopt export rig.json --format carla --out rig_carla.json", "a CARLA spawn list to render the rig; "
+     "nuscenes, urdf and opencv too"),
+)
 
 
 def write_design_html(summary: dict, out_dir, pictures: dict[str, Path], scene: str | None = None,

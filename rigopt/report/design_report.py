@@ -99,7 +99,7 @@ def design_dict(result: DesignResult, rig_file: Path | None) -> dict:
     design, milp, comparisons = result.design, result.milp, result.comparisons
     reference = result.references[0].rig
     breakdown = rigcd(reference, design.rig)  # unit weights: the matching each camera reports
-    return {
+    summary = {
         "rig_file": str(rig_file) if rig_file else None,
         "vehicle": design.rig.vehicle,
         "reference": ",".join(r.rig.name for r in result.references),
@@ -130,6 +130,26 @@ def design_dict(result: DesignResult, rig_file: Path | None) -> dict:
             "benchmark_rigs": [summary_dict(s, result.vehicle) for s in comparisons.rigs],
         },
     }
+    summary["notes"] = comparison_notes(summary)
+    return summary
+
+
+def comparison_notes(summary: dict) -> list[str]:
+    """Lines a reader of the comparison table needs: why the design is predicted to lose more than the naive
+    transfer when it is (``summary`` is :func:`design_dict` without its notes)."""
+    naive = summary["comparisons"]["naive_transfer"]
+    if naive is None or naive["predicted_drop"] >= summary["predicted_drop"]:
+        return []
+    lower = (f"The naive transfer is predicted to lose less than the design ({naive['predicted_drop']:.3f} against "
+             f"{summary['predicted_drop']:.3f})")
+    if naive["meets_coverage_requirements"]:
+        return [f"{lower} and meets every coverage requirement: the design did not find it (mount points and "
+                "orientations are sampled); compare the two in report.html and report it"]
+    fields = [r["key"] for r in summary["regions"]] if summary["regions_required"] else []
+    needs = "the reference's ring sectors" + (f" and the required fields ({', '.join(fields)})" if fields else "")
+    return [f"{lower} but misses what the design must see: {needs}; it sees {naive['coverage']:.1%} of the ring "
+            f"sectors (the design {summary['coverage']:.1%})"
+            + ("; --require none designs without the fields" if fields else "")]
 
 
 def write_design_outputs(result: DesignResult, out_dir) -> list[Path]:

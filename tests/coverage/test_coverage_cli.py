@@ -1,0 +1,24 @@
+"""``rigopt coverage`` answers: a rig that sees nothing is an error with the mount check's reasons."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+from in_process import run_rigopt
+
+from rigopt.geometry import rot_z
+from rigopt.rig.library import load_rig
+from rigopt.rig.model import Rig
+from rigopt.rig.pccr_format import write_rig
+
+
+def test_a_rig_that_sees_only_its_own_body_is_an_error_naming_the_check(tmp_path):
+    """R1's cameras turned to face the way they came, into the etron's body: coverage 0 % is no answer."""
+    r1 = load_rig("R1")
+    inward = Rig("R1_inward", r1.vehicle, tuple(replace(c, rotation=c.rotation @ rot_z(np.pi)) for c in r1.cameras))
+    result = run_rigopt("coverage", write_rig(inward, tmp_path / "inward.json"), "--json")
+    assert result.returncode == 2 and result.stdout == ""
+    assert "sees nothing on any ring" in result.stderr and "rigopt check" in result.stderr
+    assert "the body is in its view" in result.stderr  # check's reason, per camera
+    assert run_rigopt("coverage", "R1", "--json").returncode == 0  # the same cameras facing out are fine
