@@ -62,7 +62,12 @@ def vehicles_command(as_json: bool = typer.Option(False, "--json", help="Print J
         typer.echo(f"rigopt: warning: user vehicle {folder!r} skipped: {problem}", err=True)
     rows = []
     for name in vehicle_names():
-        v = load_vehicle(name)
+        try:
+            v = load_vehicle(name)
+        except RigoptError as error:  # a user vehicle whose spec reads but whose body does not (body.ply missing)
+            typer.echo(f"rigopt: warning: user vehicle {name!r} skipped: {error}; add it again with rigopt vehicle "
+                       f"add {name} --mesh FILE --force", err=True)
+            continue
         rows.append({"vehicle": v.name, "blueprint": v.blueprint, "aliases": list(v.spec.aliases),
                      "length": float(v.size[0]), "width": float(v.size[1]), "height": float(v.size[2]),
                      "zones": sorted({z.name for z in v.zones})})
@@ -133,35 +138,51 @@ def _parse_axles(text: str | None):
 def vehicle_add_command(
     name: str = typer.Argument(..., help="Name to give the vehicle."),
     mesh: Path = typer.Option(..., "--mesh", help="Mesh file: OBJ, STL, PLY, GLB/GLTF, DAE (COLLADA) or OFF; the "
-                              "parts of a scene are merged; open or multi-part meshes are closed."),
-    zones: Optional[Path] = typer.Option(None, "--zones", help="TOML file of [[zones]]; default: zones from the box."),
+                              "parts of a scene are merged; open, multi-part or thin meshes are closed."),
+    zones: Optional[Path] = typer.Option(None, "--zones", help="TOML file of \\[\\[zones]] tables (name, min, max, "
+                                         "normal, cone_deg); default: zones from the body's box."),
     frame: str = typer.Option("iso", help=FRAME_HELP),
-    scale: float = typer.Option(1.0, "--scale", help="Multiply coordinates by this: 0.01 for centimetres, 0.001 "
-                                "for millimetres, 0.0254 for inches."),
+    scale: Optional[float] = typer.Option(None, "--scale", help="Multiply coordinates by this (metres per file "
+                                          "unit): 0.01 for centimetres, 0.001 millimetres, 0.0254 inches; default: "
+                                          "a COLLADA file's declared unit, else 1."),
+    length: Optional[float] = typer.Option(None, "--length", help="Scale the mesh so that its length (longest "
+                                           "extent) is this many metres (instead of --scale)."),
     forward: Optional[str] = typer.Option(None, "--forward", help="The file's axis that points to the front: +x "
                                           "-x +y -y (+z -z); default +x, checked against the shape."),
     up: Optional[str] = typer.Option(None, "--up", help="The file's axis that points up: +z or +y (-z -y +x -x); "
                                      "default +z, checked against the shape."),
     allow_size: bool = typer.Option(False, "--allow-size", help="Accept a size outside road-vehicle limits "
                                     "(length 2.5-25 m, width 1.4-3.0 m, height 1.0-4.5 m) with a warning."),
-    axles: Optional[str] = typer.Option(None, "--axles", help="x (m, ISO frame) of each axle, e.g. 1.5,-1.4; "
-                                        "default: found from the tyres' ground contacts."),
+    ground: bool = typer.Option(False, "--ground", help="Put the mesh's lowest point on the ground (a mesh with "
+                                "tyres is always stood on them)."),
+    axles: Optional[str] = typer.Option(None, "--axles", help="x (m, from the centre of the body's footprint box, "
+                                        "after the flags) of each axle, e.g. 1.5,-1.4; default: found from the "
+                                        "tyres' ground contacts."),
     roof_rack: Optional[float] = typer.Option(None, "--roof-rack", help="Add a raised zone 'roof_rack' over the "
                                               "roof: cameras up to this many metres above it."),
+    pitch: Optional[float] = typer.Option(None, "--pitch", help="Grid spacing (m) that closes an open or "
+                                          "multi-part mesh; default: length / 200 within 1-4 cm."),
     force: bool = typer.Option(False, "--force", help="Replace a stored vehicle of the same name (any case)."),
 ):
     """Check a mesh and store it as a vehicle so that --vehicle NAME works everywhere."""
     from rigopt.vehicle.user import add_user_vehicle
 
-    added = add_user_vehicle(name, mesh, zones, frame, force=force, scale=scale, forward=forward, up=up,
-                             allow_size=allow_size, axles=_parse_axles(axles), roof_rack=roof_rack)
+    added = add_user_vehicle(name, mesh, zones, frame, force=force, scale=scale, length=length, forward=forward,
+                             up=up, allow_size=allow_size, axles=_parse_axles(axles), roof_rack=roof_rack,
+                             ground=ground, pitch=pitch)
     for warning in added.warnings:
         typer.echo(f"rigopt: warning: {warning}", err=True)
+    for message in added.notes:
+        note(message)
     console.print(f"mesh: {added.closing.describe()}")
     if added.wheels:
         console.print("wheels: " + "; ".join(f"axle x {w.x:.2f} m, radius {w.radius:.2f} m, track {w.track:.2f} m, "
                                              f"width {w.width:.2f} m" for w in added.wheels))
     else:
         console.print("wheels: none found (give --axles X1,X2 to set the axles)" if not added.axles else
-                      f"axles: {', '.join(f'{x:.2f}' for x in added.axles)} m (given)")
+                      f"axles: {', '.join(f'{x:.2f}' for x in added.axles)} m (given; no tyre found at them)")
+    if added.keep_outs:
+        console.print(f"keep-outs: {len(added.keep_outs)} narrow part(s) where no housing fits (rails, ladders, "
+                      "bars): " + "; ".join(f"{k['name']} x {k['min'][0]:.2f}..{k['max'][0]:.2f} m, z "
+                                            f"{k['min'][2]:.2f}..{k['max'][2]:.2f} m" for k in added.keep_outs))
     console.print(f"added vehicle {name!r}: {added.path}")

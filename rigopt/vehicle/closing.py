@@ -1,23 +1,35 @@
-"""Closing a vehicle mesh as it comes from a simulator or a CAD export: open, multi-part, non-manifold.
+"""Closing a vehicle mesh as it comes from a simulator or a CAD export: open, multi-part, non-manifold, thin.
 
-A mesh that manifold3d accepts as it is (each part a closed 2-manifold), or after trimesh has filled
-its small holes, is kept exactly, its parts joined by a boolean union. Any other mesh is closed on a voxel grid:
+A mesh that manifold3d accepts as it is (each part a closed 2-manifold), or after trimesh has filled its
+small holes, is kept exactly, its parts joined by a boolean union. Any other mesh is closed on a grid of
+nodes ``pitch`` m apart (:mod:`rigopt.vehicle.voxel_grid`); ``pitch`` = length / 200 clamped to [1, 4] cm
+(:func:`closing_pitch`) unless given. Two methods (``CLOSING_METHODS``; measured against each other by
+``studies/vehicles/closing_methods.py``):
 
-1. Grid: points ``pitch`` m apart over the mesh's box plus a margin; ``pitch`` = length / 200 clamped to
-   [1, 4] cm (:func:`closing_pitch`).
-2. Inside test: for each grid point and each of the 6 axis directions, the triangles a ray from the point
-   crosses (exact, by rasterising the triangles onto the grid's lines). A direction votes *inside* when its
-   crossings' signed count (+1 leaving through an outward face, -1 entering) is non-zero or their number is
-   odd, so that overlapping closed parts (count 2) and parts with flipped faces (odd number) both count as
-   solid. A point is inside when at least 4 of the 6 directions say so: a point inside a body without a
-   floor sees the body in 5 directions, a point under such a body (between the wheels) in 1.
-3. Cavities (inside a shell with an inner skin) are filled; the 0/1 field is smoothed (Gaussian, sigma =
-   one voxel) so that sloped surfaces keep their normals; its 0.5 level set is extracted by marching
-   tetrahedra on the grid (closed and 2-manifold by construction) and simplified by manifold3d to within
-   a quarter pitch.
-4. The closing error is measured: the distances (cm) from points sampled evenly on the original surface
-   to the closed surface; :data:`CLOSING_P95_LIMIT` bounds their 95th percentile. Surface inside the closed
-   body on both sides (inner skins, faces between overlapping parts) is left out and its share reported.
+``distance`` (the default): a signed distance field whose zero level is the closed surface.
+
+1. Inside: a node is inside when at least 4 of the 6 axis rays from it cross the surface with a non-zero
+   signed count or an odd number of times (exact crossings; a point in a body without a floor sees the body
+   in 5 directions, a point under it between the wheels in 1; overlapping parts count 2).
+2. Thin parts: the surface is sampled (spacing half a pitch); a sample with no inside node among the 27
+   around its nearest node is *thin* (an open panel, a sheet, a rail, a ladder, a bar: no volume the grid can see).
+   Thin parts are thickened into a shell: nodes closer than ``SHELL_PITCHES`` pitches to a thin sample.
+3. Enclosed: a node that sees the inside or the shell in at least 5 of the 6 axis directions is filled (the
+   inside of a truck body built of thin open panels, missing its floor), and so are cavities.
+4. The field: near the surface the distance to the nearest sample, negative inside, (the distance to the
+   nearest thin sample - the shell's half-thickness) for the shell; far from it +-the band. Its zero level
+   is extracted by marching tetrahedra (closed and 2-manifold by construction), simplified by manifold3d to
+   within a quarter pitch. Closed parts keep their surface (to the sampling's accuracy, a few mm); thin parts
+   grow by the shell's half-thickness on each side.
+
+``smooth`` (the first closing, kept for the comparison): the inside nodes of step 1 with cavities filled, the
+0/1 field smoothed (Gaussian, sigma one pitch) and its 0.5 level extracted. Thin parts thinner than about
+two pitches vanish.
+
+The closing error is measured for both: the distances (m) from points sampled evenly on the original surface
+to the closed surface; :data:`CLOSING_P95_LIMIT` bounds their 95th percentile, and a refusal names the finer
+``--pitch`` that fixes it. Surface inside the closed body on both sides (inner skins, faces between
+overlapping parts) is left out and its share reported.
 
 Frames and units: whatever the input's, metres expected (the pitch is in the mesh's units).
 """
@@ -30,28 +42,44 @@ from dataclasses import dataclass
 import numpy as np
 import trimesh
 from scipy import ndimage
+from scipy.spatial import cKDTree
 
 from rigopt import raycast
 from rigopt.errors import DataError
+from rigopt.vehicle.voxel_grid import Grid, hit_votes, inside_votes, marching_tetrahedra
 
-#: Grid pitch of the voxel closing: length / PITCH_DIVISIONS, clamped to [PITCH_MIN, PITCH_MAX] m.
+#: Closing methods (module doc), the default first.
+CLOSING_METHODS = ("distance", "smooth")
+#: Grid pitch of the closing: length / PITCH_DIVISIONS, clamped to [PITCH_MIN, PITCH_MAX] m.
 PITCH_DIVISIONS = 200
 PITCH_MIN, PITCH_MAX = 0.01, 0.04
+#: The finest pitch a refusal suggests (m), and the most grid nodes a closing may use.
+PITCH_FLOOR = 0.005
+MAX_NODES = 60_000_000
 #: A closed mesh is refused when the 95th percentile of its closing error exceeds this (m): the mount rules
 #: allow a lens at most 5 cm from the surface, so a surface moved further would misjudge every mount.
 CLOSING_P95_LIMIT = 0.05
 #: Surface samples of the original mesh for the error measure.
 ERROR_SAMPLES = 4000
-#: Of the 6 axis directions, this many must see the point inside the body.
+#: Of the 6 axis directions, this many must see the point inside the body (step 1) ...
 INSIDE_VOTES = 4
+#: ... and this many must meet the inside or the shell for a point to be enclosed (step 3).
+ENCLOSED_VOTES = 5
+#: Thin parts are thickened by this many pitches on each side (enough for the grid to catch a sheet or a
+#: bar wherever it lies between the nodes).
+SHELL_PITCHES = 0.75
+#: Surface samples for the distance field, per square pitch; at most MAX_SAMPLES.
+SAMPLES_PER_PITCH2 = 4
+MAX_SAMPLES = 4_000_000
 
 
 @dataclass(frozen=True)
 class ClosingReport:
-    """How a mesh was closed: ``method`` "exact" (parts were closed already) or "voxel"; ``pitch`` m (0 for
-    exact); closing error (m) from original surface samples to the closed surface: ``max_error``,
-    ``p95_error``, and ``worst_point`` (3,) m, the sample farthest away; ``buried`` the share of the original
-    surface inside the closed body (left out of the error); ``seconds`` spent."""
+    """How a mesh was closed: ``method`` "exact" (parts were closed already), "distance" or "smooth";
+    ``pitch`` m (0 for exact); closing error (m) from original surface samples to the closed surface:
+    ``max_error``, ``p95_error``, and ``worst_point`` (3,) m, the sample farthest away; ``buried`` the share of
+    the original surface inside the closed body (left out of the error); ``thin`` the share of the original
+    surface that was thin (open on both sides, thickened); ``seconds`` spent."""
 
     method: str
     pitch: float
@@ -60,22 +88,34 @@ class ClosingReport:
     worst_point: tuple[float, float, float]
     buried: float
     seconds: float
+    thin: float = 0.0
 
     def describe(self) -> str:
-        how = "parts were closed; joined exactly" if self.method == "exact" else \
-            f"closed on a {self.pitch * 100:.1f} cm voxel grid"
+        if self.method == "exact":
+            how = "parts were closed; joined exactly"
+        else:
+            how = f"closed on a {self.pitch * 100:.1f} cm grid ({self.method})"
+            if self.thin > 0:
+                how += f", {self.thin:.0%} of the surface thin (thickened by {SHELL_PITCHES * self.pitch * 100:.1f} cm)"
         return (f"{how}; closing error max {self.max_error * 100:.1f} cm, 95th percentile "
                 f"{self.p95_error * 100:.1f} cm; {self.buried:.0%} of the surface was inside the body "
                 f"({self.seconds:.1f} s)")
 
 
 def closing_pitch(mesh: trimesh.Trimesh) -> float:
-    """Voxel pitch (m) for ``mesh``: its longest extent / PITCH_DIVISIONS, clamped to [PITCH_MIN, PITCH_MAX]."""
+    """Grid pitch (m) for ``mesh``: its longest extent / PITCH_DIVISIONS, clamped to [PITCH_MIN, PITCH_MAX]."""
     return float(np.clip(np.ptp(mesh.bounds, axis=0).max() / PITCH_DIVISIONS, PITCH_MIN, PITCH_MAX))
 
 
-def close_mesh(mesh: trimesh.Trimesh, source: str = "<mesh>") -> tuple[trimesh.Trimesh, ClosingReport]:
-    """The closed 2-manifold body of ``mesh`` and the report of how it was closed (see the module doc)."""
+def close_mesh(mesh: trimesh.Trimesh, source: str = "<mesh>", *, method: str = "distance",
+               pitch: float | None = None) -> tuple[trimesh.Trimesh, ClosingReport]:
+    """The closed 2-manifold body of ``mesh`` and the report of how it was closed (see the module doc).
+    ``method`` one of CLOSING_METHODS for a mesh that is not closed already; ``pitch`` m, default
+    :func:`closing_pitch`."""
+    if method not in CLOSING_METHODS:
+        raise DataError(f"closing method must be one of {', '.join(CLOSING_METHODS)}, got {method!r}")
+    if pitch is not None and not (np.isfinite(pitch) and PITCH_FLOOR <= pitch <= 0.2):
+        raise DataError(f"--pitch is the closing grid's spacing in metres, in [{PITCH_FLOOR:g}, 0.2], got {pitch}")
     start = time.perf_counter()
     exact = _exact_union(mesh)
     if exact is None:  # a few missing triangles: fill the holes and try again
@@ -84,21 +124,34 @@ def close_mesh(mesh: trimesh.Trimesh, source: str = "<mesh>") -> tuple[trimesh.T
         trimesh.repair.fill_holes(repaired)
         trimesh.repair.fix_normals(repaired)
         exact = _exact_union(repaired)
+    thin = 0.0
     if exact is not None:
         closed, method, pitch = exact, "exact", 0.0
     else:
-        pitch = closing_pitch(mesh)
-        closed, method = voxel_close(mesh, pitch, source), "voxel"
+        pitch = float(pitch) if pitch is not None else closing_pitch(mesh)
+        nodes = Grid.around(mesh, pitch, margin=4).size
+        if nodes > MAX_NODES:
+            coarser = pitch * (nodes / MAX_NODES) ** (1 / 3)
+            raise DataError(f"{source}: a closing grid of {pitch * 100:.1f} cm needs {nodes / 1e6:.0f} million nodes "
+                            f"(at most {MAX_NODES / 1e6:.0f} million); give --pitch {np.ceil(coarser * 1000) / 1000:g} "
+                            "or more")
+        if method == "distance":
+            closed, thin = distance_close(mesh, pitch, source)
+        else:
+            closed = smooth_close(mesh, pitch, source)
     if closed.volume <= 0:
         raise DataError(f"{source}: the mesh encloses no volume (are its faces turned inside out?)")
     errors, samples, buried = closing_errors(mesh, closed, max(2 * pitch, 0.005))
     worst = samples[int(np.argmax(errors))] if len(errors) else np.zeros(3)
     report = ClosingReport(method, pitch, float(errors.max(initial=0.0)), float(np.percentile(errors, 95)) if len(errors)
-                           else 0.0, tuple(float(v) for v in worst), buried, time.perf_counter() - start)
+                           else 0.0, tuple(float(v) for v in worst), buried, time.perf_counter() - start, thin)
     if report.p95_error > CLOSING_P95_LIMIT:
+        finer = np.floor(pitch / 2 * 1000) / 1000
+        fix = (f"add --pitch {finer:g} (a finer closing grid)" if method != "exact" and finer >= PITCH_FLOOR else
+               "export it with closed parts (each part a closed surface)")
         raise DataError(f"{source}: closing the mesh moved its surface too far ({report.describe()}; the 95th "
-                        f"percentile must stay within {CLOSING_P95_LIMIT * 100:.0f} cm): it is open or thin in too "
-                        "many places; export it with closed parts")
+                        f"percentile must stay within {CLOSING_P95_LIMIT * 100:.0f} cm; the worst point is at "
+                        f"{np.round(worst, 2).tolist()} m): {fix}")
     return closed, report
 
 
@@ -124,155 +177,98 @@ def _to_trimesh(body) -> trimesh.Trimesh:
                            process=False)
 
 
-# --- voxel closing ------------------------------------------------------------------------------------------------
-
-
-def voxel_close(mesh: trimesh.Trimesh, pitch: float, source: str = "<mesh>") -> trimesh.Trimesh:
-    """The closed body of ``mesh`` on a grid of ``pitch`` m (steps 1-3 of the module doc)."""
+def _level_body(field: np.ndarray, grid: Grid, source: str, speck: float) -> trimesh.Trimesh:
+    """The closed body where ``field`` (grid shape) > 0: marching tetrahedra, simplified to a quarter pitch,
+    parts smaller than ``speck`` m^3 dropped."""
     import manifold3d
 
-    origin, shape = _grid(mesh, pitch)
-    solid = inside_grid(mesh, origin, pitch, shape)
+    vertices, faces = marching_tetrahedra(field, 0.0)
+    body = manifold3d.Manifold(manifold3d.Mesh(np.asarray(grid.origin + vertices * grid.pitch, dtype=np.float32),
+                                               np.asarray(faces, dtype=np.uint32)))
+    if body.status() != manifold3d.Error.NoError or body.is_empty():
+        raise DataError(f"{source}: closing the mesh failed ({body.status()}); export it with closed parts")
+    body = body.simplify(grid.pitch / 4)
+    parts = sorted(body.decompose(), key=lambda part: -part.volume())
+    keep = [p for p in parts if p.volume() > speck] or parts[:1]
+    return _to_trimesh(manifold3d.Manifold.batch_boolean(keep, manifold3d.OpType.Add) if len(keep) > 1 else keep[0])
+
+
+# --- the distance closing ---------------------------------------------------------------------------------------------
+
+
+def distance_close(mesh: trimesh.Trimesh, pitch: float, source: str = "<mesh>") -> tuple[trimesh.Trimesh, float]:
+    """The closed body of ``mesh`` by the ``distance`` method (module doc) on a grid of ``pitch`` m, and the
+    share of its surface that was thin."""
+    grid = Grid.around(mesh, pitch, margin=4)
+    inside = inside_votes(mesh, grid) >= INSIDE_VOTES
+    count = int(min(MAX_SAMPLES, max(20000, SAMPLES_PER_PITCH2 * mesh.area / pitch**2)))
+    samples, face = trimesh.sample.sample_surface(mesh, count, seed=0)
+    normals = mesh.face_normals[face]
+    # thin: no inside node among the 27 around the sample's nearest node (a closed part's faces, edges and
+    # corners all have one; an open panel, a sheet or a bar thinner than the pitch has none)
+    thin = ~ndimage.maximum_filter(inside, size=3, mode="constant")[tuple(grid.nearest(samples).T)]
+    shell = SHELL_PITCHES * pitch
+    band = shell + 1.5 * pitch
+    reach = int(np.ceil(band / pitch))
+    near = _near(grid, samples, reach)
+    nodes = grid.nodes(np.argwhere(near))
+    spacing = np.sqrt(mesh.area / count)
+    distance = _surface_distance(samples, normals, nodes, band, spacing)
+    thin_distance = np.full(len(nodes), band)
+    if thin.any():
+        close_to_thin = _near(grid, samples[thin], reach)[near]
+        thin_distance[close_to_thin] = _surface_distance(samples[thin], normals[thin], nodes[close_to_thin], band,
+                                                         spacing)
+    in_shell = np.zeros(grid.shape, dtype=bool)
+    in_shell[near] = thin_distance < shell
+    solid = inside | in_shell
+    solid |= hit_votes(solid) >= ENCLOSED_VOTES
     solid = ndimage.binary_fill_holes(solid)
     if not solid.any():
         raise DataError(f"{source}: no part of the mesh encloses a volume, even after closing; is it a flat or "
                         "single-sided surface?")
-    field = ndimage.gaussian_filter(solid.astype(float), sigma=1.0, mode="constant")
-    vertices, faces = marching_tetrahedra(field, 0.5)
-    body = manifold3d.Manifold(manifold3d.Mesh(np.asarray(origin + vertices * pitch, dtype=np.float32),
-                                               np.asarray(faces, dtype=np.uint32)))
-    if body.status() != manifold3d.Error.NoError or body.is_empty():
-        raise DataError(f"{source}: closing the mesh failed ({body.status()}); export it with closed parts")
-    body = body.simplify(pitch / 4)
-    # One body: drop specks (parts smaller than a few voxels) that the smoothing left behind.
-    parts = sorted(body.decompose(), key=lambda part: -part.volume())
-    keep = [p for p in parts if p.volume() > 27 * pitch**3]
-    return _to_trimesh(manifold3d.Manifold.batch_boolean(keep, manifold3d.OpType.Add) if len(keep) > 1 else keep[0])
+    # -phi: positive inside; near the surface the signed distances of the three kinds of solid, united (max)
+    field = np.where(solid, band, -band).astype(np.float32)
+    signed = np.where(inside[near], np.maximum(distance, 1e-6), -distance)
+    filled = np.where(solid[near] & ~inside[near] & ~in_shell[near], band, -band)
+    field[near] = np.maximum(np.maximum(signed, shell - thin_distance), filled)
+    return _level_body(field, grid, source, 8 * pitch**3), float(thin.mean())
 
 
-def _grid(mesh: trimesh.Trimesh, pitch: float) -> tuple[np.ndarray, tuple[int, int, int]]:
-    """Origin (3,) and shape of a grid covering the mesh with a 3-pitch margin; shifted by a small odd
-    fraction of the pitch so that no grid line runs exactly through the edges of axis-aligned meshes."""
-    low, high = mesh.bounds
-    origin = low - 3 * pitch + pitch * np.array([0.01237, 0.01711, 0.01093])
-    shape = tuple(int(n) for n in np.ceil((high - origin) / pitch) + 4)
-    return origin, shape
+def _surface_distance(samples, normals, points, cap: float, spacing: float) -> np.ndarray:
+    """(n,) m: distance from ``points`` (n, 3) to the surface sampled by ``samples`` (k, 3) with face
+    ``normals`` (k, 3) about ``spacing`` m apart, at most ``cap``: the distance to the nearest sample's tangent
+    plane, exact on a face, and beyond the sampled surface's edge (a lateral offset over ``spacing``) the offset
+    past it added in quadrature."""
+    _, nearest = cKDTree(samples).query(points, distance_upper_bound=cap + spacing)
+    found = nearest < len(samples)
+    out = np.full(len(points), cap)
+    offset = points[found] - samples[nearest[found]]
+    across = np.abs(np.einsum("ij,ij->i", offset, normals[nearest[found]]))
+    lateral = np.sqrt(np.maximum(np.einsum("ij,ij->i", offset, offset) - across**2, 0.0))
+    out[found] = np.minimum(np.hypot(across, np.maximum(lateral - spacing, 0.0)), cap)
+    return out
 
 
-def inside_grid(mesh: trimesh.Trimesh, origin: np.ndarray, pitch: float, shape) -> np.ndarray:
-    """(nx, ny, nz) bool: grid points ``origin + pitch * index`` inside the mesh by the 6-direction vote."""
-    votes = np.zeros(shape, dtype=np.int8)
-    for axis in range(3):
-        forward, backward = _axis_winding(mesh, origin, pitch, shape, axis)
-        votes += forward
-        votes += backward
-    return votes >= INSIDE_VOTES
+def _near(grid: Grid, points: np.ndarray, reach: int) -> np.ndarray:
+    """(grid shape) bool: nodes within ``reach`` nodes (in each axis) of a node nearest one of ``points``."""
+    marked = np.zeros(grid.shape, dtype=bool)
+    marked[tuple(grid.nearest(points).T)] = True
+    return ndimage.maximum_filter(marked, size=2 * reach + 1, mode="constant")
 
 
-def _axis_winding(mesh, origin, pitch, shape, axis):
-    """(shape) bool twice: rays from each grid point along +axis and along -axis cross the mesh so that the
-    point looks inside (signed count non-zero or an odd number of crossings)."""
-    u, v = [a for a in range(3) if a != axis]
-    triangles = mesh.triangles
-    normals = np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0])
-    keep = np.abs(normals[:, axis]) > 1e-12  # triangles parallel to the rays are grazed, never crossed
-    triangles, normals = triangles[keep], normals[keep]
-    # grid-line indices of each triangle's bounding box in the (u, v) plane
-    low = np.ceil((triangles[:, :, [u, v]].min(axis=1) - origin[[u, v]]) / pitch).astype(int)
-    high = np.floor((triangles[:, :, [u, v]].max(axis=1) - origin[[u, v]]) / pitch).astype(int)
-    low = np.maximum(low, 0)
-    high = np.minimum(high, np.array([shape[u], shape[v]]) - 1)
-    counts = np.maximum(high - low + 1, 0)
-    per_triangle = counts[:, 0] * counts[:, 1]
-    crossing = np.zeros((shape[axis] + 1, shape[u], shape[v]), dtype=np.int32)
-    signed = np.zeros_like(crossing)
-    for chunk in np.array_split(np.arange(len(triangles)), max(1, int(per_triangle.sum() // 2_000_000) + 1)):
-        which = np.repeat(chunk, per_triangle[chunk])
-        if len(which) == 0:
-            continue
-        offset = np.arange(len(which)) - np.repeat(np.cumsum(per_triangle[chunk]) - per_triangle[chunk],
-                                                   per_triangle[chunk])
-        ju = low[which, 0] + offset // np.maximum(counts[which, 1], 1)
-        jv = low[which, 1] + offset % np.maximum(counts[which, 1], 1)
-        pu, pv = origin[u] + ju * pitch, origin[v] + jv * pitch
-        a, b, c = triangles[which, 0], triangles[which, 1], triangles[which, 2]
-        # barycentric coordinates of the line's foot in the triangle's (u, v) projection
-        d1u, d1v, d2u, d2v = b[:, u] - a[:, u], b[:, v] - a[:, v], c[:, u] - a[:, u], c[:, v] - a[:, v]
-        det = d1u * d2v - d2u * d1v
-        qu, qv = pu - a[:, u], pv - a[:, v]
-        s = (qu * d2v - d2u * qv) / det
-        t = (d1u * qv - qu * d1v) / det
-        hit = (s >= 0) & (t >= 0) & (s + t <= 1)
-        where = a[hit, axis] + s[hit] * (b[hit, axis] - a[hit, axis]) + t[hit] * (c[hit, axis] - a[hit, axis])
-        # crossing at coordinate `where`: grid points above it see it in -axis rays, those below in +axis rays
-        slot = np.clip(np.floor((where - origin[axis]) / pitch).astype(int) + 1, 0, shape[axis])
-        np.add.at(crossing, (slot, ju[hit], jv[hit]), 1)
-        np.add.at(signed, (slot, ju[hit], jv[hit]), np.sign(normals[which[hit], axis]).astype(np.int32))
-    below_count = np.cumsum(crossing, axis=0)[:-1]  # crossings below each grid point
-    below_signed = np.cumsum(signed, axis=0)[:-1]
-    above_count = crossing.sum(axis=0) - below_count
-    above_signed = signed.sum(axis=0) - below_signed
-    forward = (above_signed != 0) | (above_count % 2 == 1)
-    backward = (below_signed != 0) | (below_count % 2 == 1)
-    return np.moveaxis(forward, 0, axis), np.moveaxis(backward, 0, axis)
+# --- the smooth closing -------------------------------------------------------------------------------------------------
 
 
-# Freudenthal split of the unit cube into 6 tetrahedra along its diagonal: corner offsets (dx, dy, dz).
-_TETRAHEDRA = np.array([[[0, 0, 0], e1, np.add(e1, e2), [1, 1, 1]]
-                        for e1, e2 in [([1, 0, 0], [0, 1, 0]), ([1, 0, 0], [0, 0, 1]), ([0, 1, 0], [1, 0, 0]),
-                                       ([0, 1, 0], [0, 0, 1]), ([0, 0, 1], [1, 0, 0]), ([0, 0, 1], [0, 1, 0])]])
-
-
-def marching_tetrahedra(field: np.ndarray, level: float) -> tuple[np.ndarray, np.ndarray]:
-    """The ``level`` surface of ``field`` (nx, ny, nz), ``field > level`` inside: vertices (n, 3) in grid
-    units and faces (m, 3), outward-wound; closed and 2-manifold when the field is ``<= level`` on the border
-    (a vertex per crossed grid edge, shared by every tetrahedron around that edge)."""
-    field = np.where(field == level, level - 1e-9, field)  # no grid value exactly on the level
-    nx, ny, nz = field.shape
-    inside = field > level
-    # cubes with corners on both sides
-    corners = np.stack([inside[dx:nx - 1 + dx, dy:ny - 1 + dy, dz:nz - 1 + dz]
-                        for dx in (0, 1) for dy in (0, 1) for dz in (0, 1)])
-    mixed = np.argwhere(corners.any(axis=0) & ~corners.all(axis=0))  # (c, 3) cube indices
-    tets = mixed[:, None, None, :] + _TETRAHEDRA[None]  # (c, 6, 4, 3) grid points
-    tets = tets.reshape(-1, 4, 3)
-    flat = np.ravel_multi_index(tets.reshape(-1, 3).T, field.shape).reshape(-1, 4)
-    values = field.reshape(-1)[flat]
-    is_in = values > level
-    count = is_in.sum(axis=1)
-    # order each tetrahedron's corners inside first
-    order = np.argsort(~is_in, axis=1, kind="stable")
-    flat = np.take_along_axis(flat, order, axis=1)
-    values = np.take_along_axis(values, order, axis=1)
-    edge_a, edge_b, triangles = [], [], []
-    for n_in, pattern in ((1, [[(0, 1), (0, 2), (0, 3)]]), (3, [[(0, 3), (1, 3), (2, 3)]]),
-                          (2, [[(0, 2), (0, 3), (1, 3)], [(0, 2), (1, 3), (1, 2)]])):
-        rows = np.flatnonzero(count == n_in)
-        for triangle in pattern:
-            edge_a.append(np.stack([flat[rows, i] for i, _ in triangle], axis=1))
-            edge_b.append(np.stack([flat[rows, o] for _, o in triangle], axis=1))
-            triangles.append(np.stack([values[rows, i] for i, _ in triangle], axis=1))
-            triangles[-1] = (triangles[-1], np.stack([values[rows, o] for _, o in triangle], axis=1))
-    inner = np.concatenate(edge_a)  # (t, 3) grid point inside, per triangle corner
-    outer = np.concatenate(edge_b)  # (t, 3) grid point outside
-    inner_value = np.concatenate([t[0] for t in triangles])
-    outer_value = np.concatenate([t[1] for t in triangles])
-    keys, index = np.unique(inner.astype(np.int64) * field.size + outer, return_inverse=True)
-    index = index.reshape(-1, 3)
-    # one vertex per crossed edge, where the field crosses the level linearly
-    first = np.zeros(len(keys), dtype=np.int64)
-    first[index.ravel()] = np.arange(index.size)
-    a_point = np.stack(np.unravel_index(inner.ravel()[first], field.shape), axis=1).astype(float)
-    b_point = np.stack(np.unravel_index(outer.ravel()[first], field.shape), axis=1).astype(float)
-    fa, fb = inner_value.ravel()[first], outer_value.ravel()[first]
-    vertices = a_point + ((level - fa) / (fb - fa))[:, None] * (b_point - a_point)
-    # wind every triangle so that its normal points from the inside corner to the outside corner
-    tri = vertices[index]
-    normal = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-    outward = (b_point[index[:, 0]] - a_point[index[:, 0]])
-    flip = np.einsum("ij,ij->i", normal, outward) < 0
-    index[flip] = index[flip][:, ::-1]
-    return vertices, index
+def smooth_close(mesh: trimesh.Trimesh, pitch: float, source: str = "<mesh>") -> trimesh.Trimesh:
+    """The closed body of ``mesh`` by the ``smooth`` method (module doc) on a grid of ``pitch`` m."""
+    grid = Grid.around(mesh, pitch)
+    solid = ndimage.binary_fill_holes(inside_votes(mesh, grid) >= INSIDE_VOTES)
+    if not solid.any():
+        raise DataError(f"{source}: no part of the mesh encloses a volume, even after closing; is it a flat or "
+                        "single-sided surface?")
+    field = ndimage.gaussian_filter(solid.astype(float), sigma=1.0, mode="constant") - 0.5
+    return _level_body(field, grid, source, 27 * pitch**3)
 
 
 # --- closing error --------------------------------------------------------------------------------------------------

@@ -26,6 +26,8 @@ Checks, each naming the flag that fixes it (:func:`check_pose`):
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 import trimesh
 
@@ -34,8 +36,16 @@ from rigopt.errors import DataError, RigoptError
 AXES = {"+x": (1, 0, 0), "-x": (-1, 0, 0), "+y": (0, 1, 0), "-y": (0, -1, 0), "+z": (0, 0, 1), "-z": (0, 0, -1)}
 #: Road-vehicle limits (m): length, width (without mirrors), height.
 SIZE_LIMITS = {"length": (2.5, 25.0), "width": (1.4, 3.0), "height": (1.0, 4.5)}
-#: Scales tried when the size looks like another unit, with the unit's name.
-UNIT_GUESSES = ((0.01, "centimetres"), (0.001, "millimetres"), (0.0254, "inches"))
+#: Typical road vehicles (length, width, height m) whose proportions a mesh's size is fitted to, to infer its scale.
+REFERENCE_SIZES = {"car": (4.6, 1.8, 1.5), "van": (5.2, 2.0, 2.0), "truck": (8.5, 2.5, 3.5), "bus": (12.0, 2.55, 3.2)}
+#: Common units (m per file unit).
+UNITS = ((0.001, "millimetres"), (0.01, "centimetres"), (0.0254, "inches"), (0.1, "decimetres"), (0.3048, "feet"),
+         (1.0, "metres"))
+#: A common unit is preferred over another scale by this much of the fit (root mean square log ratio).
+UNIT_PREFERENCE = 0.08
+#: Other scales offered: these x 10^k, preferred by this much over the fitted scale itself.
+NICE_PREFERENCE = 0.03
+NICE_NUMBERS = (1.0, 1.2, 1.25, 1.5, 2.0, 2.5, 3.0, 4.0, 5.0, 6.0, 7.5, 8.0)
 #: Even with --allow-size, a length outside these bounds (m) is refused as a unit error.
 HARD_LENGTH = (1.0, 40.0)
 #: Top heights of the two ends must differ by this share of the height to tell the front.
@@ -122,21 +132,83 @@ def front_sign(mesh: trimesh.Trimesh, axles=()) -> tuple[int, str]:
     return 0, "both ends are of about the same height"
 
 
-def unit_guess(size: np.ndarray) -> tuple[float, str] | None:
-    """(scale, unit name) that makes ``size`` (length, width, height) a plausible road vehicle, or None."""
-    for scale, unit in UNIT_GUESSES:
-        scaled = np.sort(size * scale)[::-1]
-        length, rest = scaled[0], scaled[1:]
-        if SIZE_LIMITS["length"][0] <= length <= SIZE_LIMITS["length"][1] and \
-                np.all(rest >= SIZE_LIMITS["width"][0] * 0.7) and np.all(rest <= SIZE_LIMITS["height"][1]):
-            return scale, unit
-    return None
+@dataclass(frozen=True)
+class ScaleGuess:
+    """The scale (file unit -> m) that makes a mesh's size a plausible road vehicle: ``scale``, ``unit`` (its
+    name when it is a common unit, else None), ``kind`` (the typical vehicle whose proportions fit best)."""
+
+    scale: float
+    unit: str | None
+    kind: str
+
+    def describe(self) -> str:
+        return self.unit if self.unit else f"a {self.kind} in units of {self.scale:g} m"
+
+
+def plausible(size) -> bool:
+    """Whether ``size`` (3,) m, in any order, can be a road vehicle's length, width and height (SIZE_LIMITS)."""
+    length, a, b = np.sort(np.asarray(size, float))[::-1]
+    (l0, l1), (w0, w1), (h0, h1) = SIZE_LIMITS.values()
+    return l0 <= length <= l1 and ((w0 <= a <= w1 and h0 <= b <= h1) or (w0 <= b <= w1 and h0 <= a <= h1))
+
+
+def _fit(size: np.ndarray) -> tuple[float, str]:
+    """(root mean square log ratio, kind): how far ``size`` (sorted, m) is from the nearest of REFERENCE_SIZES."""
+    return min((float(np.sqrt(np.mean((np.log(np.sort(reference)[::-1]) - np.log(size)) ** 2))), kind)
+               for kind, reference in REFERENCE_SIZES.items())
+
+
+def scale_candidates(size) -> list[ScaleGuess]:
+    """The scales that make ``size`` (3,) (file units, any order) a plausible road vehicle, best first.
+
+    Candidates: the common UNITS, and NICE_NUMBERS x 10^k near the scale that fits each of REFERENCE_SIZES
+    (least squares in log), with its 3-digit value. Those that make the size plausible (:func:`plausible`) are
+    ranked by how near their scaled size is to a reference (root mean square log ratio), a unit preferred by
+    UNIT_PREFERENCE and a round number by NICE_PREFERENCE (a car drawn in decimetres is told 0.1, one drawn at
+    0.06 m per unit 0.06)."""
+    size = np.sort(np.asarray(size, float))[::-1]
+    if not np.all(size > 0):
+        return []
+    candidates = {value: (name, UNIT_PREFERENCE) for value, name in UNITS}
+    for reference in REFERENCE_SIZES.values():
+        estimate = float(np.exp(np.mean(np.log(np.sort(reference)[::-1]) - np.log(size))))
+        decade = 10.0 ** np.floor(np.log10(estimate))
+        for value in [n * decade * f for n in NICE_NUMBERS for f in (0.1, 1.0, 10.0)]:
+            if abs(np.log(value / estimate)) < np.log(1.5):
+                candidates.setdefault(float(f"{value:.6g}"), (None, NICE_PREFERENCE))
+        candidates.setdefault(float(f"{estimate:.3g}"), (None, 0.0))
+    scored = []
+    for value, (unit, preference) in candidates.items():
+        if plausible(size * value):
+            distance, kind = _fit(size * value)
+            scored.append((distance - preference, value, unit, kind))
+    return [ScaleGuess(value, unit, kind) for _, value, unit, kind in sorted(scored)]
+
+
+def infer_scale(size) -> ScaleGuess | None:
+    """The best of :func:`scale_candidates`, or None."""
+    ranked = scale_candidates(size)
+    return ranked[0] if ranked else None
+
+
+class PoseError(DataError):
+    """A pose check that failed: the message, and ``fix`` {flag: value} (e.g. {"--scale": "0.01"}) that fixes it."""
+
+    def __init__(self, message: str, fix: dict[str, str] | None = None):
+        super().__init__(message)
+        self.fix = dict(fix or {})
+
+
+def _flags(fix: dict[str, str]) -> str:
+    return " ".join(f"{flag} {value}".strip() for flag, value in fix.items())
 
 
 def check_pose(mesh: trimesh.Trimesh, source: str, *, scale: float = 1.0, forward: str | None = None,
-               up: str | None = None, allow_size: bool = False, axles=()) -> list[str]:
+               up: str | None = None, allow_size: bool = False, axles=(), scale_given: bool = False) -> list[str]:
     """Check a mesh already brought into the ISO frame by the flags (``forward``/``up`` None: not given,
-    the defaults were used); raise DataError naming the fixing flag, or return warnings (see module doc)."""
+    the defaults were used; ``scale`` the scale applied, ``scale_given`` whether the user set it); raise
+    PoseError naming the fixing flags, or return warnings (see module doc). A unit problem's hint also carries
+    the flags the scaled mesh needs next, so that one retry with all of them gets past every pose check."""
     size = np.ptp(mesh.bounds, axis=0)
     described = f"{size[0]:.3g} x {size[1]:.3g} x {size[2]:.3g}"
     rotation = frame_rotation(forward or "+x", up or "+z")
@@ -146,56 +218,82 @@ def check_pose(mesh: trimesh.Trimesh, source: str, *, scale: float = 1.0, forwar
 
     length = size.max()
     low, high = SIZE_LIMITS["length"]
-    if not low <= length <= high:
-        guess = unit_guess(size)
-        units = "units" if scale == 1.0 else f"m with --scale {scale:g}"
-        if guess and (not allow_size or not HARD_LENGTH[0] <= length <= HARD_LENGTH[1]):
-            raise DataError(f"{source}: the mesh is {described} {units} (x, y, z), which looks like {guess[1]}: "
-                            f"add --scale {scale * guess[0]:g}")
-        if not allow_size or not HARD_LENGTH[0] <= length <= HARD_LENGTH[1]:
-            raise DataError(f"{source}: the mesh is {described} {units} (x, y, z): its length {length:.3g} m is "
-                            f"outside a road vehicle's {low:g}-{high:g} m; give its unit with --scale (0.01 for "
-                            "centimetres, 0.001 for millimetres, 0.0254 for inches)" +
-                            ("" if allow_size else ", or add --allow-size if it really is that long"))
+    units = "units" if scale == 1.0 else f"m with --scale {scale:g}"
+    ranked = scale_candidates(size)
+    relative = ranked[0].scale if ranked else 1.0
+    unit_error = not low <= length <= high or (not plausible(size) and not 0.5 <= relative <= 2.0)
+    if unit_error and ranked and (not allow_size or not HARD_LENGTH[0] <= length <= HARD_LENGTH[1]):
+        # the best candidate whose scaled mesh passes the size check once oriented, and what it needs next
+        for guess in ranked:
+            fix, then = {"--scale": f"{scale * guess.scale:.6g}"}, ""
+            scaled = trimesh.Trimesh(mesh.vertices * guess.scale, mesh.faces, process=False)
+            try:
+                check_pose(scaled, source, scale=scale * guess.scale, forward=forward, up=up, allow_size=allow_size,
+                           axles=[x * guess.scale for x in axles], scale_given=True)
+            except PoseError as error:
+                if "--allow-size" in error.fix and guess is not ranked[-1]:
+                    continue
+                extra = {k: v for k, v in error.fix.items() if k not in ("--scale", "--allow-size")}
+                fix.update(extra)
+                reason = str(error)[len(source) + 2:].rsplit(": add ", 1)[0]
+                then = f"; scaled by it, {reason}" if extra else ""
+            break
+        raise PoseError(f"{source}: the mesh is {described} {units} (x, y, z), which looks like {guess.describe()}"
+                        f"{then}: add {_flags(fix)}, or --length L with its real length L in metres", fix)
+    if not low <= length <= high and (not allow_size or not HARD_LENGTH[0] <= length <= HARD_LENGTH[1]):
+        raise DataError(f"{source}: the mesh is {described} {units} (x, y, z): its length {length:.3g} m is outside a "
+                        f"road vehicle's {low:g}-{high:g} m and no unit makes it one; give its real length with "
+                        "--length L (metres) or its unit with --scale" +
+                        ("" if allow_size else ", or add --allow-size if it really is that long"))
     if up is None:
         guessed = guess_up(mesh)
         if guessed is not None and not np.allclose(guessed, [0, 0, 1]):
-            fix = f"--up {file_axis(guessed)}"
-            raise DataError(f"{source}: z does not seem to be up: the mesh ({described} m, x, y, z) is broad at its "
+            fix = {"--up": file_axis(guessed)}
+            fix.update(_forward_fix(mesh, guessed, rotation, forward))
+            alternative = f" (or --forward {_opposite(fix['--forward'])}; whichever way its front faces)" \
+                if "--forward" in fix else ""
+            raise PoseError(f"{source}: z does not seem to be up: the mesh ({described} m, x, y, z) is broad at its "
                             f"{axis_name(guessed)} end and touches the ground in small patches at the other: "
-                            f"add {fix}" + _forward_hint(mesh, guessed, rotation, forward))
+                            f"add {_flags(fix)}{alternative}", fix)
     if size[2] > size[0] or size[1] > size[0]:
         if size[2] > size[1]:
-            raise DataError(f"{source}: the mesh is longest along z ({described} m for x, y, z): it is on its side "
+            raise PoseError(f"{source}: the mesh is longest along z ({described} m for x, y, z): it is on its side "
                             "or standing on end; name the file's axis that points up with --up (e.g. --up +y)")
         sign, reason = front_sign(_turned(mesh, 1), axles=())
         plus, minus = file_axis([0, 1, 0]), file_axis([0, -1, 0])
         if sign == 0:
-            fix = f"add --forward {plus} or --forward {minus} (whichever way its front faces)"
-        else:
-            fix = f"its front seems to face {plus if sign > 0 else minus} ({reason}): add --forward " \
-                  f"{plus if sign > 0 else minus}"
-        raise DataError(f"{source}: the mesh is longest along y ({described} m for x, y, z), not x (forward): "
-                        f"it is turned by 90 degrees; {fix}")
+            raise PoseError(f"{source}: the mesh is longest along y ({described} m for x, y, z), not x (forward): it "
+                            f"is turned by 90 degrees; add --forward {plus} or --forward {minus} (whichever way its "
+                            "front faces)", {"--forward": plus})
+        facing = plus if sign > 0 else minus
+        raise PoseError(f"{source}: the mesh is longest along y ({described} m for x, y, z), not x (forward): it is "
+                        f"turned by 90 degrees; its front seems to face {facing} ({reason}): add --forward {facing}",
+                        {"--forward": facing})
     if forward is None:
         sign, reason = front_sign(mesh, axles)
         if sign < 0:
-            raise DataError(f"{source}: the mesh seems to face {file_axis([-1, 0, 0])} ({reason}): add --forward "
+            raise PoseError(f"{source}: the mesh seems to face {file_axis([-1, 0, 0])} ({reason}): add --forward "
                             f"{file_axis([-1, 0, 0])}, or --forward {file_axis([1, 0, 0])} if its front really is "
-                            f"at {file_axis([1, 0, 0])}")
+                            f"at {file_axis([1, 0, 0])}", {"--forward": file_axis([-1, 0, 0])})
         if sign == 0:
-            raise DataError(f"{source}: cannot tell the mesh's front from its shape ({reason}): confirm it with "
+            raise PoseError(f"{source}: cannot tell the mesh's front from its shape ({reason}): confirm it with "
                             f"--forward {file_axis([1, 0, 0])}, or give --forward {file_axis([-1, 0, 0])} if it "
-                            "faces the other way")
+                            "faces the other way: add --forward " + file_axis([1, 0, 0]),
+                            {"--forward": file_axis([1, 0, 0])})
     warnings = []
     for value, (dimension, (low, high)) in zip(size, SIZE_LIMITS.items()):
         if not low <= value <= high:
             message = (f"its {dimension} {value:.2f} m is outside a road vehicle's {low:g}-{high:g} m"
                        + (" (without mirrors)" if dimension == "width" else ""))
             if not allow_size:
-                raise DataError(f"{source}: {message}; check --scale, or add --allow-size if the size is right")
+                raise PoseError(f"{source}: {message}; check --scale (or give --length L), or add --allow-size if the "
+                                "size is right", {"--allow-size": ""})
             warnings.append(f"{message} (accepted with --allow-size)")
     return warnings
+
+
+def _opposite(axis: str) -> str:
+    return ("-" if axis[0] == "+" else "+") + axis[1]
 
 
 def _turned(mesh: trimesh.Trimesh, quarter_turns: int) -> trimesh.Trimesh:
@@ -205,11 +303,15 @@ def _turned(mesh: trimesh.Trimesh, quarter_turns: int) -> trimesh.Trimesh:
     return turned
 
 
-def _forward_hint(mesh, up_iso, rotation, forward) -> str:
-    """' --forward A' when, with the guessed up, the long axis is not the current forward."""
+def _forward_fix(mesh, up_iso, rotation, forward) -> dict[str, str]:
+    """{"--forward": A} when, with the guessed up, the long axis is not the current forward (A: the end the
+    shape says is the front, else the long axis's + end); {} otherwise."""
     length_axis = np.eye(3)[int(np.argmax(np.ptp(mesh.bounds, axis=0)))]
-    current = np.array([1.0, 0.0, 0.0])
-    if abs(length_axis @ current) > 0.5 or forward is not None:
-        return ""
-    return f" --forward {axis_name(rotation.T @ length_axis)} (or {axis_name(-rotation.T @ length_axis)}; " \
-           "whichever way its front faces)"
+    if abs(length_axis @ np.array([1.0, 0.0, 0.0])) > 0.5 or forward is not None:
+        return {}
+    # turn the mesh so that the guessed up is z and the long axis x, and ask its shape which end is the front
+    side = np.cross(up_iso, length_axis)
+    turned = trimesh.Trimesh(mesh.vertices @ np.stack([length_axis, side, up_iso]).T, mesh.faces, process=False)
+    sign, _ = front_sign(turned)
+    front = length_axis * (sign if sign != 0 else 1)
+    return {"--forward": axis_name(rotation.T @ front)}

@@ -12,6 +12,7 @@ import re
 import shutil
 from dataclasses import dataclass
 from pathlib import Path
+from xml.etree import ElementTree
 
 import numpy as np
 import trimesh
@@ -21,39 +22,53 @@ from rigopt.output import atomic_folder
 from rigopt.vehicle.library import SPEC_FILE, broken_user_vehicles, find_spec, user_vehicles_dir
 from rigopt.vehicle.model import ZONE_QUERY_EDGE, expand_zones
 from rigopt.vehicle.closing import ClosingReport, close_mesh
-from rigopt.vehicle.orientation import check_pose, frame_rotation
+from rigopt.vehicle.orientation import PoseError, check_pose, frame_rotation
 from rigopt.vehicle.spec import read_toml, spec_from_dict
-from rigopt.vehicle.wheels import FoundWheels, find_wheels
+from rigopt.vehicle.supports import narrow_keep_outs
+from rigopt.vehicle.wheels import FoundWheels, contact_height, find_wheels
 
 FRAMES = ("carla", "iso")
 #: Mesh formats read (trimesh; COLLADA through pycollada); scenes of several parts are merged.
 MESH_FORMATS = (".obj", ".stl", ".ply", ".glb", ".gltf", ".dae", ".off")
-#: The lowest point of the body must lie within this distance of the ground plane z = 0 (m).
+#: Without wheels to stand on, the lowest point of the body must lie within this distance of z = 0 (m).
 GROUND_TOLERANCE = 0.5
+#: A lowering onto the wheels smaller than this (m) is made without a note.
+GROUND_NOTE = 0.005
+#: Two axles closer than this (m) are one: the smallest road wheel's diameter.
+MIN_AXLE_GAP = 0.4
 
 
 @dataclass(frozen=True)
 class PreparedMesh:
-    """A user's mesh ready to store: ``mesh`` closed, ISO frame, metres; ``raw`` the input in the ISO frame
-    before closing; ``closing`` how it was closed; ``wheels`` found (front first); ``warnings``."""
+    """A user's mesh ready to store: ``mesh`` closed, ISO frame, metres, from the vehicle centre; ``raw`` the
+    input in that frame before closing; ``closing`` how it was closed; ``wheels`` found (front first);
+    ``scale`` applied (file unit -> m); ``offset`` (3,) m added to every point after the flags (the file's
+    origin moved to the vehicle centre: the centre of the footprint box, on the ground); ``warnings`` and
+    ``notes`` (what was inferred)."""
 
     mesh: trimesh.Trimesh
     raw: trimesh.Trimesh
     closing: ClosingReport
     wheels: tuple[FoundWheels, ...]
     warnings: tuple[str, ...]
+    notes: tuple[str, ...] = ()
+    scale: float = 1.0
+    offset: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
 
 @dataclass(frozen=True)
 class AddedVehicle:
     """What ``add_user_vehicle`` stored: the spec ``path``, the ``axles`` (x m, front first), the
-    ``wheels`` found, the ``closing`` report and ``warnings``."""
+    ``wheels`` found, the ``closing`` report, the ``keep_outs`` made for narrow parts, ``warnings`` and
+    ``notes``."""
 
     path: Path
     axles: tuple[float, ...]
     wheels: tuple[FoundWheels, ...]
     closing: ClosingReport
     warnings: tuple[str, ...]
+    notes: tuple[str, ...] = ()
+    keep_outs: tuple[dict, ...] = ()
 
 
 def carla_mesh_to_iso(mesh: trimesh.Trimesh) -> trimesh.Trimesh:
@@ -63,7 +78,7 @@ def carla_mesh_to_iso(mesh: trimesh.Trimesh) -> trimesh.Trimesh:
 
 def read_mesh_file(path) -> trimesh.Trimesh:
     """Every triangle of a mesh file as one mesh, as stored (the parts of a scene merged with their
-    transforms applied); no repair."""
+    transforms applied; a COLLADA file's declared unit not applied, see :func:`declared_unit`); no repair."""
     path = Path(path)
     if not path.is_file():
         raise DataError(f"{path}: no such mesh file")
@@ -86,31 +101,106 @@ def read_mesh_file(path) -> trimesh.Trimesh:
     return trimesh.Trimesh(np.asarray(loaded.vertices, float), np.asarray(loaded.faces), process=False)
 
 
-def prepare_user_mesh(path, frame: str = "iso", *, scale: float = 1.0, forward: str | None = None,
-                      up: str | None = None, allow_size: bool = False, axles=None) -> PreparedMesh:
-    """Read a mesh file, bring it into the ISO frame (frame reflection, then ``--forward``/``--up``
-    rotation, then ``scale``), check units, orientation and size (fast, before closing; see
-    :mod:`rigopt.vehicle.orientation`), find its wheels, and close it (:mod:`rigopt.vehicle.closing`)."""
+def declared_unit(path) -> float | None:
+    """Metres per unit that a COLLADA file declares (``<asset><unit meter="0.01"/>``, the document's own
+    asset), or None (other formats, no declaration, or 1)."""
+    path = Path(path)
+    if path.suffix.lower() != ".dae":
+        return None
+    try:
+        for _, element in ElementTree.iterparse(path, events=("end",)):
+            tag = element.tag.rsplit("}", 1)[-1]
+            if tag == "unit" and "meter" in element.attrib:
+                value = float(element.attrib["meter"])
+                return value if np.isfinite(value) and value > 0 and value != 1.0 else None
+            if tag == "asset":  # the first asset to close is the document's (COLLADA puts it first)
+                return None
+    except (ElementTree.ParseError, ValueError):
+        return None
+    return None
+
+
+def prepare_user_mesh(path, frame: str = "iso", *, scale: float | None = None, length: float | None = None,
+                      forward: str | None = None, up: str | None = None, allow_size: bool = False, axles=None,
+                      ground: bool = False, pitch: float | None = None) -> PreparedMesh:
+    """Read a mesh file and bring it into rigopt's vehicle frame: frame reflection, ``--forward``/``--up``
+    rotation, scale (``scale``; or ``length``: the longest extent becomes that many metres; else a COLLADA
+    file's declared unit, else 1), then moved so that the centre of its footprint box is at x = y = 0 and its
+    tyres' lowest contacts on z = 0 (without tyres: ``ground`` puts its lowest point there, else the file's
+    z is kept when its lowest point is within GROUND_TOLERANCE of 0). Checks units, orientation and size (fast,
+    before closing; :mod:`rigopt.vehicle.orientation`), measures the wheels (at ``axles`` x m, vehicle frame,
+    when given) and closes the mesh (:mod:`rigopt.vehicle.closing`, grid ``pitch`` m)."""
     path = Path(path)
     if frame not in FRAMES:
         raise RigoptError(f"--frame must be one of {', '.join(FRAMES)}, got {frame!r}")
-    if not (np.isfinite(scale) and scale > 0):
-        raise RigoptError(f"--scale must be a positive number, got {scale}")
+    for flag, value in (("--scale", scale), ("--length", length)):
+        if value is not None and not (np.isfinite(value) and value > 0):
+            raise RigoptError(f"{flag} must be a positive number, got {value}")
+    if scale is not None and length is not None:
+        raise RigoptError("give --scale or --length, not both (--length sets the scale from the real length)")
     rotation = frame_rotation(forward or "+x", up or "+z")
     loaded = read_mesh_file(path)
     if frame == "carla":
         loaded = carla_mesh_to_iso(loaded)
-    raw = trimesh.Trimesh(loaded.vertices @ rotation.T * scale, loaded.faces, process=False)
-    raw.remove_unreferenced_vertices()
+    posed = trimesh.Trimesh(loaded.vertices @ rotation.T, loaded.faces, process=False)
+    posed.remove_unreferenced_vertices()
+    notes = []
+    if length is not None:
+        scale = length / float(np.ptp(posed.bounds, axis=0).max())
+        notes.append(f"scaled by {scale:.6g} to a length of {length:g} m")
+    elif scale is None:
+        scale = declared_unit(path) or 1.0
+        if scale != 1.0:
+            notes.append(f"the file declares its unit as {scale:g} m (COLLADA <unit meter>): scaled by {scale:g}")
+    raw = trimesh.Trimesh(posed.vertices * scale, posed.faces, process=False)
+    centre = 0.5 * (raw.bounds[0] + raw.bounds[1])
+    offset = np.array([-centre[0], -centre[1], 0.0])
+    raw.apply_translation(offset)
     wheels_guess = find_wheels(raw) if np.ptp(raw.bounds, axis=0).max() > 0 else ()
     warnings = check_pose(raw, str(path), scale=scale, forward=forward, up=up, allow_size=allow_size,
-                          axles=[w.x for w in wheels_guess])
-    if abs(raw.bounds[0, 2]) > GROUND_TOLERANCE:
-        raise DataError(f"{path}: the lowest point is at z = {raw.bounds[0, 2]:.2f} m; move the mesh so that "
-                        "its wheels stand on z = 0")
+                          axles=[w.x for w in wheels_guess], scale_given=scale != 1.0)
+    lift = _ground_lift(raw, wheels_guess, ground, str(path), notes)
+    raw.apply_translation([0.0, 0.0, lift])
+    offset[2] = lift
+    if axles is not None:
+        _check_axles(axles, raw.bounds[:, 0])
     wheels = find_wheels(raw, axles) if axles is not None else wheels_guess
-    closed, report = close_mesh(raw, str(path))
-    return PreparedMesh(closed, raw, report, wheels, tuple(warnings))
+    closed, report = close_mesh(raw, str(path), pitch=pitch)
+    return PreparedMesh(closed, raw, report, wheels, tuple(warnings), tuple(notes), float(scale),
+                        tuple(float(v) for v in offset))
+
+
+def _ground_lift(raw: trimesh.Trimesh, wheels, ground: bool, source: str, notes: list) -> float:
+    """The z shift (m) that stands ``raw`` on the ground: its tyres' lowest contacts, else (``ground``) its lowest
+    point, else none when its lowest point is near z = 0; a PoseError naming --ground otherwise."""
+    lowest = float(raw.bounds[0, 2])
+    contact = contact_height(raw, wheels)
+    if contact is not None:
+        if abs(contact) > GROUND_NOTE:
+            notes.append(f"stood on its tyres: moved {'down' if contact > 0 else 'up'} by {abs(contact):.3f} m")
+        return -contact
+    if ground:
+        if abs(lowest) > GROUND_NOTE:
+            notes.append(f"--ground: moved {'down' if lowest > 0 else 'up'} by {abs(lowest):.3f} m")
+        return -lowest
+    if abs(lowest) > GROUND_TOLERANCE:
+        raise PoseError(f"{source}: the lowest point is at z = {lowest:.2f} m and no tyres were found to stand it on: "
+                        "add --ground (to put its lowest point on z = 0)", {"--ground": ""})
+    return 0.0
+
+
+def _check_axles(axles, x_range) -> None:
+    """Refuse ``axles`` (x m, vehicle frame, front first) closer than MIN_AXLE_GAP or outside ``x_range``."""
+    low, high = (float(v) for v in x_range)
+    outside = [x for x in axles if not low < x < high]
+    if outside:
+        raise RigoptError(f"--axles {', '.join(f'{x:g}' for x in outside)} lie outside the body's length (x from "
+                          f"{low:.2f} to {high:.2f} m, measured from the centre of its footprint box)")
+    close = [(a, b) for a, b in zip(axles, axles[1:]) if a - b < MIN_AXLE_GAP]
+    if close:
+        a, b = close[0]
+        raise RigoptError(f"--axles {a:g} and {b:g} are {a - b:.2f} m apart; axles are distinct and at least "
+                          f"{MIN_AXLE_GAP:g} m apart (a wheel's diameter): give each axle's x once")
 
 
 def load_user_mesh(path, frame: str = "iso", **flags) -> trimesh.Trimesh:
@@ -157,15 +247,17 @@ def roof_rack_zone(bounds: np.ndarray, height: float) -> dict:
 
 
 def add_user_vehicle(name: str, mesh_path, zones_path=None, frame: str = "iso", *, force: bool = False,
-                     scale: float = 1.0, forward: str | None = None, up: str | None = None,
-                     allow_size: bool = False, axles=None, roof_rack: float | None = None) -> AddedVehicle:
+                     scale: float | None = None, length: float | None = None, forward: str | None = None,
+                     up: str | None = None, allow_size: bool = False, axles=None, roof_rack: float | None = None,
+                     ground: bool = False, pitch: float | None = None) -> AddedVehicle:
     """Check ``mesh_path``, store it as vehicle ``name`` with the zones of ``zones_path`` (a TOML file of
-    ``[[zones]]``) or defaults from its box (plus a ``roof_rack`` raised zone of height ``roof_rack`` m),
-    its axles and wheels (found, or at ``axles`` x m), and return what was stored.
+    ``[[zones]]``) or defaults from its box (plus a ``roof_rack`` raised zone of height ``roof_rack`` m, and
+    keep-outs over its narrow parts: :mod:`rigopt.vehicle.supports`), its axles and wheels (found, or at
+    ``axles`` x m from the vehicle centre), and return what was stored.
 
-    ``scale``, ``forward``, ``up`` and ``allow_size`` are the mesh flags of :func:`prepare_user_mesh`. A
-    user vehicle of the same name (any case) is replaced only with ``force``; built-in names and aliases
-    are never taken.
+    ``scale``, ``length``, ``forward``, ``up``, ``allow_size``, ``ground`` and ``pitch`` are the mesh flags of
+    :func:`prepare_user_mesh`. A user vehicle of the same name (any case) is replaced only with ``force``;
+    built-in names and aliases are never taken.
     """
     if not re.fullmatch(r"[A-Za-z0-9][A-Za-z0-9_.-]*", name):
         raise RigoptError(f"vehicle name {name!r} must be letters, digits, '_', '.' or '-'")
@@ -174,16 +266,11 @@ def add_user_vehicle(name: str, mesh_path, zones_path=None, frame: str = "iso", 
     if axles is not None:
         axles = sorted((float(x) for x in axles), reverse=True)
         if not axles or not all(np.isfinite(axles)):
-            raise RigoptError("--axles needs the x (m, ISO frame) of each axle, e.g. --axles 1.5,-1.4")
+            raise RigoptError("--axles needs the x (m, from the vehicle centre) of each axle, e.g. --axles 1.5,-1.4")
     folder = _store_folder(name, force)
-    prepared = prepare_user_mesh(mesh_path, frame, scale=scale, forward=forward, up=up, allow_size=allow_size,
-                                 axles=axles)
+    prepared = prepare_user_mesh(mesh_path, frame, scale=scale, length=length, forward=forward, up=up,
+                                 allow_size=allow_size, axles=axles, ground=ground, pitch=pitch)
     mesh = prepared.mesh
-    if axles is not None:
-        low, high = mesh.bounds[:, 0]
-        outside = [x for x in axles if not low <= x <= high]
-        if outside:
-            raise RigoptError(f"--axles {outside} lie outside the mesh's length (x from {low:.2f} to {high:.2f} m)")
     zones = _read_zones(zones_path) if zones_path else default_zones(mesh.bounds)
     if roof_rack is not None:
         zones = [z for z in zones if z.get("name") != "roof_rack"] + [roof_rack_zone(mesh.bounds, roof_rack)]
@@ -193,18 +280,20 @@ def add_user_vehicle(name: str, mesh_path, zones_path=None, frame: str = "iso", 
             "solids": [{"name": "body", "type": "mesh", "file": "body.ply"}],
             "wheels": [{"axles": [round(w.x, 4)], "radius": round(w.radius, 4), "width": round(w.width, 4),
                         "track": round(w.track, 4)} for w in prepared.wheels],
-            "zones": zones}
-    if not data["wheels"]:
-        del data["wheels"]
+            "zones": zones, "keep_out": []}
     # validated before anything is written; problems name the user's zones file (or the mesh for default zones)
-    spec = spec_from_dict(data, str(zones_path or mesh_path))
+    spec = spec_from_dict({k: v for k, v in data.items() if v != []}, str(zones_path or mesh_path))
     _check_zones_select_surface(spec, mesh)
+    if not zones_path:
+        data["keep_out"] = narrow_keep_outs(mesh, expand_zones(spec.zones))
+    data = {k: v for k, v in data.items() if v != [] or k in ("axles", "aliases")}
     with atomic_folder(folder, force=True, option="vehicle store") as work:
         mesh.export(work / "body.ply")
         (work / SPEC_FILE).write_text(_to_toml(data))
     for old in [p for p in folder.parent.iterdir() if p.name.lower() == name.lower() and p.name != name]:
         shutil.rmtree(old, ignore_errors=True)  # the same name in another case, replaced (force was given)
-    return AddedVehicle(folder / SPEC_FILE, found_axles, prepared.wheels, prepared.closing, prepared.warnings)
+    return AddedVehicle(folder / SPEC_FILE, found_axles, prepared.wheels, prepared.closing, prepared.warnings,
+                        prepared.notes, tuple(data.get("keep_out", ())))
 
 
 def _store_folder(name: str, force: bool) -> Path:

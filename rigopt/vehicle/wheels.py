@@ -1,13 +1,24 @@
-"""Wheels found on a vehicle mesh from its lowest contact patches.
+"""Wheels found on a vehicle mesh: axles from the ground contact patches, radius and width from the tyres'
+own surface.
 
-The tyres are what touches the ground: surface samples within a thin band above the mesh's lowest point
-(:func:`ground_band`, 5 % of the height clamped to [3, 12] cm) form patches. Patches are grouped along x
-(gaps over 25 cm split them): each group is an axle when it is shorter than 1 m along x and has patches on
-both sides of the centre line. Per axle: x = the middle of the group's x span (the contact patch of a
-round tyre is centred under its hub), track = the distance between the left and right patches' middles,
-width = the mean y span of a side's patches (a twin tyre's pair counts as one), radius from the tyre's
-outline in the side view below 80 % of a first guess (each outline point (dx, z) of a circle touching the
-ground gives r = (dx^2 + z^2) / 2z; the median is taken). ISO vehicle frame, metres.
+1. Axles: surface samples within a thin band above the mesh's lowest point (:func:`ground_band`, 5 % of the
+   height clamped to [3, 12] cm) form contact patches, grouped along x (gaps over 25 cm split them); a group
+   shorter than 1 m along x with patches on both sides of the centre line is an axle, at the middle of its
+   x span (the contact patch of a round tyre is centred under its hub).
+2. Tyres: a tyre standing on the ground at axle x is a circle in the side view through the contact point,
+   centred above it at the height of its radius r. A surface sample at (dx, h) from the contact point
+   (h above it) lies on such a circle for r = (dx^2 + h^2) / 2h, and on the tyre's tread its face normal points
+   along the radius (to within 10 degrees: a polygonal tyre's facets). Samples in the side's contact y span
+   (plus 5 cm) whose normal is radial for their own r are tread candidates; the tread is the strongest peak of
+   their r (5 mm bins): a wheel arch around the tyre, a sill or a bumper beside it gives a different r at
+   every height, and its normals point elsewhere. Radius = the median r within 1 cm of the peak; width = the y
+   span of that tread on a side (a twin tyre's pair counts as one, gap included), mean of the two sides;
+   track = between the two treads' middles. The tread must cover an arc of at least 60 degrees (a flat wall
+   at distance d from the axle looks like a tread of radius d at one height only).
+3. Plausibility: a road wheel's radius lies in ``RADIUS_RANGE``; an axle found with a radius outside it is
+   dropped (given ``axles``: refused, see :func:`find_wheels`).
+
+ISO vehicle frame (z up, wheels on the ground), metres.
 """
 
 from __future__ import annotations
@@ -17,12 +28,23 @@ from dataclasses import dataclass
 import numpy as np
 import trimesh
 
+from rigopt.errors import DataError
+
 #: Surface samples drawn to find the wheels.
-WHEEL_SAMPLES = 40000
+WHEEL_SAMPLES = 60000
 #: Contact patches further apart than this along x belong to different axles (m).
 AXLE_GAP = 0.25
 #: A contact group longer than this along x is a skirt or a floor, not a tyre (m).
 MAX_PATCH_LENGTH = 1.0
+#: A road wheel's radius (m): tyres measured outside it are not wheels.
+RADIUS_RANGE = (0.2, 0.8)
+#: Tread samples: normal within this angle of the radius (deg); at least this many per axle.
+TREAD_ANGLE_DEG = 10.0
+MIN_TREAD_SAMPLES = 30
+#: The tread samples must cover this arc of the tyre's side view (deg, 5th to 95th percentile).
+MIN_TREAD_ARC_DEG = 60.0
+#: Histogram bin of the candidates' radii, and the window around its peak kept as the tread (m).
+RADIUS_BIN, TREAD_WINDOW = 0.005, 0.01
 
 
 @dataclass(frozen=True)
@@ -41,17 +63,25 @@ def ground_band(mesh: trimesh.Trimesh) -> float:
     return float(np.clip(0.05 * np.ptp(mesh.bounds[:, 2]), 0.03, 0.12))
 
 
-def _samples(mesh: trimesh.Trimesh, seed: int = 0) -> np.ndarray:
-    points, _ = trimesh.sample.sample_surface(mesh, WHEEL_SAMPLES, seed=seed)
-    return np.concatenate([points, mesh.vertices])
+def contact_height(mesh: trimesh.Trimesh, wheels) -> float | None:
+    """z (m) of the lowest tyre contact of ``wheels`` found on ``mesh`` (the ground they stand on), None when
+    there are none."""
+    if not wheels:
+        return None
+    vertices = mesh.vertices
+    low = [vertices[np.abs(vertices[:, 0] - w.x) <= w.radius, 2].min(initial=np.inf) for w in wheels]
+    return float(min(low)) if np.isfinite(min(low)) else None
 
 
 def find_wheels(mesh: trimesh.Trimesh, axles=None) -> tuple[FoundWheels, ...]:
     """The axles' wheels of ``mesh`` (ISO frame, wheels on the ground), front first; () when no wheels are
-    found. ``axles`` (x m each) forces the axles' positions: only the wheels near them are measured."""
-    points = _samples(mesh)
+    found. ``axles`` (x m each) gives the axles' positions: the tyres near them (within 0.6 m) are measured,
+    and a tyre whose radius is outside RADIUS_RANGE is a DataError; an axle without a tyre is left out."""
+    points, face = trimesh.sample.sample_surface(mesh, WHEEL_SAMPLES, seed=0)
+    normals = mesh.face_normals[face]
+    contacts = np.concatenate([points, mesh.vertices])
     bottom, band = mesh.bounds[0, 2], ground_band(mesh)
-    low = points[points[:, 2] <= bottom + band]
+    low = contacts[contacts[:, 2] <= bottom + band]
     if len(low) == 0:
         return ()
     centre_y = 0.5 * (mesh.bounds[0, 1] + mesh.bounds[1, 1])
@@ -59,47 +89,65 @@ def find_wheels(mesh: trimesh.Trimesh, axles=None) -> tuple[FoundWheels, ...]:
         groups = [low[np.abs(low[:, 0] - x) <= 0.6] for x in axles]
     else:
         order = np.argsort(low[:, 0])
-        xs = low[order, 0]
-        cuts = np.flatnonzero(np.diff(xs) > AXLE_GAP) + 1
+        cuts = np.flatnonzero(np.diff(low[order, 0]) > AXLE_GAP) + 1
         groups = [low[part] for part in np.split(order, cuts)]
     found = []
     for k, group in enumerate(groups):
-        if len(group) == 0:
-            continue
-        span = np.ptp(group[:, 0])
         left, right = group[group[:, 1] > centre_y], group[group[:, 1] < centre_y]
-        if axles is None and (span > MAX_PATCH_LENGTH or len(left) < 3 or len(right) < 3):
-            continue
         if len(left) < 3 or len(right) < 3:
             continue
-        x = float(axles[k]) if axles is not None else float(0.5 * (group[:, 0].min() + group[:, 0].max()))
-        left_mid = 0.5 * (left[:, 1].min() + left[:, 1].max())
-        right_mid = 0.5 * (right[:, 1].min() + right[:, 1].max())
-        width = 0.5 * (np.ptp(left[:, 1]) + np.ptp(right[:, 1]))
-        radius = _radius(points, x, (right[:, 1].min(), right[:, 1].max()), (left[:, 1].min(), left[:, 1].max()),
-                         bottom, band, span)
-        found.append(FoundWheels(x, radius, float(width), float(left_mid - right_mid)))
+        span = np.ptp(group[:, 0])
+        if axles is None and span > MAX_PATCH_LENGTH:
+            continue
+        centre = float(0.5 * (group[:, 0].min() + group[:, 0].max()))
+        tyre = _tyre(points, normals, centre, float(group[:, 2].min()), band,
+                     [(side[:, 1].min(), side[:, 1].max()) for side in (left, right)])
+        x = float(axles[k]) if axles is not None else centre
+        if tyre is None:
+            continue
+        radius, width, track = tyre
+        if not RADIUS_RANGE[0] <= radius <= RADIUS_RANGE[1]:
+            if axles is not None:
+                raise DataError(f"at --axles x = {x:g} m the tyre measures a radius of {radius:.2f} m, outside a road "
+                                f"wheel's {RADIUS_RANGE[0]:g}-{RADIUS_RANGE[1]:g} m: give the x of each axle's centre")
+            continue
+        found.append(FoundWheels(x, radius, width, track))
     if axles is None and len(found) < 2:
         return ()
     return tuple(sorted(found, key=lambda w: -w.x))
 
 
-def _radius(points, x, right_span, left_span, bottom, band, chord) -> float:
-    """Tyre radius (m) at axle ``x`` from the side-view outline of the points in the tyres' y spans."""
-    # first guess from the contact chord at the band's height: chord^2 / 4 = r^2 - (r - band)^2
-    guess = (chord**2 / 4 + band**2) / (2 * band)
-    in_tyre = ((points[:, 1] >= right_span[0]) & (points[:, 1] <= right_span[1])) | \
-              ((points[:, 1] >= left_span[0]) & (points[:, 1] <= left_span[1]))
-    z = points[:, 2] - bottom
-    dx = np.abs(points[:, 0] - x)
-    near = in_tyre & (z > band) & (z < 0.8 * guess) & (dx < 1.5 * guess)
-    if near.sum() < 10:
-        return float(guess)
-    bins = np.floor(z[near] / 0.02).astype(int)
-    estimates = []
-    for b in np.unique(bins):
-        chosen = bins == b
-        k = np.argmax(dx[near][chosen])
-        height, reach = z[near][chosen][k], dx[near][chosen][k]
-        estimates.append((reach**2 + height**2) / (2 * height))
-    return float(np.median(estimates))
+def _tyre(points, normals, x: float, ground: float, band: float, spans) -> tuple[float, float, float] | None:
+    """(radius, width, track) m of the tyres standing at (``x``, ``ground``) whose contact patches span the
+    y ranges ``spans`` [(low, high) left, (low, high) right], from their tread (module doc, step 2)."""
+    dx = points[:, 0] - x
+    h = points[:, 2] - ground
+    in_side = np.zeros(len(points), dtype=int)  # 1 left, 2 right
+    for k, (low, high) in enumerate(spans):
+        in_side[(points[:, 1] >= low - 0.05) & (points[:, 1] <= high + 0.05)] = k + 1
+    chosen = (in_side > 0) & (np.abs(dx) < 1.6) & (h > band) & (h < 1.7) & (np.abs(normals[:, 1]) < 0.5)
+    dx, h, normal_xz = dx[chosen], h[chosen], normals[chosen][:, [0, 2]]
+    radius = (dx**2 + h**2) / (2 * h)
+    radial = np.stack([dx, h - radius], axis=1) / radius[:, None]
+    normal_xz = normal_xz / np.linalg.norm(normal_xz, axis=1, keepdims=True)
+    tread = np.abs(np.einsum("ij,ij->i", radial, normal_xz)) >= np.cos(np.deg2rad(TREAD_ANGLE_DEG))
+    tread &= (radius > 0.1) & (radius < 1.5)
+    if tread.sum() < MIN_TREAD_SAMPLES:
+        return None
+    counts, edges = np.histogram(radius[tread], bins=np.arange(0.1, 1.5 + RADIUS_BIN, RADIUS_BIN))
+    smoothed = np.convolve(counts, [1, 2, 1], mode="same")
+    peak = 0.5 * (edges[np.argmax(smoothed)] + edges[np.argmax(smoothed) + 1])
+    on_tread = tread & (np.abs(radius - peak) <= TREAD_WINDOW)
+    if on_tread.sum() < MIN_TREAD_SAMPLES:
+        return None
+    angle = np.degrees(np.arctan2(radial[on_tread, 0], -radial[on_tread, 1]))  # 0 at the contact, 180 on top
+    low_angle, high_angle = np.percentile(np.abs(angle), [5, 95])
+    if high_angle - low_angle < MIN_TREAD_ARC_DEG:  # a wall or a panel edge, not a round tread
+        return None
+    y, side = points[chosen][on_tread, 1], in_side[chosen][on_tread]
+    if not (np.any(side == 1) and np.any(side == 2)):
+        return None
+    left, right = y[side == 1], y[side == 2]
+    width = 0.5 * (np.ptp(left) + np.ptp(right))
+    track = 0.5 * (left.min() + left.max()) - 0.5 * (right.min() + right.max())
+    return float(np.median(radius[on_tread])), float(width), float(track)

@@ -203,8 +203,8 @@ def closed_sim_car():
 def test_open_multi_part_mesh_is_closed_and_its_error_reported(closed_sim_car):
     closed, report = closed_sim_car
     assert closed.is_watertight and closed.is_winding_consistent and closed.volume > 0
-    assert report.method == "voxel" and report.pitch == pytest.approx(4.6 / 200)
-    assert 0 < report.p95_error < 0.03 and report.max_error < 0.06
+    assert report.method == "distance" and report.pitch == pytest.approx(4.6 / 200)
+    assert 0 < report.p95_error < 0.01 and report.max_error < 0.03
     assert 0.1 < report.buried < 0.5  # the cabin's floor, the roof under it, the wheels' insides
     assert "closing error max" in report.describe() and "95th percentile" in report.describe()
 
@@ -229,13 +229,28 @@ def test_closed_parts_are_joined_exactly():
     assert closed.is_watertight
 
 
-def test_closing_is_refused_when_it_moves_the_surface_too_far():
+def test_a_single_sided_sheet_is_kept_as_a_thin_slab():
     awning = trimesh.creation.box([4.0, 1.8, 0.01])
     awning = trimesh.Trimesh(awning.vertices, awning.faces[awning.face_normals[:, 2] > 0.5], process=False)
-    awning.apply_translation([0, 0, 2.2])  # a single-sided sheet: no volume, lost by the closing
+    awning.apply_translation([0, 0, 2.2])  # a single-sided sheet: no volume of its own
+    closed, report = close_mesh(trimesh.util.concatenate([sim_car_mesh(), awning.subdivide()]), "awning.obj")
+    assert report.thin > 0.1 and report.p95_error < 0.03
+    from rigopt import raycast
+
+    assert raycast.inside(closed, [[0.0, 0.0, 2.2]]).all()  # the sheet is a slab now
+    assert not raycast.inside(closed, [[0.0, 0.0, 2.2 + 2 * report.pitch]]).any()
+
+
+def test_closing_is_refused_with_the_finer_pitch_that_fixes_it():
+    awning = trimesh.creation.box([4.0, 1.8, 0.01])
+    awning = trimesh.Trimesh(awning.vertices, awning.faces[awning.face_normals[:, 2] > 0.5], process=False)
+    awning.apply_translation([0, 0, 2.2])
     mesh = trimesh.util.concatenate([sim_car_mesh(), awning.subdivide()])
-    with pytest.raises(DataError, match=f"within {CLOSING_P95_LIMIT * 100:.0f} cm"):
-        close_mesh(mesh, "awning.obj")
+    with pytest.raises(DataError, match=f"within {CLOSING_P95_LIMIT * 100:.0f} cm.*add --pitch 0.05 ") as caught:
+        close_mesh(mesh, "awning.obj", pitch=0.1)  # the sheet thickened by 7.5 cm on each side
+    finer = float(re.search(r"--pitch (\S+)", str(caught.value)).group(1))
+    _, report = close_mesh(mesh, "awning.obj", pitch=finer)
+    assert report.p95_error <= CLOSING_P95_LIMIT
 
 
 # --- wheels -----------------------------------------------------------------------------------------------------------
@@ -272,7 +287,7 @@ def test_axles_override(box_car, tmp_path):
 def test_axles_off_the_mesh_are_refused(box_car, tmp_path):
     path = tmp_path / "box.stl"
     box_car.mesh.export(path)
-    with pytest.raises(RigoptError, match="outside the mesh"):
+    with pytest.raises(RigoptError, match="outside the body's length"):
         add_user_vehicle("boxy", path, forward="+x", axles=[9.0])
 
 

@@ -1,6 +1,6 @@
 """Acceptance: a raw simulator-like mesh (centimetres, facing -y, no floor, body, cabin and four wheels as
-separate OBJ groups) added through the CLI with the flags its errors suggest, then shown, checked and
-designed for, all in-process."""
+separate OBJ groups) added through the CLI with the flags its error suggests (all at once), then shown,
+checked and designed for, all in-process."""
 
 from __future__ import annotations
 
@@ -28,8 +28,8 @@ def session(tmp_path_factory):
     write_obj(mesh, forward="-y", scale=0.01)
     runs = {"plain": run_rigopt("vehicle", "add", "simcar", "--mesh", mesh, env=env)}
     scale = re.search(r"add (--scale \S+)", runs["plain"].stderr).group(1).split()
+    forward = re.search(r"add --scale \S+ (--forward \S+),", runs["plain"].stderr).group(1).split()
     runs["scaled"] = run_rigopt("vehicle", "add", "simcar", "--mesh", mesh, *scale, env=env)
-    forward = re.search(r"add (--forward \S+)", runs["scaled"].stderr).group(1).split()
     runs["added"] = run_rigopt("vehicle", "add", "simcar", "--mesh", mesh, *scale, *forward, env=env)
     runs["show"] = run_rigopt("vehicle", "show", "simcar", "--out", tmp / "simcar.png", env=env)
     (tmp / "rig.json").write_text(json.dumps(RIG))
@@ -39,10 +39,11 @@ def session(tmp_path_factory):
     return runs, tmp, scale, forward
 
 
-def test_the_errors_suggest_scale_then_forward(session):
+def test_the_error_suggests_scale_and_forward_at_once(session):
     runs, _, scale, forward = session
-    assert runs["plain"].returncode == 2 and "looks like centimetres: add --scale 0.01" in runs["plain"].stderr
-    assert runs["scaled"].returncode == 2 and "seems to face -y" in runs["scaled"].stderr
+    assert runs["plain"].returncode == 2 and "looks like centimetres; scaled by it, the mesh is longest along y" \
+        in runs["plain"].stderr and "add --scale 0.01 --forward -y," in runs["plain"].stderr
+    assert runs["scaled"].returncode == 2 and "seems to face -y" in runs["scaled"].stderr  # the scale alone is not enough
     assert scale == ["--scale", "0.01"] and forward == ["--forward", "-y"]
 
 
@@ -50,7 +51,7 @@ def test_the_suggested_flags_add_it(session):
     runs, tmp, _, _ = session
     added = runs["added"]
     assert added.returncode == 0, added.stderr
-    assert "closed on a 2.3 cm voxel grid" in added.stdout and "closing error max" in added.stdout
+    assert "closed on a 2.3 cm grid (distance)" in added.stdout and "closing error max" in added.stdout
     assert (tmp / "home" / "vehicles" / "simcar" / "body.ply").is_file()
 
 

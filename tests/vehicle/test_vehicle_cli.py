@@ -32,7 +32,9 @@ def mycar(asymmetric_car, tmp_path):
     asymmetric_car.mesh.export(path)
     result = invoke("vehicle", "add", "mycar", "--mesh", path, "--forward", "+x")
     assert result.exit_code == 0, (result.output, result.exception)
-    return asymmetric_car
+    from rigopt.vehicle.library import load_vehicle
+
+    return load_vehicle("mycar")  # as stored: moved to the centre of its footprint box
 
 
 def test_vehicle_add_reports_the_stored_spec(asymmetric_car, tmp_path, rigopt_home):
@@ -80,7 +82,9 @@ def test_export_in_carla_frame_is_reflected(mycar, tmp_path):
     loaded = trimesh.load(out, force="mesh")
     (x0, y0, z0), (x1, y1, z1) = mycar.mesh.bounds
     np.testing.assert_allclose(loaded.bounds, [[x0, -y1, z0], [x1, -y0, z1]], atol=1e-4)
-    assert y1 > -y0 + 0.1  # the car is asymmetric, so the reflection shows
+    centroid = mycar.mesh.center_mass
+    np.testing.assert_allclose(loaded.center_mass, centroid * [1, -1, 1], atol=1e-4)
+    assert abs(centroid[1]) > 0.01  # the car is asymmetric (one mirror), so the reflection shows
 
 
 def test_export_in_carla_frame_keeps_normals_outward(mycar, tmp_path):
