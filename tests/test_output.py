@@ -8,7 +8,8 @@ import os
 import pytest
 
 from rigopt.errors import RigoptError
-from rigopt.output import atomic_file, atomic_folder, check_out_file, check_out_folder, published, write_text_atomic
+from rigopt.output import (PARTIAL, atomic_file, atomic_folder, check_out_file, check_out_folder, existing_file,
+                           existing_folder, process_running, published, write_text_atomic)
 
 
 def write_two(folder, fail_after_first=None):
@@ -166,3 +167,127 @@ def test_a_failed_new_file_leaves_nothing(tmp_path):
 
 def test_write_text_atomic(tmp_path):
     assert write_text_atomic(tmp_path / "a" / "b.txt", "é").read_text(encoding="utf-8") == "é"
+
+
+# ------------------------------------------------------------------------------------ stale partials, interrupts
+
+
+def finished_pid() -> int:
+    """The id of a process that has run and been reaped: no process has it (until the system reuses it)."""
+    import subprocess
+    import sys
+
+    done = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True,
+                          check=True)
+    pid = int(done.stdout)
+    assert not process_running(pid)
+    return pid
+
+
+def test_a_killed_writer_leaves_a_partial_that_the_next_write_sweeps(tmp_path):
+    """A real process killed (SIGKILL) inside atomic_folder leaves its partial; the next write removes it."""
+    import signal
+    import subprocess
+    import sys
+
+    out = tmp_path / "out"
+    child = subprocess.Popen(
+        [sys.executable, "-c", "import sys\nfrom rigopt.output import atomic_folder\n"
+         f"with atomic_folder({str(out)!r}) as work:\n    (work / 'a.txt').write_text('half')\n"
+         "    print('ready', flush=True)\n    sys.stdin.read()\n"],
+        stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+    try:
+        assert child.stdout.readline().strip() == "ready"
+    finally:
+        child.send_signal(signal.SIGKILL)
+        child.communicate()
+    left = [p.name for p in tmp_path.iterdir()]
+    assert left == [f".out{PARTIAL}{child.pid}"]  # killed outright: nothing could clean up
+    with atomic_folder(out) as work:
+        write_two(work)
+    assert [p.name for p in tmp_path.iterdir()] == ["out"]
+    assert sorted(p.name for p in out.iterdir()) == ["a.txt", "b.txt"]
+
+
+def test_stale_file_partials_are_swept_and_live_ones_kept(tmp_path):
+    import subprocess
+    import sys
+
+    dead = finished_pid()
+    stale = tmp_path / f".x.json{PARTIAL}{dead}.json"
+    stale.write_text("half")
+    other_target = tmp_path / f".y.json{PARTIAL}{dead}.json"  # another target's: not this write's to sweep
+    other_target.write_text("half")
+    live = subprocess.Popen([sys.executable, "-c", "import sys; sys.stdin.read()"], stdin=subprocess.PIPE)
+    try:
+        running = tmp_path / f".x.json{PARTIAL}{live.pid}.json"
+        running.write_text("being written")
+        write_text_atomic(tmp_path / "x.json", "whole")
+        assert sorted(p.name for p in tmp_path.iterdir()) == sorted(["x.json", other_target.name, running.name])
+    finally:
+        live.communicate(b"")
+
+
+def test_a_previous_output_set_aside_by_a_killed_run_is_put_back(tmp_path):
+    """Killed between moving the old output aside and moving the new one in: the old one comes back, and a
+    write without --force is refused as for any existing output; the half-published new one is removed."""
+    dead = finished_pid()
+    aside = tmp_path / f".out{PARTIAL}{dead}.old"
+    aside.mkdir()
+    (aside / "a.txt").write_text("old a")
+    new = tmp_path / f".out{PARTIAL}{dead}"
+    new.mkdir()
+    (new / "a.txt").write_text("new a")
+    with pytest.raises(RigoptError, match="--force"):
+        with atomic_folder(tmp_path / "out"):
+            pass
+    assert [p.name for p in tmp_path.iterdir()] == ["out"]
+    assert (tmp_path / "out" / "a.txt").read_text() == "old a"
+
+
+def test_an_interrupt_while_the_new_output_is_moved_in_keeps_the_previous_one(tmp_path, monkeypatch):
+    out = previous(tmp_path)
+    real_rename = os.rename
+    calls = []
+
+    def interrupted_second_rename(source, target):
+        calls.append((source, target))
+        if len(calls) == 2:  # the old output is aside; moving the new one in is interrupted
+            raise KeyboardInterrupt
+        real_rename(source, target)
+
+    monkeypatch.setattr("rigopt.output.os.rename", interrupted_second_rename)
+    with pytest.raises(KeyboardInterrupt):
+        with atomic_folder(out, force=True) as work:
+            write_two(work)
+    assert {p.name: p.read_text() for p in out.iterdir()} == {"a.txt": "old a", "old_only.txt": "old"}
+    assert [p.name for p in tmp_path.iterdir()] == ["out"]
+
+
+def test_process_running():
+    assert process_running(os.getpid())
+    assert not process_running(finished_pid())
+    assert process_running(0)  # a process group, never taken for a finished process
+
+
+# ------------------------------------------------------------------------------------ input places
+
+
+def test_a_folder_given_for_a_file_is_named_as_such(tmp_path):
+    (tmp_path / "d").mkdir()
+    (tmp_path / "f.txt").write_text("x")
+    assert existing_file(tmp_path / "f.txt", "rig file") == tmp_path / "f.txt"
+    with pytest.raises(RigoptError, match=r"--in .*d is a folder; give the rig file itself, not a folder; fix$"):
+        existing_file(tmp_path / "d", "rig file", "fix", option="--in")
+    with pytest.raises(RigoptError, match=r"nothere: no such rig file$"):
+        existing_file(tmp_path / "nothere", "rig file")
+
+
+def test_a_file_given_for_a_folder_is_named_as_such(tmp_path):
+    (tmp_path / "d").mkdir()
+    (tmp_path / "f.txt").write_text("x")
+    assert existing_folder(tmp_path / "d", "rig files") == tmp_path / "d"
+    with pytest.raises(RigoptError, match=r"^--rigs .*f\.txt is a file; give the folder holding rig files$"):
+        existing_folder(tmp_path / "f.txt", "rig files", option="--rigs")
+    with pytest.raises(RigoptError, match=r"nothere: no such folder; give the folder holding rig files; fix$"):
+        existing_folder(tmp_path / "nothere", "rig files", "fix")

@@ -23,6 +23,26 @@ DEVICE_HELP = "cpu, cuda or cuda:K."
 RUNS_HELP = "Training runs folder (<runs>/<model>/<rig>/checkpoint.pt); default <data>/runs."
 
 
+DATA_HOLDING = "the benchmark's rig folders (<data>/<rig>/<split>, made by rigopt bench generate --out)"
+RUNS_HOLDING = "the training runs (<runs>/<model>/<rig>/checkpoint.pt, made by rigopt bench train)"
+
+
+def check_data(data: Path) -> Path:
+    """``--data`` must be an existing folder: a missing one is said as such, not as a missing trained model."""
+    from rigopt.output import existing_folder
+
+    return existing_folder(data, DATA_HOLDING, option="--data")
+
+
+def check_runs(runs: Path | None, must_exist: bool) -> None:
+    """``--runs``, when given, must be a folder: an existing one where runs are read (``must_exist``), else a folder
+    or a place for one (training makes it)."""
+    from rigopt.output import existing_folder
+
+    if runs is not None and (must_exist or runs.exists()):
+        existing_folder(runs, RUNS_HOLDING, option="--runs")
+
+
 def require_torch() -> None:
     try:
         import torch  # noqa: F401
@@ -64,6 +84,8 @@ def train_command(
     from rigopt.baselines.models import resolve_device
     from rigopt.baselines.protocol import configured, train_on
 
+    check_data(data)
+    check_runs(runs, must_exist=False)
     config = configured(model_config(model, size), epochs)
     resolve_device(device)
     runs = runs if runs is not None else data / "runs"
@@ -99,7 +121,14 @@ def evaluate_command(
     from rigopt.baselines.protocol import evaluate_on, run_folder
     from rigopt.bench.scene_model import CLASSES
 
+    check_data(data)
     family = model_config(model).family
+    if checkpoint is not None:
+        from rigopt.output import existing_file
+
+        existing_file(checkpoint, "checkpoint file (checkpoint.pt, written by rigopt bench train)",
+                      option="--checkpoint")
+    check_runs(runs, must_exist=checkpoint is None)
     if checkpoint is None:
         checkpoint = run_folder(runs if runs is not None else data / "runs", family, trained_on or rig) / "checkpoint.pt"
     with status_console.status(f"evaluating {checkpoint} on {rig}/{split}"):
@@ -144,6 +173,8 @@ def matrix_command(
     from rigopt.output import check_out_folder
 
     check_out_folder(out, resume=True)
+    check_data(data)
+    check_runs(runs, must_exist=False)
     config = configured(model_config(model, size), epochs)
     resolve_device(device)
     names = [n.strip() for text in [*rigs, *(more or [])] for n in text.split(",") if n.strip()]
@@ -183,10 +214,13 @@ def validate_command(
     from rigopt.metrics.calibration import load_weights
     from rigopt.report.json_values import json_ready
 
-    from rigopt.output import check_out_file, write_text_atomic
+    from rigopt.output import check_out_file, existing_file, write_text_atomic
 
     if out is not None:
         check_out_file(out, suffixes=(".json",))
+    existing_file(design, "design file (a rig file, or the report.json of rigopt design)")
+    check_data(data)
+    check_runs(runs, must_exist=True)
     family, calibration, rig = model_config(model).family, load_weights(weights, metric), load_design(design)
     note_fallback(calibration)
     resolve_device(device)

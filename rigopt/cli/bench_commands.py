@@ -19,9 +19,9 @@ BYTES_PER_PIXEL = 64
 
 def render_size(text: str) -> tuple[int, int]:
     """``--size`` as (width, height), refused beyond MAX_SIDE with the memory one image would take."""
-    from rigopt.cli.rig_commands import parse_image_size
+    from rigopt.cli.parsing import parse_image_size
 
-    width, height = parse_image_size(text)
+    width, height = parse_image_size(text, "--size")
     if max(width, height) > MAX_SIDE:
         gib = width * height * BYTES_PER_PIXEL / 2**30
         raise RigoptError(f"--size {text}: rendering one {width}x{height} image needs at least {gib:,.0f} GiB "
@@ -97,10 +97,11 @@ def show_command(
 ):
     """Tile a sample's camera images with its projected boxes, and a bird's-eye view of the boxes."""
     from rigopt.bench.dataset import read_dataset
-    from rigopt.output import atomic_file, check_out_file
+    from rigopt.output import atomic_file, check_out_file, existing_folder
     from rigopt.report.bench_figures import write_sample_figure
 
     out = check_out_file(out, suffixes=PICTURE_SUFFIXES)
+    existing_folder(data, "the benchmark's rig folders (<data>/<rig>/<split>, made by rigopt bench generate --out)")
 
     root = data / rig / split
     if not root.is_dir():

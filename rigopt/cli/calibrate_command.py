@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import Optional
+from typing import List, Optional
 
 import typer
 
@@ -27,8 +27,12 @@ def calibrate_command(
     bootstrap: Optional[int] = typer.Option(None, min=0, help="Bootstrap resamples for the 95 % interval of rho "
                                                                "(default: the benchmark protocol's 1000)."),
     seed: Optional[int] = typer.Option(None, min=0, help="Seed of the bootstrap (default 0)."),
-    rigs: Optional[Path] = typer.Option(None, help="Folder of <rig>.json files (in it or below it) for rigs not in "
-                                                   "the library."),
+    rigs: Optional[List[Path]] = typer.Option(None, "--rigs", help="Folder of the rig files (<rig>.json, in it or "
+                                                                   "below it) the results were measured with, for "
+                                                                   "rigs not in the library (e.g. baselines/rigs: "
+                                                                   "its real/ holds the real datasets' rigs); may "
+                                                                   "be given several times, the first holding a "
+                                                                   "rig wins."),
     solver: str = typer.Option("lbfgsb", help="Whose beta is reported: lbfgsb (the benchmark's) or qp (cvxpy)."),
     metric: str = typer.Option("rigcd", "--metric", help=METRIC_HELP),
     test_on: Optional[Path] = typer.Option(None, "--test-on",
@@ -61,15 +65,18 @@ def calibrate_command(
     if test_control is not None and test_on is None:
         raise RigoptError("--test-control names the control rigs of --test-on's data: give --test-on too "
                           "(e.g. --test-on ../shared/pccr/results)")
-    table = read_transfer(results)
+    # the results' rigs by name (--rigs first), as the benchmark measured them; one lookup, so each note once
+    lookup = benchmark_rig_lookup(rigs, note)
+    table = read_transfer(_results_place(results, "--results"))
     control_rigs = _control_rigs(control, table)
     _check_cross_rig_pairs(table, control_rigs, results)
-    target = read_transfer(test_on) if test_on is not None else None  # bad input is an error before any work
+    target = read_transfer(_results_place(test_on, "--test-on")) if test_on is not None else None
     if target is not None:
         target_control = _control_rigs(test_control, target)
         _check_cross_rig_pairs(target, target_control, test_on)
-    # the results' rigs by name (--rigs first), as the benchmark measured them; one lookup, so each note once
-    lookup = benchmark_rig_lookup(rigs, note)
+    for data in (table, target) if target is not None else (table,):  # every rig found before any work
+        for name in dict.fromkeys(data.train.tolist() + data.test.tolist()):
+            lookup(name)
     study = calibrate(table, control_rigs, lookup, bootstrap, seed, solver, metric)
     report = study_dict(study)
     if test_on is not None:
@@ -116,6 +123,17 @@ def _print_transfer(test: dict) -> None:
                     "pairs, judged the same way (held-out rho)",
                     ["model", "median", "5th percentile", "95th percentile", "share reaching the fit's rho"],
                     [[m, e["median"], e["p5"], e["p95"], e["share_reaching"]] for m, e in test["null"]["models"].items()])
+
+
+def _results_place(path: Path, option: str) -> Path:
+    """``path`` when it can hold measured transfer: a results folder or a CSV file; a JSON file (one detector's
+    results, trained_on_<rig>.json) or a missing path is refused, naming ``option``."""
+    holding = "<model>/trained_on_<rig>.json (a results folder), or a CSV file model,train_rig,test_rig,mAP"
+    if not path.exists():
+        raise RigoptError(f"{option} {path}: no such results folder or CSV file; give the folder holding {holding}")
+    if path.is_file() and path.suffix.lower() == ".json":
+        raise RigoptError(f"{option} {path} is a JSON file, one model's results; give the folder holding {holding}")
+    return path
 
 
 def _control_rigs(names: str | None, table) -> tuple[str, ...]:

@@ -8,6 +8,7 @@ from typing import Optional
 import typer
 
 from rigopt.cli.app import app, console, import_app, note, print_json, print_table, status_console
+from rigopt.cli.parsing import parse_image_size
 from rigopt.errors import RigoptError
 
 
@@ -27,14 +28,6 @@ def rigs_command(as_json: bool = typer.Option(False, "--json", help="Print JSON 
         return
     print_table("rigopt rig library", ["rig", "vehicle", "cameras", "fovs", "rigv"],
                 [[r["rig"], r["vehicle"], r["cameras"], ", ".join(f"{f:g}" for f in r["fovs"]), r["rigv"]] for r in rows])
-
-
-def parse_image_size(text: str) -> tuple[int, int]:
-    """``"1600x900"`` -> (1600, 900); raises RigoptError on anything else."""
-    parts = text.lower().split("x")
-    if len(parts) != 2 or not all(p.strip().isdigit() and int(p) > 0 for p in parts):
-        raise RigoptError(f"--image-size must look like WIDTHxHEIGHT in pixels, e.g. 1600x900; got {text!r}")
-    return int(parts[0]), int(parts[1])
 
 
 def parse_image_sizes(text: str) -> dict:

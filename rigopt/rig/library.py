@@ -10,6 +10,7 @@ from functools import lru_cache
 from pathlib import Path
 
 from rigopt.errors import RigFileError, unknown_name
+from rigopt.output import existing_file
 from rigopt.resources import data_dir
 from rigopt.rig.model import Rig
 from rigopt.rig.pccr_format import read_rig
@@ -54,10 +55,9 @@ def load_rig(name_or_path) -> Rig:
     text = str(name_or_path)
     path = Path(text)
     if path.suffix.lower() == ".json" or path.is_file():
-        if not path.is_file():
-            raise RigFileError(f"{path}: no such rig file (library rigs: {', '.join(rig_names())})")
+        existing_file(path, "rig file", f"library rigs: {', '.join(rig_names())}", kind=RigFileError)
         return read_rig(path)
     if path.is_dir() and text.lower() not in {name.lower() for name in rig_names()}:
-        raise RigFileError(f"{path}: a folder, not a rig file; give a rig JSON file or a library rig "
+        raise RigFileError(f"{path} is a folder; give the rig file itself (a rig JSON file) or a library rig "
                            f"({', '.join(rig_names())})")
     return library_rig(text)

@@ -30,6 +30,7 @@ import numpy as np
 from rigopt.camera import DISTORTION_COEFFICIENTS, Lens
 from rigopt.errors import RigFileError, RigoptError, not_utf8
 from rigopt.geometry import carla_to_iso, iso_to_carla
+from rigopt.output import existing_file
 from rigopt.rig.model import DEFAULT_IMAGE_SIZE, VEHICLE_CENTRE, Camera, Rig, RigOrigin
 
 #: Decimals kept when writing angles (degrees) and locations (metres): far below any mounting tolerance,
@@ -169,7 +170,7 @@ def _rounded(values) -> list:
 
 def read_rig(path, name: str | None = None) -> Rig:
     """Read a benchmark rig file. ``name`` defaults to the file stem."""
-    path = Path(path)
+    path = existing_file(path, "rig file", kind=RigFileError)
     try:
         text = path.read_text()
     except OSError as error:

@@ -198,24 +198,56 @@ def in_vehicle_frame(rig: Rig) -> tuple[Rig, str | None]:
     return moved, change.describe()
 
 
-def benchmark_rig_lookup(folder=None, note: Callable[[str], None] = lambda message: None) -> Callable[[str], Rig]:
+def benchmark_rig_lookup(folders=None, note: Callable[[str], None] = lambda message: None) -> Callable[[str], Rig]:
     """``lookup(name)``: the rig of measured transfer results named ``name``, as the benchmark measured it: the
-    file ``<name>.json`` in ``folder`` or a folder below it (the shallowest) when given and present, else the
-    library; moved to its vehicle's centre (:func:`in_vehicle_frame`, ``note`` told of each move), the frame
-    ``rigopt bench generate`` renders in. Each rig is loaded once."""
+    file ``<name>.json`` in one of ``folders`` (a folder or a sequence of them; the first folder holding one wins,
+    within a folder the shallowest file) or a folder below it, else the library rig; moved to its vehicle's
+    centre (:func:`in_vehicle_frame`, ``note`` told of each move), the frame ``rigopt bench generate`` renders
+    in. Each rig is loaded once.
+
+    A folder that is missing or a file is refused at once (``calibrate --rigs``); a name found nowhere raises
+    UnknownNameError saying that the results name a rig rigopt does not know and that ``--rigs`` gives it.
+    """
     from pathlib import Path
 
-    from rigopt.rig.library import load_rig
+    from rigopt.output import existing_folder
+    from rigopt.rig.library import load_rig, rig_names
 
-    files: dict[str, Path] = {}  # rig name -> its file, the shallowest of equal names; the folder read once
-    for path in sorted(Path(folder).rglob("*.json"), key=lambda path: len(path.parts)) if folder is not None else ():
-        files.setdefault(path.stem, path)
+    if folders is None:
+        folders = ()
+    elif isinstance(folders, (str, Path)):
+        folders = (folders,)
+    folders = tuple(existing_folder(folder, "the rig files (<rig>.json) the results were measured with",
+                                    option="--rigs") for folder in folders)
+    files: dict[str, Path] = {}  # rig name -> its file: the first folder's, the shallowest of equal names
+    for folder in folders:
+        for path in sorted(folder.rglob("*.json"), key=lambda path: len(path.parts)):
+            files.setdefault(path.stem, path)
     loaded: dict[str, Rig] = {}
 
     def lookup(name: str) -> Rig:
         if name not in loaded:
-            loaded[name], moved = in_vehicle_frame(load_rig(files[name]) if name in files else load_rig(name))
+            try:
+                rig = load_rig(files[name]) if name in files else load_rig(name)
+            except UnknownNameError:
+                raise _unknown_result_rig(name, folders, rig_names()) from None
+            loaded[name], moved = in_vehicle_frame(rig)
             if moved:
                 note(moved)
         return loaded[name]
     return lookup
+
+
+def _unknown_result_rig(name: str, folders: tuple, library: list[str]) -> UnknownNameError:
+    """The error for a rig of measured transfer found neither in the ``folders`` (``--rigs``) nor the library."""
+    library = ", ".join(library)
+    if not folders:
+        return UnknownNameError(
+            f"the results name rig {name!r}, which rigopt does not know: it is no library rig ({library}); give "
+            f"--rigs FOLDER, the folder of the rig files the results were measured with ({name}.json in it or below "
+            "it; e.g. --rigs baselines/rigs, whose real/ holds the real datasets' rigs)")
+    shown = " ".join(f"--rigs {folder}" for folder in folders)
+    return UnknownNameError(
+        f"the results name rig {name!r}, which rigopt does not know: there is no {name}.json in or below {shown}, "
+        f"and it is no library rig ({library}); add --rigs with the folder holding {name}.json (--rigs may be "
+        "given several times)")

@@ -29,6 +29,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from rigopt.errors import RigFileError, RigoptError
+from rigopt.output import existing_file
 from rigopt.rig.formats.common import (Imported, body_rotation, make_camera, make_lens, make_rig, numbers,
                                        quaternion_rotation, read_json, unit_quaternion)
 from rigopt.rig.formats.datasets import axle_height_origin
@@ -81,8 +82,7 @@ def read_argoverse1(path, name: str | None = None, vehicle: str = "argoverse1", 
                               f"{low:g} to {high:g}, got {axle_height!r}")
     path = Path(path)
     file = path / CALIBRATION_FILE if path.is_dir() else path
-    if not file.is_file():
-        raise RigFileError(f"{file}: no such file; {FIX}")
+    existing_file(file, "Argoverse 1 calibration file", FIX, kind=RigFileError)
     data = read_json(file, "Argoverse 1 calibration JSON", FIX)
     if not isinstance(data, dict) or not isinstance(data.get("camera_data_"), list):
         raise RigFileError(f"{file}: an Argoverse 1 calibration is a JSON object with a 'camera_data_' list; {FIX}")

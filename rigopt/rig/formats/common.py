@@ -26,6 +26,7 @@ import numpy as np
 from rigopt.camera import Lens
 from rigopt.errors import RigFileError, RigoptError, not_utf8
 from rigopt.geometry import R_CAM_OPTICAL, quaternion_to_matrix
+from rigopt.output import existing_file
 from rigopt.rig.model import Camera, Rig, RigOrigin
 
 #: A quaternion whose norm is further than this from 1 is rejected; closer ones are normalised.
@@ -60,13 +61,12 @@ def origin_note(origin: RigOrigin, why: str) -> str:
 
 
 def read_text(path: Path, what: str, fix: str) -> str:
-    """The UTF-8 text of ``path``; a RigFileError naming the file, what it should be, and ``fix``."""
+    """The UTF-8 text of ``path``; a RigFileError naming the file, what it should be (``what``, e.g. "URDF"),
+    and ``fix``: "no such URDF file", "is a folder; give the URDF file itself", unreadable, not UTF-8."""
+    path = Path(path)
+    existing_file(path, f"{what} file", fix, kind=RigFileError)
     try:
         return path.read_text()
-    except FileNotFoundError:
-        raise RigFileError(f"{path}: no such file; {fix}") from None
-    except IsADirectoryError:
-        raise RigFileError(f"{path}: is a folder, expected the {what}; {fix}") from None
     except OSError as error:
         raise RigFileError(f"{path}: cannot read the {what} ({error.strerror}); {fix}") from None
     except UnicodeDecodeError as error:
@@ -75,6 +75,7 @@ def read_text(path: Path, what: str, fix: str) -> str:
 
 def read_json(path: Path, what: str, fix: str):
     """The parsed JSON of ``path`` (see :func:`read_text`)."""
+    path = Path(path)
     text = read_text(path, what, fix)
     try:
         return json.loads(text)
@@ -223,6 +224,8 @@ def same_cameras(a: tuple[Camera, ...], b: tuple[Camera, ...]) -> bool:
 
 def choose_calibration(calibrations: list, index: int | None, where: str, how: str):
     """The ``index``-th of the distinct ``calibrations`` (0-based), or the only one when ``index`` is None."""
+    if not calibrations:
+        raise RigFileError(f"{where}: holds no camera calibration; a rig needs at least one camera")
     if index is not None:
         if isinstance(index, bool) or not isinstance(index, int) or not 0 <= index < len(calibrations):
             raise RigFileError(f"{where}: --calibration {index} is out of range; there are {len(calibrations)} "

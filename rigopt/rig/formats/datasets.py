@@ -50,6 +50,7 @@ from pathlib import Path
 import numpy as np
 
 from rigopt.errors import RigFileError
+from rigopt.output import existing_file, existing_folder
 from rigopt.rig.formats.common import (Imported, body_rotation, choose_calibration, in_modules, make_camera,
                                        make_lens, make_rig, numbers, origin_note, quaternion_rotation, read_json,
                                        rotation_matrix, same_cameras, unit_quaternion, whole_number)
@@ -110,8 +111,7 @@ def _read_arrow(path: Path, columns: tuple[str, ...], what: str, fix: str, parqu
             import pyarrow.feather as reader
     except ImportError:  # pragma: no cover - pyarrow is a core dependency
         raise RigFileError(f"{path}: reading {what} needs pyarrow; pip install pyarrow") from None
-    if not path.is_file():
-        raise RigFileError(f"{path}: no such file; {fix}")
+    existing_file(path, what, fix, kind=RigFileError)
     try:
         table = reader.read_table(path)
     except Exception:  # pyarrow raises several kinds for a file that is not its format
@@ -129,10 +129,8 @@ def _read_arrow(path: Path, columns: tuple[str, ...], what: str, fix: str, parqu
 def read_argoverse2(path, name: str | None = None, vehicle: str = "argoverse2",
                     origin: RigOrigin | None = None) -> Imported:
     """Read the cameras of an Argoverse 2 log (its folder or its calibration/ folder)."""
-    path = Path(path)
-    if not path.is_dir():
-        raise RigFileError(f"{path}: no such directory; pass an Argoverse 2 log folder (holding calibration/) "
-                           f"or its calibration/ folder")
+    path = existing_folder(path, f"{AV2_POSES} and {AV2_INTRINSICS} (an Argoverse 2 log's calibration/ folder, "
+                                 "or the log folder holding it)", kind=RigFileError)
     folder = path / "calibration" if (path / "calibration").is_dir() else path
     fix = f"an Argoverse 2 calibration folder holds {AV2_POSES} and {AV2_INTRINSICS}"
     poses = _read_arrow(folder / AV2_POSES, AV2_POSE_COLUMNS, "Argoverse 2 sensor pose table", fix)
@@ -337,6 +335,10 @@ def _waymo_v2_segments(file: Path, segments: dict[str, list]) -> None:
     """Add the cameras of a v2 camera_calibration table to ``segments`` (segment name -> cameras)."""
     fix = "use the camera_calibration component of the Waymo Open Dataset v2"
     table = _read_arrow(file, WAYMO_COLUMNS, "Waymo v2 camera_calibration table", fix, parquet=True)
+    if not table["key.camera_name"]:
+        raise RigFileError(f"{file}: the Waymo v2 camera_calibration table has its columns but no rows, so no camera; "
+                           "pass the camera_calibration file of a segment (one row per camera), or remove this one "
+                           "from the folder")
     for k in range(len(table["key.camera_name"])):
         segment = table["key.segment_context_name"][k]
         number = table["key.camera_name"][k]

@@ -31,6 +31,7 @@ import numpy as np
 from rigopt.camera import intrinsic_matrix
 from rigopt.errors import RigFileError
 from rigopt.geometry import matrix_to_quaternion
+from rigopt.output import existing_folder
 from rigopt.rig.formats.common import (Exported, Imported, body_rotation, choose_calibration, make_camera,
                                        make_lens, make_rig, numbers, optical_rotation, origin_note, quaternion_rotation,
                                        read_json,
@@ -111,8 +112,8 @@ def nuscenes_calibrations(directory, image_size=NUSCENES_IMAGE_SIZE) -> list[Cal
 
 def _calibrations(directory: Path, image_size) -> tuple[list[Calibration], bool, set[str]]:
     """(distinct calibrations, whether the tables linked records to logs, channels given the default size)."""
-    if not directory.is_dir():
-        raise RigFileError(f"{directory}: no such directory; {FIX}")
+    existing_folder(directory, f"the nuScenes tables {SENSOR_FILE} and {CALIBRATION_FILE} (e.g. v1.0-mini/)",
+                    kind=RigFileError)
     sizes = _image_sizes(image_size, directory)
     defaulted: set[str] = set()
     sensor_path, calibration_path = directory / SENSOR_FILE, directory / CALIBRATION_FILE
@@ -173,18 +174,25 @@ def _camera(record: dict, channel: str, size: tuple[int, int], where: str) -> Ca
 
 
 def _sizes_from_sample_data(sample_data, tokens: set[str], directory: Path) -> dict[str, tuple[int, int]]:
-    """calibrated_sensor token -> (width, height) of its first sample_data record with a size."""
+    """calibrated_sensor token -> (width, height) of its first sample_data record with a size.
+
+    A camera's record without ``width`` and ``height`` (both absent or null) gives none; any other value but
+    positive whole pixels (0, negative, fractional, text) is refused, naming the record: a camera image has a
+    size, so a 0 is a broken table, not a missing value.
+    """
     sizes = {}
     for k, record in enumerate(sample_data or ()):
         token = record["calibrated_sensor_token"]
         if token not in tokens or token in sizes:
             continue
         width, height = record.get("width"), record.get("height")
-        if width in (None, 0) and height in (None, 0):
+        if width is None and height is None:
             continue
         if not all(isinstance(v, int) and not isinstance(v, bool) and v > 0 for v in (width, height)):
-            raise RigFileError(f"{directory / SAMPLE_DATA_FILE}: record {k} width and height must be positive whole "
-                               f"pixels, got {width!r} x {height!r}")
+            raise RigFileError(f"{directory / SAMPLE_DATA_FILE}: record {k} (token {record.get('token', '?')!r}) is "
+                               f"an image of a camera's calibrated_sensor {token!r}, so its width and height must be "
+                               f"positive whole pixels, got {width!r} x {height!r}; fix the record, or drop both keys "
+                               "to use --image-size")
         sizes[token] = (width, height)
     return sizes
 

@@ -22,7 +22,9 @@ Layout written (REP 103 axes, REP 105 ``base_link``)::
 ``base_link`` is rigopt's vehicle frame (ISO 8855 = REP 103 body axes). URDF rpy are fixed-axis roll, pitch,
 yaw: ``R = Rz(yaw) Ry(pitch) Rx(roll)``. Reading walks the joints from the root link (every joint taken at
 its origin) to each link a ``<gazebo>`` camera sensor refers to (a camera body link, or an optical frame
-link); a camera without ``<lens><intrinsics>`` is the centred pinhole of its ``horizontal_fov``. SDFormat has
+link); a camera without ``<lens><intrinsics>`` is the centred pinhole of its ``horizontal_fov`` (in (0, pi) rad);
+with both, the intrinsics give the lens and ``horizontal_fov`` must agree with them (``FOV_AGREEMENT_DEG``). The
+links and joints must form one tree: every joint between declared links, one parent per link, no loop. SDFormat has
 no Kannala-Brandt fisheye, so fisheye lenses are refused on export. The robot name is the rig's name;
 the vehicle and zones are not carried. base_link's place on the vehicle is not fixed by REP 105: the rig's
 origin is the vehicle centre unless ``--origin`` says otherwise.
@@ -45,6 +47,9 @@ from rigopt.rig.model import Rig, RigOrigin
 OPTICAL_SUFFIX = "_optical_frame"
 #: rpy of the fixed joint from a camera body link to its optical frame (REP 103).
 OPTICAL_RPY = (-math.pi / 2, 0.0, -math.pi / 2)
+#: With both <lens><intrinsics> and <horizontal_fov>, the FOV the intrinsics give and the one written must agree
+#: within this (degrees): rounding in a hand-written file stays far below it, a different lens does not.
+FOV_AGREEMENT_DEG = 0.5
 FIX = "write a URDF with <gazebo reference=LINK><sensor type=\"camera\"> blocks (rigopt export --format urdf)"
 
 
@@ -110,20 +115,7 @@ def read_urdf(path, name: str | None = None, vehicle: str = "urdf", origin: RigO
         raise RigFileError(f"{path}: not valid XML ({error}); {FIX}") from None
     if robot.tag != "robot":
         raise RigFileError(f"{path}: the root element is <{robot.tag}>, a URDF's is <robot>; {FIX}")
-    parent_of = {}
-    for joint in robot.findall("joint"):
-        where = f"{path}: joint {joint.get('name', '?')!r}"
-        parent, child = joint.find("parent"), joint.find("child")
-        if parent is None or child is None or not parent.get("link") or not child.get("link"):
-            raise RigFileError(f"{where} needs <parent link=...> and <child link=...>")
-        if child.get("link") in parent_of:
-            raise RigFileError(f"{where}: link {child.get('link')!r} has two parents; a URDF is a tree")
-        parent_of[child.get("link")] = (parent.get("link"), _origin(joint.find("origin"), where))
-    links = [link.get("name") for link in robot.findall("link")]
-    roots = [link for link in links if link not in parent_of]
-    if len(roots) != 1:
-        raise RigFileError(f"{path}: a URDF has one root link, found {len(roots)} ({', '.join(roots[:5])}); "
-                           "join every camera link to base_link")
+    links, parent_of = _tree(robot, path)
     cameras = []
     for gazebo in robot.findall("gazebo"):
         sensor = gazebo.find("sensor")
@@ -133,7 +125,7 @@ def read_urdf(path, name: str | None = None, vehicle: str = "urdf", origin: RigO
         where = f"{path}: <gazebo reference={link!r}>"
         if link not in links:
             raise RigFileError(f"{where} refers to no <link>; name one of the robot's links")
-        pose = _pose_of(link, parent_of, where)
+        pose = _pose_of(link, parent_of)
         camera_id = link
         if link.endswith(OPTICAL_SUFFIX):  # the sensor sits on the optical frame: back to the body frame
             pose[:3, :3] = pose[:3, :3] @ R_CAM_OPTICAL.T
@@ -147,6 +139,51 @@ def read_urdf(path, name: str | None = None, vehicle: str = "urdf", origin: RigO
     why = "--origin" if origin.kind != "vehicle_centre" else "assumed for base_link; set it with --origin"
     rig = make_rig(str(path), name or robot.get("name") or path.stem, vehicle, cameras, origin)
     return Imported(rig, (origin_note(origin, why),))
+
+
+def _tree(robot, path: Path) -> tuple[list[str], dict]:
+    """The declared link names, and child link -> (parent link, (4, 4) joint transform) of every joint, checked to
+    be one tree: links named once, every joint between declared links, one parent per link, no loop, one root."""
+    links = []
+    for link in robot.findall("link"):
+        name = link.get("name")
+        if not name:
+            raise RigFileError(f"{path}: a <link> has no name; give every link name=\"...\"")
+        if name in links:
+            raise RigFileError(f"{path}: link {name!r} is declared twice; a URDF names each link once")
+        links.append(name)
+    parent_of, joint_of = {}, {}
+    for joint in robot.findall("joint"):
+        name = joint.get("name", "?")
+        where = f"{path}: joint {name!r}"
+        parent, child = joint.find("parent"), joint.find("child")
+        if parent is None or child is None or not parent.get("link") or not child.get("link"):
+            raise RigFileError(f"{where} needs <parent link=...> and <child link=...>")
+        for role, link in (("parent", parent.get("link")), ("child", child.get("link"))):
+            if link not in links:
+                raise RigFileError(f"{where}: its {role} link {link!r} is not a declared <link>; add <link "
+                                   f"name=\"{link}\"/> or name one of the robot's links")
+        child_link = child.get("link")
+        if child_link in parent_of:
+            raise RigFileError(f"{where}: link {child_link!r} has two parents (joint {joint_of[child_link]!r} gives it "
+                               f"{parent_of[child_link][0]!r}, this one {parent.get('link')!r}); a URDF is a tree, "
+                               "each link the child of one joint")
+        parent_of[child_link] = (parent.get("link"), _origin(joint.find("origin"), where))
+        joint_of[child_link] = name
+    for link in links:
+        seen = [link]
+        while seen[-1] in parent_of:
+            up = parent_of[seen[-1]][0]
+            if up in seen:
+                loop = seen[seen.index(up):] + [up]
+                raise RigFileError(f"{path}: the joints form a loop: {' -> '.join(reversed(loop))} (parent to "
+                                   "child); a URDF is a tree, remove one of those joints")
+            seen.append(up)
+    roots = [link for link in links if link not in parent_of]
+    if len(roots) != 1:
+        raise RigFileError(f"{path}: a URDF has one root link, found {len(roots)} ({', '.join(roots[:5])}); "
+                           "join every camera link to base_link")
+    return links, parent_of
 
 
 def _origin(element, where: str) -> np.ndarray:
@@ -167,12 +204,11 @@ def _origin(element, where: str) -> np.ndarray:
     return t
 
 
-def _pose_of(link: str, parent_of: dict, where: str) -> np.ndarray:
-    pose, seen = np.eye(4), set()
+def _pose_of(link: str, parent_of: dict) -> np.ndarray:
+    """(4, 4) pose of ``link`` in the root link's frame: the joint transforms from the root down (a tree, checked
+    by :func:`_tree`)."""
+    pose = np.eye(4)
     while link in parent_of:
-        if link in seen:
-            raise RigFileError(f"{where}: the joints form a loop through {link!r}")
-        seen.add(link)
         link, t = parent_of[link]
         pose = t @ pose
     return pose
@@ -198,18 +234,39 @@ def _lens(camera, where: str):
     width = whole_number(_number(image, "width", f"{where} <image>"), f"{where} <image><width>")
     height = whole_number(_number(image, "height", f"{where} <image>"), f"{where} <image><height>")
     intrinsics = camera.find("lens/intrinsics")
+    hfov = None
+    if intrinsics is None or camera.find("horizontal_fov") is not None:
+        hfov = _number(camera, "horizontal_fov", where)
+        if not 0.0 < hfov < math.pi:
+            raise RigFileError(f"{where}: <horizontal_fov> must be in (0, pi) radians for a pinhole camera "
+                               f"(0 to 180 degrees, not reached), got {hfov:g}")
     if intrinsics is not None:
         fx, fy, cx, cy = (_number(intrinsics, k, f"{where} <lens><intrinsics>") for k in ("fx", "fy", "cx", "cy"))
         if _number(intrinsics, "s", where, default=0.0) != 0.0:
             raise RigFileError(f"{where}: <lens><intrinsics><s> (skew) must be 0; rigopt's lenses have no skew")
     else:
-        hfov = _number(camera, "horizontal_fov", where)
-        if not 0.0 < hfov < math.pi:
-            raise RigFileError(f"{where}: <horizontal_fov> must be in (0, pi) radians, got {hfov:g}")
         fx = fy = width / (2.0 * math.tan(hfov / 2.0))
         cx, cy = width / 2.0, height / 2.0
     distortion = camera.find("distortion")
     if distortion is None:
-        return make_lens(where, width, height, fx, fy, cx, cy)
-    coefficients = [_number(distortion, k, f"{where} <distortion>", default=0.0) for k in ("k1", "k2", "p1", "p2", "k3")]
-    return make_lens(where, width, height, fx, fy, cx, cy, "radtan", coefficients)
+        lens = make_lens(where, width, height, fx, fy, cx, cy)
+    else:
+        coefficients = [_number(distortion, k, f"{where} <distortion>", default=0.0)
+                        for k in ("k1", "k2", "p1", "p2", "k3")]
+        lens = make_lens(where, width, height, fx, fy, cx, cy, "radtan", coefficients)
+    if intrinsics is not None and hfov is not None:
+        _check_fov_agrees(lens, hfov, where)
+    return lens
+
+
+def _check_fov_agrees(lens, hfov: float, where: str) -> None:
+    """With both <lens><intrinsics> and <horizontal_fov>, the intrinsics give the lens; the FOV must agree with it
+    within FOV_AGREEMENT_DEG: with the lens's own (distortion included, what rigopt export writes) or with the
+    undistorted pinhole's of fx and cx (what a simulator derives from the intrinsics)."""
+    pinhole = math.degrees(math.atan(lens.cx / lens.fx) + math.atan((lens.width - lens.cx) / lens.fx))
+    given = math.degrees(hfov)
+    if min(abs(given - lens.hfov), abs(given - pinhole)) > FOV_AGREEMENT_DEG:
+        raise RigFileError(f"{where}: <horizontal_fov> {hfov:g} rad ({given:.2f} deg) disagrees with "
+                           f"<lens><intrinsics>, whose fx {lens.fx:g} and cx {lens.cx:g} on {lens.width} px give "
+                           f"{pinhole:.2f} deg; rigopt takes the intrinsics: fix <horizontal_fov> to match them, or "
+                           "drop <lens><intrinsics> to use the FOV's centred pinhole")

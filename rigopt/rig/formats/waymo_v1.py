@@ -64,9 +64,11 @@ class FrameContext:
 
 def frame_contexts(path: Path) -> Iterator[FrameContext]:
     """The distinct frame contexts of a v1 TFRecord file, in file order (the frames of a segment share one
-    context, so a context whose bytes were seen before is skipped)."""
+    context, so a context whose bytes were seen before is skipped); a file without records is refused."""
     seen: set[bytes] = set()
+    records = 0
     for record, data in tfrecord_records(path, WHAT):
+        records += 1
         where = f"{path}: record {record}"
         context = _last_message(data, FRAME_CONTEXT, f"{where} (Frame)")
         digest = hashlib.sha256(context or b"").digest()
@@ -78,6 +80,9 @@ def frame_contexts(path: Path) -> Iterator[FrameContext]:
             raise RigFileError(f"{where}: the Frame has no camera calibrations (Frame.context.camera_calibrations is "
                                f"empty); pass {WHAT}")
         yield FrameContext(record, segment or Path(path).stem, calibrations)
+    if not records:
+        raise RigFileError(f"{path}: the TFRecord file holds no records (it is empty), so no Frame and no camera; "
+                           f"pass {WHAT} with its frames, or remove this one from the folder")
 
 
 def _last_message(data: bytes, number: int, where: str) -> bytes | None:

@@ -155,7 +155,8 @@ def test_bad_files_name_the_entry(tmp_path, change, message):
 
 
 def test_missing_or_broken_file(tmp_path):
-    with pytest.raises(RigFileError, match=r"vehicle_calibration_info\.json: no such file; pass an Argoverse 1 log"):
+    with pytest.raises(RigFileError, match=r"vehicle_calibration_info\.json: no such Argoverse 1 calibration file; "
+                                           r"pass an Argoverse 1 log"):
         read_argoverse1(tmp_path)
     (tmp_path / "vehicle_calibration_info.json").write_text("{")
     with pytest.raises(RigFileError, match=r"not valid JSON"):

@@ -213,13 +213,19 @@ def test_missing_and_invalid_tables_are_rejected(tmp_path, table):
     with pytest.raises(RigFileError, match=rf"{table}: a nuScenes table must be a JSON list"):
         read_nuscenes_rig(directory)
     (directory / table).unlink()
-    with pytest.raises(RigFileError, match=rf"{table}: no such file"):
+    with pytest.raises(RigFileError, match=rf"{table}: no such nuScenes table file"):
+        read_nuscenes_rig(directory)
+    (directory / table).mkdir()
+    with pytest.raises(RigFileError, match=rf"{table} is a folder; give the nuScenes table file itself"):
         read_nuscenes_rig(directory)
 
 
 def test_missing_directory_is_rejected(tmp_path):
-    with pytest.raises(RigFileError, match=r"nowhere: no such directory"):
+    with pytest.raises(RigFileError, match=r"nowhere: no such folder; give the folder holding the nuScenes tables"):
         read_nuscenes_rig(tmp_path / "nowhere")
+    (tmp_path / "sensor.json").write_text("[]")
+    with pytest.raises(RigFileError, match=r"sensor\.json is a file; give the folder holding the nuScenes tables"):
+        read_nuscenes_rig(tmp_path / "sensor.json")
 
 
 def test_tables_without_cameras_are_rejected(tmp_path):

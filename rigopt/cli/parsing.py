@@ -1,0 +1,28 @@
+"""Command-line values every command reads the same way: image sizes.
+
+One parser, one message: ``rigopt import`` (``--image-size``), ``rigopt design`` (``--image-size``) and
+``rigopt bench generate`` (``--size``) take ``WIDTHxHEIGHT`` in whole pixels.
+"""
+
+from __future__ import annotations
+
+from rigopt.errors import RigoptError
+
+#: Largest image side (px) any command takes: beyond every camera made (the largest automotive sensors are
+#: under 4000 px, industrial ones under 15000), so a larger number is a typo.
+MAX_IMAGE_SIDE = 20000
+
+
+def parse_image_size(text: str, option: str = "--image-size") -> tuple[int, int]:
+    """``"1600x900"`` -> (1600, 900): (width, height) in pixels, each a whole number in 1..MAX_IMAGE_SIDE.
+
+    option : the option the value came from, named in the RigoptError raised for anything else.
+    """
+    width, sep, height = (part.strip() for part in text.strip().lower().partition("x"))
+    size = None
+    if sep and all(part.isascii() and part.isdigit() for part in (width, height)):
+        size = (int(width), int(height))
+    if size is None or not all(1 <= side <= MAX_IMAGE_SIDE for side in size):
+        raise RigoptError(f"{option} must be WIDTHxHEIGHT in whole pixels, each side 1 to {MAX_IMAGE_SIDE}, "
+                          f"e.g. 1600x900; got {text!r}")
+    return size
