@@ -11,6 +11,7 @@ import typer
 from rigopt.cli.app import (FORCE_HELP, MIN_HEIGHT_HELP, NO_TRAILER_HELP, app, more_than, mount_rules, note,
                             note_fallback, print_json, print_table)
 from rigopt.cli.metric_commands import METRIC_HELP
+from rigopt.cli.parsing import parse_image_size
 from rigopt.design.defaults import BENCHMARK_IMAGE_SIZE as DEFAULT_IMAGE_SIZE
 from rigopt.design.defaults import DEFAULT_LENSES, DEFAULT_MAX_NODES, DEFAULT_PITCHES_DEG, DEFAULT_YAW_STEP_DEG
 from rigopt.errors import RigoptError
@@ -61,18 +62,6 @@ def parse_lenses(text: str) -> tuple[tuple[float, ...], tuple[float, float] | No
     except RigoptError:
         raise RigoptError(f"--fov must be lenses or a range (low-high) within (0, 180) degrees, got {text!r}") from None
     return lenses, fov_range
-
-
-def parse_image_size(text: str) -> tuple[int, int]:
-    """``"1280x720"`` -> (1280, 720): an image size in pixels, width by height."""
-    width, sep, height = text.lower().partition("x")
-    try:
-        size = (int(width), int(height))
-    except ValueError:
-        size = None
-    if not sep or size is None or min(size) < 1:
-        raise RigoptError(f"--image-size must be WIDTHxHEIGHT in whole pixels, e.g. 1920x1080, got {text!r}")
-    return size
 
 
 @app.command("design")
