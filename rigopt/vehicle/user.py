@@ -194,7 +194,7 @@ def _check_axles(axles, x_range) -> None:
     low, high = (float(v) for v in x_range)
     outside = [x for x in axles if not low < x < high]
     if outside:
-        raise RigoptError(f"--axles {', '.join(f'{x:g}' for x in outside)} lie outside the body's length (x from "
+        raise RigoptError(f"--axles {', '.join(f'{x:g}' for x in outside)} lie outside the mesh's length (x from "
                           f"{low:.2f} to {high:.2f} m, measured from the centre of its footprint box)")
     close = [(a, b) for a, b in zip(axles, axles[1:]) if a - b < MIN_AXLE_GAP]
     if close:

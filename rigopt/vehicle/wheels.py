@@ -36,6 +36,8 @@ WHEEL_SAMPLES = 60000
 AXLE_GAP = 0.25
 #: A contact group longer than this along x is a skirt or a floor, not a tyre (m).
 MAX_PATCH_LENGTH = 1.0
+#: A given axle must lie within this distance (m) of the middle of the tyres' contact patches near it.
+AXLE_TOLERANCE = 0.1
 #: A road wheel's radius (m): tyres measured outside it are not wheels.
 RADIUS_RANGE = (0.2, 0.8)
 #: Tread samples: normal within this angle of the radius (deg); at least this many per axle.
@@ -75,8 +77,9 @@ def contact_height(mesh: trimesh.Trimesh, wheels) -> float | None:
 
 def find_wheels(mesh: trimesh.Trimesh, axles=None) -> tuple[FoundWheels, ...]:
     """The axles' wheels of ``mesh`` (ISO frame, wheels on the ground), front first; () when no wheels are
-    found. ``axles`` (x m each) gives the axles' positions: the tyres near them (within 0.6 m) are measured,
-    and a tyre whose radius is outside RADIUS_RANGE is a DataError; an axle without a tyre is left out."""
+    found. ``axles`` (x m each) gives the axles' positions: the tyres near them (within 0.6 m) are measured;
+    a tyre centred more than AXLE_TOLERANCE from its given axle, or whose radius is outside RADIUS_RANGE, is a
+    DataError; an axle without a tyre is left out."""
     points, face = trimesh.sample.sample_surface(mesh, WHEEL_SAMPLES, seed=0)
     normals = mesh.face_normals[face]
     contacts = np.concatenate([points, mesh.vertices])
@@ -105,6 +108,9 @@ def find_wheels(mesh: trimesh.Trimesh, axles=None) -> tuple[FoundWheels, ...]:
         x = float(axles[k]) if axles is not None else centre
         if tyre is None:
             continue
+        if axles is not None and abs(centre - x) > AXLE_TOLERANCE:
+            raise DataError(f"--axles {x:g}: the tyres there stand centred at x = {centre:.2f} m, {abs(centre - x):.2f} m "
+                            f"away; give --axles {centre:.2f} (each axle's x, from the vehicle centre)")
         radius, width, track = tyre
         if not RADIUS_RANGE[0] <= radius <= RADIUS_RANGE[1]:
             if axles is not None:

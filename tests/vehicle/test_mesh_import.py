@@ -17,7 +17,9 @@ from rigopt.vehicle.library import load_vehicle
 from rigopt.vehicle.orientation import SIZE_LIMITS, check_pose, frame_rotation
 from rigopt.vehicle.user import add_user_vehicle, prepare_user_mesh, read_mesh_file
 
+import sim_car
 from sim_car import AXLES, RADIUS, TRACK, WIDTH, sim_car_mesh, sim_car_parts, to_file_frame, write_obj
+from rigopt.vehicle.wheels import find_wheels
 
 pytestmark = pytest.mark.usefixtures("rigopt_home")
 
@@ -267,6 +269,52 @@ def test_wheels_are_found_on_the_raw_car(tmp_path):
         assert wheel.width == pytest.approx(WIDTH, abs=0.02)
 
 
+def test_wheels_of_a_body_that_hugs_its_tyres_are_measured_on_the_tyres():
+    wheels = find_wheels(sim_car.joined(sim_car.hugging_car_parts()))  # arches 3 cm around them, sills at 14 cm
+    assert [w.x for w in wheels] == pytest.approx(sim_car.HUG_AXLES, abs=0.01)
+    for wheel in wheels:
+        assert wheel.radius == pytest.approx(sim_car.HUG_RADIUS, abs=0.01)  # not the arch's 0.34 m
+        assert wheel.width == pytest.approx(sim_car.HUG_WIDTH, abs=0.01)
+        assert wheel.track == pytest.approx(sim_car.HUG_TRACK, abs=0.01)
+
+
+def test_dual_rear_wheels_count_as_one_wide_tyre():
+    front, rear = find_wheels(sim_car.joined(sim_car.dual_truck_parts()))
+    assert (front.x, rear.x) == pytest.approx(sim_car.DUAL_AXLES, abs=0.01)
+    assert front.radius == pytest.approx(sim_car.DUAL_RADIUS, abs=0.01)
+    assert rear.radius == pytest.approx(sim_car.DUAL_RADIUS, abs=0.01)
+    assert front.width == pytest.approx(sim_car.DUAL_FRONT_WIDTH, abs=0.01)
+    assert rear.width == pytest.approx(sim_car.DUAL_REAR_WIDTH, abs=0.01)  # the pair, its gap included
+    assert (front.track, rear.track) == pytest.approx((sim_car.DUAL_FRONT_TRACK, sim_car.DUAL_REAR_TRACK), abs=0.01)
+
+
+def test_a_wall_beside_the_ground_is_not_a_tyre(box_car):
+    assert find_wheels(box_car.mesh, axles=[1.3, -1.2]) == ()  # the box's bottom touches the ground; no tread
+
+
+@pytest.fixture
+def hatch(tmp_path):
+    path = tmp_path / "hatch.stl"
+    sim_car.joined(sim_car.hugging_car_parts()).export(path)
+    return path
+
+
+def test_axles_given_twice_are_refused(hatch):
+    with pytest.raises(RigoptError, match="distinct and at least 0.4 m apart"):
+        add_user_vehicle("hatch", hatch, forward="+x", axles=[1.4, 1.4])
+
+
+def test_an_axle_given_off_its_tyres_is_refused_with_where_they_are(hatch):
+    with pytest.raises(DataError, match=r"--axles 1: the tyres there stand centred at x = 1\.40 m.*give --axles 1\.40"):
+        add_user_vehicle("hatch", hatch, forward="+x", axles=[1.0, -1.35])
+
+
+def test_given_axles_keep_their_measured_wheels(hatch):
+    added = add_user_vehicle("hatch", hatch, forward="+x", axles=[1.4, -1.35])
+    assert added.axles == (1.4, -1.35)
+    assert [w.radius for w in added.wheels] == pytest.approx([sim_car.HUG_RADIUS] * 2, abs=0.01)
+
+
 def test_a_box_without_wheels_has_no_axles(box_car, tmp_path):
     path = tmp_path / "box.stl"
     box_car.mesh.export(path)
@@ -287,7 +335,7 @@ def test_axles_override(box_car, tmp_path):
 def test_axles_off_the_mesh_are_refused(box_car, tmp_path):
     path = tmp_path / "box.stl"
     box_car.mesh.export(path)
-    with pytest.raises(RigoptError, match="outside the body's length"):
+    with pytest.raises(RigoptError, match="outside the mesh's length"):
         add_user_vehicle("boxy", path, forward="+x", axles=[9.0])
 
 

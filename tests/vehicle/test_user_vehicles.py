@@ -303,3 +303,26 @@ def test_a_broken_user_vehicle_is_replaced_only_with_force(broken, box_stl):
     add_user_vehicle("wreck", box_stl, force=True)
     assert broken_user_vehicles() == {}
     assert load_vehicle("wreck").name == "wreck"
+
+
+def test_a_user_vehicle_missing_its_body_is_skipped_by_the_listing(box_stl, rigopt_home):
+    import json
+
+    from in_process import run_rigopt
+
+    add_user_vehicle("mycar", box_stl)
+    add_user_vehicle("lost", box_stl)
+    (rigopt_home / "vehicles" / "lost" / "body.ply").unlink()
+    listed = run_rigopt("vehicles", "--json", env={"RIGOPT_HOME": str(rigopt_home)})
+    assert listed.returncode == 0, listed.stderr
+    names = {row["vehicle"] for row in json.loads(listed.stdout)}
+    assert "mycar" in names and "lost" not in names
+    assert "user vehicle 'lost' skipped" in listed.stderr and "--force" in listed.stderr
+
+
+def test_the_zones_option_is_described_with_its_tables():
+    from in_process import run_rigopt
+
+    shown = run_rigopt("vehicle", "add", "--help")
+    assert shown.returncode == 0
+    assert "TOML file of [[zones]] tables" in " ".join(shown.stdout.split())
