@@ -16,6 +16,12 @@ from contextlib import contextmanager
 from functools import cache
 
 
+#: Options every HiGHS solve of rigopt passes (``problem.solve(solver=cp.HIGHS, **HIGHS_OPTIONS, ...)``): no log,
+#: one thread and a fixed seed, so that answers do not depend on the machine. One thread count for all: HiGHS's
+#: scheduler keeps the count of a process's first solve and fails a later solve that asks for another.
+HIGHS_OPTIONS = {"threads": 1, "random_seed": 0, "output_flag": False}
+
+
 @cache
 def quiet_highs() -> None:
     """Make the process's first HiGHS object silently (once); a no-op when highspy is missing."""

@@ -8,13 +8,16 @@ from typing import Optional
 
 import typer
 
-from rigopt.cli.app import (FORCE_HELP, MIN_HEIGHT_HELP, NO_TRAILER_HELP, app, more_than, mount_rules, note,
-                            note_fallback, print_json, print_table)
+from rigopt.cli.app import (FORCE_HELP, MIN_HEIGHT_HELP, NO_TRAILER_HELP, app, finite, more_than, mount_rules, note,
+                            note_fallback, print_json, print_next, print_table)
 from rigopt.cli.metric_commands import METRIC_HELP
 from rigopt.cli.parsing import parse_image_size
 from rigopt.design.defaults import BENCHMARK_IMAGE_SIZE as DEFAULT_IMAGE_SIZE
 from rigopt.design.defaults import DEFAULT_LENSES, DEFAULT_MAX_NODES, DEFAULT_PITCHES_DEG, DEFAULT_YAW_STEP_DEG
 from rigopt.errors import RigoptError
+
+#: Widest mount point spacing (m) --spacing takes: a zone narrower than it would hold no mount point.
+MAX_SPACING_M = 2.0
 
 
 def numbers_text(values) -> str:
@@ -84,8 +87,8 @@ def design_command(
     zones: Optional[str] = typer.Option(None, help="Allowed zones, comma-separated (default: all of the vehicle's)."),
     pitch: str = typer.Option(numbers_text(DEFAULT_PITCHES_DEG), help="Pitch angles to consider, degrees (> 0 up)."),
     yaw_step: float = typer.Option(DEFAULT_YAW_STEP_DEG, callback=more_than(0, " degrees", 180), help="Yaw grid step, degrees."),
-    spacing: Optional[float] = typer.Option(None, callback=more_than(0, " m"),
-                                            help="Mount point spacing (m); default: sized to the vehicle."),
+    spacing: Optional[float] = typer.Option(None, callback=more_than(0, " m", MAX_SPACING_M),
+                                            help="Mount point spacing (m), at most 2; default: sized to the vehicle."),
     min_coverage: int = typer.Option(0, min=0, help="Cameras every ring sector needs, beyond the reference's "
                                                     "coverage."),
     min_overlap: int = typer.Option(0, min=0, help="Cameras needed where the reference sees a sector twice (e.g. 2)."),
@@ -105,7 +108,7 @@ def design_command(
                                                "r158) or 'none'. Without it the category's fields are required "
                                                "unless no design sees them all (then reported). See "
                                                "docs/regulations.md."),
-    cost_weight: float = typer.Option(0.0, "--cost-weight", min=0.0,
+    cost_weight: float = typer.Option(0.0, "--cost-weight", min=0.0, callback=finite(),
                                       help="Weight of the cameras' mean relative mounting cost (zone cost, +0.5 in "
                                            "tyre spray) added to the calibrated RigCD; 0 reports it only."),
     asymmetric: bool = typer.Option(False, "--asymmetric",
@@ -131,6 +134,7 @@ def design_command(
     from rigopt.design.settings import DesignSettings, pinhole_catalogue, read_catalogue
     from rigopt.metrics.calibration import load_weights
     from rigopt.output import atomic_folder, check_out_folder, published
+    from rigopt.report.design_html import NEXT_STEPS
     from rigopt.report.design_report import design_dict, write_design_outputs
     from rigopt.vehicle.library import load_vehicle
 
@@ -181,13 +185,14 @@ def design_command(
                         ("naive transfer", summary["comparisons"]["naive_transfer"]),
                         *((f"benchmark {s['name']}", s) for s in summary["comparisons"]["benchmark_rigs"])):
         if entry:
-            interval = "-" if entry["interval"] is None else "{:.2f}-{:.2f}".format(*entry["interval"])
+            interval = "-" if entry["interval"] is None else "[{:.2f}, {:.2f}]".format(*entry["interval"])
             rows.append([name, entry["predicted_drop"], interval, entry["rigcd"], entry["n_cameras"],
                          entry["coverage"], "yes" if entry["meets_coverage_requirements"] else "no",
                          "yes" if entry["extrapolation"] else "-"])
             flagged += [name] if entry["extrapolation"] else []
     print_table(f"{label} -> {target.name} ({calibration.metric}, {weights} weights); reference coverage "
-                f"{summary['reference_coverage']:.3f}", ["rig", "predicted drop", "interval", "rigcd", "cameras",
+                f"{summary['reference_coverage']:.3f}", ["rig", "predicted drop", "interval",
+                                                           f"{calibration.metric} ({weights} weights)", "cameras",
                                                            "coverage", "meets coverage", "extrapolates"], rows)
     if flagged:
         print(f"rigopt: note: {', '.join(flagged)}: beyond the calibration pairs (see report.json 'extrapolation'); "
@@ -203,7 +208,11 @@ def design_command(
     print(f"MILP {solver['milp_status']} (gap {solver['milp_gap']:.2e}) on {solver['offered_to_milp']} of "
           f"{solver['candidates']} candidates; refinement {solver['refine_status']}; {solver['seconds']:.1f} s",
           file=sys.stderr)
+    for line in summary["notes"]:
+        print(line)
     print(f"wrote {', '.join(str(f) for f in files)}")
+    print_next(f"open {out / 'report.html'} (the design for a packaging review: cameras, fields, 3D view)",
+               *(f"in {out}: {command} ({why})" for command, why in NEXT_STEPS))
 
 
 def _reference(name: str, vehicle: Optional[str]):
@@ -229,6 +238,11 @@ def _pareto(target, references, calibration, settings, out: Path, force: bool, a
     with status.status("sweeping camera counts and coverage levels") as spinner:
         points = pareto_designs(target, references, calibration, settings, counts,
                                 progress=lambda message: spinner.update(message) or status.print(f"  {message}"))
+    if not any(p.feasible for p in points):
+        count = str(counts[0]) if counts[0] == counts[1] else f"{counts[0]}-{counts[1]}"
+        raise RigoptError(f"no design of {count} camera(s) on {target.name} is feasible at any coverage "
+                          "level, so there is no frontier to draw; allow more cameras (--cameras), more zones or "
+                          "wider lenses")
     with atomic_folder(out, force=force) as work:
         files = published(write_pareto(points, work), work, out)
     if as_json:

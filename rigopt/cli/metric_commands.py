@@ -72,7 +72,9 @@ def rigcd_command(
     if as_json:
         print_json(data)
         return
-    columns = ["rigcd", "match", "count", "t (m)", "r (rad)", "f (deg)", "predicted drop", "interval"]
+    distance = "unit weights" if weights is None else f"{weights} weights"
+    columns = [f"{metric} ({distance})", f"match ({distance})", "count", "t (m)", "r (rad)", "f (deg)",
+               f"predicted drop ({calibration.name})", "interval"]
     drop = "-" if p.predicted_drop is None else p.predicted_drop
     print_table(f"RigCD {p.reference} -> {p.rig}", columns,
                 [[p.rigcd, p.match, p.count, p.t, p.r, p.f, drop, _interval(p)]])
@@ -102,8 +104,8 @@ def rank_command(
         print_json([p.to_dict() for p in ranked])
         return
     print_table(f"Candidates ranked by predicted drop from {ref} ({calibration.metric}, {weights} weights)",
-                ["rank", "rig", "predicted drop", "interval", "rigcd", "t (m)", "r (rad)", "f (deg)", "count",
-                 "extrapolates"],
+                ["rank", "rig", "predicted drop", "interval", f"{calibration.metric} ({weights} weights)", "t (m)",
+                 "r (rad)", "f (deg)", "count", "extrapolates"],
                 [[k + 1, p.rig, p.predicted_drop, _interval(p), p.rigcd, p.t, p.r, p.f, p.count,
                   "yes" if p.extrapolation else "-"] for k, p in enumerate(ranked)])
     _warn_prediction(ranked, calibration)
@@ -130,7 +132,7 @@ def _note_changes(rigs, changes) -> None:
 
 
 def _interval(p) -> str:
-    return "-" if p.interval is None else f"{p.interval[0]:.2f}-{p.interval[1]:.2f}"
+    return "-" if p.interval is None else f"[{p.interval[0]:.2f}, {p.interval[1]:.2f}]"
 
 
 def _warn_prediction(predictions, calibration) -> None:

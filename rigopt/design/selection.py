@@ -29,7 +29,7 @@ import scipy.sparse as sparse
 
 from rigopt.design.defaults import DEFAULT_MAX_NODES
 from rigopt.errors import RigoptError
-from rigopt.quiet import quiet_highs
+from rigopt.quiet import HIGHS_OPTIONS, quiet_highs
 
 
 class DesignInfeasible(RigoptError):
@@ -181,8 +181,7 @@ def select_cameras(cost, sees: np.ndarray, required: np.ndarray, mount: np.ndarr
     if cost_weight and mount_cost is not None:
         penalty = cost_weight / n_ref * (np.asarray(mount_cost, dtype=float) @ x)
     problem = cp.Problem(cp.Minimize(objective + penalty), constraints)
-    options = {"mip_rel_gap": float(mip_gap), "mip_max_nodes": int(max_nodes), "threads": 1, "random_seed": 0,
-               "output_flag": False}  # output_flag: no banner on either stream
+    options = {**HIGHS_OPTIONS, "mip_rel_gap": float(mip_gap), "mip_max_nodes": int(max_nodes)}
     if time_limit is not None:
         options["time_limit"] = float(time_limit)
     quiet_highs()

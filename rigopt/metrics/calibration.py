@@ -90,15 +90,17 @@ class Calibration:
         calibration's own for rigcd+."""
         return self.lambdas if self.metric == "rigcd+" else UNIT_LAMBDAS
 
-    def predict(self, t, r, f, count) -> np.ndarray:
-        """Predicted relative drop; t (m), r (rad), f (deg), count (-) are broadcastable arrays."""
+    def linear_drop(self, t, r, f, count) -> np.ndarray:
+        """The linear prediction ``K (alpha (lambda_t t + lambda_r r + lambda_f f) + (1 - alpha) count)``, the score
+        the benchmark's calibration fits: unbounded (it can pass 1); t (m), r (rad), f (deg), count (-) are
+        broadcastable arrays. The relative mAP drop rigopt reports is :meth:`bounded_drop`."""
         match = self.lambda_t * np.asarray(t) + self.lambda_r * np.asarray(r) + self.lambda_f * np.asarray(f)
         return self.K * (self.alpha * match + (1.0 - self.alpha) * np.asarray(count))
 
-    def drop(self, t, r, f, count) -> np.ndarray:
-        """Predicted relative drop: the linear prediction through the link (in [0, 1]); without a link the
-        linear prediction itself."""
-        linear = self.predict(t, r, f, count)
+    def bounded_drop(self, t, r, f, count) -> np.ndarray:
+        """The predicted relative mAP drop the commands report: :meth:`linear_drop` through the calibration's
+        link (in [0, 1]); without a link the linear prediction itself."""
+        linear = self.linear_drop(t, r, f, count)
         return self.link(linear) if self.link is not None else linear
 
     def knocked_out(self, component: str) -> "Calibration":
@@ -192,14 +194,14 @@ def fit_qp(features: np.ndarray, delta: np.ndarray) -> np.ndarray:
     Clarabel (interior point) where HiGHS fails, as its QP solver does on some well-posed problems."""
     import cvxpy as cp
 
-    from rigopt.quiet import quiet_highs
+    from rigopt.quiet import HIGHS_OPTIONS, quiet_highs
 
     quiet_highs()
     beta = cp.Variable(features.shape[1], nonneg=True)
     problem = cp.Problem(cp.Minimize(cp.sum_squares(features @ beta - delta)))
-    for solver in (cp.HIGHS, cp.CLARABEL):
+    for solver, options in ((cp.HIGHS, HIGHS_OPTIONS), (cp.CLARABEL, {})):
         try:
-            problem.solve(solver=solver)
+            problem.solve(solver=solver, **options)
         except cp.error.SolverError:
             continue
         if problem.status == cp.OPTIMAL:

@@ -147,8 +147,8 @@ class CalibrationStudy:
 
 def _predictions(drops: TransferDrops, features: np.ndarray, calibration: Calibration,
                  control: np.ndarray) -> PairPredictions:
-    predicted = calibration.predict(*features.T)
-    drop = calibration.drop(*features.T)
+    predicted = calibration.linear_drop(*features.T)
+    drop = calibration.bounded_drop(*features.T)
     low, high = calibration.interval.around(drop) if calibration.interval else (np.full_like(drop, np.nan),) * 2
     rank_observed, rank_predicted = np.zeros(len(predicted)), np.zeros(len(predicted))
     groups = {}
@@ -169,8 +169,8 @@ def _split_reliability(pairs: PairPredictions, resamples: int, seed: int) -> tup
 def _knockout(calibration: Calibration, pairs: PairPredictions) -> Knockout:
     held = ~pairs.control
     x, delta = pairs.features[held], pairs.delta[held]
-    rhos = {name: spearman(calibration.knocked_out(name).predict(*x.T), delta)[0] for name in KNOCKOUTS}
-    return Knockout(full=spearman(calibration.predict(*x.T), delta)[0], **rhos)
+    rhos = {name: spearman(calibration.knocked_out(name).linear_drop(*x.T), delta)[0] for name in KNOCKOUTS}
+    return Knockout(full=spearman(calibration.linear_drop(*x.T), delta)[0], **rhos)
 
 
 def calibrate(table: TransferTable, control_rigs: Sequence[str] = CONTROL_RIGS,
@@ -255,7 +255,7 @@ def _with_link(fit: CalibrationFit, features: np.ndarray, mask: np.ndarray, drop
         if key not in cache:
             cache[key] = fit_calibration(x[fit_mask], delta[fit_mask], fit.calibration.name, solver).calibration
         calibration = cache[key]
-        return lambda predict_mask: calibration.predict(*x[predict_mask].T)
+        return lambda predict_mask: calibration.linear_drop(*x[predict_mask].T)
 
     choice = choose_link(drops.train[mask], drops.test[mask], delta, refit)
     calibration = replace(fit.calibration, link=choice.link, interval=choice.interval, domain=domain_of(x))

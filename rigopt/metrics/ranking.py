@@ -64,8 +64,8 @@ def predict_transfer(reference: Rig, candidates: Sequence[Rig],
         weighted = rigcd_matrix([reference], candidates, DEFAULT_ALPHA, DEFAULT_LAMBDAS)
     else:
         weighted = rigcd_matrix([reference], candidates, calibration.alpha, calibration.lambdas)
-        linear = calibration.predict(*x.T).tolist()
-        drops = calibration.drop(*x.T).tolist()
+        linear = calibration.linear_drop(*x.T).tolist()
+        drops = calibration.bounded_drop(*x.T).tolist()
         if calibration.interval is not None:
             intervals = list(zip(*(v.tolist() for v in calibration.interval.around(drops))))
         if calibration.domain is not None:

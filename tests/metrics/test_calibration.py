@@ -195,7 +195,7 @@ def test_prediction_equals_beta_dot_x_without_fallback(seed):
     x = rng.uniform(0.0, 3.0, (20, 4))
     c = reparameterise(beta, "random")
     assert not c.fallback
-    assert c.predict(*x.T) == pytest.approx(x @ beta, rel=1e-12, abs=1e-14)
+    assert c.linear_drop(*x.T) == pytest.approx(x @ beta, rel=1e-12, abs=1e-14)
 
 
 @pytest.mark.parametrize("beta_count, expected_k", [(0.0, 1.0), (0.3, 1.0), (1.0, 1.0), (2.5, 2.5)])
@@ -206,7 +206,7 @@ def test_fallback_when_no_geometric_weight(beta_count, expected_k):
     assert c.lambdas == (1.0, 1.0, 1.0)
     assert c.K == expected_k
     t, r, f, n = np.array([0.5, 1.0]), np.array([0.2, 0.0]), np.array([10.0, 0.0]), np.array([0.25, 0.5])
-    assert c.predict(t, r, f, n) == pytest.approx(expected_k * (0.9 * (t + r + f) + 0.1 * n), rel=1e-14)
+    assert c.linear_drop(t, r, f, n) == pytest.approx(expected_k * (0.9 * (t + r + f) + 0.1 * n), rel=1e-14)
 
 
 def test_fallback_threshold_on_tiny_geometric_weights():
@@ -237,7 +237,7 @@ def test_knocked_out_sets_one_component(component, field, value):
 def test_knocked_out_count_prediction_drops_the_count_term():
     c = reparameterise((0.3, 0.6, 0.9, 0.4), "hand")
     # K = 1, lambdas (0.5, 1, 1.5): with alpha = 1 the prediction is 0.5 t + r + 1.5 f
-    assert c.knocked_out("count").predict(2.0, 1.0, 0.5, 0.75) == pytest.approx(0.5 * 2 + 1 + 1.5 * 0.5)
+    assert c.knocked_out("count").linear_drop(2.0, 1.0, 0.5, 0.75) == pytest.approx(0.5 * 2 + 1 + 1.5 * 0.5)
 
 
 def test_knocked_out_unknown_component_raises():
@@ -305,7 +305,7 @@ def test_hand_written_weights_file_without_beta_loads(tmp_path):
     path.write_text(json.dumps({"K": 0.5, "alpha": 0.8, "lambda_t": 2.0, "lambda_r": 0.5, "lambda_f": 0.1}))
     c = load_weights(path)
     # K (alpha (lt t + lr r + lf f) + (1 - alpha) count) with t = 1, r = 2, f = 10, count = 0.5
-    assert c.predict(1.0, 2.0, 10.0, 0.5) == pytest.approx(0.5 * (0.8 * (2.0 + 1.0 + 1.0) + 0.2 * 0.5))
+    assert c.linear_drop(1.0, 2.0, 10.0, 0.5) == pytest.approx(0.5 * (0.8 * (2.0 + 1.0 + 1.0) + 0.2 * 0.5))
 
 
 VALID = {"K": 0.5, "alpha": 0.8, "lambda_t": 2.0, "lambda_r": 0.5, "lambda_f": 0.1}

@@ -54,7 +54,7 @@ def test_the_transferred_rho_is_spearman_of_the_prediction_on_the_held_out_pairs
     held = ~(np.isin(drops.train, list(real_study.control_rigs)) & np.isin(drops.test, list(real_study.control_rigs)))
     for result in transfer.models:
         mine = (drops.model == result.model) & held
-        rho = spearmanr(other.predict(*x[mine].T), drops.delta[mine]).statistic
+        rho = spearmanr(other.linear_drop(*x[mine].T), drops.delta[mine]).statistic
         assert result.heldout.rho == pytest.approx(rho, abs=1e-12)
 
 

@@ -100,7 +100,7 @@ def test_every_fit_carries_a_link_interval_and_domain_from_its_control_pairs(stu
 def test_reported_interval_coverage_is_the_share_of_held_out_drops_inside(study):
     for m in study.models:
         pairs, held = m.pairs, ~m.pairs.control
-        low, high = m.fit.calibration.interval.around(m.fit.calibration.drop(*pairs.features[held].T))
+        low, high = m.fit.calibration.interval.around(m.fit.calibration.bounded_drop(*pairs.features[held].T))
         inside = np.mean((low <= pairs.delta[held]) & (pairs.delta[held] <= high))
         assert m.bounded_heldout.coverage == pytest.approx(inside)
         assert m.bounded_heldout.n == held.sum()

@@ -165,7 +165,7 @@ def test_heldout_rho_on_reference_features_agrees_to_three_decimals(study, drops
                                                                     model):
     entry = model_entry(study, model)
     x, y = heldout_by_hand(model, drops_by_hand, reference_features)
-    expected = spearmanr(entry.fit.calibration.predict(*x.T), y).statistic
+    expected = spearmanr(entry.fit.calibration.linear_drop(*x.T), y).statistic
     assert entry.heldout.rho == pytest.approx(expected, abs=1e-3)
 
 
@@ -176,7 +176,7 @@ def test_heldout_rho_treats_equal_predictions_as_ties(study, drops_by_hand, refe
     for model in MODELS:
         entry = model_entry(study, model)
         x, y = heldout_by_hand(model, drops_by_hand, reference_features)
-        exact = spearmanr(np.round(entry.fit.calibration.predict(*x.T), 10), y).statistic
+        exact = spearmanr(np.round(entry.fit.calibration.linear_drop(*x.T), 10), y).statistic
         assert entry.heldout.rho == pytest.approx(exact, abs=1e-9), model
 
 
@@ -202,7 +202,7 @@ def test_predictions_come_from_k_alpha_lambdas(study, model):
 def test_predictions_on_reference_features(study, reference_features, model):
     entry = model_entry(study, model)
     x = np.array([reference_features[k] for k in zip(entry.pairs.train, entry.pairs.test)])
-    assert np.allclose(entry.pairs.predicted, entry.fit.calibration.predict(*x.T), rtol=0, atol=1e-7)
+    assert np.allclose(entry.pairs.predicted, entry.fit.calibration.linear_drop(*x.T), rtol=0, atol=1e-7)
 
 
 def test_fast_bev_uses_the_fallback_prediction(study):
