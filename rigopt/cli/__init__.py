@@ -121,7 +121,19 @@ def run(argv: list[str] | None = None) -> int:
 
 
 def main() -> None:
-    """The console script: run the CLI with C-level stdout diverted to stderr, exit with its code."""
+    """The console script: run the CLI with C-level stdout diverted to stderr, exit with its code.
+
+    After Ctrl-C the process ends at once (``os._exit``) once its streams are flushed: a native library's
+    worker threads (the ray caster's, a solver's) may still be running, and tearing the interpreter down under
+    them can abort it ("Fatal Python error: PyThreadState_Get"). Partial outputs are already gone by then
+    (``rigopt.output`` removes them as the interrupt passes)."""
     with _CStdoutToStderr():
         code = run()
+    if code == INTERRUPTED:
+        for stream in (sys.stdout, sys.stderr):
+            try:
+                stream.flush()
+            except (OSError, ValueError):
+                pass
+        os._exit(code)
     sys.exit(code)

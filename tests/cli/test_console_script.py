@@ -110,3 +110,25 @@ def test_help_goes_to_stdout(tmp_path):
     stdout, stderr = process.communicate(timeout=120)
     assert process.returncode == 0, stderr
     assert "design" in stdout and "calibrate" in stdout
+
+
+@pytest.mark.parametrize("after_line", ["sampling mount candidates", "MILP:"])
+def test_ctrl_c_during_a_design_ends_cleanly(tmp_path, after_line):
+    """Ctrl-C at two stages of a design (native ray casting; the MILP): exit 130, one 'interrupted' line, no
+    traceback or interpreter abort, and no output folder or partial sibling left behind."""
+    import signal
+
+    process = start(["design", *SMALL_DESIGN, "--out", "{tmp}/design"], tmp_path)
+    seen = []
+    for line in process.stderr:  # the progress lines: interrupt once the stage has started
+        seen.append(line)
+        if after_line in line:
+            process.send_signal(signal.SIGINT)
+            break
+    stdout, rest = process.communicate(timeout=120)
+    stderr = "".join(seen) + rest
+    assert process.returncode == 130, stderr
+    assert "rigopt: interrupted" in stderr
+    assert "Traceback" not in stderr and "Fatal Python error" not in stderr
+    assert not (tmp_path / "design").exists()
+    assert not [p.name for p in tmp_path.iterdir() if p.name.startswith(".design")]
