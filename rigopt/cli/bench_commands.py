@@ -7,7 +7,7 @@ from typing import List, Optional
 
 import typer
 
-from rigopt.cli.app import PICTURE_SUFFIXES, app, console, status_console
+from rigopt.cli.app import PICTURE_SUFFIXES, app, console, print_next, status_console
 from rigopt.errors import RigoptError
 
 #: Largest image side ``bench generate`` renders (px); larger sizes are refused with a memory estimate.
@@ -85,6 +85,10 @@ def generate_command(
                                lambda message: status_console.print(f"rigopt: note: {message}", markup=False,
                                                                     highlight=False, soft_wrap=True), ray, workers)
     console.print("wrote " + ", ".join(str(r) for r in roots))
+    print_next(f"rigopt bench show {out} --rig {roots[0].parent.name} --split {split} --out sample.png (a sample's "
+               "images with their boxes)",
+               f"rigopt bench train --data {out} --rig {roots[0].parent.name} --model lss (a detector on it; a train "
+               "split: --split train)")
 
 
 @bench_app.command("show")

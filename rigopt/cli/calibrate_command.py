@@ -8,7 +8,7 @@ from typing import List, Optional
 
 import typer
 
-from rigopt.cli.app import FORCE_HELP, app, console, note, print_json, print_table
+from rigopt.cli.app import FORCE_HELP, app, console, note, print_json, print_next, print_table
 from rigopt.cli.metric_commands import METRIC_HELP
 from rigopt.errors import RigoptError
 
@@ -102,6 +102,7 @@ def calibrate_command(
                                  *write_calibration_figures(study, work)], work, out)
         if not as_json:
             console.print(f"wrote {len(written)} files to {out}")
+            print_next(f"open {out} (calibration.json, the pairs table and the figures: heatmaps, scatter plots)")
     if as_json:
         print_json(report)
         return

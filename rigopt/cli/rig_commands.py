@@ -7,7 +7,7 @@ from typing import Optional
 
 import typer
 
-from rigopt.cli.app import app, console, import_app, note, print_json, print_table, status_console
+from rigopt.cli.app import app, console, import_app, note, print_json, print_next, print_table, status_console
 from rigopt.cli.parsing import parse_image_size
 from rigopt.errors import RigoptError
 
@@ -121,6 +121,9 @@ def _finish_import(imported, out: Path, as_json: bool, source: str) -> None:
         return
     console.print(f"wrote {out}: {len(rig)} cameras ({', '.join(c.id for c in rig.cameras)})", highlight=False,
                   markup=False, soft_wrap=True)
+    print_next(f"rigopt check {out} (is every camera mountable on {rig.vehicle}?)",
+               f"rigopt rigcd R1 {out} (distance and predicted drop from a benchmark rig)",
+               f"rigopt coverage {out} --out {out.with_suffix('')}-coverage (what it sees around its vehicle)")
 
 
 def _camera_row(camera) -> dict:
@@ -376,3 +379,5 @@ def export_command(
         status_console.print(f"warning: {warning}", highlight=False, markup=False, soft_wrap=True)
     console.print(f"wrote {out}: {loaded.name} as {format_name} ({len(loaded)} cameras)", highlight=False,
                   markup=False, soft_wrap=True)
+    print_next(f"load it in its tool (docs/formats.md, section on {format_name}, says how); "
+               f"rigopt import {format_name} {out} --out back.json reads it back as the same rig")
