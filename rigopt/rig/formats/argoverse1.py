@@ -30,8 +30,8 @@ from pathlib import Path
 
 from rigopt.errors import RigFileError, RigoptError
 from rigopt.output import existing_file
-from rigopt.rig.formats.common import (Imported, body_rotation, make_camera, make_lens, make_rig, numbers,
-                                       quaternion_rotation, read_json, unit_quaternion)
+from rigopt.rig.formats.common import (Imported, make_camera, make_lens, make_rig, numbers,
+                                       optical_quaternion_rotation, read_json, unit_quaternion)
 from rigopt.rig.formats.datasets import axle_height_origin
 from rigopt.rig.model import RigOrigin
 
@@ -119,7 +119,7 @@ def read_argoverse1(path, name: str | None = None, vehicle: str = "argoverse1", 
         else:
             lens = make_lens(where, *size, fx, fy, cx, cy)
         position = t + [0.0, 0.0, raise_by]
-        rig_cameras.append(make_camera(where, camera, position, body_rotation(quaternion_rotation(q)), lens))
+        rig_cameras.append(make_camera(where, camera, position, optical_quaternion_rotation(q), lens))
     notes = [origin_text, "lenses keep their radial distortion (OpenCV radtan k1, k2, 0, 0, k3): the raw sensors, not "
              "the distributed images, which are undistorted" if raw_lens else
              "Argoverse 1 imagery is distributed undistorted: k1, k2, k3 are not applied (pinhole cameras; --raw-lens "

@@ -135,9 +135,10 @@ def rotation_matrix(values, where: str) -> np.ndarray:
     return u @ vt
 
 
-def quaternion_rotation(q: np.ndarray) -> np.ndarray:
-    """(3, 3) rotation of a (w, x, y, z) unit quaternion."""
-    return quaternion_to_matrix(q)
+def optical_quaternion_rotation(q: np.ndarray) -> np.ndarray:
+    """rigopt's ``R_vehicle_cam`` (3, 3) of a camera whose optical frame's orientation in the ego frame is the
+    (w, x, y, z) unit quaternion ``q`` (nuScenes, Argoverse 1 and 2, DGP)."""
+    return body_rotation(quaternion_to_matrix(q))
 
 
 def body_rotation(r_ego_optical: np.ndarray) -> np.ndarray:

@@ -51,9 +51,9 @@ import numpy as np
 
 from rigopt.errors import RigFileError
 from rigopt.output import existing_file, existing_folder
-from rigopt.rig.formats.common import (Imported, body_rotation, choose_calibration, in_modules, make_camera,
-                                       make_lens, make_rig, numbers, origin_note, quaternion_rotation, read_json,
-                                       rotation_matrix, same_cameras, unit_quaternion, whole_number)
+from rigopt.rig.formats.common import (Imported, choose_calibration, in_modules, make_camera, make_lens, make_rig,
+                                       numbers, optical_quaternion_rotation, origin_note, read_json, rotation_matrix,
+                                       same_cameras, unit_quaternion, whole_number)
 from rigopt.rig.formats.tfrecord import looks_like_tfrecord
 from rigopt.rig.formats.waymo_v1 import frame_contexts
 from rigopt.rig.model import RigOrigin
@@ -154,7 +154,7 @@ def read_argoverse2(path, name: str | None = None, vehicle: str = "argoverse2",
         height = whole_number(intrinsics["height_px"][k], f"{where} height_px")
         lens = make_lens(where, width, height, fx, fy, cx, cy)
         position = t + np.array([0.0, 0.0, raise_by])
-        cameras.append(make_camera(where, sensor, position, body_rotation(quaternion_rotation(q)), lens))
+        cameras.append(make_camera(where, sensor, position, optical_quaternion_rotation(q), lens))
     notes = (note, "Argoverse 2 imagery is undistorted: k1, k2, k3 are not applied (pinhole cameras)")
     default_name = path.name if folder != path else path.resolve().parent.name
     rig = make_rig(str(folder / AV2_INTRINSICS), name or default_name, vehicle, cameras, origin)
@@ -284,7 +284,7 @@ def _dgp_cameras(file: Path, sizes: dict, image_size) -> tuple[tuple, list[str]]
             size = tuple(image_size)
             defaulted.append(sensor)
         lens = make_lens(where, size[0], size[1], fx, fy, cx, cy, model, values)
-        cameras.append(make_camera(where, sensor, position, body_rotation(quaternion_rotation(q)), lens))
+        cameras.append(make_camera(where, sensor, position, optical_quaternion_rotation(q), lens))
     return tuple(cameras), defaulted
 
 

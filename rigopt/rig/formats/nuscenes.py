@@ -32,9 +32,8 @@ from rigopt.camera import intrinsic_matrix
 from rigopt.errors import RigFileError
 from rigopt.geometry import matrix_to_quaternion
 from rigopt.output import existing_folder
-from rigopt.rig.formats.common import (Exported, Imported, body_rotation, choose_calibration, make_camera,
-                                       make_lens, make_rig, numbers, optical_rotation, origin_note, quaternion_rotation,
-                                       read_json,
+from rigopt.rig.formats.common import (Exported, Imported, choose_calibration, make_camera, make_lens, make_rig,
+                                       numbers, optical_quaternion_rotation, optical_rotation, origin_note, read_json,
                                        same_cameras, unit_quaternion, warn_not_carried, warn_origin)
 from rigopt.rig.model import Camera, Rig, RigOrigin
 
@@ -170,7 +169,7 @@ def _camera(record: dict, channel: str, size: tuple[int, int], where: str) -> Ca
         raise RigFileError(f"{where} 'camera_intrinsic' must be [[fx, 0, cx], [0, fy, cy], [0, 0, 1]] "
                            f"(no skew); got {record['camera_intrinsic']!r}")
     lens = make_lens(where, size[0], size[1], k[0, 0], k[1, 1], k[0, 2], k[1, 2])
-    return make_camera(where, channel, translation, body_rotation(quaternion_rotation(quaternion)), lens)
+    return make_camera(where, channel, translation, optical_quaternion_rotation(quaternion), lens)
 
 
 def _sizes_from_sample_data(sample_data, tokens: set[str], directory: Path) -> dict[str, tuple[int, int]]:
