@@ -71,7 +71,9 @@ def find_spec(name: str) -> VehicleSpec:
             raise UnknownNameError(f"user vehicle {folder!r} cannot be read: {problem}; fix its vehicle.toml or "
                                    f"add it again with rigopt vehicle add {folder} --mesh FILE --force")
     listed = [s.name if s.blueprint == s.name else f"{s.name} ({s.blueprint})" for s in specs]
-    raise unknown_name("vehicle", name, listed)
+    error = unknown_name("vehicle", name, listed)
+    raise UnknownNameError(f"{error}; your own vehicles are read from $RIGOPT_HOME/vehicles (default "
+                           "~/.rigopt/vehicles): add one with rigopt vehicle add NAME --mesh FILE")
 
 
 @lru_cache(maxsize=16)
