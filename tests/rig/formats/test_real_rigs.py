@@ -55,6 +55,15 @@ def test_real_rigs_sit_on_the_roof_and_look_level():
             assert abs(camera.forward[2]) < np.sin(np.radians(5.0)), (dataset, camera.id)
 
 
+def quaternion(w, x, y, z) -> np.ndarray:
+    """Scalar-first quaternion -> (3, 3) rotation, written out independently of rigopt."""
+    n = np.linalg.norm([w, x, y, z])
+    w, x, y, z = w / n, x / n, y / n, z / n
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                     [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                     [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
+
+
 def _raw_extrinsics() -> dict:
     """{dataset: {camera: R_ego_camera (3, 3)}} as the datasets' files give them (write_sources.py's values),
     the camera frame being x forward along the optical axis, y left, z up (Waymo's own; the optical frames of
@@ -64,13 +73,6 @@ def _raw_extrinsics() -> dict:
     spec = importlib.util.spec_from_file_location("write_sources", REAL / "write_sources.py")
     sources = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(sources)
-
-    def quaternion(w, x, y, z):  # scalar-first unit quaternion -> matrix, written out independently of rigopt
-        n = np.linalg.norm([w, x, y, z])
-        w, x, y, z = w / n, x / n, y / n, z / n
-        return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-                         [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-                         [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
 
     body_from_optical = sources.OPTICAL_IN_BODY
     return {
@@ -119,3 +121,29 @@ def test_waymo_roof_cluster_is_one_camera_module():
     rig = read_rig(REAL / "waymo.json")
     assert {c.module for c in rig.cameras} == {"roof_cluster"}
     assert all(c.module is None for c in read_rig(REAL / "nuscenes.json").cameras)  # 0.5-1.7 m apart
+
+
+def test_carla_export_of_an_argoverse1_import_reproduces_its_raw_extrinsics(tmp_path):
+    """The same check on the Argoverse 1 fixture (every camera, stereo included): vehicle_SE3_camera_'s
+    scalar-first quaternion is the optical frame's rotation in the ego frame."""
+    import json
+
+    fixture = Path(__file__).resolve().parents[2] / "fixtures" / "formats" / "argoverse1_log"
+    entries = json.loads((fixture / "vehicle_calibration_info.json").read_text())["camera_data_"]
+    body_from_optical = np.array([[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]])
+    raw = {}
+    for entry in entries:
+        name = entry["key"].removeprefix("image_raw_")
+        if not name.endswith("_rect"):
+            coefficients = entry["value"]["vehicle_SE3_camera_"]["rotation"]["coefficients"]
+            raw[name] = quaternion(*coefficients) @ body_from_optical.T
+    rig_file, spawn_list = tmp_path / "av1.json", tmp_path / "spawn.json"
+    assert run_rigopt("import", "argoverse1", fixture, "--cameras", "all", "--out", rig_file).returncode == 0
+    assert run_rigopt("export", rig_file, "--format", "carla", "--out", spawn_list).returncode == 0
+    sensors = {s["id"]: s["transform"]["rotation"] for s in json.loads(spawn_list.read_text())["sensors"]}
+    assert sorted(sensors) == sorted(raw)
+    flip = np.diag([1.0, -1.0, 1.0])
+    for camera, r_ego_camera in raw.items():
+        angles = sensors[camera]
+        carla = _carla_rotate_vector(angles["pitch"], angles["yaw"], angles["roll"])
+        np.testing.assert_allclose(carla, flip @ r_ego_camera @ flip, rtol=0, atol=1e-9, err_msg=camera)
