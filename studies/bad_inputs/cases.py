@@ -16,6 +16,27 @@ RIG = '{"vehicle_type": "vehicle.audi.tt", "cameras": [{"id": "C", "location": L
 WEIGHTS = {"K": 1, "alpha": 0.5, "lambda_t": 1, "lambda_r": 1, "lambda_f": 1}
 CSV_HEADER = "model,train_rig,test_rig,mAP\n"
 CAMERA = '[[cameras]]\nname = "cam"\nwidth = 1280\nheight = 960\nfx = 1000\nfy = 1000\ncx = 640\ncy = 480\n'
+#: A URDF with one camera (90 deg: fx 640 on 1280 px); HFOV, LENS and EXTRA are filled per case.
+URDF = ("<robot name='r'><link name='base_link'/><link name='cam'/>EXTRA<joint name='cam_joint' type='fixed'>"
+        "<parent link='PARENT'/><child link='cam'/><origin xyz='1 0 1.5' rpy='0 0 0'/></joint>"
+        "<gazebo reference='cam'><sensor type='camera' name='cam'><camera><horizontal_fov>HFOV</horizontal_fov>"
+        "<image><width>1280</width><height>720</height></image>LENS</camera></sensor></gazebo></robot>\n")
+URDF_LENS = "<lens><intrinsics><fx>640</fx><fy>640</fy><cx>640</cx><cy>360</cy><s>0</s></intrinsics></lens>"
+
+
+def urdf(hfov="1.5708", lens="", parent="base_link", extra=""):
+    """The one-camera URDF with its field of view (rad), lens block, camera joint's parent and extra elements."""
+    return URDF.replace("HFOV", hfov).replace("LENS", lens).replace("PARENT", parent).replace("EXTRA", extra)
+
+
+def fixed_joint(name, parent, child):
+    return f"<joint name='{name}' type='fixed'><parent link='{parent}'/><child link='{child}'/></joint>"
+
+
+def nuscenes_sample_data(width, height):
+    """sample_data.json of the nuscenes_two tables' camera record c0 with the image size given."""
+    return json.dumps([{"token": "sd0", "calibrated_sensor_token": "c0", "sample_token": "", "width": width,
+                        "height": height}])
 
 
 def make_fixtures(tmp: Path) -> dict[str, str]:
@@ -83,6 +104,15 @@ def make_fixtures(tmp: Path) -> dict[str, str]:
         # Frame.context (1) -> camera_calibrations (2) -> name (1) = 9, not a CameraName
         "waymo_v1_camera_9.tfrecord": tfrecord_record(b"\x0a\x04\x12\x02\x08\x09"),
         "nuscenes_two/sensor.json": json.dumps([{"token": "s", "channel": "CAM_FRONT", "modality": "camera"}]),
+        "waymo_v1_empty.tfrecord": b"",
+        "urdf_fov_0.urdf": urdf(hfov="0"),
+        "urdf_fov_4.urdf": urdf(hfov="4", lens=URDF_LENS),
+        "urdf_fov_disagrees.urdf": urdf(hfov="1.0", lens=URDF_LENS),
+        "urdf_undeclared_parent.urdf": urdf(parent="chassis"),
+        "urdf_loop.urdf": urdf(extra="<link name='a'/><link name='b'/>" + fixed_joint("ab", "a", "b")
+                               + fixed_joint("ba", "b", "a")),
+        "urdf_two_parents.urdf": urdf(extra="<link name='mast'/>" + fixed_joint("mast_joint", "base_link", "mast")
+                                      + fixed_joint("cam_on_mast", "mast", "cam")),
         "nuscenes_two/calibrated_sensor.json": json.dumps([
             {"token": f"c{k}", "sensor_token": "s", "translation": [1.0 + k, 0.0, 1.5], "rotation": [0.5, -0.5, 0.5, -0.5],
              "camera_intrinsic": [[1266.4, 0.0, 800.0], [0.0, 1266.4, 450.0], [0.0, 0.0, 1.0]]} for k in range(2)]),
@@ -99,12 +129,17 @@ def make_fixtures(tmp: Path) -> dict[str, str]:
         + 'distortion = "fisheye"\ncoefficients = [0.05, -0.01, 0, 0]\n',
         "cameras_twice.toml": CAMERA + CAMERA,
     }
+    for folder, (width, height) in {"nuscenes_size_0": (0, 0), "nuscenes_size_fraction": (1600.5, 900)}.items():
+        for table in ("sensor.json", "calibrated_sensor.json"):
+            files[f"{folder}/{table}"] = files[f"nuscenes_two/{table}"]
+        files[f"{folder}/sample_data.json"] = nuscenes_sample_data(width, height)
     for name, content in files.items():
         path = tmp / name
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_bytes(content if isinstance(content, bytes) else content.encode())
-    (tmp / "emptydir").mkdir(exist_ok=True)
-    (tmp / "dir.png").mkdir(exist_ok=True)
+    for folder in ("emptydir", "dir.png", "dir.json", "dir.urdf"):
+        (tmp / folder).mkdir(exist_ok=True)
+    _write_empty_waymo_table(tmp / "waymo_empty" / "camera_calibration.parquet")
     load_vehicle("tt").mesh.export(tmp / "car.stl")
     _write_posed_meshes(load_vehicle("tt").mesh, tmp)
     env = {"RIGOPT_HOME": str(tmp / "home")}
@@ -140,6 +175,18 @@ def make_fixtures(tmp: Path) -> dict[str, str]:
         shutil.copytree(tmp / "bench" / "R1", tmp / "bench_missing" / "R1")
         (tmp / "bench_missing" / "R1" / "mini" / images[0].relative_to(tmp / "bench" / "R1" / "mini")).unlink()
     return env
+
+
+def _write_empty_waymo_table(path: Path) -> None:
+    """A Waymo v2 camera_calibration Parquet file with the columns rigopt reads and no row."""
+    import pyarrow as pa
+    import pyarrow.parquet as parquet
+
+    from rigopt.rig.formats.datasets import WAYMO_COLUMNS
+
+    path.parent.mkdir(parents=True, exist_ok=True)
+    texts = {"key.segment_context_name": pa.string(), "key.camera_name": pa.int8()}
+    parquet.write_table(pa.table({c: pa.array([], type=texts.get(c, pa.float64())) for c in WAYMO_COLUMNS}), path)
 
 
 def _write_posed_meshes(mesh, tmp: Path) -> None:
@@ -356,7 +403,7 @@ CASES: list[tuple[str, list[str], str]] = [
     ("design --out unwritable", [*DESIGN, "--out", "/proc/rigopt-design"], "/proc/rigopt-design"),
     ("design --pareto --out not empty", [*DESIGN, "--pareto", "--out", f"{T}/full"], "--force"),
     # --- import nuscenes ---
-    ("import missing folder", ["import", "nuscenes", f"{T}/none", "--out", f"{T}/r.json"], "no such directory"),
+    ("import missing folder", ["import", "nuscenes", f"{T}/none", "--out", f"{T}/r.json"], "no such folder"),
     ("import tables not UTF-8", ["import", "nuscenes", f"{T}/nuscenes_not_utf8", "--out", f"{T}/r.json"],
      "not UTF-8"),
     ("import --out not .json", ["import", "nuscenes", f"{T}/none", "--out", f"{T}/r.txt"], ".json"),
@@ -381,7 +428,7 @@ CASES: list[tuple[str, list[str], str]] = [
     ("import argoverse2 not feather", ["import", "argoverse2", f"{T}/av2", "--out", f"{T}/r.json"],
      "not a readable"),
     ("import argoverse2 missing folder", ["import", "argoverse2", f"{T}/none", "--out", f"{T}/r.json"],
-     "no such directory"),
+     "no such folder"),
     ("import --origin custom without offset", ["import", "carla", f"{T}/carla_no_sensors.json", "--out",
                                                f"{T}/r.json", "--origin", "custom"], "--origin-offset X,Y,Z"),
     ("import --origin-offset without custom", ["import", "carla", f"{T}/carla_no_sensors.json", "--out",
@@ -389,7 +436,7 @@ CASES: list[tuple[str, list[str], str]] = [
     ("import --origin-offset malformed", ["import", "carla", f"{T}/carla_no_sensors.json", "--out", f"{T}/r.json",
                                           "--origin", "custom", "--origin-offset", "1;0;0"], "three numbers"),
     ("import argoverse1 missing file", ["import", "argoverse1", f"{T}/none", "--out", f"{T}/r.json"],
-     "no such file"),
+     "no such Argoverse 1 calibration file"),
     ("import argoverse1 unknown camera", ["import", "argoverse1", f"{T}/av1", "--out", f"{T}/r.json"],
      "not an Argoverse 1 camera"),
     ("import argoverse1 --cameras unknown", ["import", "argoverse1", f"{T}/av1", "--out", f"{T}/r.json",
@@ -430,7 +477,8 @@ CASES: list[tuple[str, list[str], str]] = [
     ("export nuscenes --out not empty", ["export", "R1", "--format", "nuscenes", "--out", f"{T}/full"], "--force"),
     ("export unknown rig", ["export", "R99", "--format", "carla", "--out", f"{T}/x.json"], "R99"),
     # --- bench generate / show ---
-    ("generate --size 100000x100000", [*BENCH, "--size", "100000x100000"], "GiB"),
+    ("generate --size 20000x20000", [*BENCH, "--size", "20000x20000"], "GiB"),
+    ("generate --size 100000x100000", [*BENCH, "--size", "100000x100000"], "each side 1 to 20000"),
     ("generate --size text", [*BENCH, "--size", "big"], "WIDTHxHEIGHT"),
     ("generate --seed -5", [*BENCH, "--seed", "-5"], "--seed"),
     ("generate --scenes 0", [*BENCH, "--scenes", "0"], "--scenes"),
@@ -439,7 +487,7 @@ CASES: list[tuple[str, list[str], str]] = [
     ("generate unknown rig", ["bench", "generate", "--rigs", "R99", "--out", f"{T}/gen"], "R99"),
     ("generate --out is a file", ["bench", "generate", "--rigs", "R1", "--out", f"{T}/file.txt"], "is a file"),
     ("generate --out under a file", ["bench", "generate", "--rigs", "R1", "--out", f"{T}/file.txt/g"], "is a file"),
-    ("show missing folder", ["bench", "show", f"{T}/none", "--rig", "R1", "--out", f"{T}/s.png"], "no such rig"),
+    ("show missing folder", ["bench", "show", f"{T}/none", "--rig", "R1", "--out", f"{T}/s.png"], "no such folder"),
     ("show sample out of range", ["bench", "show", f"{T}/bench", "--rig", "R1", "--sample", "99", "--out",
                                   f"{T}/s.png"], "--sample"),
     ("show missing image", ["bench", "show", f"{T}/bench_missing", "--rig", "R1", "--out", f"{T}/s.png"],
@@ -466,4 +514,58 @@ CASES: list[tuple[str, list[str], str]] = [
                                  f"{T}/bench"], "no such design"),
     ("validate --out not .json", ["validate", f"{T}/rig_nan.json", "--ref", "R1", "--model", "lss", "--data",
                                   f"{T}/bench", "--out", f"{T}/v.txt"], ".json"),
+    # --- import, export, calibrate, bench, validate edges (issue 29, parts 10-11) ---
+    ("import waymo v2 table without rows", ["import", "waymo", f"{T}/waymo_empty", "--out", f"{T}/r.json"],
+     "no rows"),
+    ("import waymo v1 TFRecord without records", ["import", "waymo", f"{T}/waymo_v1_empty.tfrecord", "--out",
+                                                  f"{T}/r.json"], "holds no records"),
+    ("import urdf horizontal_fov 0", ["import", "urdf", f"{T}/urdf_fov_0.urdf", "--out", f"{T}/r.json"],
+     "(0, pi)"),
+    ("import urdf horizontal_fov 4 with intrinsics", ["import", "urdf", f"{T}/urdf_fov_4.urdf", "--out",
+                                                      f"{T}/r.json"], "(0, pi)"),
+    ("import urdf horizontal_fov against intrinsics", ["import", "urdf", f"{T}/urdf_fov_disagrees.urdf", "--out",
+                                                       f"{T}/r.json"], "disagrees with <lens><intrinsics>"),
+    ("import urdf joint to an undeclared link", ["import", "urdf", f"{T}/urdf_undeclared_parent.urdf", "--out",
+                                                 f"{T}/r.json"], "'chassis' is not a declared <link>"),
+    ("import urdf joint loop", ["import", "urdf", f"{T}/urdf_loop.urdf", "--out", f"{T}/r.json"], "loop"),
+    ("import urdf link with two parents", ["import", "urdf", f"{T}/urdf_two_parents.urdf", "--out", f"{T}/r.json"],
+     "two parents"),
+    ("import urdf given a folder", ["import", "urdf", f"{T}/emptydir", "--out", f"{T}/r.json"],
+     "is a folder; give the URDF file itself"),
+    ("import nuscenes image width 0", ["import", "nuscenes", f"{T}/nuscenes_size_0", "--out", f"{T}/r.json"],
+     "record 0 (token 'sd0')"),
+    ("import nuscenes image width 1600.5", ["import", "nuscenes", f"{T}/nuscenes_size_fraction", "--out",
+                                            f"{T}/r.json"], "positive whole pixels"),
+    ("import nuscenes given a file", ["import", "nuscenes", f"{T}/file.txt", "--out", f"{T}/r.json"],
+     "is a file; give the folder holding"),
+    ("import --image-size 99999x99999", ["import", "nuscenes", f"{T}/nuscenes_two", "--out", f"{T}/r.json",
+                                         "--image-size", "99999x99999"], "each side 1 to 20000"),
+    ("design --image-size 99999x99999", [*DESIGN, "--image-size", "99999x99999"], "each side 1 to 20000"),
+    ("rig file .json that is a folder", ["rigv", f"{T}/dir.json"], "is a folder; give the rig file itself"),
+    ("export --out a folder for a file", ["export", "R1", "--format", "urdf", "--out", f"{T}/dir.urdf"],
+     "is a folder; give the name of the file"),
+    ("calibrate --rigs missing", [*CAL, SHIPPED, "--rigs", f"{T}/no_rigs"], "--rigs"),
+    ("calibrate --rigs a file", [*CAL, SHIPPED, "--rigs", f"{T}/file.txt"], "is a file; give the folder holding"),
+    ("calibrate results naming a rig outside the library", [*CAL, "{repo}/baselines/transfer"],
+     "give --rigs FOLDER"),
+    ("calibrate --rigs without the results' rig", [*CAL, "{repo}/baselines/transfer", "--rigs", f"{T}/emptydir"],
+     "add --rigs"),
+    ("calibrate --results one model's JSON", [*CAL, f"{T}/results_no_diagonal/M/trained_on_R1.json"],
+     "is a JSON file"),
+    ("train --data missing", ["bench", "train", "--data", f"{T}/none", "--rig", "R1", "--model", "lss"],
+     "none: no such folder"),
+    ("evaluate --data missing", ["bench", "evaluate", "--data", f"{T}/none", "--rig", "R1", "--model", "lss"],
+     "none: no such folder"),
+    ("matrix --data missing", ["bench", "matrix", "--data", f"{T}/none", "--rigs", "R1", "--model", "lss", "--out",
+                               f"{T}/m"], "none: no such folder"),
+    ("validate --data missing", ["validate", f"{T}/rig_nan.json", "--ref", "R1", "--model", "lss", "--data",
+                                 f"{T}/none"], "none: no such folder"),
+    ("train --data a file", ["bench", "train", "--data", f"{T}/file.txt", "--rig", "R1", "--model", "lss"],
+     "is a file; give the folder holding"),
+    ("evaluate --checkpoint a folder", ["bench", "evaluate", "--data", f"{T}/bench", "--rig", "R1", "--model", "lss",
+                                        "--checkpoint", f"{T}/emptydir"], "is a folder; give the checkpoint file"),
+    ("validate design a folder", ["validate", f"{T}/emptydir", "--ref", "R1", "--model", "lss", "--data",
+                                  f"{T}/bench"], "is a folder; give the design file"),
+    ("bench show data a file", ["bench", "show", f"{T}/file.txt", "--rig", "R1", "--out", f"{T}/s.png"],
+     "is a file; give the folder holding"),
 ]

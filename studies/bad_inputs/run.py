@@ -38,6 +38,25 @@ A full disk (ENOSPC) while writing gives `rigopt: error: --out OUT: cannot write
 the device; free some space or write elsewhere); nothing was changed there` (tested by injecting the error into
 the writers: tests/test_output.py, tests/cli/test_atomic_outputs.py).
 
+## Places: files, folders, partial outputs
+
+Every path a command reads is checked for what it must be (`rigopt.output.existing_file` / `existing_folder`,
+used by the rig file and format readers, `calibrate --results/--test-on/--rigs`, `--data`, `--runs`,
+`--checkpoint`, `validate`'s design, `bench show`): a folder given for a file says `X is a folder; give the ...
+file itself`, a file given for a folder `X is a file; give the folder holding ...`, and only a missing place
+says `no such ...`. A missing `--data` folder is said as such, not as a missing trained model. `calibrate
+--rigs` takes several folders (the first holding `<rig>.json`, in it or below it, wins); a rig the results name
+that is in none of them nor in the library is refused before any work, naming `--rigs` as the fix (`--rigs
+baselines/rigs` finds the real datasets' rigs in `baselines/rigs/real/`). Image sizes (`--image-size`,
+`bench generate --size`) are whole pixels, 1 to 20000 a side, through one parser (`rigopt/cli/parsing.py`).
+
+A run killed outright (SIGKILL, power loss) cannot remove its temporary sibling `.NAME.partial-PID`: the next
+atomic write of the same target removes every such sibling whose process id no longer runs (`os.kill(pid, 0)`
+finds no process), and puts back a previous output that was set aside (`.NAME.partial-PID.old`) when the
+target itself is missing. A partial of a running process is left alone.
+
+## The catalogue
+
 The table is written by `studies/bad_inputs/run.py`, which runs each case through the installed console script
 (`{tmp}` is a scratch folder with the files named, `{repo}` the checkout); tests/cli/test_bad_inputs.py runs
 each in-process and checks that the message here is the one rigopt prints.
