@@ -24,6 +24,7 @@ from typing import Iterator
 import numpy as np
 
 from rigopt.errors import RigFileError
+from rigopt.output import existing_file
 
 #: CRC32C's polynomial, bit-reflected.
 CASTAGNOLI = 0x82F63B78
@@ -121,13 +122,9 @@ def looks_like_tfrecord(path: Path) -> bool:
 def tfrecord_records(path: Path, what: str) -> Iterator[tuple[int, bytes]]:
     """(index, data) of every record of the TFRecord file ``path``, both CRCs checked; a RigFileError names the
     file and record for a file that is not a TFRecord, a truncated record or a CRC that does not match."""
-    path = Path(path)
+    path = existing_file(path, "TFRecord file", f"pass {what}", kind=RigFileError)
     try:
         file = open(path, "rb")
-    except FileNotFoundError:
-        raise RigFileError(f"{path}: no such file; pass {what}") from None
-    except IsADirectoryError:
-        raise RigFileError(f"{path}: is a folder, expected {what}") from None
     except OSError as error:
         raise RigFileError(f"{path}: cannot read it ({error.strerror}); pass {what}") from None
     with file:
