@@ -127,20 +127,27 @@ PANEL = 0.025
 def thin_fire_truck_parts() -> dict[str, trimesh.Trimesh]:
     """A fire truck as a simulator exports it: every wall a separate panel 2.5 cm thick (closed slabs that do
     not join: a few cm gaps at the corners), no floor, an open windshield (one single-sided sheet), a ladder
-    of 3 cm rails and 2 cm rungs on posts above the body's roof, a light bar on the cab, four tyres."""
+    of 3 cm rails and 2 cm rungs on posts above the body's roof, a 4 cm light bar on posts above the cab, four
+    tyres."""
     t = PANEL
     parts = {
         # cab: x in [2.3, 4.2], lower than the body
-        "cab_left": _box([2.3, 1.25 - t, 0.7], [3.7, 1.25, 2.9]), "cab_right": _box([2.3, -1.25, 0.7], [3.7, -1.25 + t, 2.9]),
+        "cab_left": _box([2.3, 1.25 - t, 0.7], [3.7, 1.25, 2.9]),
+        "cab_right": _box([2.3, -1.25, 0.7], [3.7, -1.25 + t, 2.9]),
         "cab_left_low": _box([3.72, 1.25 - t, 0.7], [4.15, 1.25, 1.8]),
         "cab_right_low": _box([3.72, -1.25, 0.7], [4.15, -1.25 + t, 1.8]),
-        "cab_roof": _box([2.3, -1.22, 2.9], [3.7, 1.22, 2.9 + t]), "cab_grille": _box([4.2 - t, -1.2, 0.7], [4.2, 1.2, 1.75]),
+        "cab_roof": _box([2.3, -1.22, 2.9], [3.7, 1.22, 2.9 + t]),
+        "cab_grille": _box([4.2 - t, -1.2, 0.7], [4.2, 1.2, 1.75]),
         "cab_back": _box([2.3, -1.2, 0.9], [2.3 + t, 1.2, 2.88]),
         # body: x in [-4.2, 2.25]
-        "body_left": _box([-4.2, 1.25 - t, 0.9], [2.25, 1.25, 3.2]), "body_right": _box([-4.2, -1.25, 0.9], [2.25, -1.25 + t, 3.2]),
-        "body_roof": _box([-4.2, -1.22, 3.2], [2.25, 1.22, 3.2 + t]), "body_rear": _box([-4.2, -1.2, 0.9], [-4.2 + t, 1.2, 3.18]),
+        "body_left": _box([-4.2, 1.25 - t, 0.9], [2.25, 1.25, 3.2]),
+        "body_right": _box([-4.2, -1.25, 0.9], [2.25, -1.25 + t, 3.2]),
+        "body_roof": _box([-4.2, -1.22, 3.2], [2.25, 1.22, 3.2 + t]),
+        "body_rear": _box([-4.2, -1.2, 0.9], [-4.2 + t, 1.2, 3.18]),
         "body_front": _box([2.25 - t, -1.2, 0.9], [2.25, 1.2, 3.18]),
-        "light_bar": _box([3.365, -0.8, 2.95], [3.435, 0.8, 3.05]),
+        "light_bar": _box([3.38, -0.8, 2.99], [3.42, 0.8, 3.03]),  # a 4 x 4 cm LED bar on two posts
+        "light_bar_post_left": _box([3.39, 0.49, 2.9 + t], [3.41, 0.51, 2.99]),
+        "light_bar_post_right": _box([3.39, -0.51, 2.9 + t], [3.41, -0.49, 2.99]),
     }
     windshield = trimesh.Trimesh([[4.2, -1.2, 1.8], [4.2, 1.2, 1.8], [3.7, 1.2, 2.85], [3.7, -1.2, 2.85]],
                                  [[0, 1, 2], [0, 2, 3]], process=False)

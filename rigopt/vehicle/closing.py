@@ -11,8 +11,8 @@ nodes ``pitch`` m apart (:mod:`rigopt.vehicle.voxel_grid`); ``pitch`` = length /
 1. Inside: a node is inside when at least 4 of the 6 axis rays from it cross the surface with a non-zero
    signed count or an odd number of times (exact crossings; a point in a body without a floor sees the body
    in 5 directions, a point under it between the wheels in 1; overlapping parts count 2).
-2. Thin parts: the surface is sampled (spacing half a pitch); a sample with no inside node among the 27
-   around its nearest node is *thin* (an open panel, a sheet, a rail, a ladder, a bar: no volume the grid can see).
+2. Thin parts: the surface is sampled (spacing half a pitch); a sample with no inside node at the 8 corners
+   of its grid cell is *thin* (an open panel, a sheet, a rail, a ladder, a bar: no volume the grid can see).
    Thin parts are thickened into a shell: nodes closer than ``SHELL_PITCHES`` pitches to a thin sample.
 3. Enclosed: a node that sees the inside or the shell in at least 5 of the 6 axis directions is filled (the
    inside of a truck body built of thin open panels, missing its floor), and so are cavities.
@@ -21,6 +21,9 @@ nodes ``pitch`` m apart (:mod:`rigopt.vehicle.voxel_grid`); ``pitch`` = length /
    is extracted by marching tetrahedra (closed and 2-manifold by construction), simplified by manifold3d to
    within a quarter pitch. Closed parts keep their surface (to the sampling's accuracy, a few mm); thin parts
    grow by the shell's half-thickness on each side.
+
+``winding``: as ``distance``, with step 1's inside test replaced by the generalised winding number (at least
+1/2; libigl's fast winding number, ``pip install libigl``), for the comparison.
 
 ``smooth`` (the first closing, kept for the comparison): the inside nodes of step 1 with cavities filled, the
 0/1 field smoothed (Gaussian, sigma one pitch) and its 0.5 level extracted. Thin parts thinner than about
@@ -49,7 +52,7 @@ from rigopt.errors import DataError
 from rigopt.vehicle.voxel_grid import Grid, hit_votes, inside_votes, marching_tetrahedra
 
 #: Closing methods (module doc), the default first.
-CLOSING_METHODS = ("distance", "smooth")
+CLOSING_METHODS = ("distance", "smooth", "winding")
 #: Grid pitch of the closing: length / PITCH_DIVISIONS, clamped to [PITCH_MIN, PITCH_MAX] m.
 PITCH_DIVISIONS = 200
 PITCH_MIN, PITCH_MAX = 0.01, 0.04
@@ -135,16 +138,17 @@ def close_mesh(mesh: trimesh.Trimesh, source: str = "<mesh>", *, method: str = "
             raise DataError(f"{source}: a closing grid of {pitch * 100:.1f} cm needs {nodes / 1e6:.0f} million nodes "
                             f"(at most {MAX_NODES / 1e6:.0f} million); give --pitch {np.ceil(coarser * 1000) / 1000:g} "
                             "or more")
-        if method == "distance":
-            closed, thin = distance_close(mesh, pitch, source)
+        if method in ("distance", "winding"):
+            closed, thin = distance_close(mesh, pitch, source, winding=method == "winding")
         else:
             closed = smooth_close(mesh, pitch, source)
     if closed.volume <= 0:
         raise DataError(f"{source}: the mesh encloses no volume (are its faces turned inside out?)")
     errors, samples, buried = closing_errors(mesh, closed, max(2 * pitch, 0.005))
     worst = samples[int(np.argmax(errors))] if len(errors) else np.zeros(3)
-    report = ClosingReport(method, pitch, float(errors.max(initial=0.0)), float(np.percentile(errors, 95)) if len(errors)
-                           else 0.0, tuple(float(v) for v in worst), buried, time.perf_counter() - start, thin)
+    p95 = float(np.percentile(errors, 95)) if len(errors) else 0.0
+    report = ClosingReport(method, pitch, float(errors.max(initial=0.0)), p95, tuple(float(v) for v in worst), buried,
+                           time.perf_counter() - start, thin)
     if report.p95_error > CLOSING_P95_LIMIT:
         finer = np.floor(pitch / 2 * 1000) / 1000
         fix = (f"add --pitch {finer:g} (a finer closing grid)" if method != "exact" and finer >= PITCH_FLOOR else
@@ -193,20 +197,26 @@ def _level_body(field: np.ndarray, grid: Grid, source: str, speck: float) -> tri
     return _to_trimesh(manifold3d.Manifold.batch_boolean(keep, manifold3d.OpType.Add) if len(keep) > 1 else keep[0])
 
 
-# --- the distance closing ---------------------------------------------------------------------------------------------
+# --- the distance closing ------------------------------------------------------------------------------------------
 
 
-def distance_close(mesh: trimesh.Trimesh, pitch: float, source: str = "<mesh>") -> tuple[trimesh.Trimesh, float]:
+def distance_close(mesh: trimesh.Trimesh, pitch: float, source: str = "<mesh>",
+                   winding: bool = False) -> tuple[trimesh.Trimesh, float]:
     """The closed body of ``mesh`` by the ``distance`` method (module doc) on a grid of ``pitch`` m, and the
-    share of its surface that was thin."""
+    share of its surface that was thin; ``winding``: the ``winding`` method's inside test."""
     grid = Grid.around(mesh, pitch, margin=4)
-    inside = inside_votes(mesh, grid) >= INSIDE_VOTES
+    inside = _winding_inside(mesh, grid) if winding else inside_votes(mesh, grid) >= INSIDE_VOTES
     count = int(min(MAX_SAMPLES, max(20000, SAMPLES_PER_PITCH2 * mesh.area / pitch**2)))
     samples, face = trimesh.sample.sample_surface(mesh, count, seed=0)
     normals = mesh.face_normals[face]
-    # thin: no inside node among the 27 around the sample's nearest node (a closed part's faces, edges and
-    # corners all have one; an open panel, a sheet or a bar thinner than the pitch has none)
-    thin = ~ndimage.maximum_filter(inside, size=3, mode="constant")[tuple(grid.nearest(samples).T)]
+    # thin: no inside node at the 8 corners of the grid cell holding the sample (a closed part's faces, edges
+    # and corners all have one; an open panel, a sheet or a bar thinner than the pitch has none)
+    nx, ny, nz = grid.shape
+    cell_inside = np.zeros((nx - 1, ny - 1, nz - 1), dtype=bool)
+    for dx, dy, dz in np.ndindex(2, 2, 2):
+        cell_inside |= inside[dx:nx - 1 + dx, dy:ny - 1 + dy, dz:nz - 1 + dz]
+    cell = np.clip(np.floor((samples - grid.origin) / pitch).astype(int), 0, np.array(grid.shape) - 2)
+    thin = ~cell_inside[tuple(cell.T)]
     shell = SHELL_PITCHES * pitch
     band = shell + 1.5 * pitch
     reach = int(np.ceil(band / pitch))
@@ -235,6 +245,17 @@ def distance_close(mesh: trimesh.Trimesh, pitch: float, source: str = "<mesh>") 
     return _level_body(field, grid, source, 8 * pitch**3), float(thin.mean())
 
 
+def _winding_inside(mesh: trimesh.Trimesh, grid: Grid) -> np.ndarray:
+    """(grid shape) bool: nodes whose generalised winding number with respect to ``mesh`` is at least 1/2."""
+    try:
+        import igl
+    except ImportError:
+        raise DataError("the winding closing needs libigl: pip install libigl") from None
+    nodes = grid.nodes(np.stack(np.unravel_index(np.arange(grid.size), grid.shape), axis=1))
+    number = igl.fast_winding_number(np.asarray(mesh.vertices, float), np.asarray(mesh.faces, np.int64), nodes)
+    return (np.asarray(number) >= 0.5).reshape(grid.shape)
+
+
 def _surface_distance(samples, normals, points, cap: float, spacing: float) -> np.ndarray:
     """(n,) m: distance from ``points`` (n, 3) to the surface sampled by ``samples`` (k, 3) with face
     ``normals`` (k, 3) about ``spacing`` m apart, at most ``cap``: the distance to the nearest sample's tangent
@@ -257,7 +278,7 @@ def _near(grid: Grid, points: np.ndarray, reach: int) -> np.ndarray:
     return ndimage.maximum_filter(marked, size=2 * reach + 1, mode="constant")
 
 
-# --- the smooth closing -------------------------------------------------------------------------------------------------
+# --- the smooth closing --------------------------------------------------------------------------------------------
 
 
 def smooth_close(mesh: trimesh.Trimesh, pitch: float, source: str = "<mesh>") -> trimesh.Trimesh:

@@ -21,7 +21,7 @@ from rigopt.errors import DataError, RigoptError
 from rigopt.output import atomic_folder
 from rigopt.vehicle.library import SPEC_FILE, broken_user_vehicles, find_spec, user_vehicles_dir
 from rigopt.vehicle.model import ZONE_QUERY_EDGE, expand_zones
-from rigopt.vehicle.closing import ClosingReport, close_mesh
+from rigopt.vehicle.closing import SHELL_PITCHES, ClosingReport, close_mesh
 from rigopt.vehicle.orientation import PoseError, check_pose, frame_rotation
 from rigopt.vehicle.spec import read_toml, spec_from_dict
 from rigopt.vehicle.supports import narrow_keep_outs
@@ -36,6 +36,8 @@ GROUND_TOLERANCE = 0.5
 GROUND_NOTE = 0.005
 #: Two axles closer than this (m) are one: the smallest road wheel's diameter.
 MIN_AXLE_GAP = 0.4
+#: A narrow part's keep-out reaches this far (m) beyond its thickened surface: the lens's 3 cm and 3 cm more.
+KEEP_OUT_CLEARANCE = 0.06
 
 
 @dataclass(frozen=True)
@@ -285,7 +287,9 @@ def add_user_vehicle(name: str, mesh_path, zones_path=None, frame: str = "iso", 
     spec = spec_from_dict({k: v for k, v in data.items() if v != []}, str(zones_path or mesh_path))
     _check_zones_select_surface(spec, mesh)
     if not zones_path:
-        data["keep_out"] = narrow_keep_outs(mesh, expand_zones(spec.zones))
+        # beyond the narrow part: its thickening and one grid pitch (an enclosed ladder is filled up to it)
+        reach = (SHELL_PITCHES + 1) * prepared.closing.pitch + KEEP_OUT_CLEARANCE
+        data["keep_out"] = narrow_keep_outs(prepared.raw, reach)
     data = {k: v for k, v in data.items() if v != [] or k in ("axles", "aliases")}
     with atomic_folder(folder, force=True, option="vehicle store") as work:
         mesh.export(work / "body.ply")

@@ -109,8 +109,9 @@ def find_wheels(mesh: trimesh.Trimesh, axles=None) -> tuple[FoundWheels, ...]:
         if tyre is None:
             continue
         if axles is not None and abs(centre - x) > AXLE_TOLERANCE:
-            raise DataError(f"--axles {x:g}: the tyres there stand centred at x = {centre:.2f} m, {abs(centre - x):.2f} m "
-                            f"away; give --axles {centre:.2f} (each axle's x, from the vehicle centre)")
+            raise DataError(f"--axles {x:g}: the tyres there stand centred at x = {centre:.2f} m, "
+                            f"{abs(centre - x):.2f} m away; give --axles {centre:.2f} (each axle's x, from the vehicle "
+                            "centre)")
         radius, width, track = tyre
         if not RADIUS_RANGE[0] <= radius <= RADIUS_RANGE[1]:
             if axles is not None:

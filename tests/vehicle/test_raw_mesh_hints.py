@@ -3,7 +3,7 @@
 Each raw mesh is written the way a simulator or a CAD tool would (tests/sim_car.py's vehicles in other units,
 turned, lifted, split in parts, open, thin). The loop runs ``rigopt vehicle add`` in-process; on a refusal it
 reads the flags after the error line's last ": add " (the first of alternatives), adds them and retries, at
-most 3 runs. Then the stored vehicle is measured against the truth it was built from.
+most 3 runs (2 are needed). Then the stored vehicle is measured against the truth it was built from.
 """
 
 from __future__ import annotations
@@ -109,9 +109,11 @@ def test_every_raw_mesh_is_added_by_following_the_hints(case, tmp_path, rigopt_h
     path = write(tmp_path)
     outcome, flags, runs = add_following_hints("raw", path, {"RIGOPT_HOME": str(rigopt_home)})
     assert outcome.returncode == 0, (flags, outcome.stderr)
+    assert runs <= 2  # one retry with the hinted flags is enough
     assert "Traceback" not in outcome.stderr
     spec = tomllib.loads((rigopt_home / "vehicles" / "raw" / "vehicle.toml").read_text())
-    assert spec["box"] == pytest.approx(size, rel=0.02, abs=0.03)  # the right scale, the right way round
+    # the right scale, the right way round (the fire truck's ladder is filled between its rails and rungs)
+    assert spec["box"] == pytest.approx(size, rel=0.03, abs=0.03)
     assert spec["axles"] == pytest.approx(sorted(axles, reverse=True), abs=0.02)  # from the footprint's centre
     assert [w["radius"] for w in spec["wheels"]] == pytest.approx([radius] * len(axles), abs=0.015)
     assert "closing error max" in outcome.stdout
@@ -197,7 +199,7 @@ def test_the_thin_truck_gets_keep_outs_over_its_ladder_and_light_bar(tmp_path, r
     offset = -0.5 * (fire.mesh.bounds[0, 0] + fire.mesh.bounds[1, 0])  # truth (sim_car) is in the file's frame
     ladder_rail = [-1.0 + offset, 0.45, 3.41]  # 3 cm above the top of a rail
     rung = [0.2 + offset, 0.0, 3.40]
-    light_bar = [3.4 + offset, 0.3, 3.08]
+    light_bar = [3.4 + offset, 0.3, 3.03 + 0.03 + 0.03]  # on its top: its shell and the lens's 3 cm
     body_roof = [-2.3 + offset, 1.0, 3.25]  # the roof beside the ladder
     cab_side = [3.0 + offset, 1.28, 2.0]
     found = in_keep_outs(fire, [ladder_rail, rung, light_bar, body_roof, cab_side])

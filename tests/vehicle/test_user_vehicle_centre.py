@@ -29,7 +29,8 @@ RIG = {"cameras": [
 def close_to(a, b, tolerance: float = 1e-6) -> bool:
     """Whether two JSON values are equal, numbers to ``tolerance``; keys naming the vehicle or rig are skipped."""
     if isinstance(a, dict):
-        return set(a) == set(b) and all(close_to(a[k], b[k], tolerance) for k in a if k not in ("vehicle", "name", "rig"))
+        named = ("vehicle", "name", "rig")
+        return set(a) == set(b) and all(close_to(a[k], b[k], tolerance) for k in a if k not in named)
     if isinstance(a, list):
         return len(a) == len(b) and all(close_to(x, y, tolerance) for x, y in zip(a, b))
     if isinstance(a, float) or isinstance(b, float):
