@@ -49,9 +49,9 @@ def _refuse_blind(report, rig, vehicle) -> None:
         return
     from rigopt.mounting.rules import check_rig
 
-    reasons = [f"{c.id}: {'; '.join(c.problems)}" for c in check_rig(rig, vehicle).cameras if c.problems]
+    reasons = [f"{c.id} ({', '.join(c.problems)})" for c in check_rig(rig, vehicle).cameras if c.problems]
     raise RigoptError(f"{rig.name} on {vehicle.name} sees nothing on any ring"
-                      + (f": {' | '.join(reasons)}" if reasons else "")
+                      + (f": {'; '.join(reasons)}" if reasons else "")
                       + f"; run rigopt check {rig.name} for the mount checks and move the cameras onto the surface, "
                         "facing away from the body")
 

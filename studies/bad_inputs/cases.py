@@ -24,6 +24,13 @@ URDF = ("<robot name='r'><link name='base_link'/><link name='cam'/>EXTRA<joint n
 URDF_LENS = "<lens><intrinsics><fx>640</fx><fy>640</fy><cx>640</cx><cy>360</cy><s>0</s></intrinsics></lens>"
 
 
+def one_error_line(lines: list[str]) -> bool:
+    """The answer to a bad input: stderr's lines hold one ``rigopt: error:`` line, the last; any before it are
+    the command's indented progress lines (an error found after some work, such as a design with no feasible
+    point)."""
+    return bool(lines) and lines[-1].startswith("rigopt: error: ") and all(line.startswith("  ") for line in lines[:-1])
+
+
 def urdf(hfov="1.5708", lens="", parent="base_link", extra=""):
     """The one-camera URDF with its field of view (rad), lens block, camera joint's parent and extra elements."""
     return URDF.replace("HFOV", hfov).replace("LENS", lens).replace("PARENT", parent).replace("EXTRA", extra)
@@ -52,6 +59,8 @@ def make_fixtures(tmp: Path) -> dict[str, str]:
         "rig_malformed.json": '{"vehicle_type": "x", "cameras": [',
         "rig_nan.json": RIG.replace("LOC", "[0, NaN, 1]"),
         "rig_far.json": RIG.replace("LOC", "[1e308, 0, 1]"),
+        "rig_escape_id.json": RIG.replace("LOC", "[2.1, 0, 0.6]").replace('"id": "C"', '"id": "C\\u001b[31mRED"'),
+        "rig_null_id.json": RIG.replace("LOC", "[2.1, 0, 0.6]").replace('"id": "C"', '"id": null'),
         "rig_no_cameras.json": '{"vehicle_type": "v", "cameras": []}',
         "rig_fov_200.json": RIG.replace("LOC", "[0, 0, 1]").replace('"fov": 60', '"fov": 200'),
         "rig_list.json": "[1, 2, 3]",
@@ -140,6 +149,7 @@ def make_fixtures(tmp: Path) -> dict[str, str]:
     for folder in ("emptydir", "dir.png", "dir.json", "dir.urdf"):
         (tmp / folder).mkdir(exist_ok=True)
     _write_empty_waymo_table(tmp / "waymo_empty" / "camera_calibration.parquet")
+    _write_inward_rig(tmp / "rig_inward.json")
     load_vehicle("tt").mesh.export(tmp / "car.stl")
     _write_posed_meshes(load_vehicle("tt").mesh, tmp)
     env = {"RIGOPT_HOME": str(tmp / "home")}
@@ -187,6 +197,22 @@ def _write_empty_waymo_table(path: Path) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
     texts = {"key.segment_context_name": pa.string(), "key.camera_name": pa.int8()}
     parquet.write_table(pa.table({c: pa.array([], type=texts.get(c, pa.float64())) for c in WAYMO_COLUMNS}), path)
+
+
+def _write_inward_rig(path: Path) -> None:
+    """R1 with every camera turned to face the way it came: into the etron's body (it sees nothing)."""
+    from dataclasses import replace
+
+    import numpy as np
+
+    from rigopt.geometry import rot_z
+    from rigopt.rig.library import load_rig
+    from rigopt.rig.model import Rig
+    from rigopt.rig.pccr_format import write_rig
+
+    r1 = load_rig("R1")
+    write_rig(Rig("R1_inward", r1.vehicle, tuple(replace(c, rotation=c.rotation @ rot_z(np.pi)) for c in r1.cameras)),
+              path)
 
 
 def _write_posed_meshes(mesh, tmp: Path) -> None:
@@ -395,6 +421,15 @@ CASES: list[tuple[str, list[str], str]] = [
     ("check --min-height too high", ["check", "R1", "--min-height", "12"], "--min-height"),
     ("design --spacing 0", [*DESIGN, "--spacing", "0"], "--spacing"),
     ("design --spacing -1", [*DESIGN, "--spacing", "-1"], "--spacing"),
+    ("design --spacing wider than the zones", [*DESIGN, "--spacing", "100"], "--spacing"),
+    ("design --cost-weight inf", [*DESIGN, "--cost-weight", "inf"], "--cost-weight"),
+    ("design --max-nodes 0", [*DESIGN, "--max-nodes", "0"], "--max-nodes"),
+    ("design --min-height above every mount point", [*DESIGN, "--min-height", "5"], "--min-height"),
+    ("design --pareto with no feasible point", [*DESIGN, "--pareto", "--cameras", "1", "--out", f"{T}/pareto"],
+     "no frontier"),
+    ("coverage of a rig that sees only its body", ["coverage", f"{T}/rig_inward.json"], "sees nothing"),
+    ("camera id with a terminal escape", ["check", f"{T}/rig_escape_id.json"], "control characters"),
+    ("camera id null", ["check", f"{T}/rig_null_id.json"], "'id' must be a non-empty string"),
     ("design --min-coverage -1", [*DESIGN, "--min-coverage", "-1"], "--min-coverage"),
     ("design --min-overlap -1", [*DESIGN, "--min-overlap", "-1"], "--min-overlap"),
     ("design --out is a file", [*DESIGN, "--out", f"{T}/file.txt"], "is a file"),

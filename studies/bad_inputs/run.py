@@ -18,13 +18,14 @@ HERE = Path(__file__).resolve().parent
 REPO = HERE.parents[1]
 sys.path.insert(0, str(HERE))
 
-from cases import CASES, make_fixtures  # noqa: E402
+from cases import CASES, make_fixtures, one_error_line  # noqa: E402
 
 DOC = REPO / "docs" / "errors.md"
 INTRO = """# Errors: every bad input, its message
 
 Every input rigopt cannot use ends in one line on stderr, `rigopt: error: ...`, and exit code 2: it names
-the file or option and says how to fix it. Never a traceback. Usage errors (unknown commands or options, values
+the file or option and says how to fix it. Never a traceback. An error found after some work (a design with no
+feasible point) follows the command's indented progress lines; the table shows the error line. Usage errors (unknown commands or options, values
 of the wrong type or out of range) are found while the command line is parsed, and `--out` before any work.
 
 Outputs are written whole or not at all (`rigopt/output.py`): a folder is built in a hidden temporary sibling
@@ -88,7 +89,7 @@ def main() -> None:
         for (name, args, fragment), result in zip(CASES, results):
             lines = result.stderr.strip().splitlines()
             line = normalised(lines[-1] if lines else "", tmp)
-            ok = (result.returncode == 2 and len(lines) == 1 and line.startswith("rigopt: error: ")
+            ok = (result.returncode == 2 and one_error_line(lines) and line.startswith("rigopt: error: ")
                   and "Traceback" not in result.stderr and fragment in line and not result.stdout)
             if not ok:
                 failures.append(f"{name}: exit {result.returncode}, stdout {result.stdout[:80]!r}, stderr "
