@@ -98,7 +98,7 @@ class ClosingReport:
             how = "parts were closed; joined exactly"
         else:
             how = f"closed on a {self.pitch * 100:.1f} cm grid ({self.method})"
-            if self.thin > 0:
+            if self.thin >= 0.005:
                 how += f", {self.thin:.0%} of the surface thin (thickened by {SHELL_PITCHES * self.pitch * 100:.1f} cm)"
         return (f"{how}; closing error max {self.max_error * 100:.1f} cm, 95th percentile "
                 f"{self.p95_error * 100:.1f} cm; {self.buried:.0%} of the surface was inside the body "

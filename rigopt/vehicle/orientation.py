@@ -2,15 +2,19 @@
 (fast, on the raw mesh, before it is closed) that tell which flag fixes a mesh that is not.
 
 Flags (``rigopt vehicle add``): ``--scale S`` multiplies every coordinate (0.01: centimetres, 0.001:
-millimetres, 0.0254: inches); ``--forward A`` names the file's axis that points to the vehicle's front and
+millimetres, 0.0254: inches; ``--length L`` sets it from the real length, :mod:`rigopt.vehicle.user`);
+``--forward A`` names the file's axis that points to the vehicle's front and
 ``--up A`` the file's axis that points up (A one of +x -x +y -y +z -z; defaults +x and +z). They give the
 rotation whose rows are the ISO axes in file coordinates: x_iso = forward, z_iso = up, y_iso = up x forward
 (left); e.g. ``--forward -y --up +z`` is a 90-degree turn about z taking file -y to ISO +x.
 
-Checks, each naming the flag that fixes it (:func:`check_pose`):
+Checks, each raising a :class:`PoseError` whose message ends with the flags that fix it and whose ``fix``
+holds them (:func:`check_pose`):
 
-1. units: a length (longest extent) outside 2.5-25 m that a common unit explains (x 0.01, 0.001 or
-   0.0254 puts every dimension within the size limits): "looks like centimetres: add --scale 0.01";
+1. units: a length (longest extent) outside 2.5-25 m, or a size no road vehicle has that a scale outside
+   0.5-2 explains; the scale is inferred from the size (:func:`scale_candidates`: any factor, a common unit or
+   a round number preferred), and the hint carries the flags the scaled mesh needs next (the checks below
+   run on it): "looks like inches: add --scale 0.0254 --forward -y, or --length L ...";
 2. up (when ``--up`` is not given): the height axis is found as the short axis whose ends differ most in
    horizontal area near them (the roof is broad, the tyres touch the ground in small patches); when it is
    clearly not z: "add --up +y";
@@ -204,9 +208,9 @@ def _flags(fix: dict[str, str]) -> str:
 
 
 def check_pose(mesh: trimesh.Trimesh, source: str, *, scale: float = 1.0, forward: str | None = None,
-               up: str | None = None, allow_size: bool = False, axles=(), scale_given: bool = False) -> list[str]:
+               up: str | None = None, allow_size: bool = False, axles=()) -> list[str]:
     """Check a mesh already brought into the ISO frame by the flags (``forward``/``up`` None: not given,
-    the defaults were used; ``scale`` the scale applied, ``scale_given`` whether the user set it); raise
+    the defaults were used; ``scale`` the scale applied); raise
     PoseError naming the fixing flags, or return warnings (see module doc). A unit problem's hint also carries
     the flags the scaled mesh needs next, so that one retry with all of them gets past every pose check."""
     size = np.ptp(mesh.bounds, axis=0)
@@ -229,7 +233,7 @@ def check_pose(mesh: trimesh.Trimesh, source: str, *, scale: float = 1.0, forwar
             scaled = trimesh.Trimesh(mesh.vertices * guess.scale, mesh.faces, process=False)
             try:
                 check_pose(scaled, source, scale=scale * guess.scale, forward=forward, up=up, allow_size=allow_size,
-                           axles=[x * guess.scale for x in axles], scale_given=True)
+                           axles=[x * guess.scale for x in axles])
             except PoseError as error:
                 if "--allow-size" in error.fix and guess is not ranked[-1]:
                     continue

@@ -1,7 +1,8 @@
 """User vehicles: check a mesh file, bring it into the ISO frame, give it zones, and store it by name.
 
-A stored vehicle is ``$RIGOPT_HOME/vehicles/<name>/`` holding ``body.ply`` (ISO frame, metres) and a
-``vehicle.toml`` whose one solid is that mesh; from then on ``--vehicle <name>`` works everywhere. Names are
+A stored vehicle is ``$RIGOPT_HOME/vehicles/<name>/`` holding ``body.ply`` (ISO frame, metres, from the
+vehicle centre: the centre of the body's footprint box, on the ground under its tyres, whatever the file's
+origin) and a ``vehicle.toml`` whose one solid is that mesh, with its axles, wheels, zones and keep-outs; from then on ``--vehicle <name>`` works everywhere. Names are
 unique without regard to case; replacing a stored vehicle needs ``force``, and the folder is written whole
 (rigopt.output.atomic_folder) or not at all.
 """
@@ -160,7 +161,7 @@ def prepare_user_mesh(path, frame: str = "iso", *, scale: float | None = None, l
     raw.apply_translation(offset)
     wheels_guess = find_wheels(raw) if np.ptp(raw.bounds, axis=0).max() > 0 else ()
     warnings = check_pose(raw, str(path), scale=scale, forward=forward, up=up, allow_size=allow_size,
-                          axles=[w.x for w in wheels_guess], scale_given=scale != 1.0)
+                          axles=[w.x for w in wheels_guess])
     lift = _ground_lift(raw, wheels_guess, ground, str(path), notes)
     raw.apply_translation([0.0, 0.0, lift])
     offset[2] = lift

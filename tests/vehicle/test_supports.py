@@ -16,7 +16,7 @@ def surface(mesh: trimesh.Trimesh, count: int = 20000) -> np.ndarray:
 @pytest.mark.parametrize("side, narrow", [(0.03, True), (0.05, True), (0.07, False), (0.3, False)])
 def test_a_square_bar_is_narrow_below_about_5_7_cm(side, narrow):
     bar = trimesh.creation.box([2.0, side, side])
-    points = surface(bar)
+    points = surface(bar, 3000)
     middle = np.abs(points[:, 0]) < 0.8  # away from its ends
     assert narrow_points(points)[middle].mean() == pytest.approx(1.0 if narrow else 0.0, abs=0.05)
 
