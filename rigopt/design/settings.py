@@ -23,6 +23,7 @@ import numpy as np
 from rigopt.camera import DISTORTION_COEFFICIENTS, Lens
 from rigopt.design.defaults import DEFAULT_LENSES, DEFAULT_MAX_NODES, DEFAULT_PITCHES_DEG, DEFAULT_YAW_STEP_DEG, RANGE_STEP
 from rigopt.errors import DataError, RigoptError, not_utf8
+from rigopt.output import existing_file
 from rigopt.rig.model import DEFAULT_IMAGE_SIZE, Camera
 
 if TYPE_CHECKING:
@@ -166,7 +167,8 @@ def parse_catalogue(data, where: str) -> tuple[CatalogueCamera, ...]:
 def read_catalogue(path) -> tuple[CatalogueCamera, ...]:
     """The cameras of a catalogue file: TOML (``.toml``) or JSON (any other name); see
     :func:`parse_catalogue` and docs/design.md. Raises DataError for an unreadable or malformed file."""
-    path = Path(path)
+    path = existing_file(path, "camera catalogue (TOML or JSON)", "docs/design.md shows one",
+                         option="--cameras-file", kind=DataError)
     try:
         text = path.read_bytes().decode("utf-8")
     except OSError as error:

@@ -34,6 +34,7 @@ import numpy as np
 from rigopt.errors import DataError, RigoptError, not_utf8, unknown_name
 from rigopt.metrics.prediction import LINKS, Domain, Interval, Link
 from rigopt.metrics.rigcd import DEFAULT_ALPHA, rigcd_matrix, tie_broken_lambdas
+from rigopt.output import existing_file
 from rigopt.resources import data_dir
 from rigopt.rig.model import Rig
 
@@ -265,6 +266,8 @@ def load_weights(name_or_path, metric: str = "rigcd") -> Calibration:
         if text.lower() not in by_lower:
             raise unknown_name(f"{metric} weights", text, names)
         path = data_dir("metrics") / WEIGHTS_FOLDERS[metric] / f"{by_lower[text.lower()]}.json"
+    existing_file(path, "weights file", "give a shipped name or a JSON file rigopt calibrate wrote",
+                  option="--weights", kind=DataError)
     try:
         data = json.loads(path.read_text())
     except OSError as error:
