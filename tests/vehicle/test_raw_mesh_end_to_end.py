@@ -13,6 +13,8 @@ import pytest
 from in_process import run_rigopt
 from sim_car import AXLES, write_obj
 
+pytestmark = pytest.mark.slow  # a design end to end (about 25 s)
+
 RIG = {"vehicle_type": "simcar", "cameras": [
     {"id": "CAM_FRONT", "location": [2.33, 0, 0.6], "rotation": [0, 0, 0], "fov": 90},
     {"id": "CAM_BACK", "location": [-2.33, 0, 0.6], "rotation": [0, 180, 0], "fov": 90},
