@@ -143,7 +143,8 @@ def close_mesh(mesh: trimesh.Trimesh, source: str = "<mesh>", *, method: str = "
         else:
             closed = smooth_close(mesh, pitch, source)
     if closed.volume <= 0:
-        raise DataError(f"{source}: the mesh encloses no volume (are its faces turned inside out?)")
+        raise DataError(f"{source}: the mesh encloses no volume: its faces seem turned inside out; export it with "
+                        "outward-facing normals")
     errors, samples, buried = closing_errors(mesh, closed, max(2 * pitch, 0.005))
     worst = samples[int(np.argmax(errors))] if len(errors) else np.zeros(3)
     p95 = float(np.percentile(errors, 95)) if len(errors) else 0.0
@@ -235,8 +236,8 @@ def distance_close(mesh: trimesh.Trimesh, pitch: float, source: str = "<mesh>",
     solid |= hit_votes(solid) >= ENCLOSED_VOTES
     solid = ndimage.binary_fill_holes(solid)
     if not solid.any():
-        raise DataError(f"{source}: no part of the mesh encloses a volume, even after closing; is it a flat or "
-                        "single-sided surface?")
+        raise DataError(f"{source}: no part of the mesh encloses a volume, even after closing: give a finer --pitch, "
+                        "or export the body as closed parts")
     # -phi: positive inside; near the surface the signed distances of the three kinds of solid, united (max)
     field = np.where(solid, band, -band).astype(np.float32)
     signed = np.where(inside[near], np.maximum(distance, 1e-6), -distance)
@@ -286,8 +287,8 @@ def smooth_close(mesh: trimesh.Trimesh, pitch: float, source: str = "<mesh>") ->
     grid = Grid.around(mesh, pitch)
     solid = ndimage.binary_fill_holes(inside_votes(mesh, grid) >= INSIDE_VOTES)
     if not solid.any():
-        raise DataError(f"{source}: no part of the mesh encloses a volume, even after closing; is it a flat or "
-                        "single-sided surface?")
+        raise DataError(f"{source}: no part of the mesh encloses a volume, even after closing: give a finer --pitch, "
+                        "or export the body as closed parts")
     field = ndimage.gaussian_filter(solid.astype(float), sigma=1.0, mode="constant") - 0.5
     return _level_body(field, grid, source, 27 * pitch**3)
 

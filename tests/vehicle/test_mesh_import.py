@@ -243,6 +243,12 @@ def test_a_single_sided_sheet_is_kept_as_a_thin_slab():
     assert not raycast.inside(closed, [[0.0, 0.0, 2.2 + 2 * report.pitch]]).any()
 
 
+def test_a_mesh_turned_inside_out_is_refused_with_the_step_that_fixes_it():
+    box = trimesh.creation.box([4.0, 1.8, 1.4])
+    with pytest.raises(DataError, match="turned inside out; export it with outward-facing normals"):
+        close_mesh(trimesh.Trimesh(box.vertices, box.faces[:, ::-1]), "inside_out.stl")
+
+
 def test_closing_is_refused_with_the_finer_pitch_that_fixes_it():
     awning = trimesh.creation.box([4.0, 1.8, 0.01])
     awning = trimesh.Trimesh(awning.vertices, awning.faces[awning.face_normals[:, 2] > 0.5], process=False)
