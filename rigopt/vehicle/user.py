@@ -165,6 +165,10 @@ def prepare_user_mesh(path, frame: str = "iso", *, scale: float | None = None, l
     lift = _ground_lift(raw, wheels_guess, ground, str(path), notes)
     raw.apply_translation([0.0, 0.0, lift])
     offset[2] = lift
+    if np.abs(offset).max() > GROUND_NOTE:
+        origin = np.round(offset, 3) + 0.0  # no negative zeros
+        notes.append("measured from the centre of its footprint box on the ground: the file's origin is at "
+                     f"({origin[0]:+.3f}, {origin[1]:+.3f}, {origin[2]:+.3f}) m (ISO x, y, z)")
     if axles is not None:
         _check_axles(axles, raw.bounds[:, 0])
     wheels = find_wheels(raw, axles) if axles is not None else wheels_guess

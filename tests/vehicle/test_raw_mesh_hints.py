@@ -168,6 +168,7 @@ def test_a_floating_mesh_is_stood_on_its_tyres_with_a_note(tmp_path, rigopt_home
     outcome = run_rigopt("vehicle", "add", "truck", "--mesh", path, env={"RIGOPT_HOME": str(rigopt_home)})
     assert outcome.returncode == 0, outcome.stderr
     assert "stood on its tyres: moved down by 1.300 m" in outcome.stderr
+    assert "the file's origin is at (-0.050, +0.000, -1.300) m" in outcome.stderr  # its box is centred at x 0.05
     from rigopt.vehicle.library import load_vehicle
 
     assert load_vehicle("truck").mesh.bounds[0, 2] == pytest.approx(0.0, abs=0.005)
