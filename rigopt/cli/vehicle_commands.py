@@ -9,7 +9,7 @@ from typing import Optional
 import typer
 
 from rigopt.cli.app import (MIN_HEIGHT_HELP, NO_TRAILER_HELP, PICTURE_SUFFIXES, app, console, mount_rules, note,
-                            note_vehicle, print_json, print_table, vehicle_app)
+                            note_vehicle, print_json, print_next, print_table, vehicle_app)
 from rigopt.errors import RigoptError
 
 
@@ -186,3 +186,5 @@ def vehicle_add_command(
                       "bars): " + "; ".join(f"{k['name']} x {k['min'][0]:.2f}..{k['max'][0]:.2f} m, z "
                                             f"{k['min'][2]:.2f}..{k['max'][2]:.2f} m" for k in added.keep_outs))
     console.print(f"added vehicle {name!r}: {added.path}")
+    print_next(f"rigopt vehicle show {name} --out {name}.png (its zones, wheels and keep-outs, to check them)",
+               f"rigopt design --vehicle {name} --ref R1 (a rig on it that transfers from the benchmark's R1)")

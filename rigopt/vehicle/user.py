@@ -266,8 +266,9 @@ def add_user_vehicle(name: str, mesh_path, zones_path=None, frame: str = "iso", 
     :func:`prepare_user_mesh`. A user vehicle of the same name (any case) is replaced only with ``force``;
     built-in names and aliases are never taken.
     """
-    if not re.fullmatch(r"[A-Za-z0-9][A-Za-z0-9_.-]*", name):
-        raise RigoptError(f"vehicle name {name!r} must be letters, digits, '_', '.' or '-'")
+    if not re.fullmatch(r"[^\W_][\w.-]*", name):  # letters of any script, digits, '_', '.', '-'
+        raise RigoptError(f"vehicle name {name!r} must start with a letter or digit and hold only letters, digits, "
+                          "'_', '.' or '-' (no spaces, slashes or other marks)")
     if roof_rack is not None and not (np.isfinite(roof_rack) and 0 < roof_rack <= 3.0):
         raise RigoptError(f"--roof-rack is the rack's height above the roof in metres, in (0, 3], got {roof_rack}")
     if axles is not None:

@@ -326,3 +326,11 @@ def test_the_zones_option_is_described_with_its_tables():
     shown = run_rigopt("vehicle", "add", "--help")
     assert shown.returncode == 0
     assert "TOML file of [[zones]] tables" in " ".join(shown.stdout.split())
+
+
+def test_names_are_letters_of_any_script_digits_and_three_marks(box_stl):
+    """'ü' is a letter (the message used to say letters and refuse it); spaces, slashes and marks are not."""
+    assert add_user_vehicle("müllwagen_2.0-b", box_stl).parent.name == "müllwagen_2.0-b"
+    for bad in ("my car", "a/b", "_lead", "x!", "..", ""):
+        with pytest.raises(RigoptError, match="letters, digits"):
+            add_user_vehicle(bad, box_stl)
