@@ -37,7 +37,7 @@ def session(tmp_path_factory):
     (tmp / "rig.json").write_text(json.dumps(RIG))
     runs["check"] = run_rigopt("check", tmp / "rig.json", "--json", env=env)
     runs["design"] = run_rigopt("design", "--vehicle", "simcar", "--ref", "R1", "--yaw-step", "30", "--pitch", "0",
-                                "--fov", "90,120", "--time-limit", "20", "--json", "--out", tmp / "design", env=env)
+                                "--fov", "90,120", "--json", "--out", tmp / "design", env=env)
     return runs, tmp, scale, forward
 
 
