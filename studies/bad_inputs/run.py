@@ -87,7 +87,7 @@ def main() -> None:
             results = list(pool.map(lambda case: run_case(case[1], tmp, env), CASES))
         rows, failures = [], []
         for (name, args, fragment), result in zip(CASES, results):
-            lines = result.stderr.strip().splitlines()
+            lines = [line for line in result.stderr.splitlines() if line.strip()]
             line = normalised(lines[-1] if lines else "", tmp)
             ok = (result.returncode == 2 and one_error_line(lines) and line.startswith("rigopt: error: ")
                   and "Traceback" not in result.stderr and fragment in line and not result.stdout)

@@ -63,7 +63,7 @@ def test_bad_input(scratch, name, capsys, monkeypatch):
     capsys.readouterr()
     code = run([a.format(tmp=tmp, repo=REPO) for a in args])
     out, err = capsys.readouterr()
-    lines = err.strip().splitlines()
+    lines = [line for line in err.splitlines() if line.strip()]
     assert code == INPUT_ERROR, err
     assert CASES_MODULE.one_error_line(lines), err  # the error last; before it only indented progress lines
     assert fragment in lines[-1]
