@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 import pytest
+from carla_convention import carla_rotate_vector
 from hypothesis import assume, example, given
 from hypothesis import strategies as st
 
@@ -172,27 +173,16 @@ def test_gimbal_lock_sets_roll_zero_and_keeps_the_rotation(sign, yaw, roll):
 # --- CARLA <-> ISO 8855 ---------------------------------------------------------------------------------
 
 
-def _carla_rotate_vector_matrix(pitch_deg, yaw_deg, roll_deg):
-    """The matrix of CARLA's ``Rotation::RotateVector`` (LibCarla ``geom/Rotation.h``), written out from its
-    documented component formulas, in CARLA's own axes (x forward, y right, z up)."""
-    cp, sp = math.cos(math.radians(pitch_deg)), math.sin(math.radians(pitch_deg))
-    cy, sy = math.cos(math.radians(yaw_deg)), math.sin(math.radians(yaw_deg))
-    cr, sr = math.cos(math.radians(roll_deg)), math.sin(math.radians(roll_deg))
-    return np.array([[cp * cy, cy * sp * sr - sy * cr, -cy * sp * cr - sy * sr],
-                     [cp * sy, sy * sp * sr + cy * cr, -sy * sp * cr + cy * sr],
-                     [sp, -cp * sr, cp * cr]])
-
-
 @given(pitch=angles_deg, yaw=angles_deg, roll=angles_deg)
 def test_carla_to_iso_is_carlas_rotate_vector_conjugated_by_s(pitch, yaw, roll):
     _, r_iso = carla_to_iso([0.0, 0.0, 0.0], [pitch, yaw, roll])
-    np.testing.assert_allclose(r_iso, S @ _carla_rotate_vector_matrix(pitch, yaw, roll) @ S, atol=1e-12)
+    np.testing.assert_allclose(r_iso, S @ carla_rotate_vector(pitch, yaw, roll) @ S, atol=1e-12)
 
 
 def test_camera_at_pitch_5_yaw_30_roll_10_has_carlas_forward_right_and_up_vectors():
     """CARLA's forward, right and up vectors of the camera (its x, y, z axes rotated by RotateVector), taken to
     ISO 8855 (y left: right = -y), equal rigopt's camera axes to 1e-9."""
-    carla = _carla_rotate_vector_matrix(5.0, 30.0, 10.0)
+    carla = carla_rotate_vector(5.0, 30.0, 10.0)
     forward, right, up = (S @ carla[:, k] for k in range(3))
     _, rotation = carla_to_iso([0.0, 0.0, 0.0], [5.0, 30.0, 10.0])
     np.testing.assert_allclose(rotation[:, 0], forward, atol=1e-9)
@@ -209,7 +199,7 @@ def test_iso_to_carla_gives_angles_carlas_formula_maps_back(pitch, yaw, roll):
     """Whatever angles iso_to_carla writes, CARLA's RotateVector of them is the rotation written."""
     _, r_iso = carla_to_iso([0.0, 0.0, 0.0], [pitch, yaw, roll])
     _, angles = iso_to_carla([0.0, 0.0, 0.0], r_iso)
-    np.testing.assert_allclose(S @ _carla_rotate_vector_matrix(*angles) @ S, r_iso, atol=1e-9)
+    np.testing.assert_allclose(S @ carla_rotate_vector(*angles) @ S, r_iso, atol=1e-9)
 
 
 @given(location=locations)

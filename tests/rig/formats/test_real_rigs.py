@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from carla_convention import carla_rotate_vector
 from in_process import run_rigopt
 
 from rigopt.rig.pccr_format import read_rig
@@ -83,35 +84,34 @@ def _raw_extrinsics() -> dict:
     }
 
 
-def _carla_rotate_vector(pitch_deg, yaw_deg, roll_deg) -> np.ndarray:
-    """CARLA's Rotation::RotateVector matrix (LibCarla geom/Rotation.h), in CARLA's axes (y right)."""
-    cp, sp = np.cos(np.radians(pitch_deg)), np.sin(np.radians(pitch_deg))
-    cy, sy = np.cos(np.radians(yaw_deg)), np.sin(np.radians(yaw_deg))
-    cr, sr = np.cos(np.radians(roll_deg)), np.sin(np.radians(roll_deg))
-    return np.array([[cp * cy, cy * sp * sr - sy * cr, -cy * sp * cr - sy * sr],
-                     [cp * sy, sy * sp * sr + cy * cr, -sy * sp * cr + cy * sr],
-                     [sp, -cp * sr, cp * cr]])
+def _carla_export_matches(import_args, raw: dict, tmp_path, cwd=None) -> dict:
+    """Run ``rigopt`` ``import_args`` into a rig file, export it as a CARLA spawn list, and check that CARLA's
+    RotateVector of each camera's angles is its raw camera-to-ego rotation ``raw[id]`` (3, 3), taken to CARLA's
+    y-right axes, to 1e-9. Returns the spawn list's rotations by camera."""
+    import json
+
+    rig_file, spawn_list = tmp_path / "rig.json", tmp_path / "spawn.json"
+    result = run_rigopt(*import_args, "--out", rig_file, cwd=cwd)
+    assert result.returncode == 0, result.stderr
+    result = run_rigopt("export", rig_file, "--format", "carla", "--out", spawn_list)
+    assert result.returncode == 0, result.stderr
+    sensors = {s["id"]: s["transform"]["rotation"] for s in json.loads(spawn_list.read_text())["sensors"]}
+    assert sorted(sensors) == sorted(raw)
+    flip = np.diag([1.0, -1.0, 1.0])  # ISO (y left) <-> CARLA (y right), on the vehicle and on the camera
+    for camera, r_ego_camera in raw.items():
+        angles = sensors[camera]
+        carla = carla_rotate_vector(angles["pitch"], angles["yaw"], angles["roll"])
+        np.testing.assert_allclose(carla, flip @ r_ego_camera @ flip, rtol=0, atol=1e-9, err_msg=camera)
+    return sensors
 
 
 @pytest.mark.parametrize("dataset", list(IMPORTS))
 def test_carla_export_of_an_imported_real_rig_reproduces_its_raw_extrinsics(dataset, tmp_path):
     """Import the raw calibration, export it as a CARLA spawn list, and rotate the camera's axes with CARLA's own
     formula: the result is the raw camera-to-ego rotation (taken to CARLA's y-right axes) to 1e-9."""
-    import json
 
     args, _ = IMPORTS[dataset]
-    rig_file, spawn_list = tmp_path / "rig.json", tmp_path / "spawn.json"
-    assert run_rigopt("import", *args, "--out", rig_file, cwd=REAL).returncode == 0
-    result = run_rigopt("export", rig_file, "--format", "carla", "--out", spawn_list)
-    assert result.returncode == 0, result.stderr
-    sensors = {s["id"]: s["transform"]["rotation"] for s in json.loads(spawn_list.read_text())["sensors"]}
-    flip = np.diag([1.0, -1.0, 1.0])  # ISO (y left) <-> CARLA (y right), on the vehicle and on the camera
-    raw = _raw_extrinsics()[dataset]
-    assert sorted(sensors) == sorted(raw)
-    for camera, r_ego_camera in raw.items():
-        angles = sensors[camera]
-        carla = _carla_rotate_vector(angles["pitch"], angles["yaw"], angles["roll"])
-        np.testing.assert_allclose(carla, flip @ r_ego_camera @ flip, rtol=0, atol=1e-9, err_msg=camera)
+    sensors = _carla_export_matches(["import", *args], _raw_extrinsics()[dataset], tmp_path, cwd=REAL)
     if dataset in ("nuscenes", "argoverse2"):  # real calibrations: every camera has some roll
         assert max(abs(a["roll"]) for a in sensors.values()) > 0.1
 
@@ -137,13 +137,4 @@ def test_carla_export_of_an_argoverse1_import_reproduces_its_raw_extrinsics(tmp_
         if not name.endswith("_rect"):
             coefficients = entry["value"]["vehicle_SE3_camera_"]["rotation"]["coefficients"]
             raw[name] = quaternion(*coefficients) @ body_from_optical.T
-    rig_file, spawn_list = tmp_path / "av1.json", tmp_path / "spawn.json"
-    assert run_rigopt("import", "argoverse1", fixture, "--cameras", "all", "--out", rig_file).returncode == 0
-    assert run_rigopt("export", rig_file, "--format", "carla", "--out", spawn_list).returncode == 0
-    sensors = {s["id"]: s["transform"]["rotation"] for s in json.loads(spawn_list.read_text())["sensors"]}
-    assert sorted(sensors) == sorted(raw)
-    flip = np.diag([1.0, -1.0, 1.0])
-    for camera, r_ego_camera in raw.items():
-        angles = sensors[camera]
-        carla = _carla_rotate_vector(angles["pitch"], angles["yaw"], angles["roll"])
-        np.testing.assert_allclose(carla, flip @ r_ego_camera @ flip, rtol=0, atol=1e-9, err_msg=camera)
+    _carla_export_matches(["import", "argoverse1", fixture, "--cameras", "all"], raw, tmp_path)
