@@ -43,3 +43,13 @@ def run_rigopt(*args, cwd=None, env: dict[str, str] | None = None) -> Outcome:
             else:
                 os.environ[key] = value
     return Outcome(code, out.getvalue(), err.getvalue())
+
+
+def refused(result: Outcome, fragment: str) -> str:
+    """The one error line of a refused command: asserts exit 2, nothing on stdout, one ``rigopt: error:`` line on
+    stderr holding ``fragment``, and returns that line."""
+    lines = result.stderr.strip().splitlines()
+    assert result.returncode == 2 and len(lines) == 1 and lines[0].startswith("rigopt: error: "), result.stderr
+    assert fragment in lines[0], lines[0]
+    assert result.stdout == ""
+    return lines[0]

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from in_process import run_rigopt
+from in_process import refused, run_rigopt
 from rigopt.errors import RigoptError, UnknownNameError
 from rigopt.metrics.transfer import read_transfer
 from rigopt.rig.library import load_rig
@@ -20,14 +20,6 @@ from rigopt.vehicle.placement import benchmark_rig_lookup
 REPO = Path(__file__).resolve().parents[2]
 BASELINE_RIGS = REPO / "baselines" / "rigs"
 RIGS = ["R1", "R1-r", "R1-t", "R1-f", "R1-c6", "R1-c10", "nuscenes"]
-
-
-def refused(result, fragment: str) -> str:
-    lines = result.stderr.strip().splitlines()
-    assert result.returncode == 2 and len(lines) == 1 and lines[0].startswith("rigopt: error: "), result.stderr
-    assert fragment in lines[0], lines[0]
-    assert result.stdout == ""
-    return lines[0]
 
 
 @pytest.fixture(scope="module")

@@ -13,21 +13,12 @@ import pyarrow as pa
 import pyarrow.parquet as parquet
 import pytest
 
-from in_process import run_rigopt
+from in_process import refused, run_rigopt
 from rigopt.errors import RigFileError
 from rigopt.rig.formats.datasets import WAYMO_COLUMNS, read_waymo
 from rigopt.rig.formats.nuscenes import SAMPLE_DATA_FILE, nuscenes_token, read_nuscenes, write_nuscenes_calibration
 from rigopt.rig.formats.urdf import FOV_AGREEMENT_DEG, export_urdf, read_urdf
 from rigopt.rig.library import load_rig
-
-
-def refused(result, fragment: str) -> str:
-    """The one error line of a refused command; asserts exit 2, the line and the fragment in it."""
-    lines = result.stderr.strip().splitlines()
-    assert result.returncode == 2 and len(lines) == 1 and lines[0].startswith("rigopt: error: "), result.stderr
-    assert fragment in lines[0], lines[0]
-    assert result.stdout == ""
-    return lines[0]
 
 
 # --------------------------------------------------------------------------------------------------- Waymo
