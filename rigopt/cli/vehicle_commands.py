@@ -95,9 +95,9 @@ def vehicle_show_command(
     out = check_out_file(out, suffixes=PICTURE_SUFFIXES)
     vehicle, drawn = load_vehicle(name), None
     if rig:
-        drawn, change = place_rig(load_rig(rig), vehicle, refuse_inside=False)
-        if change is not None:
-            note(change.describe())
+        loaded = load_rig(rig)
+        drawn, change = place_rig(loaded, vehicle, refuse_inside=False)
+        note_vehicle(loaded, vehicle, change)
     with atomic_file(out) as work:
         write_vehicle_figure(vehicle, work, drawn)
     console.print(f"wrote {out}")
