@@ -95,9 +95,9 @@ def design_command(
     max_nodes: int = typer.Option(DEFAULT_MAX_NODES, "--max-nodes", min=1, max=10_000_000,
                                   help="MILP work limit in branch-and-bound nodes: the same design on any machine; "
                                        "a design not proven best within it is an error."),
-    time_limit: Optional[float] = typer.Option(None, callback=more_than(0, " s"),
-                                               help="Accept a time-boxed MILP answer (s), reported with its gap; "
-                                                    "it may differ between machines (default: none)."),
+    accept_gap: bool = typer.Option(False, "--accept-gap",
+                                    help="Take the best design found within --max-nodes, reported with its gap, "
+                                         "instead of refusing one not proven best."),
     min_height: Optional[float] = typer.Option(None, "--min-height", min=0.0, max=5.0,
                                                help=MIN_HEIGHT_HELP),
     no_trailer: bool = typer.Option(False, "--no-trailer", help=NO_TRAILER_HELP),
@@ -155,7 +155,7 @@ def design_command(
         cameras=parse_camera_count(cameras), lenses=lenses, fov_range=fov_range,
         zones=tuple(z.strip() for z in zones.split(",")) if zones else None,
         pitches_deg=pitches, yaw_step_deg=yaw_step, spacing=spacing,
-        min_coverage=min_coverage, min_overlap=min_overlap, max_nodes=max_nodes, time_limit=time_limit,
+        min_coverage=min_coverage, min_overlap=min_overlap, max_nodes=max_nodes, accept_gap=accept_gap,
         rules=mount_rules(min_height, no_trailer), symmetric=False if asymmetric else None, cost_weight=cost_weight,
         require=require)
     references = [_reference(name.strip(), ref_vehicle) for name in ref.split(",") if name.strip()]

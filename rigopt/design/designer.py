@@ -416,17 +416,17 @@ def _best_selection(costs, sees, needed, mount, mount_points, counts, alpha, set
         progress(f"MILP: {low if low == high else f'{low}-{high}'} cameras from {len(costs[0])} candidates")
         try:
             selection = select_cameras(costs, sees, needed, mount, (low, high), alpha, clashes, settings.max_nodes,
-                                       settings.mip_gap, mirror, mount_cost, settings.cost_weight, settings.time_limit)
+                                       settings.mip_gap, mirror, mount_cost, settings.cost_weight)
         except DesignInfeasible:
             if high == counts[1] and best is None:
                 raise
             continue
-        if selection.status == "node_limit" and settings.time_limit is None:
+        if selection.status == "node_limit" and not settings.accept_gap:
             raise RigoptError(f"the selection MILP ({low if low == high else f'{low}-{high}'} cameras) stopped at its "
                               f"work limit of {settings.max_nodes} branch-and-bound nodes {selection.gap:.1%} from "
-                              "proven best, so its answer could depend on the machine; raise --max-nodes (e.g. "
-                              f"--max-nodes {4 * settings.max_nodes}), or accept a time-boxed answer with --time-limit "
-                              "SECONDS (reported with its gap; it may differ between machines)")
+                              "proven best; raise --max-nodes (e.g. "
+                              f"--max-nodes {4 * settings.max_nodes}), or take the best selection found within it with "
+                              "--accept-gap (reported with its gap)")
         if best is None or selection.objective + selection.cost_term < best.objective + best.cost_term:
             best = selection
     return best

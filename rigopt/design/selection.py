@@ -120,7 +120,7 @@ def _matching(cp, x, cost: np.ndarray, n_cameras: int, alpha: float, count_choic
 def select_cameras(cost, sees: np.ndarray, required: np.ndarray, mount: np.ndarray, n_cameras: int | tuple[int, int],
                    alpha: float, clash_pairs=(), max_nodes: int = DEFAULT_MAX_NODES, mip_gap: float = 1e-4,
                    mirror: np.ndarray | None = None, mount_cost: np.ndarray | None = None,
-                   cost_weight: float = 0.0, time_limit: float | None = None) -> Selection:
+                   cost_weight: float = 0.0) -> Selection:
     """Solve the selection MILP above.
 
     cost : (n, R) float raw-unit matching costs, or a list of them (one per reference rig: the fleet mode,
@@ -129,8 +129,7 @@ def select_cameras(cost, sees: np.ndarray, required: np.ndarray, mount: np.ndarr
     or a (low, high) range at or above every reference's camera count, solved at once (the count a variable
     of the MILP: with N >= R the objective stays linear); max_nodes : the branch-and-bound nodes HiGHS may
     explore, a work limit (one thread, a fixed seed), so the same input gives the same selection on any machine
-    at any load; time_limit : seconds, only for a time-boxed answer a user asked for (it may differ between
-    machines; status ``time_limit``); clash_pairs :
+    at any load (status ``node_limit`` when it stops there before proving ``mip_gap``); clash_pairs :
     (p, 2) int mount points whose housings collide; mirror : (n,) int each candidate's mirror image among
     the n (itself on the centreline), or None for no symmetry; mount_cost : (n,) float relative mounting cost
     of each candidate, weighted by ``cost_weight`` per reference camera in the objective (w / R sum m_c x_c,
@@ -182,8 +181,6 @@ def select_cameras(cost, sees: np.ndarray, required: np.ndarray, mount: np.ndarr
         penalty = cost_weight / n_ref * (np.asarray(mount_cost, dtype=float) @ x)
     problem = cp.Problem(cp.Minimize(objective + penalty), constraints)
     options = {**HIGHS_OPTIONS, "mip_rel_gap": float(mip_gap), "mip_max_nodes": int(max_nodes)}
-    if time_limit is not None:
-        options["time_limit"] = float(time_limit)
     quiet_highs()
     start = time.perf_counter()
     try:
@@ -199,35 +196,25 @@ def select_cameras(cost, sees: np.ndarray, required: np.ndarray, mount: np.ndarr
                                "requirements; allow more cameras (--cameras), more zones, wider lenses or lower "
                                f"the coverage requirement{' (or design without symmetry: --asymmetric)' if pairs else ''}")
     chosen = np.flatnonzero(x.value > 0.5) if x.value is not None else np.zeros(0, dtype=int)
-    stopped = _stopped_by(problem, max_nodes)
-    if not low <= len(chosen) <= high:  # stopped at a limit before finding any feasible selection
-        raise RigoptError(f"the MIP solver found no feasible design within {_limit_words(max_nodes, time_limit)} "
-                          f"(status {problem.status}); raise {'--time-limit' if stopped == 'time_limit' else '--max-nodes'}")
+    if not low <= len(chosen) <= high:  # stopped at the node limit before finding any feasible selection
+        raise RigoptError(f"the MIP solver found no feasible design within {max_nodes} branch-and-bound nodes "
+                          f"(status {problem.status}); raise --max-nodes")
     matched = []
     for (y, _, _), c in zip(matchings, costs):
         pairs = y.value.reshape(n, c.shape[1]) > 0.5
         matched.append(np.array([int(np.argmax(pairs[k])) if pairs[k].any() else -1 for k in chosen]))
     gap = _gap(problem)
-    status = "optimal" if problem.status == cp.OPTIMAL else stopped or problem.status
+    status = "optimal" if problem.status == cp.OPTIMAL else "node_limit" if _stopped(problem) else problem.status
     rigcd_value = float(objective.value) if len(matchings) > 1 else float(matchings[0][2].value)
     cost_term = float(penalty.value) if hasattr(penalty, "value") else 0.0
     return Selection(chosen, matched[0], rigcd_value, status, gap, seconds, n, tuple(matched), cost_term)
 
 
-def _stopped_by(problem, max_nodes: int) -> str | None:
-    """"node_limit" or "time_limit" when HiGHS stopped at a limit before proving the gap, else None."""
+def _stopped(problem) -> bool:
+    """True when HiGHS stopped at its node limit before proving the gap (its only limit)."""
     import cvxpy as cp
 
-    if problem.status != cp.USER_LIMIT:
-        return None
-    info = problem.solver_stats.extra_stats if problem.solver_stats else None
-    nodes = getattr(info, "mip_node_count", None)
-    return "node_limit" if nodes is not None and nodes >= max_nodes else "time_limit"
-
-
-def _limit_words(max_nodes: int, time_limit: float | None) -> str:
-    nodes = f"{max_nodes} branch-and-bound nodes"
-    return nodes if time_limit is None else f"{nodes} or {time_limit:g} s"
+    return problem.status == cp.USER_LIMIT
 
 
 def _gap(problem) -> float:

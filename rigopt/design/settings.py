@@ -217,10 +217,11 @@ class DesignSettings:
     """About how many mount points offer every orientation for coverage (the coverage pool)."""
     max_nodes: int = DEFAULT_MAX_NODES
     """MILP work limit: branch-and-bound nodes (one thread, fixed seed). A design the MILP has not proven best
-    within it (relative gap above ``mip_gap``) is an error, unless ``time_limit`` asks for a time-boxed answer."""
-    time_limit: float | None = None
-    """Seconds: a time-boxed MILP whose best selection is returned with its gap (it may differ between machines
-    and loads); None (the default) solves to ``mip_gap`` within ``max_nodes``."""
+    within it (relative gap above ``mip_gap``) is an error, unless ``accept_gap``. No clock limits the MILP: the
+    same input gives the same selection on any machine at any load."""
+    accept_gap: bool = False
+    """Return the best selection found within ``max_nodes`` with its gap (status ``node_limit``) instead of
+    refusing a selection not proven best."""
     mip_gap: float = 1e-4
     """MILP relative optimality gap at which HiGHS stops."""
     refine: bool = True
