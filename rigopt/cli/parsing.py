@@ -1,10 +1,12 @@
-"""Command-line values every command reads the same way: image sizes.
+"""Command-line values every command reads the same way: image sizes, origin offsets.
 
 One parser, one message: ``rigopt import`` (``--image-size``), ``rigopt design`` (``--image-size``) and
 ``rigopt bench generate`` (``--size``) take ``WIDTHxHEIGHT`` in whole pixels.
 """
 
 from __future__ import annotations
+
+import math
 
 from rigopt.errors import RigoptError
 
@@ -26,3 +28,16 @@ def parse_image_size(text: str, option: str = "--image-size") -> tuple[int, int]
         raise RigoptError(f"{option} must be WIDTHxHEIGHT in whole pixels, each side 1 to {MAX_IMAGE_SIDE}, "
                           f"e.g. 1600x900; got {text!r}")
     return size
+
+
+def parse_origin_offset(text: str) -> tuple[float, float, float]:
+    """``"-1.4,0,0.3"`` -> (-1.4, 0.0, 0.3) metres; raises RigoptError on anything but three finite numbers."""
+    parts = text.split(",")
+    try:
+        values = tuple(float(p) for p in parts)
+    except ValueError:
+        values = ()
+    if len(values) != 3 or not all(math.isfinite(v) for v in values):
+        raise RigoptError(f"--origin-offset must be three numbers X,Y,Z in metres (x forward, y left, z up), e.g. "
+                          f"-1.4,0,0.3; got {text!r}")
+    return values

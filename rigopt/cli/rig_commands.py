@@ -8,7 +8,7 @@ from typing import Optional
 import typer
 
 from rigopt.cli.app import app, console, import_app, note, print_json, print_next, print_table, status_console
-from rigopt.cli.parsing import parse_image_size
+from rigopt.cli.parsing import parse_image_size, parse_origin_offset
 from rigopt.errors import RigoptError
 
 
@@ -43,14 +43,13 @@ ORIGIN_HELP = ("Where the file's positions are measured from: vehicle_centre, re
                "--origin-offset); default: the format's own, see docs/formats.md.")
 ORIGIN_OFFSET_HELP = ("With --origin custom: X,Y,Z metres from the vehicle centre on the ground (ISO 8855: x forward, "
                       "y left, z up) to the point the file's positions are measured from.")
-ORIGIN_KINDS = ("vehicle_centre", "rear_axle", "custom")
 OUT_HELP = "Rig file to write (rigopt's rig JSON)."
 IMPORT_FORCE_HELP = "Replace an existing --out file."
 
 
 def _origin(text: str | None, offset: str | None):
     """The RigOrigin of ``--origin`` and ``--origin-offset`` (None when neither is given: the format's own)."""
-    from rigopt.rig.model import RigOrigin
+    from rigopt.rig.model import ORIGIN_KINDS, RigOrigin
 
     if text is None:
         if offset is not None:
@@ -66,21 +65,6 @@ def _origin(text: str | None, offset: str | None):
         raise RigoptError("--origin custom needs --origin-offset X,Y,Z: the origin's place in metres from the vehicle "
                           "centre on the ground (x forward, y left, z up), e.g. --origin-offset -1.4,0,0.3")
     return RigOrigin("custom", parse_origin_offset(offset))
-
-
-def parse_origin_offset(text: str) -> tuple[float, float, float]:
-    """``"-1.4,0,0.3"`` -> (-1.4, 0.0, 0.3) metres; raises RigoptError on anything but three finite numbers."""
-    import math
-
-    parts = text.split(",")
-    try:
-        values = tuple(float(p) for p in parts)
-    except ValueError:
-        values = ()
-    if len(values) != 3 or not all(math.isfinite(v) for v in values):
-        raise RigoptError(f"--origin-offset must be three numbers X,Y,Z in metres (x forward, y left, z up), e.g. "
-                          f"-1.4,0,0.3; got {text!r}")
-    return values
 
 
 def _check_vehicle(vehicle):
