@@ -8,6 +8,6 @@ from pathlib import Path
 
 STUDIES = Path(__file__).resolve().parents[2] / "studies"
 
-for folder in (STUDIES / "rigcd_plus",):
+for folder in (STUDIES / "rigcd_plus", STUDIES / "validation"):
     if str(folder) not in sys.path:
         sys.path.insert(0, str(folder))

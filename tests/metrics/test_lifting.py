@@ -1,0 +1,60 @@
+"""Rig-distance terms for lifting detectors (rigopt/metrics/lifting.py)."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from rigopt.geometry import rotation_from_yaw_pitch_roll
+from rigopt.metrics.lifting import DEPTH_RANGE, TERMS, ground_depths, lifting_terms
+from rigopt.metrics.rigcd import rigcd
+from rigopt.rig.library import load_rig
+from rigopt.rig.model import Camera, Rig
+
+
+def _moved(rig: Rig, transform) -> Rig:
+    return dataclasses.replace(rig, name=rig.name + "'", cameras=tuple(transform(c) for c in rig.cameras))
+
+
+def _column(values, name):
+    return values[:, TERMS.index(name)]
+
+
+def test_a_rig_against_itself_is_zero_and_rigcd_terms_are_the_published_ones():
+    r1, r6 = load_rig("R1"), load_rig("R6")
+    values = lifting_terms([r1, r1], [r1, r6])
+    assert np.all(values[0] == 0)
+    published = rigcd(r1, r6)
+    assert values[1, :4] == pytest.approx([published.t, published.r, published.f, published.count], abs=1e-12)
+
+
+def test_yaw_and_plan_moves_leave_the_depth_prior_alone():
+    r1 = load_rig("R1")
+    turned = _moved(r1, lambda c: dataclasses.replace(
+        c, position=c.position + np.array([0.7, -0.4, 0.0]), rotation=rotation_from_yaw_pitch_roll(0.3, 0, 0) @ c.rotation))
+    values = lifting_terms([r1], [turned])[0]
+    assert _column(values[None], "dpm")[0] == pytest.approx(0, abs=1e-12)
+    assert _column(values[None], "t_vert")[0] == pytest.approx(0, abs=1e-12)
+    assert _column(values[None], "t_plan")[0] == pytest.approx(np.hypot(0.7, 0.4))
+    assert _column(values[None], "r_yaw")[0] == pytest.approx(0.3)
+    assert _column(values[None], "r_tilt")[0] == pytest.approx(0, abs=1e-12)
+
+
+def test_a_camera_twice_as_high_sees_the_ground_twice_as_far():
+    level = Camera("C", np.array([0.0, 0.0, 0.5]), np.eye(3), 90.0)
+    high = dataclasses.replace(level, position=np.array([0.0, 0.0, 1.0]))
+    low, up = (np.exp(ground_depths([c], grid=(4, 8))[0]) for c in (level, high))
+    ground = (up < DEPTH_RANGE[1]) & (low > DEPTH_RANGE[0])
+    assert ground.sum() >= 4 and np.allclose(up[ground], 2 * low[ground])
+    assert np.allclose(low[:16], DEPTH_RANGE[1])  # the upper half of a level camera sees no ground
+
+
+def test_pitch_counts_as_tilt_and_changes_the_depth_prior():
+    r1 = load_rig("R1")
+    pitched = _moved(r1, lambda c: dataclasses.replace(c, rotation=c.rotation @ rotation_from_yaw_pitch_roll(0, -0.2, 0)))
+    values = lifting_terms([r1], [pitched])
+    assert _column(values, "r_tilt")[0] == pytest.approx(0.2)
+    assert _column(values, "r_yaw")[0] == pytest.approx(0, abs=1e-12)
+    assert _column(values, "dpm")[0] > 0.3
