@@ -1,4 +1,4 @@
-"""Where rigopt's shipped data lives: the ``metrics/`` and ``vehicles/`` folders.
+"""Where rigopt's shipped data lives: the ``metrics/``, ``vehicles/`` and ``detectors/`` folders.
 
 In a source checkout they are top-level folders beside the ``rigopt`` package; a built wheel carries
 them inside the package as ``rigopt/_data/``. Both layouts are found here and nowhere else.
@@ -12,7 +12,7 @@ _PACKAGE = Path(__file__).resolve().parent
 
 
 def data_dir(name: str) -> Path:
-    """The shipped data folder ``name`` ("metrics" or "vehicles") of this installation."""
+    """The shipped data folder ``name`` ("metrics", "vehicles" or "detectors") of this installation."""
     for candidate in (_PACKAGE / "_data" / name, _PACKAGE.parent / name):
         if candidate.is_dir():
             return candidate

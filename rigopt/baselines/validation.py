@@ -35,9 +35,13 @@ from rigopt.rig.model import Rig
 
 
 def load_design(path) -> Rig:
-    """A rig from a rig file or a design report (``report.json`` beside its ``rig.json``); a file named
-    rig.json or report.json takes its folder's name (e.g. ``firetruck_from_R1``)."""
+    """A rig from a rig file, a design report (``report.json`` beside its ``rig.json``) or a library rig's name;
+    a file named rig.json or report.json takes its folder's name (e.g. ``firetruck_from_R1``)."""
+    from rigopt.rig.library import rig_names
+
     path = Path(path)
+    if not path.exists() and str(path) in rig_names():
+        return load_rig(str(path))
     if not path.is_file():
         raise RigFileError(f"{path}: no such design file; pass a rig file or the report.json of rigopt design")
     rig_path = path

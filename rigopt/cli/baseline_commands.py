@@ -193,18 +193,27 @@ def matrix_command(
 
 @app.command("validate")
 def validate_command(
-    design: Path = typer.Argument(..., help="A designed rig: its rig file or the report.json of rigopt design."),
+    design: Path = typer.Argument(..., help="The rig: a rig file, the report.json of rigopt design or a library rig."),
     ref: str = typer.Option(..., "--ref", help="Reference rig the detector was trained on."),
     model: str = typer.Option(..., "--model", help=MODEL_HELP),
-    data: Path = typer.Option(..., "--data", help="Benchmark folder with the reference's test split and trained run."),
+    data: Optional[Path] = typer.Option(None, "--data", help="Benchmark folder with the reference's test split and a "
+                                        "trained run (rigopt bench generate, bench train). Without it, the models "
+                                        "rigopt ships score the rig on the reference's test scenes, rendered into "
+                                        "--cache."),
     weights: str = typer.Option("joint", "--weights", help="Calibrated weights for the predicted drops."),
     metric: str = typer.Option("rigcd", "--metric", help=METRIC_HELP),
     device: str = typer.Option("cpu", "--device", help=DEVICE_HELP),
-    runs: Optional[Path] = typer.Option(None, "--runs", help=RUNS_HELP),
+    runs: Optional[Path] = typer.Option(None, "--runs", help=RUNS_HELP + " Needs --data."),
+    cache: Optional[Path] = typer.Option(None, "--cache", help="Without --data: where the renderings are kept "
+                                         "(default $RIGOPT_HOME/cache/validate, ~/.rigopt/cache/validate)."),
+    workers: int = typer.Option(0, "--workers", min=0, help="Without --data: rendering processes (0: one per core)."),
+    compare: bool = typer.Option(False, "--compare", help="Without --data: also measure the hand-designed rigs of "
+                                 "the rig's vehicle and the naive and height-matched transfers of the reference "
+                                 "(as --data always does)."),
     out: Optional[Path] = typer.Option(None, "--out", help="Also write the result as JSON here."),
     as_json: bool = typer.Option(False, "--json", help="Print JSON instead of a table."),
 ):
-    """Measure a design's transfer drop with a reference-trained detector, beside the predicted drop."""
+    """Measure a rig's transfer drop with a reference-trained detector, beside the predicted drop."""
     require_torch()
     import json
 
@@ -215,15 +224,27 @@ def validate_command(
     from rigopt.report.json_values import json_ready
 
     from rigopt.output import check_out_file, existing_file, write_text_atomic
+    from rigopt.rig.library import rig_names
 
     if out is not None:
         check_out_file(out, suffixes=(".json",))
-    existing_file(design, "design file (a rig file, or the report.json of rigopt design)")
-    check_data(data)
+    if not (not design.exists() and str(design) in rig_names()):
+        existing_file(design, "design file (a rig file, the report.json of rigopt design, or a library rig's name)")
+    if data is None and runs is not None:
+        raise RigoptError("--runs names trained runs of a --data folder: add --data, or leave --runs out to use the "
+                          "shipped models")
+    if data is not None and (cache is not None or compare):
+        raise RigoptError(f"--{'cache' if cache is not None else 'compare'} is for the shipped models (no --data); "
+                          "with --data the renderings go into that folder and the comparison rigs are always measured")
+    if data is not None:
+        check_data(data)
     check_runs(runs, must_exist=True)
     family, calibration, rig = model_config(model).family, load_weights(weights, metric), load_design(design)
     note_fallback(calibration)
     resolve_device(device)
+    if data is None:
+        _validate_shipped(rig, ref, family, calibration, weights, device, cache, workers, compare, out, as_json)
+        return
     with status_console.status("validating") as status:
         result = validate_design(rig, ref, family, data, calibration, runs, device, status.update)
     if out is not None:
@@ -245,6 +266,64 @@ def validate_command(
     print_table(f"measured drop of the design minus the others (below 0: the design loses less); intervals from "
                 f"{result['bootstrap']['resamples']} paired resamples of the {result['bootstrap']['blocks']} test "
                 f"scenes", ["difference", "other rig's role", "value", "95 % interval"], rows)
+
+
+def _validate_shipped(rig, ref: str, family: str, calibration, weights: str, device: str, cache, workers: int,
+                      compare: bool, out, as_json: bool) -> None:
+    """validate without --data: the shipped models, the reference's test scenes rendered into the cache."""
+    import json
+    import os
+
+    from rigopt.baselines.shipped import default_cache, measure, shipped_detector
+    from rigopt.baselines.validation import comparison_rigs
+    from rigopt.metrics.ranking import predict_transfer
+    from rigopt.output import existing_folder, write_text_atomic
+    from rigopt.report.json_values import json_ready
+    from rigopt.rig.library import load_rig
+
+    detector = shipped_detector(family, load_rig(ref).name)
+    reference = load_rig(detector.reference)
+    if cache is not None and cache.exists():
+        existing_folder(cache, "renderings of the reference's test scenes (made by rigopt validate)", option="--cache")
+    rigs = [("rig", rig)]
+    if compare:
+        rigs += comparison_rigs(rig, reference, calibration)[1:]
+    names = [r.name for _, r in rigs]
+    if len(set(names)) != len(names):
+        raise RigoptError(f"rig names must differ from each other: {names}")
+    workers = workers or os.cpu_count() or 1
+    with status_console.status("validating") as status:
+        measured = measure([r for _, r in rigs], detector, cache, device, workers, status.update)
+    predictions = predict_transfer(reference, [r for _, r in rigs], calibration)
+    card = detector.card
+    result = {"reference": reference.name, "model": family, "models": "shipped", "detector": detector.folder.name,
+              "seeds": detector.seeds, "epochs": card["recipe"]["epochs"],
+              "reference_mAP": {s: card["seeds"][str(s)]["mAP"] for s in detector.seeds},
+              "reference_mAP_visible": {s: card["seeds"][str(s)]["mAP_visible"] for s in detector.seeds},
+              "test_scenes": card["test_data"]["scenes"], "image_size": card["test_data"]["image_size"],
+              "cache": str(cache or default_cache()), "metric": calibration.metric, "weights": calibration.name,
+              "interval_note": "95 % intervals over resampled test scenes: the noise of the test, not uncertainty "
+                               "over rigs or trainings",
+              "rigs": [{"role": role, **entry, "predicted_drop": prediction.predicted_drop,
+                        "predicted_interval": prediction.to_dict()["interval"],
+                        "extrapolation": prediction.to_dict()["extrapolation"], "rigcd": prediction.rigcd}
+                       for (role, _), entry, prediction in zip(rigs, measured, predictions)]}
+    if out is not None:
+        write_text_atomic(out, json.dumps(json_ready(result), indent=1) + "\n")
+    if as_json:
+        print_json(result)
+        return
+    rows = [[e["role"], e["rig"], e["n_cameras"], " / ".join(_number(s["drop"]) for s in e["seeds"].values()),
+             _number(e["drop"]), _interval(e["drop_ci"]), _number(e["drop_visible"]), _number(e["predicted_drop"]),
+             _interval(e["predicted_interval"]), "yes" if e["extrapolation"] else "-"] for e in result["rigs"]]
+    own = " / ".join(_number(v) for v in result["reference_mAP"].values())
+    print_table(f"{family} trained on {reference.name}, shipped ({len(detector.seeds)} seeds, {result['epochs']} "
+                f"epochs; own mAP {own}), {result['test_scenes']} test scenes; predicted with {calibration.metric}, "
+                f"{weights} weights",
+                ["role", "rig", "cameras", "drop per seed", "mean drop", "95 % interval (test scenes)",
+                 "visible-only drop", "predicted drop", "90 % prediction interval", "extrapolates"], rows)
+    console.print(f"drops are relative to the model's own fixed-set mAP on {reference.name}; intervals resample the "
+                  f"{result['test_scenes']} test scenes (test noise only); renderings kept in {result['cache']}")
 
 
 def _visible_maps(out: Path, family: str, names: List[str]) -> dict:
