@@ -188,8 +188,8 @@ def _keep_pairs(opti, problem: RefineProblem, design: Rig, u, v, yaw, pitch, fov
 def _moved(camera: Camera, position, rotation, fov: float) -> Camera:
     """``camera`` at a new pose: a benchmark pinhole with FOV ``fov`` (deg), a real lens unchanged."""
     if camera.lens is not None:
-        return Camera.with_lens(camera.id, position, rotation, camera.lens, camera.zone)
-    return Camera(camera.id, position, rotation, fov, camera.image_size, camera.zone)
+        return Camera.with_lens(camera.id, position, rotation, camera.lens, camera.zone, role=camera.role)
+    return Camera(camera.id, position, rotation, fov, camera.image_size, camera.zone, role=camera.role)
 
 
 def project_to_surface(rig: Rig, vehicle: Vehicle, rules: MountRules = MountRules()) -> Rig:

@@ -77,6 +77,10 @@ class Camera:
         Name of the camera module (one housing) it shares with other cameras of the rig: a roof cluster, a
         stereo pair. Cameras of one module are one part to the mount rules (their housings do not clash with
         each other); None for a camera in a housing of its own.
+    role : str
+        ``"perception"`` (fed to the transferred detector: matched to the reference and counted in the rig
+        distances) or ``"near_field"`` (for the regulation fields and the blind near field, not fed to the
+        detector: counted for coverage, cost and packaging). One of ROLES; default perception.
 
     Names (``id``, ``zone``, ``module``) are printable text: no control characters or terminal escapes, so
     that they print and serialise (XML, JSON, tables) as they are. Positions lie within
@@ -91,10 +95,13 @@ class Camera:
     zone: str | None = None
     lens: Lens | None = None
     module: str | None = None
+    role: str = "perception"
 
     def __post_init__(self):
         _check_name(self.id, "camera id")
         what = f"camera {self.id!r}"
+        if self.role not in ROLES:
+            raise RigFileError(f"{what} role must be one of {', '.join(ROLES)}, got {self.role!r}")
         for key in ("zone", "module"):
             if getattr(self, key) is not None:
                 _check_name(getattr(self, key), f"{what} {key}")
@@ -129,9 +136,9 @@ class Camera:
 
     @classmethod
     def with_lens(cls, id: str, position, rotation, lens: Lens, zone: str | None = None,
-                  module: str | None = None) -> "Camera":
+                  module: str | None = None, role: str = "perception") -> "Camera":
         """A camera with a real lens: ``fov`` and ``image_size`` derived from it."""
-        return cls(id, position, rotation, lens.hfov, lens.image_size, zone, lens, module)
+        return cls(id, position, rotation, lens.hfov, lens.image_size, zone, lens, module, role)
 
     @property
     def lens_model(self) -> Lens:
@@ -153,9 +160,13 @@ class Camera:
             and self.image_size == other.image_size
             and self.zone == other.zone
             and self.module == other.module
+            and self.role == other.role
             and _same_lens(self.lens, other.lens, atol)
         )
 
+
+#: What a camera is for (see :class:`Camera`): fed to the detector, or for the near field and the regulations.
+ROLES = ("perception", "near_field")
 
 #: Largest distance (m) of a camera from its rig's origin, per coordinate: cameras are on their vehicle.
 MAX_POSITION_M = 1000.0
@@ -288,6 +299,22 @@ class Rig:
         """(8, N) float: the cameras as :func:`camera_columns` (position, unit quaternion, FOV), built once;
         batched metrics concatenate these blocks."""
         return _read_only(np.ascontiguousarray(camera_columns(self.positions, self.rotations, self.fovs)))
+
+    @property
+    def near_field_count(self) -> int:
+        """How many cameras have the near_field role."""
+        return sum(c.role == "near_field" for c in self.cameras)
+
+    def perception(self) -> "Rig":
+        """The rig of its perception cameras (itself when all are): what the transferred detector is fed and the
+        rig distances compare. A rig with none is an error."""
+        if self.near_field_count == 0:
+            return self
+        kept = tuple(c for c in self.cameras if c.role == "perception")
+        if not kept:
+            raise RigFileError(f"rig {self.name!r} has no perception cameras (all {len(self)} are near_field); the "
+                               "rig distances compare the cameras fed to the detector: mark some 'perception'")
+        return Rig(self.name, self.vehicle, kept, self.origin)
 
     def same_as(self, other: "Rig", atol: float = 1e-9) -> bool:
         """True when names, vehicles and every camera agree (arrays within ``atol``)."""

@@ -11,7 +11,8 @@ any multiple of 360 apart; ``fov`` horizontal, degrees. Other keys (the benchmar
 ignored. rigopt adds optional keys, written only when they differ from the benchmark's defaults:
 
 - per camera: ``image_size`` ``[width, height]`` (default 1280 x 720), ``zone``, ``module`` (the camera
-  module, one housing, it shares with other cameras: a roof cluster, a stereo pair), and for a real lens
+  module, one housing, it shares with other cameras: a roof cluster, a stereo pair), ``role``
+  (``"near_field"``; absent: ``"perception"``, so files written before roles are all perception), and for a real lens
   ``"intrinsics": {"fx": .., "fy": .., "cx": .., "cy": ..}`` (px) with
   ``"distortion": {"model": "radtan" | "fisheye", "coefficients": [...]}`` (OpenCV order: k1, k2, p1, p2,
   k3; fisheye k1..k4). With intrinsics, ``fov`` is the lens's derived horizontal FOV (checked on reading).
@@ -31,7 +32,7 @@ from rigopt.camera import DISTORTION_COEFFICIENTS, Lens
 from rigopt.errors import RigFileError, RigoptError, not_utf8
 from rigopt.geometry import carla_to_iso, iso_to_carla
 from rigopt.output import existing_file
-from rigopt.rig.model import DEFAULT_IMAGE_SIZE, VEHICLE_CENTRE, Camera, Rig, RigOrigin
+from rigopt.rig.model import DEFAULT_IMAGE_SIZE, ROLES, VEHICLE_CENTRE, Camera, Rig, RigOrigin
 
 #: Decimals kept when writing angles (degrees) and locations (metres): far below any mounting tolerance,
 #: and enough to give back the numbers of a file that was read.
@@ -76,8 +77,12 @@ def _camera_from_dict(entry, index: int, source: str) -> Camera:
         raise RigFileError(f"{where} ({entry['id']}) 'image_size' must be [width, height] in pixels, got {size!r}")
     position, rotation_matrix = carla_to_iso(location, rotation)
     lens = _lens_from(entry, size, f"{where} ({entry['id']})")
+    role = entry.get("role", "perception")
+    if role not in ROLES:
+        raise RigFileError(f"{where} ({entry['id']}) 'role' must be one of {', '.join(ROLES)} (absent: perception), "
+                           f"got {role!r}")
     return Camera(entry["id"], position, rotation_matrix, fov, tuple(size), entry.get("zone"), lens,
-                  entry.get("module"))
+                  entry.get("module"), role)
 
 
 def _lens_from(entry: dict, size, where: str) -> Lens | None:
@@ -143,6 +148,8 @@ def rig_to_dict(rig: Rig) -> dict:
             entry["zone"] = camera.zone
         if camera.module is not None:
             entry["module"] = camera.module
+        if camera.role != "perception":
+            entry["role"] = camera.role
         if camera.lens is not None:
             lens = camera.lens
             entry["intrinsics"] = dict(zip(("fx", "fy", "cx", "cy"), _rounded([lens.fx, lens.fy, lens.cx, lens.cy])))

@@ -8,6 +8,9 @@ Layout::
                   "transform": {"location": {"x": .., "y": .., "z": ..},
                                 "rotation": {"pitch": .., "yaw": .., "roll": ..}}}, ...]}
 
+Each camera's role (perception or near_field) is written as its ``role_name`` attribute, CARLA's own attribute
+for what an actor is for; a list whose ``role_name`` is anything else reads as perception.
+
 Each sensor is what ``world.spawn_actor(blueprint, carla.Transform(...), attach_to=vehicle)`` takes:
 attribute values are strings, as ``blueprint.set_attribute`` wants them; the transform is relative to the
 vehicle actor, in CARLA's frame (x forward, y right, z up, left-handed; rotations in degrees), whose origin
@@ -25,7 +28,7 @@ from rigopt.errors import RigFileError, RigoptError
 from rigopt.geometry import carla_to_iso, iso_to_carla
 from rigopt.rig.formats.common import (Exported, Imported, format_number, make_rig, numbers, origin_note, read_json,
                                        warn_origin, whole_number)
-from rigopt.rig.model import Camera, Rig, RigOrigin
+from rigopt.rig.model import ROLES, Camera, Rig, RigOrigin
 
 BLUEPRINT = "sensor.camera.rgb"
 FIX = "write it with rigopt export --format carla (keys rig, vehicle, sensors)"
@@ -45,7 +48,8 @@ def export_carla(rig: Rig) -> Exported:
         width, height = camera.image_size
         sensors.append({
             "id": camera.id, "blueprint": BLUEPRINT,
-            "attributes": {"image_size_x": str(width), "image_size_y": str(height), "fov": format_number(camera.fov)},
+            "attributes": {"image_size_x": str(width), "image_size_y": str(height), "fov": format_number(camera.fov),
+                           "role_name": camera.role},
             "transform": {"location": dict(zip("xyz", (float(v) + 0.0 for v in location))),
                           "rotation": dict(zip(("pitch", "yaw", "roll"), (float(v) + 0.0 for v in rotation)))},
         })
@@ -83,8 +87,10 @@ def read_carla(path, name: str | None = None, vehicle: str | None = None, origin
         location = [_value(transform.get("location"), key, f"{where} location") for key in "xyz"]
         rotation = [_value(transform.get("rotation"), key, f"{where} rotation") for key in ("pitch", "yaw", "roll")]
         position, matrix = carla_to_iso(location, rotation)
+        role = attributes.get("role_name", "perception")
         try:
-            cameras.append(Camera(str(sensor["id"]), position, matrix, fov, tuple(size)))
+            cameras.append(Camera(str(sensor["id"]), position, matrix, fov, tuple(size),
+                                  role=role if role in ROLES else "perception"))
         except RigoptError as error:
             raise RigFileError(f"{where}: {error}") from None
     origin = origin or RigOrigin()

@@ -244,7 +244,7 @@ def format_number(value: float) -> str:
 
 
 def warn_not_carried(rig: Rig, format_name: str, carries_name: bool, carries_vehicle: bool) -> list[str]:
-    """Warnings for the rig-level things ``format_name`` does not carry (name, vehicle, zones, modules)."""
+    """Warnings for the rig-level things ``format_name`` does not carry (name, vehicle, zones, modules, roles)."""
     lost, options = [], []
     if not carries_name:
         lost.append(f"the rig's name {rig.name!r}")
@@ -258,6 +258,8 @@ def warn_not_carried(rig: Rig, format_name: str, carries_name: bool, carries_veh
     grouped = [c.id for c in rig.cameras if c.module is not None]
     if grouped:
         lost.append(f"the camera modules of {len(grouped)} camera(s)")
+    if rig.near_field_count:
+        lost.append(f"the near_field role of {rig.near_field_count} camera(s) (read back as perception)")
     if not lost:
         return []
     again = f"; give {' and '.join(options)} on import" if options else ""
