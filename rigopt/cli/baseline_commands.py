@@ -11,7 +11,7 @@ from typing import List, Optional
 
 import typer
 
-from rigopt.cli.app import app, console, note_fallback, print_json, print_table, status_console
+from rigopt.cli.app import app, console, note, note_fallback, print_json, print_table, status_console
 from rigopt.cli.bench_commands import bench_app
 from rigopt.cli.metric_commands import METRIC_HELP
 from rigopt.errors import RigoptError
@@ -271,6 +271,7 @@ def validate_command(
 def _validate_shipped(rig, ref: str, family: str, calibration, weights: str, device: str, cache, workers: int,
                       compare: bool, out, as_json: bool) -> None:
     """validate without --data: the shipped models, the reference's test scenes rendered into the cache."""
+    import dataclasses
     import json
     import os
 
@@ -286,6 +287,10 @@ def _validate_shipped(rig, ref: str, family: str, calibration, weights: str, dev
     if cache is not None and cache.exists():
         existing_folder(cache, "renderings of the reference's test scenes (made by rigopt validate)", option="--cache")
     rigs = [("rig", rig)]
+    if rig.near_field_count:  # the detector is fed the perception cameras; the whole rig is kept for the record
+        rigs = [("perception cameras", rig.perception()), ("whole rig", dataclasses.replace(rig, name=f"{rig.name}_whole"))]
+        note(f"{rig.name}: {rig.near_field_count} near_field camera(s) are not fed to the detector: measured on its "
+             f"{len(rigs[0][1])} perception cameras, and whole for the record")
     if compare:
         rigs += comparison_rigs(rig, reference, calibration)[1:]
     names = [r.name for _, r in rigs]

@@ -148,3 +148,21 @@ def test_bad_input_exits_2_with_one_line(use_packed, tmp_path, capsys, args, mes
     assert code == INPUT_ERROR, stderr
     lines = stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("rigopt: error: ") and message in lines[0]
+
+
+def test_near_field_cameras_are_not_fed_to_the_detector(use_packed, tmp_path, capsys):
+    """A rig with near_field cameras is measured on its perception cameras, and whole for the record."""
+    from rigopt.rig.pccr_format import write_rig
+
+    r5 = load_rig("R5")
+    mixed = dataclasses.replace(r5, name="mixed", cameras=(dataclasses.replace(r5.cameras[0], role="near_field"),
+                                                           *r5.cameras[1:]))
+    path = write_rig(mixed, tmp_path / "mixed.json")
+    capsys.readouterr()
+    code = run(["validate", str(path), "--ref", "R1", "--model", "lss", "--json", "--workers", "1",
+                "--cache", str(tmp_path / "cache")])
+    captured = capsys.readouterr()
+    assert code == 0, captured.err
+    entries = json.loads(captured.out)["rigs"]
+    assert [(e["role"], e["n_cameras"]) for e in entries] == [("perception cameras", 3), ("whole rig", 4)]
+    assert "1 near_field camera(s) are not fed to the detector" in captured.err
