@@ -14,8 +14,8 @@ from rigopt.errors import RigoptError
 
 #: The --require option's help (also for other commands that take regulation fields).
 REQUIRE_HELP = ("Regulation fields every camera-visible point of which is checked, comma-separated: r158 (rear, "
-                "reversing), r151 (nearside blind spot), r159 (front, moving off), r46-iv, r46-v, r46-vi (R46 "
-                "classes IV, V, VI), dvs (London Direct Vision Standard); default (the vehicle category's: trucks "
+                "reversing), r151 (nearside blind spot), r159 (front, moving off), r46-ii, r46-iv, r46-v, r46-vi (R46 "
+                "classes II, IV, V, VI), dvs (London Direct Vision Standard); default (the vehicle category's: trucks "
                 "r151,r159,r158, cars r158) or none. Add :lht for left-hand traffic (nearside on the left), e.g. "
                 "r151:lht. See docs/regulations.md.")
 
@@ -167,11 +167,19 @@ def _print_tables(data: dict, other: dict | None) -> None:
                   f"{100 * bev['overlap2_frac_within_20m']:.1f} % by >= 2 cameras, at most {bev['max_count']}")
 
     if data.get("regions"):
-        print_table("regulation fields (--require): required points seen by >= 1 camera; covered = all of them",
-                    ["field", "covered", "seen", "seen per height", "unseen area (m²)", "area (m²)", "points"],
-                    [[r["key"], "yes" if r["covered"] else "no", r["covered_frac"],
+        from rigopt.report.coverage_figures import camera_field_rows
+
+        print_table("regulation fields (--require): required points seen by >= 1 camera, the unseen ground beside it; "
+                    "weighted: each point by its criticality (docs/regulations.md); covered = all of them",
+                    ["field", "covered", "seen", "unseen area (m²)", "weighted seen", "seen per height", "area (m²)",
+                     "points"],
+                    [[r["key"], "yes" if r["covered"] else "no", f"{100 * r['covered_frac']:.1f} %",
+                      f"{r['unseen_area_m2']:.1f}", f"{100 * r['weighted_covered_frac']:.1f} %",
                       ", ".join(f"{h['height_m']:g} m {100 * h['covered_frac']:.1f} %" for h in r["height_covered_frac"]),
-                      f"{r['unseen_area_m2']:.1f}", f"{r['area_m2']:.1f}", r["n_points"]] for r in data["regions"]])
+                      f"{r['area_m2']:.1f}", r["n_points"]] for r in data["regions"]])
+        columns, rows = camera_field_rows(data["regions"])
+        print_table("regulation fields by camera: share of each field's required points a camera sees (and sees "
+                    "alone); the alone shares and 'seen by >= 2' add up to 'seen by any'", columns, rows)
 
     if "compare" in data:
         diff = data["compare"]

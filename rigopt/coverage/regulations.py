@@ -1,18 +1,20 @@
 """Requirement presets modelled on regulations' close-proximity fields, and a rig's coverage of them.
 
-Each preset is a ground region around the vehicle (rectangles placed against the body's outline, joined)
-with the heights at which a test object there must be seen: UN R158 behind the vehicle, R151 along the
-nearside, R159 in front, R46 classes IV, V and VI, and TfL's Direct Vision Standard. Their figures, sources
+Each preset is a ground region around the vehicle (rectangles and polygons placed against the body's outline,
+joined) with the heights at which a test object there must be seen: UN R158 behind the vehicle, R151 along the
+nearside, R159 in front, R46 classes II, IV, V and VI, and TfL's Direct Vision Standard. Their figures, sources
 and simplifications are in docs/regulations.md.
 
-Frames: ISO 8855 vehicle frame (x forward, y left, z up; metres; the vehicle's origin on the ground). The
-body's outline is its footprint (the convex hull of the mesh on the ground, mirrors included): ``front``
-and ``rear`` are its largest and smallest x, the ``nearside`` and ``offside`` its extreme y on the kerb side
-and on the other side. In right-hand traffic (the default) the nearside is the right, -y; in left-hand
-traffic it is the left, +y. The driver's ocular points (the R46 fields) are taken at ``driver_eye_x``.
+Frames: ISO 8855 vehicle frame (x forward, y left, z up; metres; the vehicle's origin on the ground). A preset's
+lines come from its reference outline (:class:`BodyReference`): for most presets the footprint of the whole body
+(the convex hull of the mesh on the ground, mirrors included); for R151 the body below 2.0 m without its mirrors,
+and a coupled trailer. ``front`` and ``rear`` are the outline's largest and smallest x, the ``nearside`` and
+``offside`` its extreme y on the kerb side and on the other side. In right-hand traffic (the default) the
+nearside is the right, -y; in left-hand traffic it is the left, +y. The driver's ocular points (the R46 fields)
+are taken at ``driver_eye_x``.
 
-A field never asks for ground the body stands on or overhangs: the region is the field less the footprint
-grown by ``clearance`` (0.3 m, R158's own near edge; a test object has a body of its own, and the ground
+A field never asks for ground the body stands on or overhangs: the region is the field less the reference
+outline grown by ``clearance`` (0.3 m, R158's own near edge; a test object has a body of its own, and the ground
 right under a bumper is hidden from every camera above it).
 """
 
@@ -44,6 +46,24 @@ HEAVY_CATEGORIES = ("M2", "M3", "N2", "N3")
 #: away from the body, m).
 X_LINES = ("front", "rear", "eye")
 SIDE_LINES = ("nearside", "offside")
+#: R151's reference lines leave out every part of the vehicle higher than this (m) above the ground.
+R151_MAX_HEIGHT = 2.0
+#: The zones that hold devices for indirect vision (mirror heads, camera arms): R151's lines leave out the mesh
+#: inside them, their boxes grown by MIRROR_ZONE_MARGIN m on every side (a mirror's arm reaches past the zone a
+#: camera may be mounted in: the hgv's lower arms end 0.14 m ahead of its mirror zones).
+MIRROR_ZONES = ("mirror",)
+MIRROR_ZONE_MARGIN = 0.2
+#: Where rigopt ends R46 class II's field, which runs "to the horizon" (m behind the driver's ocular points).
+R46_HORIZON_CUT = 50.0
+#: Length (m) of the criticality weights' fall-off with distance from the body and from the nearside front corner.
+CRITICALITY_LENGTH = 1.0
+
+
+def _check_edge(name: str, edge, lines: tuple[str, ...]) -> None:
+    line, offset = edge
+    if line not in lines or not np.isfinite(offset):
+        raise RigoptError(f"a field's {name} edge is (line, offset m) with line one of {', '.join(lines)} and a "
+                          f"finite offset, got {edge!r}")
 
 
 @dataclass(frozen=True)
@@ -63,15 +83,102 @@ class FieldBox:
 
     def __post_init__(self):
         for name, lines in (("back", X_LINES), ("ahead", X_LINES), ("offside", SIDE_LINES), ("nearside", SIDE_LINES)):
-            line, offset = getattr(self, name)
-            if line not in lines or not np.isfinite(offset):
-                raise RigoptError(f"a field box's {name} edge is (line, offset m) with line one of "
-                                  f"{', '.join(lines)} and a finite offset, got {getattr(self, name)!r}")
+            _check_edge(name, getattr(self, name), lines)
+
+    def shape(self, lines: "BodyLines") -> shapely.Polygon:
+        """The rectangle in the vehicle frame (m), placed against ``lines``."""
+        x0, x1 = sorted((lines.x(self.back), lines.x(self.ahead)))
+        y0, y1 = sorted((lines.y(self.offside), lines.y(self.nearside)))
+        return shapely.box(x0, y0, x1, y1)
+
+
+@dataclass(frozen=True)
+class FieldPolygon:
+    """One polygon of a field: ``corners`` in order, each (x edge, side edge) as in :class:`FieldBox` (an x line
+    and offset forward, a side line and offset outward). E.g. R46 class IV's outer edge running straight from
+    4.5 m out at 1.5 m behind the eyes to 15 m out at 10 m behind them."""
+
+    corners: tuple[tuple[tuple[str, float], tuple[str, float]], ...]
+
+    def __post_init__(self):
+        if len(self.corners) < 3:
+            raise RigoptError(f"a field polygon needs at least 3 corners, got {len(self.corners)}")
+        for x_edge, side_edge in self.corners:
+            _check_edge("corner's x", x_edge, X_LINES)
+            _check_edge("corner's side", side_edge, SIDE_LINES)
+
+    def shape(self, lines: "BodyLines") -> shapely.Polygon:
+        """The polygon in the vehicle frame (m), placed against ``lines``; an invalid (self-crossing) one is
+        refused."""
+        polygon = shapely.Polygon([(lines.x(x_edge), lines.y(side_edge)) for x_edge, side_edge in self.corners])
+        if not polygon.is_valid:
+            raise RigoptError(f"a field polygon's corners cross each other: {self.corners!r}")
+        return polygon
+
+
+@dataclass(frozen=True)
+class BodyReference:
+    """What of the vehicle a preset's lines and near-body clearance are measured from.
+
+    ``max_height``: parts of the mesh higher than this (m) are left out (None: none); ``left_out_zones``: the
+    mesh inside the boxes of these zones (mirrored copies included), grown by MIRROR_ZONE_MARGIN, is left out (a
+    vehicle without such a zone keeps everything); ``trailer``: a coupled trailer (every keep-out in force that
+    occludes, ``lifted`` ones left out) joins the outline, so that its sides and its rear are the vehicle's.
+    """
+
+    max_height: float | None = None
+    left_out_zones: tuple[str, ...] = ()
+    trailer: bool = False
+
+    @property
+    def whole_body(self) -> bool:
+        return self.max_height is None and not self.left_out_zones and not self.trailer
+
+    def outline(self, vehicle: Vehicle, lifted=()) -> shapely.Polygon:
+        """The reference on the ground, vehicle frame (m): the convex hull of the kept mesh in plan, joined
+        with the plan rectangle of each coupled trailer."""
+        if self.whole_body:
+            return Footprint.of_mesh(vehicle.mesh).polygon
+        points = _mesh_points_below(vehicle.mesh, self.max_height)
+        keep = np.ones(len(points), dtype=bool)
+        for zone in vehicle.zones:
+            if zone.name in self.left_out_zones:
+                low, high = zone.min - MIRROR_ZONE_MARGIN, zone.max + MIRROR_ZONE_MARGIN
+                keep &= ~np.all((points >= low) & (points <= high), axis=1)
+        if not keep.any():
+            raise RigoptError(f"{vehicle.name}: no part of the body is left for the reference lines (below "
+                              f"{self.max_height} m, outside the zones {', '.join(self.left_out_zones)})")
+        outline = shapely.MultiPoint(points[keep, :2]).convex_hull
+        if self.trailer:
+            boxes = [shapely.box(low[0], low[1], high[0], high[1])
+                     for low, high, _ in keep_out_boxes(vehicle, lifted, occluding_only=True)]
+            outline = shapely.union_all([outline, *boxes])
+        return outline
+
+
+#: The whole body, mirrors included (every preset but R151).
+WHOLE_BODY = BodyReference()
+#: R151's reference: the body up to 2.0 m without its devices for indirect vision, and a coupled trailer.
+R151_REFERENCE = BodyReference(R151_MAX_HEIGHT, MIRROR_ZONES, trailer=True)
+
+
+def _mesh_points_below(mesh, height: float | None) -> np.ndarray:
+    """(n, 3) float m: the vertices of ``mesh`` at most ``height`` high and the points where its edges cross that
+    height (the corners of the mesh cut there); every vertex when ``height`` is None."""
+    vertices = np.asarray(mesh.vertices, dtype=float)
+    if height is None:
+        return vertices
+    edges = np.asarray(mesh.edges_unique)
+    a, b = vertices[edges[:, 0]], vertices[edges[:, 1]]
+    crossing = (a[:, 2] - height) * (b[:, 2] - height) < 0
+    t = (height - a[crossing, 2]) / (b[crossing, 2] - a[crossing, 2])
+    cut = a[crossing] + t[:, None] * (b[crossing] - a[crossing])
+    return np.concatenate([vertices[vertices[:, 2] <= height], cut])
 
 
 @dataclass(frozen=True)
 class BodyLines:
-    """The lines fields are placed against, from the footprint: ``front``, ``rear``, ``eye`` x (m);
+    """The lines fields are placed against, from the reference outline: ``front``, ``rear``, ``eye`` x (m);
     ``nearside``, ``offside`` y (m); ``outward`` the y direction (+1 or -1) from the body to the nearside."""
 
     front: float
@@ -90,6 +197,11 @@ class BodyLines:
         direction = self.outward if line == "nearside" else -self.outward
         return getattr(self, line) + direction * offset
 
+    @property
+    def nearside_front_corner(self) -> np.ndarray:
+        """(2,) float m: where the front line meets the nearside line."""
+        return np.array([self.front, self.nearside])
+
 
 def driver_eye_x(vehicle: Vehicle) -> float:
     """x (m) of the driver's ocular points: EYE_SETBACK behind the body's front, by category."""
@@ -97,31 +209,36 @@ def driver_eye_x(vehicle: Vehicle) -> float:
     return float(vehicle.mesh.bounds[1][0]) - EYE_SETBACK[kind]
 
 
-def body_lines(vehicle: Vehicle, traffic: str = "right") -> BodyLines:
-    """The footprint's extreme lines of ``vehicle`` for ``traffic`` ('right': nearside -y; 'left': +y)."""
+def body_lines(vehicle: Vehicle, traffic: str = "right", reference: BodyReference = WHOLE_BODY,
+               lifted=()) -> BodyLines:
+    """The extreme lines of ``vehicle``'s ``reference`` outline for ``traffic`` ('right': nearside -y; 'left':
+    +y); ``lifted`` names keep-outs lifted (a trailer not coupled)."""
     if traffic not in TRAFFIC:
         raise RigoptError(f"unknown traffic side {traffic!r}; use right (nearside on the right, -y) or left")
-    (x_min, y_min, _), (x_max, y_max, _) = np.asarray(vehicle.mesh.bounds, dtype=float)
+    x_min, y_min, x_max, y_max = reference.outline(vehicle, lifted).bounds
     near, off, outward = (y_min, y_max, -1.0) if traffic == "right" else (y_max, y_min, 1.0)
     return BodyLines(float(x_max), float(x_min), driver_eye_x(vehicle), float(near), float(off), outward)
 
 
 @dataclass(frozen=True)
 class RegionPreset:
-    """A requirement: the ground ``boxes`` (FieldBox) around the vehicle, joined, less the footprint grown by
-    ``clearance`` m, where a test object must be seen at every one of ``heights`` (m above the ground).
+    """A requirement: the ground ``boxes`` (FieldBox or FieldPolygon) around the vehicle, joined, less the
+    ``reference`` outline grown by ``clearance`` m, where a test object must be seen at every one of ``heights``
+    (m above the ground).
 
     ``key`` names it on the command line (``r151``, ``r151:lht`` in left-hand traffic), ``title`` says what it
-    is, ``source`` cites the regulation; ``traffic`` ('right' or 'left') puts the nearside at -y or +y.
+    is, ``source`` cites the regulation; ``traffic`` ('right' or 'left') puts the nearside at -y or +y;
+    ``reference`` (:class:`BodyReference`) is what the lines are measured from.
     """
 
     key: str
     title: str
     source: str
     heights: tuple[float, ...]
-    boxes: tuple[FieldBox, ...]
+    boxes: tuple[FieldBox | FieldPolygon, ...]
     traffic: str = "right"
     clearance: float = NEAR_BODY_CLEARANCE
+    reference: BodyReference = WHOLE_BODY
 
     def __post_init__(self):
         if not self.heights or not all(np.isfinite(h) and h >= 0 for h in self.heights):
@@ -141,29 +258,50 @@ class RegionPreset:
         key = self.base_key + (f":{TRAFFIC_SUFFIX['left']}" if traffic == "left" else "")
         return replace(self, key=key, traffic=traffic)
 
-    def polygon(self, vehicle: Vehicle) -> shapely.Polygon:
-        """The ground region in the vehicle frame (m): the boxes' union less the grown footprint (a Polygon for
-        every preset on a convex footprint; a MultiPolygon only where a body splits a field)."""
-        lines = body_lines(vehicle, self.traffic)
-        rectangles = []
-        for box in self.boxes:
-            x0, x1 = sorted((lines.x(box.back), lines.x(box.ahead)))
-            y0, y1 = sorted((lines.y(box.offside), lines.y(box.nearside)))
-            rectangles.append(shapely.box(x0, y0, x1, y1))
-        field = shapely.union_all(rectangles)
-        return field.difference(Footprint.of_mesh(vehicle.mesh).polygon.buffer(self.clearance))
+    def lines(self, vehicle: Vehicle, lifted=()) -> BodyLines:
+        """The lines this preset's fields are placed against on ``vehicle`` (``lifted``: keep-outs lifted)."""
+        return body_lines(vehicle, self.traffic, self.reference, lifted)
 
-    def ground_samples(self, vehicle: Vehicle, spacing: float = 0.5) -> tuple[np.ndarray, np.ndarray]:
+    def polygon(self, vehicle: Vehicle, lifted=()) -> shapely.Polygon | shapely.MultiPolygon:
+        """The ground region in the vehicle frame (m): the boxes' union less the grown reference outline (a
+        Polygon for every one-sided preset on a convex footprint; a MultiPolygon for fields on both sides, r46-ii,
+        or where a body splits a field). ``lifted`` names keep-outs lifted (a trailer not coupled)."""
+        lines = self.lines(vehicle, lifted)
+        field = shapely.union_all([box.shape(lines) for box in self.boxes])
+        return field.difference(self.reference.outline(vehicle, lifted).buffer(self.clearance))
+
+    def ground_samples(self, vehicle: Vehicle, spacing: float = 0.5, lifted=()) -> tuple[np.ndarray, np.ndarray]:
         """((g, 2), (b, 2)) float m: the grid points (on multiples of ``spacing``) strictly inside the polygon,
         and its boundary sampled at most ``spacing`` apart (every corner included)."""
-        polygon = self.polygon(vehicle)
+        polygon = self.polygon(vehicle, lifted)
         return grid_inside(polygon, spacing), boundary_samples(polygon, spacing)
 
-    def points(self, vehicle: Vehicle, spacing: float = 0.5) -> np.ndarray:
+    def points(self, vehicle: Vehicle, spacing: float = 0.5, lifted=()) -> np.ndarray:
         """(n, 3) float m, vehicle frame: the grid over the polygon and its boundary samples
         (:meth:`ground_samples`) at every height; heights vary slowest, the grid before the boundary."""
-        grid, boundary = self.ground_samples(vehicle, spacing)
+        grid, boundary = self.ground_samples(vehicle, spacing, lifted)
         return at_heights(np.concatenate([grid, boundary]), self.heights)
+
+    def criticality(self, vehicle: Vehicle, xy, lifted=()) -> np.ndarray:
+        """(n,) float in (0, 2]: the criticality weight of each ground position ``xy`` (n, 2) m (see
+        :func:`criticality_weights`), against this preset's reference outline and nearside front corner."""
+        return criticality_weights(xy, self.reference.outline(vehicle, lifted),
+                                   self.lines(vehicle, lifted).nearside_front_corner)
+
+
+def criticality_weights(xy, outline, corner) -> np.ndarray:
+    """(n,) float in (0, 2]: how critical a test object at each ground position ``xy`` (n, 2) m is.
+
+    w = 1 / (1 + d_body / L) + 1 / (1 + d_corner / L), with d_body the distance (m) from ``outline`` (a shapely
+    polygon, the body on the ground), d_corner the distance from ``corner`` (2,) m (the nearside front corner, where
+    a turning truck's front meets a cyclist or pedestrian beside it) and L = CRITICALITY_LENGTH (1 m). Each term
+    is 1 at the body (at the corner) and halves at L: right at the corner w = 2, 1 m out from a side far from the
+    corner about 0.5 + (small), far from both it tends to 0. rigopt's choice, not a regulation's.
+    """
+    xy = np.asarray(xy, dtype=float).reshape(-1, 2)
+    d_body = shapely.distance(outline, shapely.points(xy)) if len(xy) else np.zeros(0)
+    d_corner = np.linalg.norm(xy - np.asarray(corner, dtype=float), axis=1)
+    return 1.0 / (1.0 + np.asarray(d_body) / CRITICALITY_LENGTH) + 1.0 / (1.0 + d_corner / CRITICALITY_LENGTH)
 
 
 def _check_spacing(spacing: float) -> float:
@@ -212,21 +350,41 @@ def _box(back, ahead, offside, nearside) -> FieldBox:
     return FieldBox(back, ahead, offside, nearside)
 
 
-_R46_IV = (_box(("eye", -25.0), ("eye", -1.5), ("nearside", 0.0), ("nearside", 4.5)),
-           _box(("eye", -25.0), ("eye", -10.0), ("nearside", 0.0), ("nearside", 15.0)))
+def _r46_wedge(side: str, near_back: float, near_width: float, wide_back: float, wide_width: float,
+               far_back: float) -> FieldPolygon:
+    """An R46 wide field on ``side`` ('nearside' or 'offside'): ``near_width`` m wide from ``near_back`` m behind
+    the ocular points, its outer edge running straight to ``wide_width`` m at ``wide_back`` m behind them, that wide
+    to ``far_back`` m behind them; every width measured outward from ``side``'s line."""
+    return FieldPolygon(((("eye", -near_back), (side, 0.0)), (("eye", -near_back), (side, near_width)),
+                         (("eye", -wide_back), (side, wide_width)), (("eye", -far_back), (side, wide_width)),
+                         (("eye", -far_back), (side, 0.0))))
+
+
+_R46_II = tuple(_r46_wedge(side, 4.0, 1.0, 30.0, 5.0, R46_HORIZON_CUT) for side in ("offside", "nearside"))
+_R46_IV = (_r46_wedge("nearside", 1.5, 4.5, 10.0, 15.0, 25.0),)
 _R46_V = (_box(("eye", -1.75), ("eye", 1.0), ("nearside", 0.0), ("nearside", 2.0)),)
 _R46_VI = (_box(("front", 0.0), ("front", 2.0), ("offside", 0.0), ("nearside", 2.0)),)
+#: R151's band: 4.5 m out from the nearside, from the front back 30 m and at least to the rear of the vehicle or
+#: of its coupled trailer (the collision line's end).
+_R151 = (_box(("front", -30.0), ("front", 0.0), ("nearside", 0.0), ("nearside", 4.5)),
+         _box(("rear", 0.0), ("front", 0.0), ("nearside", 0.0), ("nearside", 4.5)))
 
 PRESETS: dict[str, RegionPreset] = {p.key: p for p in (
     RegionPreset("r158", "rear close-proximity field (reversing)",
-                 "UN R158 (devices for reversing motion), rear-view camera field 0.3-3.5 m behind the vehicle",
-                 (0.0, 0.4, 0.8, 1.2), (_box(("rear", -3.5), ("rear", -0.3), *_FULL_WIDTH),)),
+                 "UN R158 (devices for reversing motion), rear-view camera field 0.3-3.5 m behind the vehicle; its "
+                 "test object 0.8 m tall, 0.3 m across",
+                 (0.0, 0.4, 0.8), (_box(("rear", -3.5), ("rear", -0.3), *_FULL_WIDTH),)),
     RegionPreset("r151", "nearside blind-spot field (BSIS)",
-                 "UN R151 (blind spot information system), nearside area from the front corner rearwards",
-                 (0.0, 0.8, 1.2, 1.6), (_box(("front", -30.0), ("front", 0.0), ("nearside", 0.0), ("nearside", 4.5)),)),
+                 "UN R151 (blind spot information system), nearside area from the front corner rearwards, lines "
+                 "without mirrors and parts above 2.0 m, to the rear of a coupled trailer",
+                 (0.0, 0.8, 1.2, 1.6), _R151, reference=R151_REFERENCE),
     RegionPreset("r159", "front close-proximity field (MOIS)",
                  "UN R159 (moving off information system), area directly in front of the vehicle",
                  (0.0, 0.8, 1.2, 1.6), (_box(("front", 0.0), ("front", 3.7), ("offside", 0.5), ("nearside", 0.5)),)),
+    RegionPreset("r46-ii", "main rear-view fields, both sides (class II)",
+                 "UN R46 class II field of vision (main exterior mirror / camera-monitor), driver and passenger "
+                 f"side, cut {R46_HORIZON_CUT:g} m behind the ocular points",
+                 (0.0, 0.8, 1.2), _R46_II),
     RegionPreset("r46-iv", "wide-angle field, nearside (class IV)",
                  "UN R46 class IV field of vision (wide-angle exterior mirror / camera-monitor), passenger side",
                  (0.0, 0.8, 1.2), _R46_IV),
@@ -291,15 +449,29 @@ def parse_require(text: str, vehicle: Vehicle, traffic: str = "right") -> tuple[
 # ----------------------------------------------------------------------------------------------- coverage
 
 
+@dataclass(frozen=True)
+class CameraShare:
+    """One camera's part in a field: ``seen_frac`` the share of the field's required points it sees, ``only_frac``
+    the share it alone sees (no other camera of the rig does)."""
+
+    camera: str
+    seen_frac: float
+    only_frac: float
+
+
 @dataclass(frozen=True, eq=False)
 class RegionCoverage:
     """How much of one preset's region a rig sees.
 
     ``covered_frac``: the fraction of the required points (``n_points``: grid and boundary, every height, at
     ``spacing`` m) seen by at least one camera; ``height_covered_frac`` (h,) the same per height of
-    ``heights``; ``unseen`` (k, 3) float m the required points no camera sees; ``area_m2`` the region's ground
-    area; ``unseen_area_m2`` that area times the fraction of its grid positions where some required height is
-    unseen; ``polygon`` the region (vehicle frame, m).
+    ``heights``; ``weighted_covered_frac`` the same with each point weighted by its criticality
+    (:func:`criticality_weights` of its ground position); ``unseen`` (k, 3) float m the required points no camera
+    sees; ``area_m2`` the region's ground area; ``unseen_area_m2`` that area times the fraction of its grid
+    positions where some required height is unseen; ``cameras`` (CameraShare, in the rig's order) each camera's
+    share, ``overlap_frac`` the share seen by two cameras or more, so that the cameras' ``only_frac`` and
+    ``overlap_frac`` add up to ``covered_frac`` (all 0 for a field with no required point, which counts as
+    covered); ``polygon`` the region (vehicle frame, m).
     """
 
     key: str
@@ -313,7 +485,10 @@ class RegionCoverage:
     area_m2: float
     unseen_area_m2: float
     spacing: float
-    polygon: shapely.Polygon
+    polygon: shapely.Polygon | shapely.MultiPolygon
+    weighted_covered_frac: float = 1.0
+    cameras: tuple[CameraShare, ...] = ()
+    overlap_frac: float = 0.0
 
     @property
     def covered(self) -> bool:
@@ -332,32 +507,48 @@ def required_mask(vehicle: Vehicle, points, lifted=()) -> np.ndarray:
     return needed
 
 
+def _share(values: np.ndarray, weights: np.ndarray | None = None) -> float:
+    """The (weighted) mean of the bool ``values``, 1.0 when there are none."""
+    if not len(values):
+        return 1.0
+    return float(np.average(values, weights=weights))
+
+
 def region_coverage(rig: Rig, vehicle: Vehicle, presets, spacing: float = 0.1, backend: str = "auto",
                     max_range: float = DEFAULT_MAX_RANGE, lifted=()) -> tuple[RegionCoverage, ...]:
     """Coverage of each of ``presets`` by ``rig`` (positions in ``vehicle``'s frame) on ``vehicle``: every
     required point (:func:`required_mask`) of the region's grid and boundary at ``spacing`` m, at every height,
-    tested for occlusion-aware visibility (:func:`rigopt.coverage.visibility.visible_by`)."""
+    tested for occlusion-aware visibility (:func:`rigopt.coverage.visibility.visible_by`) by each camera.
+    ``lifted`` names keep-outs lifted (a trailer not coupled): they neither hide points nor place R151's lines."""
     model = CameraModel.of_cameras(rig.cameras)
     out = []
     for preset in presets:
-        polygon = preset.polygon(vehicle)
+        polygon = preset.polygon(vehicle, lifted)
         grid, boundary = grid_inside(polygon, spacing), boundary_samples(polygon, spacing)
-        per_height = len(grid) + len(boundary)
-        points = at_heights(np.concatenate([grid, boundary]), preset.heights)
+        ground = np.concatenate([grid, boundary])
+        points = at_heights(ground, preset.heights)
         needed = required_mask(vehicle, points, lifted)
-        seen = np.ones(len(points), dtype=bool)
+        by_camera = np.zeros((len(rig.cameras), len(points)), dtype=bool)
         if needed.any():
-            seen[needed] = visible_by(vehicle.mesh, model, rig.positions, rig.rotations, points[needed], max_range,
-                                      backend).any(axis=0)
+            by_camera[:, needed] = visible_by(vehicle.mesh, model, rig.positions, rig.rotations, points[needed],
+                                              max_range, backend)
+        count = by_camera.sum(axis=0)
+        seen = (count > 0) | ~needed
+        per_height = len(ground)
         by_height = [(seen[k * per_height:(k + 1) * per_height], needed[k * per_height:(k + 1) * per_height])
                      for k in range(len(preset.heights))]
-        fractions = tuple(float(s[n].mean()) if n.any() else 1.0 for s, n in by_height)
         grid_unseen = np.zeros(len(grid), dtype=bool)
         for s, n in by_height:
             grid_unseen |= (~s & n)[:len(grid)]
         unseen_share = float(grid_unseen.mean()) if len(grid) else float(np.any(needed & ~seen))
+        weights = np.tile(preset.criticality(vehicle, ground, lifted), len(preset.heights))[needed]
+        alone = by_camera[:, needed] & (count[needed] == 1)
+        shares = tuple(CameraShare(camera.id, float(by_camera[k, needed].mean()) if needed.any() else 0.0,
+                                   float(alone[k].mean()) if needed.any() else 0.0)
+                       for k, camera in enumerate(rig.cameras))
         out.append(RegionCoverage(
-            preset.key, preset.title, preset.source, tuple(preset.heights),
-            float(seen[needed].mean()) if needed.any() else 1.0, fractions, points[needed & ~seen],
-            int(needed.sum()), float(polygon.area), float(polygon.area * unseen_share), float(spacing), polygon))
+            preset.key, preset.title, preset.source, tuple(preset.heights), _share(seen[needed]),
+            tuple(_share(s[n]) for s, n in by_height), points[needed & ~seen], int(needed.sum()),
+            float(polygon.area), float(polygon.area * unseen_share), float(spacing), polygon,
+            _share(seen[needed], weights), shares, float(np.mean(count[needed] >= 2)) if needed.any() else 0.0))
     return tuple(out)

@@ -11,11 +11,13 @@ from datetime import datetime, timezone
 from pathlib import Path
 
 import numpy as np
+import shapely
 
 from rigopt.coverage.measures import CoverageComparison, CoverageReport
 from rigopt.report.coverage_figures import (
     bev_figure,
     blind_figure,
+    camera_field_rows,
     comparison_dict,
     figure_png,
     regions_dict,
@@ -111,20 +113,29 @@ def render_html(report: CoverageReport, rig: Rig, comparison: CoverageComparison
     parts.append(table(header, rows))
 
     if regions:
+        fields = regions_dict(regions)
         parts.append("<h2>Regulation fields</h2>")
         parts.append('<p class="note">Share of each field\'s required points (a grid and the field\'s outline, at '
-                     "every height) seen by at least one camera; a field is covered when every point is. Fields, "
-                     "figures and sources: docs/regulations.md.</p>")
+                     "every height) seen by at least one camera, and the field's ground where some height is unseen; "
+                     "weighted: each point weighted by its criticality (nearer the body and the nearside front corner "
+                     "weighs more). A field is covered when every point is. Fields, figures and sources: "
+                     "docs/regulations.md.</p>")
         rows = []
-        for region in regions_dict(regions):
+        for region in fields:
             heights = ", ".join(f"{h['height_m']:g} m {100 * h['covered_frac']:.1f} %"
                                 for h in region["height_covered_frac"])
             rows.append([f"<td>{escape(region['key'])}</td>", f"<td>{escape(region['title'])}</td>",
-                         "yes" if region["covered"] else "no", pct(region["covered_frac"]), f"<td>{escape(heights)}</td>",
-                         num(region["unseen_area_m2"], 1, " m²"), num(region["area_m2"], 1, " m²"),
+                         "yes" if region["covered"] else "no", pct(region["covered_frac"]),
+                         num(region["unseen_area_m2"], 1, " m²"), pct(region["weighted_covered_frac"]),
+                         f"<td>{escape(heights)}</td>", num(region["area_m2"], 1, " m²"),
                          f"<td>{escape(region['source'])}</td>"])
-        parts.append(table(["field", "what", "covered", "seen", "seen per height", "unseen area", "area", "source"],
-                           rows))
+        parts.append(table(["field", "what", "covered", "seen", "unseen area", "weighted seen", "seen per height",
+                            "area", "source"], rows))
+        columns, rows = camera_field_rows(fields)
+        parts.append('<p class="note">Which camera covers which field: the share of each field\'s required points a '
+                     "camera sees and, in brackets, sees alone; the alone shares and the share seen by two cameras or "
+                     "more add up to the share seen by any.</p>")
+        parts.append(table(columns, [[f"<td>{escape(row[0])}</td>", *(escape(c) for c in row[1:])] for row in rows]))
 
     parts.append("<h2>Blind zone and bird's-eye view</h2>")
     blind, bev = data["blind_distance_m"], data["bev"]
@@ -213,8 +224,9 @@ def write_html_report(report: CoverageReport, out_dir, rig: Rig, comparison: Cov
 
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    scene = (scene_html(vehicle, rig, regions=[(r.key, np.asarray(r.polygon.exterior.coords)[:, :2]) for r in regions])
-             if vehicle is not None else None)
+    outlines = [(r.key, np.asarray(part.exterior.coords)[:, :2]) for r in regions
+                for part in shapely.get_parts(r.polygon) if not part.is_empty]
+    scene = scene_html(vehicle, rig, regions=outlines) if vehicle is not None else None
     page = render_html(report, rig, comparison, compare_report,
                        _figures(report, rig, compare_report, figures, regions), scene, regions)
     path = out_dir / REPORT_FILE

@@ -53,10 +53,11 @@ def _inside(polygon, x, y) -> bool:
     return bool(polygon.contains(shapely.Point(x, y)))
 
 
-def test_every_preset_checks_at_least_the_ground_0_8_and_1_2_m():
+def test_every_preset_checks_the_ground_and_0_8_m_and_r158_its_own_object():
     for preset in PRESETS.values():
-        assert {0.0, 0.8, 1.2} <= set(preset.heights), preset.key
+        assert {0.0, 0.8} <= set(preset.heights), preset.key
         assert preset.title and preset.source
+    assert PRESETS["r158"].heights == (0.0, 0.4, 0.8)  # R158's object is 0.8 m tall: foot, middle, top
 
 
 def test_r158_lies_behind_the_rear_across_the_vehicle_width(firetruck, lines):
@@ -67,12 +68,14 @@ def test_r158_lies_behind_the_rear_across_the_vehicle_width(firetruck, lines):
     assert _inside(polygon, lines["rear"] - 2.0, 0.0)
 
 
-def test_r151_lies_along_the_nearside_minus_y(firetruck, lines):
+def test_r151_lies_along_the_nearside_minus_y_inside_the_mirrors(firetruck, lines):
     polygon = PRESETS["r151"].polygon(firetruck)
+    near = PRESETS["r151"].lines(firetruck).nearside
+    assert lines["right"] + 0.05 < near < 0.0  # R151's line leaves the mirrors out: it lies inside them
     x0, y0, x1, y1 = polygon.bounds
-    assert y1 <= lines["right"] + TOL and y0 == pytest.approx(lines["right"] - 4.5, abs=TOL)
+    assert y1 <= near + TOL and y0 == pytest.approx(near - 4.5, abs=TOL)
     assert x1 == pytest.approx(lines["front"], abs=TOL) and x0 == pytest.approx(lines["front"] - 30.0, abs=TOL)
-    assert _inside(polygon, 0.0, lines["right"] - 1.0) and not _inside(polygon, 0.0, lines["left"] + 1.0)
+    assert _inside(polygon, 0.0, near - 1.0) and not _inside(polygon, 0.0, lines["left"] + 1.0)
 
 
 def test_r159_lies_ahead_of_the_front(firetruck, lines):
@@ -94,7 +97,10 @@ def test_r46_fields_are_placed_against_the_driver_eye_and_the_nearside(firetruck
     assert x0 >= lines["front"] - TOL and x1 == pytest.approx(lines["front"] + 2.0, abs=TOL)
     assert y0 == pytest.approx(right - 2.0, abs=TOL) and y1 == pytest.approx(lines["left"], abs=TOL)
     four = PRESETS["r46-iv"].polygon(firetruck)
-    assert _inside(four, eye - 20.0, right - 14.0) and not _inside(four, eye - 5.0, right - 6.0)
+    assert _inside(four, eye - 20.0, right - 14.0) and not _inside(four, eye - 20.0, right - 15.2)
+    # 5 m behind the eyes the outer edge, running straight from 4.5 m (1.5 m back) to 15 m (10 m back), is
+    # 4.5 + 10.5 * 3.5 / 8.5 = 8.82 m out
+    assert _inside(four, eye - 5.0, right - 8.7) and not _inside(four, eye - 5.0, right - 8.95)
     assert _inside(four, eye - 5.0, right - 4.0) and four.bounds[2] == pytest.approx(eye - 1.5, abs=TOL)
 
 
@@ -107,12 +113,15 @@ def test_dvs_wraps_the_cab_front_and_nearside(firetruck, lines):
     assert not _inside(polygon, lines["front"] - 1.0, lines["left"] + 1.0)  # offside only 0.6 m
 
 
-def test_no_field_asks_for_ground_under_or_right_next_to_the_body(firetruck):
-    grown = Footprint.of_mesh(firetruck.mesh).polygon.buffer(NEAR_BODY_CLEARANCE - TOL)
+def test_no_field_asks_for_ground_under_or_right_next_to_its_reference(firetruck):
+    body = Footprint.of_mesh(firetruck.mesh).polygon
     for preset in PRESETS.values():
         polygon = preset.polygon(firetruck)
-        assert polygon.geom_type == "Polygon", preset.key
+        parts = 2 if preset.key == "r46-ii" else 1  # class II: a field on each side
+        assert len(shapely.get_parts(polygon)) == parts, preset.key
+        grown = preset.reference.outline(firetruck).buffer(NEAR_BODY_CLEARANCE - TOL)
         assert polygon.intersection(grown).area < 1e-9, preset.key
+        assert polygon.intersection(body).area < 1e-9, preset.key  # never under the body, mirrors included
 
 
 def test_a_field_box_names_its_lines():
@@ -127,7 +136,7 @@ def test_a_field_box_names_its_lines():
 
 
 def test_left_hand_traffic_mirrors_the_nearside(box_vehicle):
-    for key in ("r151", "r46-iv", "r46-v", "r46-vi", "dvs"):
+    for key in ("r151", "r46-ii", "r46-iv", "r46-v", "r46-vi", "dvs"):
         right, left = PRESETS[key], PRESETS[key].with_traffic("left")
         assert left.key == f"{key}:lht" and left.traffic == "left"
         mirrored = shapely.affinity.scale(right.polygon(box_vehicle), 1.0, -1.0, origin=(0, 0))
@@ -287,6 +296,9 @@ def test_coverage_require_adds_the_fields_to_json_tables_and_folder(cli_rig, tmp
     assert regions["r158"]["covered"] is True and regions["r158"]["covered_frac"] == 1.0
     assert regions["r159"]["covered"] is False and regions["r159"]["unseen_area_m2"] > 0
     assert [h["height_m"] for h in regions["r158"]["height_covered_frac"]] == list(PRESETS["r158"].heights)
+    assert regions["r158"]["weighted_covered_frac"] == 1.0 and regions["r158"]["overlap_frac"] == 0.0
+    assert regions["r158"]["cameras"] == [{"camera": "CAM_BACK", "seen_frac": 1.0, "only_frac": 1.0}]
+    assert regions["r159"]["cameras"][0]["seen_frac"] < 1.0 and 0.0 <= regions["r159"]["weighted_covered_frac"] < 1.0
     written = json.loads((tmp_path / "out" / "coverage.json").read_text())
     assert written["regions"] == json.loads(result.stdout)["regions"]
     assert (tmp_path / "out" / "regions.png").read_bytes().startswith(b"\x89PNG")
@@ -295,6 +307,8 @@ def test_coverage_require_adds_the_fields_to_json_tables_and_folder(cli_rig, tmp
 
     text = run_rigopt("coverage", rig_file, "--require", "r158", env=env)
     assert text.returncode == 0 and "regulation fields" in text.stdout and "r158" in text.stdout
+    assert "unseen area" in text.stdout and "weighted seen" in text.stdout
+    assert "by camera" in text.stdout and "CAM_BACK" in text.stdout and "100.0 % (100.0 % alone)" in text.stdout
 
 
 def test_coverage_require_refuses_a_bad_name_in_one_line(cli_rig):
