@@ -183,6 +183,39 @@ def _print_tables(report: dict) -> None:
     print_table("Knockout: held-out rho without one component", ["model", "full", "no t", "no r", "no f", "no count"],
                 [[m, *(e["knockout"][k] for k in ("full", "lambda_t", "lambda_r", "lambda_f", "count"))]
                  for m, e in models.items()])
+    _print_intervals(report["intervals"])
+
+
+def _print_intervals(intervals: dict) -> None:
+    """The prediction intervals on the held-out pairs per predicted-drop bin (coverage and pairs), overall
+    width in [0, 1] and clipped share, the bounded MAE beside the constant predictors'; a note naming the fits
+    whose intervals are uninformative."""
+    named = [(m, e) for m, e in intervals["models"].items() if e is not None]
+    named += [(f"{m} (joint)", e) for m, e in intervals["joint"].items() if e is not None]
+    if not named:
+        return
+    bins = [f"[{b['bin'][0]:g}, {b['bin'][1]:g}{']' if k == len(named[0][1]['bins']) - 1 else ')'}"
+            for k, b in enumerate(named[0][1]["bins"])]
+    print_table("Prediction intervals on held-out pairs: half-width; informs: not spanning the range a drop can "
+                "take; coverage (pairs) per predicted-drop bin; width: mean length within [0, 1]; clipped: share "
+                "reaching past 0 or 1; MAE of the predicted drop, of the median of the calibration drops (const) and "
+                "of the held-out drops' own median (const*, hindsight)",
+                ["fit", "half", "informs", *bins, "all", "width", "clipped", "MAE", "MAE const",
+                 "MAE const*"],
+                [[name, e["halfwidth"], "yes" if e["interval_informative"] else "NO",
+                  *(_coverage(b) for b in e["bins"]), _coverage(e["overall"]), e["overall"]["mean_width"],
+                  e["overall"]["clipped"], e["bounded_mae"], e["constant_mae"], e["oracle_constant_mae"]]
+                 for name, e in named])
+    wide = [name for name, e in named if not e["interval_informative"]]
+    if wide:
+        from rigopt.metrics.prediction import UNINFORMATIVE_TEXT
+
+        note(f"{', '.join(wide)}: {UNINFORMATIVE_TEXT}: the coverage above is that of intervals spanning "
+             "(nearly) every possible drop, no finding")
+
+
+def _coverage(entry: dict) -> str:
+    return "-" if entry["n"] == 0 else f"{entry['coverage']:.2f} ({entry['n']})"
 
 
 def _ci(ci) -> str:

@@ -180,12 +180,14 @@ def design_command(
     if as_json:
         print_json(summary)
         return
-    rows, flagged = [], []
+    rows, flagged, uninformative = [], [], []
     for name, entry in (("design", {**summary, "meets_coverage_requirements": True}),
                         ("naive transfer", summary["comparisons"]["naive_transfer"]),
                         *((f"benchmark {s['name']}", s) for s in summary["comparisons"]["benchmark_rigs"])):
         if entry:
             interval = "-" if entry["interval"] is None else "[{:.2f}, {:.2f}]".format(*entry["interval"])
+            if entry.get("interval_informative") is False:  # spans the range a drop can take: no finding
+                interval, uninformative = "uninformative", uninformative + [name]
             rows.append([name, entry["predicted_drop"], interval, entry["rigcd"], entry["n_cameras"],
                          entry["coverage"], "yes" if entry["meets_coverage_requirements"] else "no",
                          "yes" if entry["extrapolation"] else "-"])
@@ -194,6 +196,11 @@ def design_command(
                 f"{summary['reference_coverage']:.3f}", ["rig", "predicted drop", "interval",
                                                            f"{calibration.metric} ({weights} weights)", "cameras",
                                                            "coverage", "meets coverage", "extrapolates"], rows)
+    if uninformative:
+        from rigopt.metrics.prediction import UNINFORMATIVE_TEXT
+
+        print(f"rigopt: note: {', '.join(uninformative)}: {UNINFORMATIVE_TEXT}; the predicted drops are point "
+              "estimates only (report.json keeps the numbers)", file=sys.stderr)
     if flagged:
         print(f"rigopt: note: {', '.join(flagged)}: beyond the calibration pairs (see report.json 'extrapolation'); "
               "their predicted drops are less certain than the intervals say", file=sys.stderr)

@@ -132,11 +132,25 @@ def _note_changes(rigs, changes) -> None:
 
 
 def _interval(p) -> str:
-    return "-" if p.interval is None else f"[{p.interval[0]:.2f}, {p.interval[1]:.2f}]"
+    """The interval's cell: '[low, high]', '-' without one, 'uninformative' where it spans the range a drop can
+    take (:func:`_warn_prediction` says so in full)."""
+    if p.interval is None:
+        return "-"
+    return "uninformative" if not p.interval_informative else f"[{p.interval[0]:.2f}, {p.interval[1]:.2f}]"
 
 
 def _warn_prediction(predictions, calibration) -> None:
-    """Notes under a table: pairs outside the calibration data, a fallback calibration."""
+    """Notes under a table: uninformative intervals, pairs outside the calibration data, a fallback
+    calibration."""
+    from rigopt.metrics.prediction import UNINFORMATIVE_TEXT
+
+    wide = [p for p in predictions if p.interval is not None and not p.interval_informative]
+    if wide:
+        pairs = "every pair" if len(wide) == len(predictions) > 1 else ", ".join(f"{p.reference} -> {p.rig}"
+                                                                               for p in wide)
+        note(f"{pairs}: {UNINFORMATIVE_TEXT}: the {calibration.name} calibration's "
+             f"{calibration.interval.level:.0%} interval is +-{calibration.interval.halfwidth:.2f}; the predicted "
+             "drop is a point estimate only (--json keeps the numbers)")
     for p in predictions:
         if p.extrapolation is not None:
             note(f"{p.reference} -> {p.rig} extrapolates beyond the calibration pairs: {p.extrapolation.describe()}; "

@@ -210,6 +210,22 @@ def fit_qp(features: np.ndarray, delta: np.ndarray) -> np.ndarray:
     raise RigoptError(f"the calibration QP did not solve to optimality (status {problem.status})")
 
 
+def fit_exact(features: np.ndarray, delta: np.ndarray) -> np.ndarray:
+    """(k,) float: the exact optimum of the same least squares with beta >= 0, by scipy's active-set
+    non-negative least squares (Lawson-Hanson) on features (P, k), delta (P,). Its optimum is the QP's
+    (:func:`fit_qp`) without a modelling layer; a weight that no pair informs (a feature that is 0 on every
+    pair) is 0, where L-BFGS-B leaves it at its start 0.5. The leave-one-rig-out refits of the prediction
+    interval use it (``protocol.fold_calibration``); the reported weights keep the benchmark's L-BFGS-B."""
+    from scipy.optimize import nnls
+
+    features, delta = np.asarray(features, dtype=float), np.asarray(delta, dtype=float)
+    if features.ndim != 2 or features.shape[0] != len(delta) or len(delta) == 0:
+        raise DataError(f"fit_exact needs features (P, k) and delta (P,) with P >= 1, got {features.shape} and "
+                        f"{delta.shape}")
+    beta, _ = nnls(features, delta, maxiter=50 * features.shape[1])
+    return beta
+
+
 def fit_calibration(features: np.ndarray, delta: np.ndarray, name: str, solver: str = "lbfgsb") -> CalibrationFit:
     """Fit beta both ways, check they agree, and reparameterise the ``solver``'s one.
 

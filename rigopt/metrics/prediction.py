@@ -9,7 +9,10 @@ saturates at 1. Three pieces turn ``s`` into a number a user can act on, all fit
   benchmark's published figures keep reproducing from ``s``; MAE and RMSE are reported for both.
 - :class:`Interval`: a split-conformal half-width from leave-one-control-rig-out residuals: for every
   control rig, the model (linear fit and link) is refitted on the control pairs that do not involve it, and
-  the pairs that do are predicted; the ``level`` quantile of the absolute residuals is the half-width.
+  the pairs that do are predicted; the ``level`` quantile of the absolute residuals is the half-width. An
+  interval that spans (nearly) the whole range a drop can take says nothing and is reported as
+  uninformative (:func:`interval_informative`); :func:`interval_report` measures an interval on held-out
+  pairs per predicted-drop bin, beside the best constant predictor.
 - :class:`Domain`: the control pairs' features. A pair outside their per-term range, or far from their
   convex hull, is an extrapolation and is flagged with the terms and by how much.
 
@@ -18,7 +21,7 @@ Features everywhere are (P, 4) float: unit-weight (t m, r rad, f deg, count -).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Callable, Sequence
 
 import numpy as np
@@ -95,11 +98,38 @@ class Interval:
         drop = np.asarray(drop, dtype=float)
         return drop - self.halfwidth, np.minimum(drop + self.halfwidth, 1.0)
 
+    @property
+    def informative(self) -> bool:
+        """False when every interval of this half-width is uninformative (:func:`interval_informative`)."""
+        return self.halfwidth < UNINFORMATIVE_HALFWIDTH
+
     def to_dict(self) -> dict:
         return {"halfwidth": self.halfwidth, "level": self.level, "method": self.method}
 
 
 CONFORMAL_METHOD = "split conformal, leave-one-control-rig-out residuals"
+
+#: An interval is uninformative when, clipped to [0, 1], it covers at least this share of [0, 1], or when its
+#: half-width is at least UNINFORMATIVE_HALFWIDTH (for the symmetric Interval the first implies the second).
+UNINFORMATIVE_SHARE = 0.9
+UNINFORMATIVE_HALFWIDTH = 0.45
+#: What every command says in place of an uninformative interval.
+UNINFORMATIVE_TEXT = "interval uninformative (wider than the range it could take)"
+
+
+def interval_informative(low, high, halfwidth=None):
+    """Whether intervals (low, high) say something: clipped to [0, 1] they cover less than UNINFORMATIVE_SHARE
+    of it, and ``halfwidth`` (when given) is below UNINFORMATIVE_HALFWIDTH.
+
+    low, high : (...,) float, the interval's ends as reported (relative drop); halfwidth : float or (...,).
+    Returns a bool for scalar ends, else a (...,) bool array.
+    """
+    low, high = np.asarray(low, dtype=float), np.asarray(high, dtype=float)
+    share = np.clip(np.minimum(high, 1.0) - np.maximum(low, 0.0), 0.0, None)
+    informative = share < UNINFORMATIVE_SHARE - 1e-12  # [0.05, 0.95] covers 0.9 despite rounding
+    if halfwidth is not None:
+        informative = informative & (np.asarray(halfwidth, dtype=float) < UNINFORMATIVE_HALFWIDTH)
+    return bool(informative) if informative.ndim == 0 else informative
 
 
 def conformal_halfwidth(residuals, level: float = DEFAULT_LEVEL) -> float:
@@ -112,22 +142,33 @@ def conformal_halfwidth(residuals, level: float = DEFAULT_LEVEL) -> float:
     return float(r[rank - 1])
 
 
+def rig_folds(train, test) -> list[tuple[str, np.ndarray, np.ndarray]]:
+    """The folds of leave-one-rig-out, by rig: for each rig named in ``train`` or ``test`` (P,) str, in order of
+    first appearance, ``(rig, involved, scored)``: ``involved`` (P,) bool the pairs with that rig on either side
+    (all left out of the fold's fit, for every detector when pairs of several are stacked), ``scored`` those of
+    them that are off-diagonal (predicted by the fold). Rigs whose fold would leave nothing to fit or nothing to
+    score are skipped."""
+    train, test = np.asarray(train), np.asarray(test)
+    folds = []
+    for rig in dict.fromkeys(train.tolist() + test.tolist()):
+        involved = (train == rig) | (test == rig)
+        scored = involved & (train != test)
+        if scored.any() and not involved.all():
+            folds.append((rig, involved, scored))
+    return folds
+
+
 def leave_one_rig_out_residuals(train, test, delta, fit_and_predict: Callable[[np.ndarray, np.ndarray], np.ndarray]
                                 ) -> np.ndarray:
     """Residuals delta - prediction of every off-diagonal calibration pair, each predicted by a model fitted
-    without one of its rigs (a pair involving two rigs appears twice).
+    without one of its rigs (a pair involving two rigs appears twice). The folds are :func:`rig_folds`: a fold
+    drops every pair involving one rig, never single pairs.
 
     train, test : (P,) str rig names; delta : (P,) float; fit_and_predict(fit_mask (P,) bool, predict_mask
     (P,) bool) -> predictions of the ``predict_mask`` pairs from a model fitted on the ``fit_mask`` pairs.
     """
-    train, test, delta = np.asarray(train), np.asarray(test), np.asarray(delta, dtype=float)
-    residuals = []
-    for rig in dict.fromkeys(train.tolist() + test.tolist()):
-        involved = (train == rig) | (test == rig)
-        scored = involved & (train != test)
-        if not scored.any() or involved.all():
-            continue
-        residuals.append(delta[scored] - fit_and_predict(~involved, scored))
+    delta = np.asarray(delta, dtype=float)
+    residuals = [delta[scored] - fit_and_predict(~involved, scored) for _, involved, scored in rig_folds(train, test)]
     if not residuals:
         raise DataError("leave-one-rig-out residuals need at least two rigs in the calibration pairs")
     return np.concatenate(residuals)
@@ -215,11 +256,13 @@ def domain_of(features: Sequence[Sequence[float]]) -> Domain:
 @dataclass(frozen=True)
 class LinkChoice:
     """The link chosen for a calibration and the evidence: ``loro_mae`` maps each candidate link kind to its
-    leave-one-control-rig-out mean absolute error on the calibration pairs (the choice is the smallest)."""
+    leave-one-control-rig-out mean absolute error on the calibration pairs (the choice is the smallest);
+    ``fold_betas`` maps each left-out rig to its fold's linear weights (4,) where the caller records them."""
 
     link: Link
     interval: Interval
     loro_mae: dict
+    fold_betas: dict = field(default_factory=dict)
 
 
 def choose_link(train, test, delta, refit: Callable[[np.ndarray], Callable[[np.ndarray], np.ndarray]],
@@ -246,3 +289,91 @@ def choose_link(train, test, delta, refit: Callable[[np.ndarray], Callable[[np.n
     best = min(LINKS, key=lambda kind: loro_mae[kind])
     interval = Interval(conformal_halfwidth(residuals[best], level), level, CONFORMAL_METHOD)
     return LinkChoice(links[best], interval, loro_mae)
+
+
+#: Edges of the predicted-drop bins of :func:`interval_report`: [0, 0.25), [0.25, 0.5), [0.5, 0.75), [0.75, 1].
+DROP_BIN_EDGES = (0.0, 0.25, 0.5, 0.75, 1.0)
+
+
+@dataclass(frozen=True)
+class IntervalBin:
+    """The intervals of the pairs whose predicted drop lies in [``low``, ``high``) ([0.75, 1] for the last bin,
+    predicted drops above 1 included): ``n`` pairs; ``coverage`` the share whose measured drop lies in its
+    interval; ``mean_width`` the mean length of the interval clipped to [0, 1] (1 = it spans every drop from 0
+    to 1); ``clipped`` the share whose interval reaches past 1 (cut there) or below 0; NaN without pairs."""
+
+    low: float
+    high: float
+    n: int
+    coverage: float
+    mean_width: float
+    clipped: float
+
+    def to_dict(self) -> dict:
+        return {"bin": [self.low, self.high], "n": self.n, **{k: _finite(getattr(self, k))
+                                                             for k in ("coverage", "mean_width", "clipped")}}
+
+
+@dataclass(frozen=True)
+class IntervalReport:
+    """A calibration's prediction intervals judged on pairs it was not fitted on (held-out pairs).
+
+    ``bins``: one IntervalBin per predicted-drop bin (DROP_BIN_EDGES); ``overall``: all pairs; ``halfwidth``
+    and ``informative`` (:attr:`Interval.informative`); ``uninformative_share``: the share of the pairs whose
+    interval is uninformative; ``bounded_mae``: MAE of the predicted drop; ``constant``: the best constant
+    predictor a calibration set gives (the median of its pairs' drops) and ``constant_mae`` its MAE on the same
+    pairs; ``oracle_constant_mae``: the MAE of the median of these pairs' own drops, the best any constant can
+    do on them (known only afterwards)."""
+
+    bins: tuple[IntervalBin, ...]
+    overall: IntervalBin
+    halfwidth: float
+    informative: bool
+    uninformative_share: float
+    bounded_mae: float
+    constant: float
+    constant_mae: float
+    oracle_constant_mae: float
+
+    def to_dict(self) -> dict:
+        return {"bins": [b.to_dict() for b in self.bins], "overall": self.overall.to_dict(),
+                "halfwidth": self.halfwidth, "interval_informative": self.informative,
+                "uninformative_share": _finite(self.uninformative_share), "bounded_mae": _finite(self.bounded_mae),
+                "constant": _finite(self.constant), "constant_mae": _finite(self.constant_mae),
+                "oracle_constant_mae": _finite(self.oracle_constant_mae)}
+
+
+def _finite(value: float):
+    return float(value) if np.isfinite(value) else None
+
+
+def interval_report(drop, delta, interval: Interval, calibration_delta) -> IntervalReport:
+    """How ``interval`` does around the predicted drops ``drop`` (P,) of pairs with measured drops ``delta``
+    (P,), per predicted-drop bin and overall, beside the constant median(``calibration_delta``) (the drops of
+    the pairs the calibration was fitted on, (Q,))."""
+    drop, delta = np.asarray(drop, dtype=float), np.asarray(delta, dtype=float)
+    calibration_delta = np.asarray(calibration_delta, dtype=float)
+    if drop.shape != delta.shape or drop.ndim != 1 or len(drop) == 0 or len(calibration_delta) == 0:
+        raise DataError(f"interval_report needs drop and delta (P,) and calibration drops (Q,), P, Q >= 1; got "
+                        f"{drop.shape}, {delta.shape}, {calibration_delta.shape}")
+    low, high = interval.around(drop)
+    inside = (low <= delta) & (delta <= high)
+    width = np.clip(np.minimum(high, 1.0) - np.maximum(low, 0.0), 0.0, None)
+    clipped = (drop + interval.halfwidth > 1.0) | (low < 0.0)
+    bin_of = np.clip(np.digitize(drop, DROP_BIN_EDGES[1:-1]), 0, len(DROP_BIN_EDGES) - 2)  # above 1: the last
+
+    def summary(mask, lo, hi) -> IntervalBin:
+        if not mask.any():
+            return IntervalBin(lo, hi, 0, float("nan"), float("nan"), float("nan"))
+        return IntervalBin(lo, hi, int(mask.sum()), float(inside[mask].mean()), float(width[mask].mean()),
+                           float(clipped[mask].mean()))
+
+    def mae(errors) -> float:
+        return float(np.mean(np.abs(errors)))
+
+    bins = tuple(summary(bin_of == k, DROP_BIN_EDGES[k], DROP_BIN_EDGES[k + 1]) for k in range(len(DROP_BIN_EDGES) - 1))
+    overall = summary(np.ones(len(drop), dtype=bool), DROP_BIN_EDGES[0], DROP_BIN_EDGES[-1])
+    uninformative = ~np.asarray(interval_informative(low, high, interval.halfwidth), dtype=bool)
+    constant = float(np.median(calibration_delta))
+    return IntervalReport(bins, overall, interval.halfwidth, interval.informative, float(uninformative.mean()),
+                          mae(drop - delta), constant, mae(delta - constant), mae(delta - np.median(delta)))

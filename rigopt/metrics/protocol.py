@@ -19,9 +19,10 @@ import numpy as np
 
 from rigopt.errors import DataError
 from rigopt.metrics.calibration import (UNIT_LAMBDAS, Calibration, CalibrationFit, check_metric, fit_calibration,
-                                       pair_features)
+                                       fit_exact, pair_features, reparameterise)
 from rigopt.metrics.matched_fit import fit_rematched
-from rigopt.metrics.prediction import LinkChoice, choose_link, domain_of
+from rigopt.metrics.prediction import (IntervalReport, LinkChoice, choose_link, domain_of, interval_report,
+                                       rig_folds)
 from rigopt.metrics.reliability import (DEFAULT_BOOTSTRAP, DEFAULT_SEED, Reliability, drop_ranks, finite_or_none,
                                         reliability, rho_gain, spearman)
 from rigopt.metrics.transfer import TransferDrops, TransferTable
@@ -111,6 +112,8 @@ class ModelCalibration:
     bounded_control: BoundedAccuracy
     bounded_heldout: BoundedAccuracy
     link_choice: LinkChoice
+    #: The prediction interval judged on the held-out pairs, per predicted-drop bin (None without held-out pairs).
+    interval_heldout: IntervalReport | None = None
 
 
 @dataclass(frozen=True)
@@ -122,6 +125,9 @@ class ModelReliability:
     heldout: Reliability
     bounded_control: BoundedAccuracy
     bounded_heldout: BoundedAccuracy
+    #: The prediction interval judged on the held-out pairs, per predicted-drop bin (None without held-out pairs
+    #: or without the calibration's own calibration pairs, as for a calibration judged on other data).
+    interval_heldout: IntervalReport | None = None
 
 
 @dataclass(frozen=True)
@@ -200,7 +206,7 @@ def calibrate(table: TransferTable, control_rigs: Sequence[str] = CONTROL_RIGS,
         control_rel, heldout_rel = _split_reliability(pairs, resamples, seed)
         models.append(ModelCalibration(model, fit, control_rel, heldout_rel, _knockout(fit.calibration, pairs), pairs,
                                        bounded_accuracy(pairs, pairs.control), bounded_accuracy(pairs, ~pairs.control),
-                                       choice))
+                                       choice, _interval_heldout(pairs, fit.calibration, drops.delta[mine & control])))
 
     joint_fit, features = _fit(features_under, control, drops.delta, JOINT, solver, metric)
     joint_fit, joint_choice = _with_link(joint_fit, features, control, drops, solver)
@@ -211,7 +217,8 @@ def calibrate(table: TransferTable, control_rigs: Sequence[str] = CONTROL_RIGS,
         subset = PairPredictions(*(getattr(joint_pairs, f)[mine] for f in PairPredictions.__dataclass_fields__))
         per_model.append(ModelReliability(model, *_split_reliability(subset, resamples, seed),
                                           bounded_accuracy(subset, subset.control),
-                                          bounded_accuracy(subset, ~subset.control)))
+                                          bounded_accuracy(subset, ~subset.control),
+                                          _interval_heldout(subset, joint_fit.calibration, drops.delta[control])))
     joint = JointCalibration(joint_fit, tuple(per_model), joint_pairs, joint_choice)
     return CalibrationStudy(control_rigs, tuple(models), joint, drops.skipped, metric)
 
@@ -241,23 +248,51 @@ def _fit(features_under, mask: np.ndarray, delta: np.ndarray, name: str, solver:
     return fit, features_under(fit.calibration.match_lambdas)
 
 
+def _interval_heldout(pairs: PairPredictions, calibration: Calibration,
+                      calibration_delta: np.ndarray) -> IntervalReport | None:
+    """``calibration``'s interval on the held-out pairs of ``pairs`` beside the constant median(calibration_delta)
+    (the drops of the pairs it was fitted on); None without an interval or held-out pairs."""
+    held = ~pairs.control
+    if calibration.interval is None or not held.any():
+        return None
+    return interval_report(pairs.drop[held], pairs.delta[held], calibration.interval, calibration_delta)
+
+
+def fold_calibration(x: np.ndarray, delta: np.ndarray, name: str) -> Calibration:
+    """The linear weights of one leave-one-rig-out fold: the exact non-negative least squares optimum
+    (:func:`rigopt.metrics.calibration.fit_exact`) on the fold's pairs, x (n, 4), delta (n,), reparameterised
+    as every fit is (the fallback included), whatever solver the reported weights use. L-BFGS-B from 0.5 would
+    leave a weight that the fold's pairs cannot inform at its start value (beta_f when R1-f, the one control rig
+    with another FOV, is left out: every remaining pair has f = 0) and so predict the left-out rig's pairs from a
+    weight no data chose; the exact optimum sets it to 0."""
+    return reparameterise(fit_exact(x, delta), name)
+
+
 def _with_link(fit: CalibrationFit, features: np.ndarray, mask: np.ndarray, drops: TransferDrops,
                solver: str) -> tuple[CalibrationFit, LinkChoice]:
     """``fit`` with its calibration given a link, an interval and a domain, all from the pairs in ``mask``.
 
-    Leave-one-rig-out refits refit the linear weights on the features as they are (for rigcd+, those under
-    the final lambdas: the rematching is not repeated per fold)."""
+    The link is fitted to the reported weights' linear predictions of those pairs (``solver``'s fit, refitted
+    on the features as they are). The interval's leave-one-rig-out folds are by rig (``prediction.rig_folds``:
+    a fold drops every pair that involves one control rig, for every detector in a joint fit) and each fold's
+    weights are :func:`fold_calibration`, the exact optimum, whatever ``solver`` is; for rigcd+ they are
+    refitted on the features under the final lambdas (the rematching is not repeated per fold). The folds'
+    betas are kept in the returned LinkChoice's ``fold_betas`` (left-out rig -> (4,) beta)."""
     x, delta = features[mask], drops.delta[mask]
     cache: dict[bytes, Calibration] = {}
 
     def refit(fit_mask: np.ndarray):
         key = fit_mask.tobytes()
         if key not in cache:
-            cache[key] = fit_calibration(x[fit_mask], delta[fit_mask], fit.calibration.name, solver).calibration
+            cache[key] = (fit_calibration(x, delta, fit.calibration.name, solver).calibration if fit_mask.all()
+                          else fold_calibration(x[fit_mask], delta[fit_mask], fit.calibration.name))
         calibration = cache[key]
         return lambda predict_mask: calibration.linear_drop(*x[predict_mask].T)
 
-    choice = choose_link(drops.train[mask], drops.test[mask], delta, refit)
+    train, test = drops.train[mask], drops.test[mask]
+    choice = choose_link(train, test, delta, refit)
+    fold_betas = {rig: cache[(~involved).tobytes()].beta for rig, involved, _ in rig_folds(train, test)}
+    choice = replace(choice, fold_betas=fold_betas)
     calibration = replace(fit.calibration, link=choice.link, interval=choice.interval, domain=domain_of(x))
     return replace(fit, calibration=calibration), choice
 

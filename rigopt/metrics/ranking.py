@@ -8,7 +8,7 @@ from typing import Sequence
 import numpy as np
 
 from rigopt.metrics.calibration import Calibration
-from rigopt.metrics.prediction import Extrapolation
+from rigopt.metrics.prediction import Extrapolation, interval_informative
 from rigopt.metrics.rigcd import DEFAULT_ALPHA, DEFAULT_LAMBDAS, rigcd_matrix, tie_broken_lambdas
 from rigopt.rig.model import Rig
 
@@ -40,12 +40,22 @@ class TransferPrediction:
     interval: tuple[float, float] | None = None
     extrapolation: Extrapolation | None = None
     fallback: bool = False
+    interval_halfwidth: float | None = None
+
+    @property
+    def interval_informative(self) -> bool | None:
+        """Whether the interval says anything (``prediction.interval_informative``: it is not, once clipped to
+        [0, 1], about the whole range a drop can take); None without an interval."""
+        if self.interval is None:
+            return None
+        return interval_informative(*self.interval, self.interval_halfwidth)
 
     def to_dict(self) -> dict:
-        """JSON form: rig, reference, predicted_drop, interval, linear_drop, rigcd, match, t, r, f, count,
-        extrapolation (null or {terms: [...], hull_distance}), fallback."""
+        """JSON form: rig, reference, predicted_drop, interval, interval_informative, linear_drop, rigcd, match, t,
+        r, f, count, extrapolation (null or {terms: [...], hull_distance}), fallback."""
         return {"reference": self.reference, "rig": self.rig, "predicted_drop": self.predicted_drop,
                 "interval": list(self.interval) if self.interval is not None else None,
+                "interval_informative": self.interval_informative,
                 "linear_drop": self.linear_drop, "rigcd": self.rigcd, "match": self.match, "t": self.t, "r": self.r,
                 "f": self.f, "count": self.count,
                 "extrapolation": self.extrapolation.to_dict() if self.extrapolation is not None else None,
@@ -74,7 +84,8 @@ def predict_transfer(reference: Rig, candidates: Sequence[Rig],
     return [
         TransferPrediction(reference.name, rig.name, float(weighted.rigcd[0, k]), float(weighted.match[0, k]),
                            float(x[k, 3]), float(x[k, 0]), float(x[k, 1]), float(x[k, 2]), drops[k], linear[k],
-                           intervals[k], flags[k], fallback)
+                           intervals[k], flags[k], fallback,
+                           calibration.interval.halfwidth if intervals[k] is not None else None)
         for k, rig in enumerate(candidates)
     ]
 

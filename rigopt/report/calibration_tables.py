@@ -31,8 +31,21 @@ def weights_dict(fit: CalibrationFit) -> dict:
 
 def link_dict(fit: CalibrationFit, choice: LinkChoice) -> dict:
     """The bounded link of a fit: its kind and parameters, the leave-one-control-rig-out MAE of every
-    candidate link (the smallest chosen) and the prediction interval."""
-    return {**choice.link.to_dict(), "loro_mae": choice.loro_mae, "interval": choice.interval.to_dict()}
+    candidate link (the smallest chosen), the prediction interval (with ``interval_informative``) and the
+    folds' exact betas (``fold_betas``: left-out control rig -> {t, r, f, count})."""
+    return {**choice.link.to_dict(), "loro_mae": choice.loro_mae,
+            "interval": {**choice.interval.to_dict(), "interval_informative": choice.interval.informative},
+            "fold_betas": {rig: dict(zip(FEATURES, map(float, beta))) for rig, beta in choice.fold_betas.items()}}
+
+
+def intervals_dict(study: CalibrationStudy) -> dict:
+    """The prediction intervals judged on the held-out pairs (``IntervalReport.to_dict``): ``models`` each
+    detector's own fit, ``joint`` the joint fit on each detector's pairs."""
+    def report(entry):
+        return entry.interval_heldout.to_dict() if entry.interval_heldout is not None else None
+
+    return {"models": {m.model: report(m) for m in study.models},
+            "joint": {r.model: report(r) for r in study.joint.models}}
 
 
 def bounded_dict(control: BoundedAccuracy, heldout: BoundedAccuracy) -> dict:
@@ -45,7 +58,8 @@ def study_dict(study: CalibrationStudy) -> dict:
     "bounded", "knockout"}}, "joint": {"weights", "link", "models": {M: {"control", "heldout", "bounded"}}}}``
     plus the control rigs and the skipped training rigs. ``control``/``heldout`` judge the linear prediction
     (the benchmark's figures: rho, CI, MAE, RMSE); ``bounded`` the predicted drop through the link (MAE, RMSE,
-    and the fraction of pairs inside the prediction interval)."""
+    and the fraction of pairs inside the prediction interval); ``intervals`` (:func:`intervals_dict`) the
+    interval per predicted-drop bin on the held-out pairs, beside the best constant predictor."""
     models = {
         m.model: {
             "weights": weights_dict(m.fit),
@@ -66,7 +80,7 @@ def study_dict(study: CalibrationStudy) -> dict:
                    for r in study.joint.models},
     }
     return {"metric": study.metric, "control_rigs": list(study.control_rigs), "models": models, "joint": joint,
-            "skipped": [list(s) for s in study.skipped]}
+            "intervals": intervals_dict(study), "skipped": [list(s) for s in study.skipped]}
 
 
 def transfer_dict(transfer, source_fit: CalibrationFit) -> dict:

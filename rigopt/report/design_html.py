@@ -34,7 +34,14 @@ def _match_text(camera: dict) -> str:
 
 
 def _interval_text(entry: dict) -> str:
-    return "-" if entry.get("interval") is None else "[{:.2f}, {:.2f}]".format(*entry["interval"])
+    """'[low, high]', '-' without an interval, the uninformative text where it spans the range a drop can take."""
+    from rigopt.metrics.prediction import UNINFORMATIVE_TEXT
+
+    if entry.get("interval") is None:
+        return "-"
+    if entry.get("interval_informative") is False:
+        return UNINFORMATIVE_TEXT
+    return "[{:.2f}, {:.2f}]".format(*entry["interval"])
 
 
 def _extrapolation_text(entry: dict) -> str:
@@ -77,7 +84,8 @@ def render_design_html(summary: dict, figures: dict[str, bytes], scene: str | No
         "Predicted drop: the calibrated relative mAP drop of a detector trained on the reference; coverage: the "
         "fraction of ring sectors seen; a rig meets the requirements when it sees every sector the reference sees "
         f"on its own vehicle (reference coverage {pct(summary['reference_coverage'])}). The interval is the "
-        "calibration's 90 % prediction interval; a rig beyond the calibration pairs' features extrapolates, and its "
+        "calibration's 90 % prediction interval, or said to be uninformative where it spans (nearly) every drop "
+        "from 0 to 1 (half-width 0.45 or more); a rig beyond the calibration pairs' features extrapolates, and its "
         "prediction is less certain than the interval says.</p>",
         "<h2>Predicted transfer and coverage</h2>",
         table(["rig", "cameras", "predicted drop", "90 % interval", f"{summary['metric']} ({summary['weights']} weights)",

@@ -15,10 +15,11 @@ from rigopt.vehicle.symmetry import rig_symmetry
 
 
 def prediction_extras(p) -> dict:
-    """What qualifies a predicted drop: its interval, the linear prediction, the extrapolation flags (null
+    """What qualifies a predicted drop: its interval and whether it says anything (``interval_informative``:
+    false when it spans the range a drop can take), the linear prediction, the extrapolation flags (null
     when the pair lies within the calibration pairs) and whether the calibration is a fallback."""
     return {key: value for key, value in p.to_dict().items()
-            if key in ("interval", "linear_drop", "extrapolation", "fallback")}
+            if key in ("interval", "interval_informative", "linear_drop", "extrapolation", "fallback")}
 
 
 def summary_dict(summary: RigSummary, vehicle=None) -> dict:
