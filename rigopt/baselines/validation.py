@@ -138,7 +138,9 @@ def validate_design(design: Rig, reference: str, family: str, data, calibration:
                         "measured_drop_visible": finite_or_none(drops_visible[k]),
                         "measured_drop_visible_ci": interval(resampled_drops_visible[:, k]),
                         "predicted_drop": prediction.predicted_drop,
-                        "predicted_interval": predicted["interval"], "extrapolation": predicted["extrapolation"],
+                        "predicted_interval": predicted["interval"],
+                        "interval_informative": predicted["interval_informative"],
+                        "extrapolation": predicted["extrapolation"],
                         "rigcd": prediction.rigcd})
     design_minus = [{"rig": names[k - 1], "role": rigs[k - 1][0], "difference": finite_or_none(drops[1] - drops[k]),
                      "ci": interval(resampled_drops[:, 1] - resampled_drops[:, k])} for k in range(2, len(test_rigs))]

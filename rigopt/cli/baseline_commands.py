@@ -254,13 +254,14 @@ def validate_command(
         return
     rows = [[e["role"], e["rig"], e["n_cameras"], _number(e["mAP"]), _number(e["measured_drop"]),
              _interval(e["measured_drop_ci"]), _number(e["mAP_visible"]), _number(e["measured_drop_visible"]),
-             _number(e["predicted_drop"]), _interval(e["predicted_interval"]),
+             _number(e["predicted_drop"]), _predicted_interval(e),
              "yes" if e["extrapolation"] else "-", e["rigcd"]] for e in result["rigs"]]
     print_table(f"{family} trained on {result['reference']} (own mAP {_number(result['reference_mAP'])}, "
                 f"visible-only {_number(result['reference_mAP_visible'])}), {result['test_scenes']} test scenes; "
                 f"predicted with {calibration.metric}, {weights} weights",
                 ["role", "rig", "cameras", "mAP", "measured drop", "95 % interval", "visible mAP", "visible drop",
                  "predicted drop", "90 % prediction interval", "extrapolates", "RigCD"], rows)
+    _note_uninformative(result["rigs"], calibration)
     rows = [[f"design - {e['rig']}", e["role"], _number(e["difference"]), _interval(e["ci"])]
             for e in result["design_minus"]]
     print_table(f"measured drop of the design minus the others (below 0: the design loses less); intervals from "
@@ -311,6 +312,7 @@ def _validate_shipped(rig, ref: str, family: str, calibration, weights: str, dev
                                "over rigs or trainings",
               "rigs": [{"role": role, **entry, "predicted_drop": prediction.predicted_drop,
                         "predicted_interval": prediction.to_dict()["interval"],
+                        "interval_informative": prediction.interval_informative,
                         "extrapolation": prediction.to_dict()["extrapolation"], "rigcd": prediction.rigcd}
                        for (role, _), entry, prediction in zip(rigs, measured, predictions)]}
     if out is not None:
@@ -320,15 +322,31 @@ def _validate_shipped(rig, ref: str, family: str, calibration, weights: str, dev
         return
     rows = [[e["role"], e["rig"], e["n_cameras"], " / ".join(_number(s["drop"]) for s in e["seeds"].values()),
              _number(e["drop"]), _interval(e["drop_ci"]), _number(e["drop_visible"]), _number(e["predicted_drop"]),
-             _interval(e["predicted_interval"]), "yes" if e["extrapolation"] else "-"] for e in result["rigs"]]
+             _predicted_interval(e), "yes" if e["extrapolation"] else "-"] for e in result["rigs"]]
     own = " / ".join(_number(v) for v in result["reference_mAP"].values())
     print_table(f"{family} trained on {reference.name}, shipped ({len(detector.seeds)} seeds, {result['epochs']} "
                 f"epochs; own mAP {own}), {result['test_scenes']} test scenes; predicted with {calibration.metric}, "
                 f"{weights} weights",
                 ["role", "rig", "cameras", "drop per seed", "mean drop", "95 % interval (test scenes)",
                  "visible-only drop", "predicted drop", "90 % prediction interval", "extrapolates"], rows)
+    _note_uninformative(result["rigs"], calibration)
     console.print(f"drops are relative to the model's own fixed-set mAP on {reference.name}; intervals resample the "
                   f"{result['test_scenes']} test scenes (test noise only); renderings kept in {result['cache']}")
+
+
+def _predicted_interval(entry: dict) -> str:
+    """The prediction interval's cell: 'uninformative' where it spans the range a drop can take."""
+    if entry.get("interval_informative") is False:
+        return "uninformative"
+    return _interval(entry["predicted_interval"])
+
+
+def _note_uninformative(entries: list, calibration) -> None:
+    from rigopt.metrics.prediction import UNINFORMATIVE_TEXT
+
+    if any(e.get("interval_informative") is False for e in entries):
+        note(f"predicted drops: {UNINFORMATIVE_TEXT} with the {calibration.name} calibration's "
+             f"{calibration.interval.level:.0%} interval (+-{calibration.interval.halfwidth:.2f}); --json keeps the numbers")
 
 
 def _visible_maps(out: Path, family: str, names: List[str]) -> dict:

@@ -166,3 +166,16 @@ def test_near_field_cameras_are_not_fed_to_the_detector(use_packed, tmp_path, ca
     entries = json.loads(captured.out)["rigs"]
     assert [(e["role"], e["n_cameras"]) for e in entries] == [("perception cameras", 3), ("whole rig", 4)]
     assert "1 near_field camera(s) are not fed to the detector" in captured.err
+
+
+def test_the_table_says_when_the_prediction_interval_is_uninformative(use_packed, tmp_path, capsys):
+    """The joint calibration's interval spans the whole range: the cell and a note say so, JSON keeps it."""
+    capsys.readouterr()
+    code = run(["validate", "R5", "--ref", "R1", "--model", "lss", "--workers", "1", "--cache", str(tmp_path / "c")])
+    captured = capsys.readouterr()
+    assert code == 0, captured.err
+    assert "uninformative" in captured.out and "interval uninformative (wider than the range" in captured.err
+    code = run(["validate", "R5", "--ref", "R1", "--model", "lss", "--workers", "1", "--cache", str(tmp_path / "c"),
+                "--json"])
+    entry = json.loads(capsys.readouterr().out)["rigs"][0]
+    assert entry["interval_informative"] is False and len(entry["predicted_interval"]) == 2
