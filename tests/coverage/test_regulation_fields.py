@@ -264,3 +264,18 @@ def test_the_camera_field_table_lists_every_camera_and_the_totals(box_vehicle, c
     assert [row[0] for row in rows] == ["REAR", "FRONT", "seen by >= 2", "seen by any"]
     assert rows[0][1] == "100.0 % (100.0 % alone)" and rows[1][1] == "0.0 % (0.0 % alone)"
     assert rows[3][2] == f"{100 * regions[1]['covered_frac']:.1f} %"
+
+
+def test_the_report_folder_draws_a_two_sided_field_piece_by_piece(box_vehicle, camera, rig, small_settings, tmp_path):
+    from rigopt.coverage.measures import coverage_report
+    from rigopt.report.coverage_html import write_coverage_folder
+
+    cameras = rig(camera([-2.03, 0.0, 1.45], yaw_deg=180.0, pitch_deg=-20.0, fov=150.0, id="REAR"))
+    regions = region_coverage(cameras, box_vehicle, [PRESETS["r46-ii"]], spacing=0.5)
+    assert regions[0].polygon.geom_type == "MultiPolygon"
+    written = write_coverage_folder(tmp_path, coverage_report(cameras, box_vehicle, small_settings), cameras,
+                                    vehicle=box_vehicle, regions=regions)
+    page = (tmp_path / "report.html").read_text(encoding="utf-8")
+    assert [p.name for p in written][-2:] == ["regions.png", "report.html"]
+    assert page.count('"name":"r46-ii"') == 2 * 2  # the 3D view: each side's fill and outline
+    assert "seen by &gt;= 2" in page and "REAR" in page  # the camera -> field table
