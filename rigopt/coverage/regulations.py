@@ -295,8 +295,8 @@ def criticality_weights(xy, outline, corner) -> np.ndarray:
     w = 1 / (1 + d_body / L) + 1 / (1 + d_corner / L), with d_body the distance (m) from ``outline`` (a shapely
     polygon, the body on the ground), d_corner the distance from ``corner`` (2,) m (the nearside front corner, where
     a turning truck's front meets a cyclist or pedestrian beside it) and L = CRITICALITY_LENGTH (1 m). Each term
-    is 1 at the body (at the corner) and halves at L: right at the corner w = 2, 1 m out from a side far from the
-    corner about 0.5 + (small), far from both it tends to 0. rigopt's choice, not a regulation's.
+    is 1 at the body (at the corner) and halves L away: at the corner w = 2, 1 m ahead of it 1, 3 m from both 0.5,
+    far from both it tends to 0. rigopt's choice, not a regulation's.
     """
     xy = np.asarray(xy, dtype=float).reshape(-1, 2)
     d_body = shapely.distance(outline, shapely.points(xy)) if len(xy) else np.zeros(0)
