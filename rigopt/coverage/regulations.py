@@ -85,7 +85,7 @@ class FieldBox:
         for name, lines in (("back", X_LINES), ("ahead", X_LINES), ("offside", SIDE_LINES), ("nearside", SIDE_LINES)):
             _check_edge(name, getattr(self, name), lines)
 
-    def shape(self, lines: "BodyLines") -> shapely.Polygon:
+    def shape(self, lines: BodyLines) -> shapely.Polygon:
         """The rectangle in the vehicle frame (m), placed against ``lines``."""
         x0, x1 = sorted((lines.x(self.back), lines.x(self.ahead)))
         y0, y1 = sorted((lines.y(self.offside), lines.y(self.nearside)))
@@ -107,7 +107,7 @@ class FieldPolygon:
             _check_edge("corner's x", x_edge, X_LINES)
             _check_edge("corner's side", side_edge, SIDE_LINES)
 
-    def shape(self, lines: "BodyLines") -> shapely.Polygon:
+    def shape(self, lines: BodyLines) -> shapely.Polygon:
         """The polygon in the vehicle frame (m), placed against ``lines``; an invalid (self-crossing) one is
         refused."""
         polygon = shapely.Polygon([(lines.x(x_edge), lines.y(side_edge)) for x_edge, side_edge in self.corners])

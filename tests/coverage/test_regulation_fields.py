@@ -13,6 +13,8 @@ Every expectation is computed by hand from a box vehicle's dimensions:
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 import shapely
@@ -246,7 +248,7 @@ def test_camera_shares_add_up_to_the_covered_share(box_vehicle, camera, rig):
 
 
 def test_a_field_with_no_required_point_has_no_camera_share(tmp_path_factory, box_vehicle, camera, rig):
-    text = open(box_vehicle.spec.source).read() + _trailer(-20.0, 1.5, x_max=-2.0)  # covers all of r158
+    text = Path(box_vehicle.spec.source).read_text() + _trailer(-20.0, 1.5, x_max=-2.0)  # covers all of r158
     coupled = _vehicle(tmp_path_factory, text)
     (result,) = region_coverage(rig(camera([2.03, 0.0, 1.0], id="FRONT")), coupled, [PRESETS["r158"]], spacing=0.2)
     assert result.n_points == 0 and result.covered and result.covered_frac == 1.0
