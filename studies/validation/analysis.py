@@ -43,7 +43,8 @@ TARGET_RHO = 0.8
 
 def spearman(x: np.ndarray, y: np.ndarray) -> np.ndarray:
     """Spearman rho along the last axis of x, y (..., n) (average ranks for ties); NaN where a side is constant."""
-    rx, ry = (np.apply_along_axis(rankdata, -1, np.asarray(v, dtype=float)) for v in (x, y))
+    x, y = np.broadcast_arrays(np.asarray(x, dtype=float), np.asarray(y, dtype=float))
+    rx, ry = (rankdata(v, axis=-1) for v in (x, y))
     rx, ry = rx - rx.mean(-1, keepdims=True), ry - ry.mean(-1, keepdims=True)
     denominator = np.sqrt((rx ** 2).sum(-1) * (ry ** 2).sum(-1))
     with np.errstate(invalid="ignore", divide="ignore"):
