@@ -112,13 +112,23 @@ def rank_command(
 
 
 def _comparable(names: List[str], vehicle: Optional[str]):
-    """The rigs ``names`` in one frame (:func:`rigopt.vehicle.placement.comparable_rigs`) and the origin changes
-    made; :func:`_note_changes` says them once the command has succeeded."""
+    """The perception cameras of the rigs ``names`` in one frame (:func:`rigopt.vehicle.placement.comparable_rigs`)
+    and the origin changes made; :func:`_note_changes` says them once the command has succeeded."""
     from rigopt.rig.library import load_rig
     from rigopt.vehicle.library import load_vehicle
     from rigopt.vehicle.placement import comparable_rigs
 
-    return comparable_rigs([load_rig(name) for name in names], load_vehicle(vehicle) if vehicle is not None else None)
+    rigs = [_perception(load_rig(name)) for name in names]
+    return comparable_rigs(rigs, load_vehicle(vehicle) if vehicle is not None else None)
+
+
+def _perception(rig):
+    """The rig's perception cameras, the ones a detector is fed and the rig distances compare; a note when
+    near_field cameras are left out."""
+    if rig.near_field_count:
+        note(f"{rig.name}: its {rig.near_field_count} near_field camera(s) are not fed to the detector and are left "
+             f"out; the distance compares its {len(rig) - rig.near_field_count} perception camera(s)")
+    return rig.perception()
 
 
 def _note_changes(rigs, changes) -> None:

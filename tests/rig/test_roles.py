@@ -59,3 +59,22 @@ def test_carla_carries_the_role_as_role_name_and_nuscenes_says_it_does_not(tmp_p
     assert read_carla(path).rig.near_field_count == 1
     warnings = export_nuscenes(mixed).warnings
     assert any("near_field role of 1 camera(s)" in w for w in warnings)
+
+
+def test_rigcd_and_rank_compare_the_perception_cameras_and_say_so(tmp_path, capsys):
+    from rigopt.cli import run
+    from rigopt.rig.pccr_format import write_rig
+
+    r1 = load_rig("R1")
+    extra = dataclasses.replace(r1.cameras[0], id="CAM_FISHEYE_FRONT", role="near_field", fov=120.0)
+    with_near_field = write_rig(dataclasses.replace(r1, name="r1nf", cameras=(*r1.cameras, extra)),
+                                tmp_path / "r1nf.json")
+    capsys.readouterr()
+    assert run(["rigcd", "R1", str(with_near_field), "--json"]) == 0
+    captured = capsys.readouterr()
+    data = json.loads(captured.out)
+    assert data["rigcd"] == 0 and data["count"] == 0  # the near-field camera is not compared
+    assert "1 near_field camera(s) are not fed to the detector" in captured.err
+    assert run(["rank", "--ref", "R1", str(with_near_field), "R1-c6", "--json"]) == 0
+    ranked = json.loads(capsys.readouterr().out)
+    assert ranked[0]["rig"] == "r1nf" and ranked[0]["rigcd"] == 0
