@@ -76,14 +76,16 @@ class CandidateSet:
 
 def build_candidates(vehicle: Vehicle, lenses, spacing: float, yaws_deg, pitches_deg, zones=None,
                      rules: MountRules = MountRules(), max_body_fraction: float | None = None,
-                     symmetric: bool = False) -> CandidateSet:
+                     symmetric: bool = False, clear_lens=None) -> CandidateSet:
     """Every clear (mount point, pitch, yaw, catalogue camera) combination as a candidate camera.
 
     lenses : the catalogue: CatalogueCameras, Lenses or FOVs (deg, benchmark pinholes), taken once each in
     the order of their FOVs (cameras of equal FOV in the given order); max_body_fraction : drop candidates
     whose image shows more of the ego body than this share (:func:`mounting.candidates.body_fraction`);
     symmetric : mount points in mirrored pairs (:func:`rigopt.mounting.sampling.sample_symmetric_zone_points`)
-    and only candidates whose mirror image is a candidate too (``CandidateSet.mirror``)."""
+    and only candidates whose mirror image is a candidate too (``CandidateSet.mirror``); clear_lens : the lens
+    (or pinhole FOV, deg) whose checked frustum must be clear of the body, None for each catalogue camera's own
+    (a surround-view fisheye sees its own body at its edges: its central cone is checked instead)."""
     unique = list(dict.fromkeys(catalogue_of(lenses)))
     catalogue = tuple(sorted(unique, key=lambda c: c.fov))
     if symmetric:
@@ -94,7 +96,8 @@ def build_candidates(vehicle: Vehicle, lenses, spacing: float, yaws_deg, pitches
     pitches = np.deg2rad(np.asarray(pitches_deg, dtype=float))
     parts = []
     for index, entry in enumerate(catalogue):
-        clear = clear_directions(vehicle, points, yaws, pitches, entry.lens, rules)  # (m, k, j)
+        clear = clear_directions(vehicle, points, yaws, pitches, entry.lens if clear_lens is None else clear_lens,
+                                 rules)  # (m, k, j)
         mount, pitch_index, yaw_index = np.nonzero(clear)
         parts.append((mount, pitch_index, yaw_index, np.full(len(mount), index)))
     mount, pitch_index, yaw_index, lens = (np.concatenate(column) for column in zip(*parts))

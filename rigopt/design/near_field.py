@@ -1,0 +1,224 @@
+"""The near-field stage: surround-view fisheyes that see the regulation fields and the blind near field.
+
+Production rigs separate two jobs. Perception cameras (windscreen, B-pillars, a truck's high mirror arm) feed
+the detector and are matched to the reference; near-field cameras (grille, mirrors, tailgate, cab corners),
+wide fisheyes looking down, serve the close-proximity fields of the regulations and the ground right around
+the body. This stage chooses the near_field cameras of a design, given its perception cameras:
+
+    minimise   sum_c (1 + w m_c) x_c            (the fewest cameras, then the cheapest mounts; w < 1 / n)
+    subject to sum_c sees_cq x_c >= 1            every required point q: each field point at each of its
+                                                 test-object heights, and the near ring around the body
+               at most one camera per mount point and per clashing pair; none where a perception camera sits
+               x_c = x_mirror(c)                 (symmetric designs: mirrored pairs or the centreline)
+               x binary
+
+Candidates are the catalogue's fisheyes (default :func:`fisheye_190`: 190 deg, equidistant Kannala-Brandt) on
+the vehicle's mount points, facing every NEAR_FIELD_YAW_STEP deg of yaw at NEAR_FIELD_PITCHES_DEG (down to
+straight down), whose central cone (a CLEAR_CONE_DEG pinhole) is clear of the body: a surround-view fisheye sees
+its own body at its edges, which is why it is mounted at the outermost points. ``m_c`` is the relative mounting
+cost (:func:`rigopt.mounting.practice.mounting_costs`). The MILP has a work limit, never a clock. Afterwards the
+fields are checked densely (every ``DENSE_SPACING`` m) and unseen points join the requirements of another round.
+"""
+
+from __future__ import annotations
+
+import time
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sparse
+from scipy.spatial import cKDTree
+
+from rigopt.camera import CameraModel, Lens
+from rigopt.coverage.footprint import Footprint
+from rigopt.coverage.regulations import RegionPreset, required_mask
+from rigopt.coverage.visibility import visible_by
+from rigopt.design.candidates import CandidateSet, build_candidates
+from rigopt.design.defaults import DEFAULT_MAX_NODES
+from rigopt.design.requirements import DENSE_SPACING, REGION_SPACING, field_labels
+from rigopt.design.selection import DesignInfeasible, _gap, _mount_groups, essential_requirements
+from rigopt.design.settings import CatalogueCamera
+from rigopt.errors import RigoptError
+from rigopt.mounting.practice import mounting_costs
+from rigopt.mounting.rules import MountRules
+from rigopt.quiet import HIGHS_OPTIONS, quiet_highs
+from rigopt.rig.model import Rig
+from rigopt.vehicle.model import Vehicle
+
+#: The default near-field camera: horizontal FOV (deg) and image size (px) of an equidistant fisheye.
+FISHEYE_HFOV_DEG = 190.0
+FISHEYE_IMAGE_SIZE = (1280, 800)
+#: Pitches (deg, > 0 up) and yaw step (deg) of the near-field candidates' orientations.
+NEAR_FIELD_PITCHES_DEG = (-90.0, -60.0, -45.0, -30.0, -15.0, 0.0)
+NEAR_FIELD_YAW_STEP = 45.0
+#: The central cone (a pinhole of this horizontal FOV, deg) that must be clear of the body.
+CLEAR_CONE_DEG = 60.0
+#: Largest share of a near-field camera's image that may show the ego body.
+MAX_BODY_FRACTION = 0.4
+#: The near ring: distances (m) from the body's footprint and heights (m) that must be seen all around.
+NEAR_RING_DISTANCES = (0.5, 1.0)
+NEAR_RING_HEIGHTS = (0.0, 0.8)
+NEAR_RING_SECTORS = 36
+#: Farthest a near-field camera counts as seeing (m).
+NEAR_FIELD_RANGE = 35.0
+#: Mount points closer than this (m) may not both hold a camera, nor sit this close to a perception camera.
+CLASH_DISTANCE = 0.10
+#: Rounds of the dense field check.
+DENSE_ROUNDS = 3
+
+
+def fisheye_190() -> CatalogueCamera:
+    """A 190-degree surround-view fisheye, 1280 x 800 px, equidistant (Kannala-Brandt with zero coefficients)."""
+    width, height = FISHEYE_IMAGE_SIZE
+    focal = (width / 2) / np.radians(FISHEYE_HFOV_DEG / 2)
+    lens = Lens(width, height, focal, focal, width / 2, height / 2, "fisheye", (0.0, 0.0, 0.0, 0.0))
+    return CatalogueCamera.of_lens(f"fisheye {FISHEYE_HFOV_DEG:g} deg {width}x{height} (equidistant)", lens)
+
+
+@dataclass(frozen=True)
+class NearFieldPoints:
+    """What the near-field cameras must see: ``points`` (q, 3) m, vehicle frame, and ``labels`` (q,)."""
+
+    points: np.ndarray
+    labels: tuple[str, ...]
+
+    def extended(self, points: np.ndarray, labels) -> "NearFieldPoints":
+        return NearFieldPoints(np.concatenate([self.points, points]), self.labels + tuple(labels))
+
+
+def near_field_points(vehicle: Vehicle, presets: tuple[RegionPreset, ...], lifted=()) -> NearFieldPoints:
+    """The near ring around the footprint and every field point of ``presets`` (each at its heights), less the
+    points inside the footprint or a keep-out in force (a coupled trailer)."""
+    footprint = Footprint.of_mesh(vehicle.mesh)
+    azimuths = np.linspace(-np.pi, np.pi, NEAR_RING_SECTORS, endpoint=False)
+    parts, labels = [], []
+    for height in NEAR_RING_HEIGHTS:
+        for distance in NEAR_RING_DISTANCES:
+            parts.append(footprint.ring_points(azimuths, distance, height))
+            labels += [f"near ring {distance:g} m at height {height:g} m, azimuth {np.rad2deg(a):+.0f} deg"
+                       for a in azimuths]
+    for preset in presets:
+        mine = preset.points(vehicle, REGION_SPACING)
+        parts.append(mine)
+        labels += field_labels(preset.key, mine)
+    points = np.concatenate(parts)
+    keep = required_mask(vehicle, points, lifted)
+    return NearFieldPoints(points[keep], tuple(label for label, k in zip(labels, keep) if k))
+
+
+def near_field_candidates(vehicle: Vehicle, spacing: float, symmetric: bool, rules: MountRules = MountRules(),
+                          catalogue=None, zones=None) -> CandidateSet:
+    """The near-field candidates on ``vehicle``'s mount points (see the module docstring)."""
+    yaws = np.arange(-180.0, 180.0, NEAR_FIELD_YAW_STEP)
+    return build_candidates(vehicle, catalogue or (fisheye_190(),), spacing, yaws, NEAR_FIELD_PITCHES_DEG, zones,
+                            rules, MAX_BODY_FRACTION, symmetric, clear_lens=CLEAR_CONE_DEG)
+
+
+@dataclass(frozen=True)
+class NearFieldDesign:
+    """The chosen near-field cameras (``cameras``, role near_field), the candidates' count, the points required
+    (``n_points``, after the dense rounds), the MILP's ``status`` and ``gap``, and ``seconds`` in all."""
+
+    cameras: tuple
+    n_candidates: int
+    n_points: int
+    status: str
+    gap: float
+    seconds: float
+    rounds: int
+
+
+def select_near_field(sees: np.ndarray, mount: np.ndarray, mount_points: np.ndarray, mount_cost: np.ndarray,
+                      mirror: np.ndarray | None = None, max_nodes: int = DEFAULT_MAX_NODES) -> tuple[np.ndarray, str, float]:
+    """The MILP of the module docstring: (chosen (k,) int, status, relative gap). sees (n, q) bool; mount (n,) int
+    into mount_points (m, 3) m; mount_cost (n,) float; mirror (n,) int or None. Raises DesignInfeasible when some
+    point no candidate sees, or no selection meets every point."""
+    import cvxpy as cp
+
+    n = sees.shape[0]
+    unseen = np.flatnonzero(~sees.any(axis=0))
+    if len(unseen):
+        raise DesignInfeasible(f"{len(unseen)} near-field point(s) no near-field candidate sees")
+    x = cp.Variable(n, boolean=True)
+    needed = essential_requirements(sees, np.ones(sees.shape[1], dtype=int))
+    constraints = [sparse.csr_matrix(sees[:, needed].T.astype(float)) @ x >= 1]
+    clashes = cKDTree(mount_points).query_pairs(CLASH_DISTANCE, output_type="ndarray")
+    groups = _mount_groups(mount, clashes)
+    if groups.shape[0]:
+        constraints.append(groups @ x <= 1)
+    if mirror is not None:
+        first = np.flatnonzero(np.arange(n) < mirror)
+        if len(first):
+            constraints.append(x[first] == x[mirror[first]])
+    cost = np.asarray(mount_cost, dtype=float)
+    weight = 1.0 / (n * max(float(cost.max(initial=1.0)), 1.0) + 1.0)  # the count first, the cost breaks ties
+    problem = cp.Problem(cp.Minimize(cp.sum(x) + weight * (cost @ x)), constraints)
+    quiet_highs()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        problem.solve(solver=cp.HIGHS, **{**HIGHS_OPTIONS, "mip_rel_gap": 1e-6, "mip_max_nodes": int(max_nodes)})
+    if problem.status in (cp.INFEASIBLE, cp.INFEASIBLE_INACCURATE) or x.value is None:
+        raise DesignInfeasible("no choice of near-field cameras sees every near-field point with its housing clear "
+                               "of the others; allow more zones or a finer --spacing")
+    status = "optimal" if problem.status == cp.OPTIMAL else "node_limit"
+    return np.flatnonzero(x.value > 0.5), status, _gap(problem)
+
+
+def design_near_field(vehicle: Vehicle, perception: Rig, presets: tuple[RegionPreset, ...], spacing: float,
+                      symmetric: bool, rules: MountRules = MountRules(), catalogue=None, zones=None,
+                      max_nodes: int = DEFAULT_MAX_NODES, lifted=(), progress=lambda message: None) -> NearFieldDesign:
+    """The near-field cameras of a design whose perception cameras are ``perception`` (on ``vehicle``): they
+    see every field of ``presets`` densely and the near ring, the fewest and cheapest, clear of the perception
+    cameras' housings."""
+    start = time.perf_counter()
+    candidates = near_field_candidates(vehicle, spacing, symmetric, rules, catalogue, zones)
+    free = np.ones(len(candidates.mount_points), dtype=bool)
+    if len(perception):
+        near = cKDTree(perception.positions).query(candidates.mount_points)[0] < CLASH_DISTANCE
+        free &= ~near
+    usable = free[candidates.mount]
+    if candidates.mirror is not None:
+        usable &= usable[candidates.mirror]
+    index = np.flatnonzero(usable)
+    if not len(index):
+        raise RigoptError(f"no mount point of {vehicle.name} is left for a near-field camera beside the perception "
+                          "cameras; allow more zones")
+    mirror = None if candidates.mirror is None else np.searchsorted(index, candidates.mirror[index])
+    model = candidates.model(index)
+    points = near_field_points(vehicle, presets, lifted)
+    progress(f"near field: {len(index)} fisheye candidates, {len(points.points)} points to see")
+    cost = mounting_costs(vehicle, candidates.mount_zones[candidates.mount[index]], candidates.positions[index])
+    dense = [preset.points(vehicle, DENSE_SPACING) for preset in presets]
+    dense = [p[required_mask(vehicle, p, lifted)] for p in dense]
+    for round_ in range(1, DENSE_ROUNDS + 1):
+        sees = visible_by(vehicle.mesh, model, candidates.positions[index], candidates.rotations[index], points.points,
+                          NEAR_FIELD_RANGE)
+        chosen, status, gap = select_near_field(sees, candidates.mount[index], candidates.mount_points, cost, mirror,
+                                                max_nodes)
+        picked = index[chosen]
+        unseen = []
+        if dense:
+            chosen_model = candidates.model(picked)
+            for preset, field in zip(presets, dense):
+                seen = visible_by(vehicle.mesh, chosen_model, candidates.positions[picked],
+                                  candidates.rotations[picked], field, NEAR_FIELD_RANGE).any(axis=0)
+                unseen.append((preset.key, field[~seen]))
+        missing = sum(len(u) for _, u in unseen)
+        if not missing or round_ == DENSE_ROUNDS:
+            break
+        progress(f"near field: {missing} dense field point(s) unseen; round {round_ + 1}")
+        for key, extra in unseen:
+            points = points.extended(extra, field_labels(key, extra))
+    if missing:
+        raise DesignInfeasible(f"after {DENSE_ROUNDS} rounds the near-field cameras still miss {missing} dense field "
+                               "point(s); allow more zones or a finer --spacing")
+    cameras = tuple(_near_field_camera(candidates, k, n) for n, k in enumerate(picked))
+    return NearFieldDesign(cameras, len(index), len(points.points), status, gap, time.perf_counter() - start, round_)
+
+
+def _near_field_camera(candidates: CandidateSet, k: int, n: int):
+    import dataclasses
+
+    camera = candidates.camera(k, f"CAM_NEAR_FIELD_{n + 1}")
+    return dataclasses.replace(camera, role="near_field")

@@ -1,0 +1,64 @@
+"""The near-field stage (rigopt/design/near_field.py): fisheye candidates, the set-cover MILP, and a small design."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from rigopt.camera import CameraModel
+from rigopt.coverage.regulations import parse_require, required_mask
+from rigopt.coverage.visibility import visible_by
+from rigopt.design import near_field
+from rigopt.design.selection import DesignInfeasible
+from rigopt.rig.library import load_rig
+from rigopt.rig.model import Rig
+from rigopt.vehicle.library import load_vehicle
+
+
+def test_the_default_fisheye_is_a_190_degree_equidistant_lens():
+    camera = near_field.fisheye_190()
+    assert camera.lens.distortion == "fisheye" and camera.lens.coefficients == (0.0, 0.0, 0.0, 0.0)
+    assert camera.fov == pytest.approx(190.0) and camera.lens.image_size == (1280, 800)
+
+
+def test_the_set_cover_takes_the_fewest_then_the_cheapest():
+    # 4 candidates on 4 mount points far apart; points 0-2: {0, 1} see 0 and 1, {2} sees 2, {3} sees 0-2
+    sees = np.array([[1, 1, 0], [1, 1, 0], [0, 0, 1], [1, 1, 1]], dtype=bool)
+    mount_points = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0], [3, 0, 0]], dtype=float)
+    chosen, status, gap = near_field.select_near_field(sees, np.arange(4), mount_points, np.ones(4))
+    assert chosen.tolist() == [3] and status == "optimal" and gap == pytest.approx(0, abs=1e-9)
+    sees[3, 2] = False  # now two cameras are needed: the cheaper of 0 and 1 with 2
+    chosen, _, _ = near_field.select_near_field(sees, np.arange(4), mount_points, np.array([2.0, 1.0, 1.0, 1.0]))
+    assert sorted(chosen.tolist()) in ([1, 2], [2, 3])
+    assert 0 not in chosen
+
+
+def test_a_point_no_candidate_sees_is_infeasible():
+    with pytest.raises(DesignInfeasible, match="no near-field candidate sees"):
+        near_field.select_near_field(np.array([[True, False]]), np.zeros(1, dtype=int), np.zeros((1, 3)), np.ones(1))
+
+
+def test_clashing_mounts_hold_one_camera():
+    sees = np.array([[1, 0], [0, 1], [1, 1]], dtype=bool)
+    mount_points = np.array([[0, 0, 0], [0.05, 0, 0], [5, 0, 0]], dtype=float)  # 0 and 1 clash
+    chosen, _, _ = near_field.select_near_field(sees, np.arange(3), mount_points, np.array([1.0, 1.0, 5.0]))
+    assert chosen.tolist() == [2]
+
+
+@pytest.mark.slow
+def test_the_tt_sees_its_rear_field_and_near_ring_with_few_fisheyes():
+    """On the tt (M1: R158), the design's fisheyes see every near ring and field point, at most two look back."""
+    tt = load_vehicle("tt")
+    presets = parse_require("default", tt)
+    perception = Rig("none", tt.blueprint, (load_rig("R4").cameras[0],))
+    design = near_field.design_near_field(tt, perception, presets, 0.25, tt.symmetry.symmetric)
+    rig = Rig("nf", tt.blueprint, design.cameras)
+    assert all(c.role == "near_field" for c in rig.cameras) and 3 <= len(rig) <= 8
+    points = near_field.near_field_points(tt, presets).points
+    dense = np.concatenate([p.points(tt, 0.1) for p in presets])
+    model = CameraModel.of_cameras(rig.cameras)
+    for pts in (points, dense[required_mask(tt, dense)]):
+        seen = visible_by(tt.mesh, model, rig.positions, rig.rotations, pts, near_field.NEAR_FIELD_RANGE)
+        assert seen.any(axis=0).all()
+    backwards = [c for c in rig.cameras if c.forward[0] < -0.7]
+    assert 1 <= len(backwards) <= 2
