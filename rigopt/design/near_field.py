@@ -22,6 +22,7 @@ fields are checked densely (every ``DENSE_SPACING`` m) and unseen points join th
 
 from __future__ import annotations
 
+import dataclasses
 import time
 import warnings
 from dataclasses import dataclass
@@ -30,14 +31,19 @@ import numpy as np
 import scipy.sparse as sparse
 from scipy.spatial import cKDTree
 
-from rigopt.camera import CameraModel, Lens
+from rigopt.camera import Lens
 from rigopt.coverage.footprint import Footprint
 from rigopt.coverage.regulations import RegionPreset, required_mask
 from rigopt.coverage.visibility import visible_by
 from rigopt.design.candidates import CandidateSet, build_candidates
 from rigopt.design.defaults import DEFAULT_MAX_NODES
 from rigopt.design.requirements import DENSE_SPACING, REGION_SPACING, field_labels
-from rigopt.design.selection import DesignInfeasible, _gap, _mount_groups, essential_requirements
+from rigopt.design.selection import (
+    DesignInfeasible,
+    _gap,
+    _mount_groups,
+    essential_requirements,
+)
 from rigopt.design.settings import CatalogueCamera
 from rigopt.errors import RigoptError
 from rigopt.mounting.practice import mounting_costs
@@ -218,7 +224,4 @@ def design_near_field(vehicle: Vehicle, perception: Rig, presets: tuple[RegionPr
 
 
 def _near_field_camera(candidates: CandidateSet, k: int, n: int):
-    import dataclasses
-
-    camera = candidates.camera(k, f"CAM_NEAR_FIELD_{n + 1}")
-    return dataclasses.replace(camera, role="near_field")
+    return dataclasses.replace(candidates.camera(k, f"CAM_NEAR_FIELD_{n + 1}"), role="near_field")
