@@ -52,19 +52,77 @@ def _extrapolation_text(entry: dict) -> str:
     return "-" if flag is None else describe_extrapolation(flag)
 
 
-def scene_section(scene: str, compared: str | None) -> list[str]:
-    """The "3D view" section: its heading, a note on what is drawn and in which frame, and the ``scene``
-    fragment (``report.scene_3d.scene_html``); ``compared``: the name of the rig drawn in grey, if any."""
+def scene_section(scene: str, compared: str | None, frame: str | None = None) -> list[str]:
+    """The "3D view" section: its heading, a note on what is drawn and in which frame (``frame``: the report's,
+    e.g. "ISO 8855, origin on the ground below the rear axle's centre"; the view's own words without it), and
+    the ``scene`` fragment (``report.scene_3d.scene_html``); ``compared``: the name of the rig drawn in grey."""
+    from rigopt.report.frustums import FRUSTUM_RANGE_M
     from rigopt.report.scene_3d import FRAME_TEXT
 
     grey = f" The reference rig {escape(compared)} is drawn in grey, dashed." if compared else ""
+    where = f"{frame} (x forward, y left, z up, metres), as the tables" if frame else FRAME_TEXT
     return ["<h2>3D view</h2>",
             '<p class="note">Drag to turn, scroll to zoom, hover for details; click a legend entry to hide or show '
-            "it. The design's cameras with their frustums (lines to the image corners along the lens's own corner "
-            f"rays, outline through its edges' rays), the mounting zones as in the pictures, the keep-outs in "
-            f"orange, the wheels (not mountable) dark grey.{grey} {escape(FRAME_TEXT)}; the camera table's CARLA "
-            "frame has y to the right.</p>",
+            "it. The design's cameras with their frustums to "
+            f"{FRUSTUM_RANGE_M:g} m (lines to the image corners along the lens's own corner rays, outline through "
+            "its edges' rays) and, in the camera's colour on the ground, where each frustum meets the ground; the "
+            "mounting zones as in the pictures, the keep-outs in orange, the wheels (not mountable) dark grey."
+            f"{grey} Frame: {escape(where)}.</p>",
             scene]
+
+
+def _value(value, digits: int = 1) -> str:
+    return "-" if value is None else f"{value:.{digits}f}"
+
+
+def _feature_text(sheet: dict) -> str:
+    """The zone a camera sits in, or 'none (nearest: zone, d m)'."""
+    if sheet["zone"] is not None:
+        return sheet["zone"]
+    if sheet["nearest_zone"] is None:
+        return "none"
+    return f"none (nearest: {sheet['nearest_zone']}, {sheet['nearest_zone_m']:.2f} m)"
+
+
+def packaging_section(packaging: list[dict], frame: str) -> list[str]:
+    """The "Packaging" section: one row per camera of ``packaging`` (``design_report.packaging_rows``), the
+    columns' definitions below the table; positions in ``frame``."""
+    from rigopt.coverage.packaging import BLOCKED_GRID, PERSON_DISTANCE_M
+
+    def resolution(sheet: dict) -> str:
+        return "; ".join(f"{g['distance_m']:g} m: {_value(g['lateral'], 0)} / {_value(g['longitudinal'], 0)}"
+                         for g in sheet["ground_resolution_px_per_m"])
+
+    def people(sheet: dict, person: str) -> str:
+        entry = next(p for p in sheet["person_height_px"] if p["person"] == person)
+        return " / ".join(_value(entry[place], 0) for place in ("left", "centre", "right"))
+
+    heights = {p["person"]: p["height_m"] for p in packaging[0]["person_height_px"]} if packaging else {}
+    rows = [[escape(c["camera"]), escape(_feature_text(c)),
+             escape(", ".join(f"{v:.2f}" for v in c["mount_point_m"])),
+             escape(", ".join(f"{v:.2f}" for v in c["surface_normal"])), num(c["wedge_angle_deg"], 1, "°"),
+             num(c["protrusion_m"], 3), num(c["nearest_ground_m"], 2), num(c["nearest_ground_from_body_m"], 2),
+             escape(resolution(c)), escape(people(c, "adult")), escape(people(c, "child")), pct(c["blocked_frac"])]
+            for c in packaging]
+    adult, child = heights.get("adult", 1.8), heights.get("child", 0.8)
+    return ["<h2>Packaging</h2>",
+            table(["camera", "body feature (zone)", f"mount point x, y, z (m, {frame})", "surface normal",
+                   "bracket wedge", "protrusion (m)", "nearest ground from lens (m)", "from body (m)",
+                   "ground px/m across / along", f"{adult:g} m adult px (left / centre / right)",
+                   f"{child:g} m child px (left / centre / right)", "image blocked by body"], rows, numeric_from=4),
+            '<p class="note">Per camera, through its own lens: the body feature is the mounting zone of its mount '
+            "point (the lens's foot on the body surface), or the nearest zone and its distance; the surface normal "
+            "is the body's outward unit normal there, and the bracket wedge the angle between it and the optical "
+            "axis (0° when the camera looks straight out of the surface); the protrusion is how far the lens stands "
+            "in front of the surface along that normal. Nearest ground: the shortest horizontal distance from the "
+            "lens's ground point (and from the body's footprint) to ground the camera sees, the body's blocking "
+            "ray-cast. Ground px/m: image pixels per metre across and along the ground, 5, 10 and 20 m from the "
+            "lens's ground point straight ahead along the optical axis's ground direction (- where the camera "
+            f"does not see that ground). People: a person standing {PERSON_DISTANCE_M:g} m from the lens's ground "
+            "point in the direction of the image's left edge, its centre and its right edge, height in pixels of "
+            "the part in the image and not hidden by the body. Image blocked: the share of a "
+            f"{BLOCKED_GRID[0]} x {BLOCKED_GRID[1]} grid of pixel rays that meets the body. Definitions in "
+            "docs/design.md and rigopt/coverage/packaging.py.</p>"]
 
 
 def render_design_html(summary: dict, figures: dict[str, bytes], scene: str | None = None,
@@ -78,6 +136,7 @@ def render_design_html(summary: dict, figures: dict[str, bytes], scene: str | No
     rows = [[name, e["n_cameras"], e["predicted_drop"], _interval_text(e), e["rigcd"], e["coverage"],
              e["meets_coverage_requirements"], _extrapolation_text(e)] for name, e in named if e]
     solver = summary["solver"]
+    frame = summary.get("frame") or "ISO 8855, origin on the ground at the vehicle's centre"
     parts = [
         f"<h1>Design for {escape(summary['vehicle'])} from {escape(summary['reference'])}</h1>",
         f'<p class="note">Generated by rigopt on {escape(datetime.now(timezone.utc).strftime("%Y-%m-%d %H:%M UTC"))}. '
@@ -110,11 +169,12 @@ def render_design_html(summary: dict, figures: dict[str, bytes], scene: str | No
             ["continuous refinement", escape(solver["refine_status"])], ["total time", num(solver["seconds"], 1, " s")],
         ]),
         "<h2>Cameras</h2>",
-        table(["camera", "zone", "location x, y, z (m, CARLA: y right)", "pitch, yaw, roll (deg, CARLA)", "hfov",
-               "image (px)", "fx (px)", "distortion", "lens hFOV x vFOV", "matched reference camera (t m, r rad, f deg)", "zone cost", "tyre spray"],
+        table(["camera", "zone", f"x, y, z (m, {frame})", "yaw, pitch, roll (deg; yaw > 0 left, pitch > 0 up)",
+               "hfov", "image (px)", "fx (px)", "distortion", "lens hFOV x vFOV",
+               "matched reference camera (t m, r rad, f deg)", "zone cost", "tyre spray"],
               [[escape(c["id"]), escape(c["zone"] or "-"),
-                escape(", ".join(f"{v:.2f}" for v in c["carla"]["location_m"])),
-                escape(", ".join(f"{v:.1f}" for v in c["carla"]["rotation_pitch_yaw_roll_deg"])),
+                escape(", ".join(f"{v:.2f}" for v in c["position"])),
+                escape(", ".join(f"{v:.1f}" for v in c["yaw_pitch_roll_deg"])),
                 num(c["fov"], 1, "°"), escape(f"{c['lens']['width']}x{c['lens']['height']}"),
                 num(c["lens"]["fx"], 1, ""), escape(_distortion_text(c["lens"])),
                 escape(f"{c['lens']['hfov_deg']:.1f}° x {c['lens']['vfov_deg']:.1f}°"), escape(_match_text(c)),
@@ -122,9 +182,12 @@ def render_design_html(summary: dict, figures: dict[str, bytes], scene: str | No
                for c in summary["cameras"]], numeric_from=4),
         "<p class=\"note\">RigCD of the reference to the design (unit weights): " + escape(
             "; ".join(f"{k} {v:.3f}" for k, v in summary["rigcd_breakdown"].items())) + ".</p>",
-        f'<p class="note">Rig file: {escape(summary["rig_file"])} beside this report (the benchmark\'s JSON format, '
-        'CARLA frame).</p>',
+        f'<p class="note">Positions and angles in this report: {escape(frame)} (x forward, y left, z up). The rig '
+        f'file, {escape(summary["rig_file"])} beside this report, is in the benchmark\'s JSON format, whose frame is '
+        "CARLA's (origin at the vehicle's centre, y to the right).</p>",
     ]
+    if summary.get("packaging"):
+        parts += packaging_section(summary["packaging"], frame)
     if summary.get("regions"):
         state = "required" if summary["regions_required"] else "reported, not required (--require to enforce)"
         parts += [f"<h2>Regulation fields ({escape(state)})</h2>",
@@ -137,7 +200,7 @@ def render_design_html(summary: dict, figures: dict[str, bytes], scene: str | No
                   f'{summary["regions"][0]["spacing_m"]:g} m, at each test-object height) checked with occlusion; '
                   "geometry and sources in docs/regulations.md.</p>"]
     if scene is not None:
-        parts += scene_section(scene, compared)
+        parts += scene_section(scene, compared, summary.get("frame"))
     if figures:
         parts.append("<h2>Pictures</h2>")
         parts += [image(figures[name], name, _CAPTIONS.get(name, name)) for name in _CAPTIONS if name in figures]

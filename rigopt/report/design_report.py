@@ -44,24 +44,29 @@ def rig_mounting_cost(rig: Rig, vehicle) -> float:
 
 
 def camera_rows(rig: Rig, reference: Rig, pairs, vehicle=None) -> list[dict]:
-    """Each designed camera for an engineer: id (where it is mounted and looks), zone, lens, its pose twice
-    (``position`` m in rigopt's ISO frame: x forward, y left, z up; ``carla``: the rig file's location m and
-    [pitch, yaw, roll] deg, y right), and the reference camera it is matched to by RigCD (unit weights) with
-    that pair's t (m), r (rad), f (deg) (``pairs``: RigCDBreakdown.pairs, (reference id, rig id)); with the
-    ``vehicle``, its zone's mounting ``zone_cost`` and its tyre ``spray`` exposure (high / low)."""
-    from rigopt.geometry import iso_to_carla
+    """Each designed camera for an engineer: id (where it is mounted and looks), zone, lens, its pose in the
+    report's frame (``position`` m and ``yaw_pitch_roll_deg``: ISO 8855, x forward, y left, z up, measured
+    from the ground below the rear axle's centre, :func:`rigopt.coverage.packaging.report_origin`, or from the
+    vehicle centre without a ``vehicle``; yaw > 0 turns left, pitch > 0 tilts up), and the reference camera
+    it is matched to by RigCD (unit weights) with that pair's t (m), r (rad), f (deg) (``pairs``:
+    RigCDBreakdown.pairs, (reference id, rig id)); with the ``vehicle``, its zone's mounting ``zone_cost`` and
+    its tyre ``spray`` exposure (high / low). ``rig`` is in the vehicle-centre frame (the design's); CARLA's
+    frame appears only in the rig file."""
+    from rigopt.coverage.packaging import report_origin
+    from rigopt.geometry import yaw_pitch_roll_from_rotation
     from rigopt.metrics.rigcd import camera_costs
     from rigopt.mounting.practice import mounting_costs, spray_exposure
 
     partner = {b: a for a, b in pairs}
     by_id = {c.id: c for c in reference.cameras}
-    location, rotation = iso_to_carla(rig.positions, rig.rotations)
+    origin = report_origin(vehicle).point if vehicle is not None else np.zeros(3)
+    angles = np.rad2deg(np.stack(yaw_pitch_roll_from_rotation(rig.rotations), axis=-1))
     spray = spray_exposure(vehicle, rig.positions) if vehicle is not None else None
     mounting = mounting_costs(vehicle, [c.zone for c in rig.cameras], rig.positions) if vehicle is not None else None
     rows = []
     for k, camera in enumerate(rig.cameras):
-        row = {"id": camera.id, "zone": camera.zone, "fov": camera.fov, "position": camera.position.tolist(),
-               "carla": {"location_m": location[k].tolist(), "rotation_pitch_yaw_roll_deg": rotation[k].tolist()},
+        row = {"id": camera.id, "zone": camera.zone, "role": camera.role, "fov": camera.fov,
+               "position": (camera.position - origin).tolist(), "yaw_pitch_roll_deg": angles[k].tolist(),
                "lens": camera.lens_model.summary(), "matched_reference_camera": None}
         if vehicle is not None:
             costs = {z.name: z.cost for z in vehicle.zones}
@@ -75,6 +80,28 @@ def camera_rows(rig: Rig, reference: Rig, pairs, vehicle=None) -> list[dict]:
             row["matched_reference_camera"] = {"id": ref.id, "t_m": t, "r_rad": r, "f_deg": f}
         rows.append(row)
     return rows
+
+
+def packaging_rows(rig: Rig, vehicle) -> list[dict]:
+    """Each camera's packaging sheet (:mod:`rigopt.coverage.packaging`: body feature, surface normal and
+    bracket wedge angle, protrusion, nearest visible ground, ground resolution, people's heights in pixels,
+    blocked share) as JSON values, positions measured from the report's datum
+    (:func:`rigopt.coverage.packaging.report_origin`). ``rig`` may be measured from any origin the vehicle
+    can place."""
+    from rigopt.coverage.packaging import report_origin, rig_packaging
+
+    origin = report_origin(vehicle).point
+    return [sheet.to_dict(origin) for sheet in rig_packaging(rig, vehicle)]
+
+
+def frame_dict(vehicle) -> dict:
+    """The report's frame: its name (``frame``) and where its origin lies from the vehicle's centre, the
+    rig file's origin (``origin_from_vehicle_centre_m``: subtract it from a rig file position, after turning
+    CARLA's y right into ISO's y left, to get the report's)."""
+    from rigopt.coverage.packaging import report_origin
+
+    datum = report_origin(vehicle)
+    return {"frame": datum.frame, "origin_from_vehicle_centre_m": datum.point.tolist()}
 
 
 def breakdown_dict(b) -> dict:
@@ -93,7 +120,9 @@ def symmetry_dict(result: DesignResult) -> dict:
 
 
 def design_dict(result: DesignResult, rig_file: Path | None) -> dict:
-    """The ``rigopt design --json`` object (and the body of report.json)."""
+    """The ``rigopt design --json`` object (and the body of report.json). Positions are in one frame, named by
+    ``frame`` (ISO 8855 from the ground below the rear axle's centre, :func:`frame_dict`): the cameras'
+    poses and the ``packaging`` sheets (:func:`packaging_rows`); CARLA's frame is only the rig file's."""
     from rigopt.metrics.rigcd import rigcd
     from rigopt.report.coverage_figures import regions_dict
 
@@ -103,6 +132,7 @@ def design_dict(result: DesignResult, rig_file: Path | None) -> dict:
     summary = {
         "rig_file": str(rig_file) if rig_file else None,
         "vehicle": design.rig.vehicle,
+        **frame_dict(result.vehicle),
         "reference": ",".join(r.rig.name for r in result.references),
         "metric": result.calibration.metric,
         "weights": result.calibration.name,
@@ -119,6 +149,7 @@ def design_dict(result: DesignResult, rig_file: Path | None) -> dict:
                    "refine_status": result.refinement.status, "candidates": milp.n_candidates,
                    "offered_to_milp": milp.n_offered, "repairs": milp.repairs, "seconds": result.seconds},
         "cameras": camera_rows(design.rig, reference, breakdown.pairs, result.vehicle),
+        "packaging": packaging_rows(design.rig, result.vehicle),
         "symmetry": symmetry_dict(result),
         "regions_required": result.settings.require != "none",
         "regions_fallback": result.fields_fallback,
@@ -188,6 +219,6 @@ def write_design_outputs(result: DesignResult, out_dir) -> list[Path]:
     outlines = [(r.key, np.asarray(r.polygon.exterior.coords)[:, :2]) for r in result.regions
                 if r.polygon.geom_type == "Polygon"]
     scene = scene_html(vehicle, result.design.rig, compare=compared, lifted=result.settings.rules.practice.lifted,
-                       regions=outlines)
+                       regions=outlines, datum="rear_axle")
     page = write_design_html(summary, out_dir, pictures, scene, compared.name if compared is not None else None)
     return [rig_file, report, *pictures.values(), page]

@@ -1,9 +1,11 @@
 """An interactive 3D view (plotly) of a vehicle, its mounting zones and keep-outs, and a rig's cameras with
-their frustums, for the HTML reports; the page carries plotly.js inline, so it opens offline.
+their frustums and the frustums' ground footprints, for the HTML reports; the page carries plotly.js inline,
+so it opens offline.
 
-Everything is drawn in the ISO 8855 vehicle frame (x forward, y left, z up; metres) with its origin at the
-vehicle's centre on the ground, the frame of every rigopt vehicle mesh; a rig measured from another origin
-(its rear axle) is moved there first. What is drawn:
+Everything is drawn in the ISO 8855 vehicle frame (x forward, y left, z up; metres) from a named origin on
+the ground (``datum``): the vehicle's centre, the frame of every rigopt vehicle mesh (the coverage page), or
+the ground below the rear axle's centre (the design report, whose tables use it too). A rig measured from
+another origin (its rear axle) is placed on the vehicle first. What is drawn:
 
 - the body mesh, each face split exactly along the planes of the zone boxes it crosses and each piece
   coloured by the zone it lies in (the first matching zone, as ``Vehicle.zone_names`` decides; grey outside
@@ -11,11 +13,17 @@ vehicle's centre on the ground, the frame of every rigopt vehicle mesh; a rig me
 - the wheels: the body's faces inside a wheel's cylinder (a cylinder is drawn for a wheel the mesh lacks),
   not mountable;
 - the keep-out boxes in force (translucent, their reason on hover);
-- each camera: a marker at its lens (hover: id, zone, pose, lens) and its frustum: lines from the lens to the
-  image's four corners ``frustum_range`` m away along the real lens's corner rays, and the image's outline
-  through the rays of points along its edges (so a distorted lens draws its true, curved outline; see
-  :func:`frustum_lines`);
-- optionally a second rig in grey (``compare``) and ground regions (translucent polygons at z = 0).
+- each camera: a marker at its lens (hover: id, zone, pose from the datum, lens), its frustum: lines from
+  the lens to the image's four corners ``frustum_range`` m (default 5 m) away along the real lens's corner
+  rays, and the image's outline through the rays of points along its edges (so a distorted lens draws its
+  true, curved outline; see :func:`frustum_lines`), and where that frustum meets the ground, translucent in
+  the camera's colour (:func:`frustum_footprint`);
+- optionally a second rig in grey (``compare``, frustums only) and ground regions (translucent polygons at
+  z = 0).
+
+The view opens framed on the vehicle: the axes span everything drawn at one scale, the camera looks at the
+vehicle's bounding box from the front left, above, from a distance that fits the box, and the legend lies
+beside the scene, not over it (:func:`framed_scene`).
 
 plotly is imported inside the functions, so importing this module stays cheap.
 """
@@ -27,10 +35,10 @@ from typing import TYPE_CHECKING, Sequence
 
 import numpy as np
 
-from rigopt.camera import CameraModel
 from rigopt.errors import RigoptError
-from rigopt.geometry import clip_polygon, iso_to_carla, yaw_pitch_roll_from_rotation
+from rigopt.geometry import clip_polygon, yaw_pitch_roll_from_rotation
 from rigopt.mounting.practice import keep_out_boxes
+from rigopt.report.frustums import FRUSTUM_RANGE_M, frustum_footprint, frustum_lines
 from rigopt.rig.model import Camera, Rig
 from rigopt.vehicle.model import Vehicle
 from rigopt.vehicle.placement import to_vehicle_centre
@@ -38,18 +46,23 @@ from rigopt.vehicle.placement import to_vehicle_centre
 if TYPE_CHECKING:
     from plotly.graph_objects import Figure
 
-#: Default distance (m) from the lens at which frustums are drawn.
-FRUSTUM_RANGE_M = 2.0
 #: Bodies with more faces are coarsened (vertex clustering) to about this many before drawing.
 MAX_DRAWN_FACES = 20_000
-#: Points per image edge of a drawn frustum outline (rays through them: curved for a distorted lens).
-EDGE_POINTS = 9
-#: A frustum whose outline rays stay within this angle (deg) of the optical axis ends on a plane, else on a sphere.
-PLANE_LIMIT_DEG = 75.0
 #: A body face counts as a wheel's when its vertices lie within this distance (m) of the wheel's cylinder.
 WHEEL_TOLERANCE_M = 0.01
 #: Height (m) at which ground regions are drawn, just above the ground plane.
 REGION_HEIGHT_M = 0.01
+#: Height (m) at which frustums' ground footprints are drawn, just above the regions.
+FOOTPRINT_HEIGHT_M = 0.02
+#: Direction (ISO axes: ahead, left, above) from which the view first looks at the vehicle, and the eye's
+#: distance in radii of the vehicle's bounding sphere (plotly's camera sees 45 degrees vertically: a sphere
+#: fills the view's height from 1 / sin(22.5 deg) = 2.61 radii).
+VIEW_DIRECTION = (1.5, 1.2, 0.8)
+VIEW_DISTANCE_RADII = 2.7
+#: The share of the figure's width the 3D scene takes; the legend lies to its right, over none of it.
+SCENE_WIDTH_FRACTION = 0.76
+#: The origins a view may be drawn from: the vehicle's centre on the ground, or the ground below its rear axle.
+DATUMS = ("vehicle_centre", "rear_axle")
 
 WHEELS = "wheels (not mountable)"
 BODY = "body (no zone)"
@@ -221,52 +234,51 @@ def _polylines(lines: Sequence[np.ndarray]) -> list[list]:
 # ------------------------------------------------------------------------------------------------ cameras
 
 
-def frustum_lines(camera: Camera, frustum_range: float = FRUSTUM_RANGE_M) -> tuple[np.ndarray, np.ndarray]:
-    """A camera's drawn frustum in the vehicle frame (m): its image's corners (4, 3) (top-left, top-right,
-    bottom-right, bottom-left pixel corners) and its outline (4 EDGE_POINTS + 1, 3), closed, from the
-    top-left corner clockwise as seen from behind the camera, each on the ray of its pixel through the
-    camera's lens model (distortion included, so a distorted lens draws its true, curved outline).
-
-    Where the points lie on their rays: on the plane across the optical axis at which the corner farthest off
-    the axis is ``frustum_range`` m from the lens (a centred lens has all four corners there, and a pinhole's
-    outline is a rectangle); for a lens whose outline reaches more than PLANE_LIMIT_DEG off its axis (a wide
-    fisheye, whose corners may look backwards) on the sphere of radius ``frustum_range`` instead."""
-    width, height = camera.image_size
-    corners_px = np.array([[0.0, 0.0], [width, 0.0], [width, height], [0.0, height]])
-    s = np.arange(EDGE_POINTS) / EDGE_POINTS
-    outline_px = np.concatenate([a + s[:, None] * (b - a) for a, b in zip(corners_px, np.roll(corners_px, -1, 0))])
-    outline_px = np.concatenate([outline_px, corners_px[:1]])
-    rays = CameraModel.of_camera(camera).pixel_rays(np.concatenate([corners_px, outline_px]), frame="body")
-    distance = np.full(len(rays), float(frustum_range))
-    if rays[:, 0].min() >= np.cos(np.deg2rad(PLANE_LIMIT_DEG)):
-        distance *= rays[:4, 0].min() / rays[:, 0]  # on the plane x = frustum_range * (least corner cosine)
-    points = camera.position + (distance[:, None] * rays) @ camera.rotation.T
-    return points[:4], points[4:]
-
-
-def camera_hover(camera: Camera, rig_name: str) -> str:
-    """The hover text (plotly's HTML subset, text escaped) of a camera: id, rig, zone, position and
-    yaw/pitch/roll in the vehicle frame, the rig file's CARLA pose, and its lens."""
+def camera_hover(camera: Camera, rig_name: str, origin=None, origin_text: str = "from the vehicle centre") -> str:
+    """The hover text (plotly's HTML subset, text escaped) of a camera: id, rig, zone, position (measured from
+    ``origin`` (3,) m, a point in the camera's frame, default its origin; ``origin_text`` names it) and
+    yaw/pitch/roll in the ISO 8855 vehicle frame, and its lens."""
     yaw, pitch, roll = (float(np.rad2deg(a)) for a in yaw_pitch_roll_from_rotation(camera.rotation))
-    location, carla = iso_to_carla(camera.position[None], camera.rotation[None])
     lens = camera.lens_model
     model = "pinhole" if lens.distortion == "none" else f"{lens.distortion} " + ", ".join(
         f"{c:.3g}" for c in lens.coefficients)
-    x, y, z = camera.position
+    x, y, z = camera.position - (np.zeros(3) if origin is None else np.asarray(origin, dtype=float))
     lines = [f"<b>{html.escape(camera.id)}</b> ({html.escape(rig_name)})",
              f"zone: {html.escape(camera.zone or '-')}",
-             f"x, y, z: {x:.2f}, {y:.2f}, {z:.2f} m (vehicle frame: y left)",
+             f"x, y, z: {x:.2f}, {y:.2f}, {z:.2f} m (ISO 8855 vehicle frame {html.escape(origin_text)}: y left)",
              f"yaw, pitch, roll: {yaw:.1f}, {pitch:.1f}, {roll:.1f} deg (yaw > 0 left, pitch > 0 up)",
-             "CARLA (rig file, y right): {:.2f}, {:.2f}, {:.2f} m; pitch, yaw, roll {:.1f}, {:.1f}, {:.1f} deg".format(
-                 *location[0], *carla[0]),
              f"lens: {lens.hfov:.1f} x {lens.vfov:.1f} deg, {html.escape(model)}, {lens.width}x{lens.height} px, "
              f"fx {lens.fx:.0f} px"]
     return "<br>".join(lines)
 
 
-def _camera_traces(go, rig: Rig, frustum_range: float, dimmed: bool) -> list:
-    """Per camera: its frustum (Scatter3d lines, the legend entry) and its lens marker (hover details), in one
-    legend group so that one click shows or hides both.
+def _footprint_traces(go, footprint, colour: str, name: str, group: str) -> list:
+    """A frustum's ground footprint (shapely, vehicle frame) as translucent fills (polygons without holes,
+    ear-clipped) and outlines at FOOTPRINT_HEIGHT_M, in the camera's legend group."""
+    import shapely
+
+    traces = []
+    for part in shapely.get_parts(footprint):
+        if part.is_empty or part.area <= 1e-9:
+            continue
+        rings = [np.asarray(part.exterior.coords)[:, :2], *(np.asarray(r.coords)[:, :2] for r in part.interiors)]
+        if not part.interiors:
+            outline = rings[0][:-1]
+            flat = np.column_stack([outline, np.full(len(outline), FOOTPRINT_HEIGHT_M)])
+            traces.append(_mesh_trace(go, flat[_ear_clipping(outline)], name, colour,
+                                      f"{html.escape(name)}: ground footprint", opacity=0.18, legendgroup=group,
+                                      showlegend=False, meta="footprint"))
+        x, y, z = _polylines([np.column_stack([r, np.full(len(r), FOOTPRINT_HEIGHT_M)]) for r in rings])
+        traces.append(go.Scatter3d(x=x, y=y, z=z, mode="lines", name=name, legendgroup=group, showlegend=False,
+                                   line=dict(color=colour, width=2), hoverinfo="name", meta="footprint"))
+    return traces
+
+
+def _camera_traces(go, rig: Rig, frustum_range: float, dimmed: bool, origin=None,
+                   origin_text: str = "from the vehicle centre") -> list:
+    """Per camera: its frustum (Scatter3d lines, the legend entry), its lens marker (hover details, positions
+    from ``origin``, see :func:`camera_hover`) and, for the designed (not ``dimmed``) rig, the frustum's ground
+    footprint (:func:`frustum_footprint`), in one legend group so that one click shows or hides them.
 
     The frustum trace's x, y, z: for each corner (top-left, top-right, bottom-right, bottom-left) the lens
     and that corner, then a gap (None); then the image outline (:func:`frustum_lines`)."""
@@ -284,8 +296,11 @@ def _camera_traces(go, rig: Rig, frustum_range: float, dimmed: bool) -> list:
         traces.append(go.Scatter3d(x=x, y=y, z=z,
                                    mode="markers", name=name, legendgroup=group, showlegend=False,
                                    marker=dict(size=4 if dimmed else 6, color=colour, symbol="diamond"),
-                                   opacity=0.6 if dimmed else 1.0, hovertext=camera_hover(camera, rig.name),
+                                   opacity=0.6 if dimmed else 1.0,
+                                   hovertext=camera_hover(camera, rig.name, origin, origin_text),
                                    hoverinfo="text", meta="lens"))
+        if not dimmed:
+            traces += _footprint_traces(go, frustum_footprint(camera, frustum_range), colour, name, group)
     return traces
 
 
@@ -353,26 +368,102 @@ def _region_traces(go, regions: Sequence[tuple[str, np.ndarray]]) -> list:
 # ------------------------------------------------------------------------------------------------ figure
 
 
+def view_datum(vehicle: Vehicle, datum: str = "vehicle_centre") -> tuple[np.ndarray, str]:
+    """The origin a view is drawn from: its point (3,) m in the vehicle-centre frame and its words (for the
+    frame text). ``datum``: "vehicle_centre" (the mesh's own origin) or "rear_axle" (the reports' datum,
+    :func:`rigopt.coverage.packaging.report_origin`: the vehicle's centre where its axles are unknown)."""
+    from rigopt.coverage.packaging import report_origin
+
+    if datum not in DATUMS:
+        raise RigoptError(f"unknown view datum {datum!r}; use one of {', '.join(DATUMS)}")
+    if datum == "vehicle_centre":
+        return np.zeros(3), "origin at the vehicle's centre on the ground"
+    chosen = report_origin(vehicle)
+    return chosen.point, chosen.origin
+
+
+def frame_text(vehicle: Vehicle, datum: str = "vehicle_centre") -> str:
+    """The words naming the frame a view is drawn in (:data:`FRAME_TEXT` for the vehicle centre)."""
+    return f"ISO 8855 vehicle frame: x forward, y left, z up, metres, {view_datum(vehicle, datum)[1]}"
+
+
+def _translate(traces: list, offset: np.ndarray) -> None:
+    """Move every trace's points by -``offset`` (3,) m, in place (gaps, None, stay gaps)."""
+    for trace in traces:
+        for axis, shift in zip("xyz", offset):
+            values = getattr(trace, axis)
+            if values is None or shift == 0:
+                continue
+            if trace.type == "mesh3d":
+                setattr(trace, axis, np.asarray(values, dtype=np.float32) - np.float32(shift))
+            else:
+                setattr(trace, axis, [None if v is None else float(v) - shift for v in values])
+
+
+def _bounds(traces: list) -> np.ndarray:
+    """(2, 3) float m: the lowest and highest x, y, z of every trace's points."""
+    low, high = np.full(3, np.inf), np.full(3, -np.inf)
+    for trace in traces:
+        for k, axis in enumerate("xyz"):
+            values = getattr(trace, axis)
+            if values is None or len(values) == 0:
+                continue
+            array = np.array([np.nan if v is None else v for v in values], dtype=float)
+            if np.isfinite(array).any():
+                low[k], high[k] = min(low[k], np.nanmin(array)), max(high[k], np.nanmax(array))
+    return np.stack([low, high])
+
+
+def framed_scene(bounds: np.ndarray, vehicle_box: np.ndarray, origin_text: str = "from the vehicle centre") -> dict:
+    """The plotly ``scene`` layout (axis ranges, aspect ratio, camera) that shows everything within ``bounds``
+    (2, 3) m at one scale and opens framed on ``vehicle_box`` (2, 3) m; the x axis's title names the frame's
+    origin (``origin_text``, e.g. "from the rear axle").
+
+    The axes span ``bounds`` padded by 3 % of their largest extent L, drawn at equal scale (aspect ratio:
+    each extent over L), so plotly's scene coordinates are (point - the ranges' middle) / L. The camera
+    looks at the box's centre from VIEW_DIRECTION, VIEW_DISTANCE_RADII box half-diagonals away."""
+    pad = 0.03 * float(np.max(bounds[1] - bounds[0]))
+    low, high = bounds[0] - pad, bounds[1] + pad
+    lengths = high - low
+    scale = float(lengths.max())
+    middle = (low + high) / 2
+    centre = (vehicle_box.mean(axis=0) - middle) / scale
+    radius = 0.5 * float(np.linalg.norm(vehicle_box[1] - vehicle_box[0])) / scale
+    direction = np.asarray(VIEW_DIRECTION, dtype=float) / np.linalg.norm(VIEW_DIRECTION)
+    eye = centre + VIEW_DISTANCE_RADII * radius * direction
+    titles = (f"{AXIS_TITLES[0]} {origin_text}", *AXIS_TITLES[1:])
+    axes = {f"{axis}axis": dict(title=dict(text=text), range=[float(low[k]), float(high[k])], autorange=False)
+            for k, (axis, text) in enumerate(zip("xyz", titles))}
+    return dict(aspectmode="manual", aspectratio=dict(zip("xyz", (float(v) for v in lengths / scale))),
+                camera=dict(center=dict(zip("xyz", (float(v) for v in centre))),
+                            eye=dict(zip("xyz", (float(v) for v in eye))), up=dict(x=0.0, y=0.0, z=1.0)),
+                domain=dict(x=[0.0, SCENE_WIDTH_FRACTION], y=[0.0, 1.0]), **axes)
+
+
 def scene_figure(vehicle: Vehicle, rig: Rig | None = None, *, regions: Sequence[tuple[str, np.ndarray]] = (),
                  compare: Rig | None = None, frustum_range: float = FRUSTUM_RANGE_M, lifted: Sequence[str] = (),
-                 max_faces: int = MAX_DRAWN_FACES) -> "Figure":
+                 max_faces: int = MAX_DRAWN_FACES, datum: str = "vehicle_centre") -> "Figure":
     """The 3D view of ``vehicle`` with ``rig`` (and ``compare`` in grey, dashed) on it, as a plotly Figure.
 
     Traces, in order: the body by zone (one Mesh3d per zone name, then BODY, then WHEELS; hover names the
     zone), wheel cylinders the mesh lacks, the keep-out boxes in force (``lifted``: names of optional
     keep-outs switched off, as ``MountPractice.lifted``; a translucent Mesh3d named ``keep-out: name
-    (reason)`` and its edges), each camera's frustum and lens marker (:func:`_camera_traces`; the frustum
-    trace is named by the camera id, ``"<rig>: <id>"`` for the compared rig), and the ground ``regions``
-    [(name, outline (k, 2) m in the vehicle frame)] as translucent polygons at z = 0.
-    Rigs measured from another origin are moved to the vehicle's centre (RigoptError when the vehicle's axles,
-    needed for that, are unknown). ``frustum_range`` m > 0: where frustums end. Frame: ISO 8855 vehicle
-    frame, metres (:data:`FRAME_TEXT`)."""
+    (reason)`` and its edges), each camera's frustum, lens marker and (``rig``'s cameras) ground footprint
+    (:func:`_camera_traces`; the frustum trace is named by the camera id, ``"<rig>: <id>"`` for the compared
+    rig), and the ground ``regions`` [(name, outline (k, 2) m in the vehicle-centre frame)] as translucent
+    polygons at z = 0. Rigs measured from another origin are moved to the vehicle's centre (RigoptError when
+    the vehicle's axles, needed for that, are unknown). ``frustum_range`` m > 0: where frustums end.
+    ``datum``: the origin everything is drawn from (:func:`view_datum`; axes ISO 8855, :func:`frame_text`).
+    The view opens framed on the vehicle (:func:`framed_scene`), the legend beside the scene."""
     import plotly.graph_objects as go
 
     from rigopt.report.vehicle_figures import zone_colours
 
     if not frustum_range > 0:
         raise RigoptError(f"the frustum range must be positive (m), got {frustum_range}")
+    origin, _ = view_datum(vehicle, datum)
+    origin_text = "from the rear axle" if datum == "rear_axle" and vehicle.rear_axle is not None else \
+        "from the vehicle centre"
     triangles, labels, missing = body_triangles(vehicle, max_faces)
     colours = {name: "rgb({:.0f}, {:.0f}, {:.0f})".format(*(255 * np.array(c[:3])))
                for name, c in zone_colours(vehicle).items()}
@@ -404,17 +495,18 @@ def scene_figure(vehicle: Vehicle, rig: Rig | None = None, *, regions: Sequence[
     for other, dimmed in ((compare, True), (rig, False)):
         if other is not None:
             placed, _ = to_vehicle_centre(other, vehicle)
-            traces += _camera_traces(go, placed, frustum_range, dimmed)
+            traces += _camera_traces(go, placed, frustum_range, dimmed, origin, origin_text)
     traces += _region_traces(go, regions)
+    _translate(traces, origin)
     title = f"{vehicle.name} ({vehicle.blueprint})" + (f" with rig {rig.name}" if rig is not None else "") + (
         f", {compare.name} in grey" if compare is not None else "")
-    axes = {f"{axis}axis": dict(title=dict(text=text)) for axis, text in zip("xyz", AXIS_TITLES)}
+    vehicle_box = np.asarray(vehicle.mesh.bounds, dtype=float) - origin
     figure = go.Figure(traces)
     figure.update_layout(
         title=dict(text=html.escape(title)), template="plotly_white", height=720,
-        margin=dict(l=0, r=0, t=40, b=0),
-        scene=dict(aspectmode="data", camera=dict(eye=dict(x=1.5, y=1.2, z=0.8)), **axes),
-        legend=dict(title=dict(text="click to show or hide"), itemsizing="constant", groupclick="togglegroup"))
+        margin=dict(l=0, r=0, t=40, b=0), scene=framed_scene(_bounds(traces), vehicle_box, origin_text),
+        legend=dict(title=dict(text="click to show or hide"), itemsizing="constant", groupclick="togglegroup",
+                    x=SCENE_WIDTH_FRACTION + 0.01, xanchor="left", y=1.0, yanchor="top"))
     return figure
 
 
@@ -437,8 +529,8 @@ def figure_html(figure: "Figure", *, include_plotlyjs: bool = True, div_id: str 
 
 def scene_html(vehicle: Vehicle, rig: Rig | None = None, *, regions: Sequence[tuple[str, np.ndarray]] = (),
                compare: Rig | None = None, frustum_range: float = FRUSTUM_RANGE_M, lifted: Sequence[str] = (),
-               include_plotlyjs: bool = True, div_id: str = "scene-3d") -> str:
+               datum: str = "vehicle_centre", include_plotlyjs: bool = True, div_id: str = "scene-3d") -> str:
     """:func:`scene_figure` as an HTML fragment (:func:`figure_html`)."""
     figure = scene_figure(vehicle, rig, regions=regions, compare=compare, frustum_range=frustum_range,
-                          lifted=lifted)
+                          lifted=lifted, datum=datum)
     return figure_html(figure, include_plotlyjs=include_plotlyjs, div_id=div_id)

@@ -190,17 +190,20 @@ def test_bad_input_writes_no_design_folder(bad_runs):
     assert list(bad_runs["cwd"].iterdir()) == []
 
 
-def test_each_camera_reports_its_carla_pose_and_the_reference_camera_it_matches(design_run):
-    from rigopt.geometry import iso_to_carla
+def test_each_camera_reports_its_pose_from_the_rear_axle_and_the_reference_camera_it_matches(design_run):
     from rigopt.rig.library import load_rig
 
-    summary, _, _ = design_run
+    summary, out, _ = design_run
     reference = {c.id for c in load_rig("R1").cameras}
     matched = [c["matched_reference_camera"] for c in summary["cameras"] if c["matched_reference_camera"]]
     assert sorted(m["id"] for m in matched) == sorted(reference)  # every reference camera has one partner
-    for camera in summary["cameras"]:
-        location, _ = iso_to_carla(np.array([camera["position"]]), np.eye(3)[None])
-        assert camera["carla"]["location_m"] == pytest.approx(location[0].tolist())
+    assert summary["frame"] == "ISO 8855, origin on the ground below the rear axle's centre"
+    rig = load_rig(out / "rig.json")  # CARLA's frame, from the vehicle centre: the rig file only
+    for camera, placed in zip(summary["cameras"], rig.cameras):
+        assert "carla" not in camera
+        assert camera["position"] == pytest.approx((placed.position - summary["origin_from_vehicle_centre_m"]).tolist())
+    report = json.loads((out / "report.json").read_text())
+    assert [p["camera"] for p in report["packaging"]] == [c.id for c in rig.cameras]  # one sheet per camera
     assert all(camera["spray"] in ("high", "low") and camera["zone_cost"] == 1.0 for camera in summary["cameras"])
     breakdown = summary["rigcd_breakdown"]
     assert breakdown["t_m"] == pytest.approx(np.mean([m["t_m"] for m in matched]), rel=1e-9)

@@ -13,7 +13,7 @@ from rigopt.camera import Lens, vertical_fov
 from rigopt.errors import RigoptError
 from rigopt.geometry import R_CAM_OPTICAL, rotation_from_yaw_pitch_roll
 from rigopt.mounting.practice import keep_out_boxes
-from rigopt.report import scene_3d
+from rigopt.report import frustums, scene_3d
 from rigopt.report.scene_3d import BODY, REGION_HEIGHT_M, WHEELS, body_triangles, scene_figure, scene_html
 from rigopt.rig.model import Camera, Rig, RigOrigin
 from rigopt.vehicle.model import Vehicle
@@ -118,6 +118,7 @@ def test_one_frustum_and_one_lens_marker_per_camera_in_a_legend_group(figure, ri
         lens = next(t for t in group if t.meta == "lens")
         assert np.allclose([lens.x[0], lens.y[0], lens.z[0]], camera.position, atol=1e-12)
         assert f"<b>{camera.id}</b>" in lens.hovertext and "vehicle frame" in lens.hovertext
+        assert "CARLA" not in lens.hovertext  # CARLA's frame only in the CARLA export
         assert f"{camera.lens_model.hfov:.1f} x {camera.lens_model.vfov:.1f} deg" in lens.hovertext
 
 
@@ -136,19 +137,19 @@ def test_a_pinhole_frustum_spans_its_fovs(figure, rig):
 
 def test_frustum_lines_follow_the_corner_rays_exactly():
     camera = Camera("c", np.array([1.0, 2.0, 3.0]), rotation_from_yaw_pitch_roll(0.3, 0.2, -0.1), 90.0, (1600, 900))
-    corners, outline = scene_3d.frustum_lines(camera, 1.0)
+    corners, outline = frustums.frustum_lines(camera, 1.0)
     body = (corners - camera.position) @ camera.rotation
     half_h, half_v = np.deg2rad(45.0), np.deg2rad(vertical_fov(90.0, 1600, 900) / 2)
     assert np.allclose(np.arctan2(np.abs(body[:, 1]), body[:, 0]), half_h, atol=1e-9)
     assert np.allclose(np.arctan2(np.abs(body[:, 2]), body[:, 0]), half_v, atol=1e-9)
-    assert len(outline) == 4 * scene_3d.EDGE_POINTS + 1 and np.allclose(outline[0], outline[-1])
+    assert len(outline) == 4 * frustums.EDGE_POINTS + 1 and np.allclose(outline[0], outline[-1])
 
 
 @pytest.mark.parametrize("index", [1, 2])
 def test_a_distorted_lens_draws_its_true_corners_and_outline(figure, rig, index):
     camera = rig.cameras[index]
     lens = camera.lens_model
-    corners, outline = scene_3d.frustum_lines(camera, RANGE)
+    corners, outline = frustums.frustum_lines(camera, RANGE)
     optical = ((np.concatenate([corners, outline]) - camera.position) @ camera.rotation) @ R_CAM_OPTICAL
     pixels = lens.project(optical)  # back through the lens's own projection
     width, height = lens.image_size
@@ -162,14 +163,14 @@ def test_a_distorted_lens_draws_its_true_corners_and_outline(figure, rig, index)
 
 def test_the_fisheye_frustum_reaches_behind_its_lens_on_a_sphere(rig):
     camera = rig.cameras[2]  # wider than 180 degrees: its corner rays point behind the image plane
-    corners, outline = scene_3d.frustum_lines(camera, RANGE)
+    corners, outline = frustums.frustum_lines(camera, RANGE)
     assert np.all(((corners - camera.position) @ camera.rotation)[:, 0] < 0)
     assert np.allclose(np.linalg.norm(outline - camera.position, axis=1), RANGE, atol=1e-9)
 
 
 def test_a_pinhole_frustum_ends_in_a_rectangle_across_its_axis(rig):
     camera = rig.cameras[0]
-    corners, outline = scene_3d.frustum_lines(camera, RANGE)
+    corners, outline = frustums.frustum_lines(camera, RANGE)
     body = (outline - camera.position) @ camera.rotation
     assert np.allclose(body[:, 0], body[0, 0], atol=1e-9)  # one plane across the optical axis
     left, right, top, bottom = body[:, 1].max(), body[:, 1].min(), body[:, 2].max(), body[:, 2].min()
@@ -180,7 +181,7 @@ def test_a_pinhole_frustum_ends_in_a_rectangle_across_its_axis(rig):
 
 def test_an_off_centre_lens_has_its_farthest_corner_at_the_range(rig):
     camera = rig.cameras[1]  # radtan, principal point off the image centre
-    corners, _ = scene_3d.frustum_lines(camera, RANGE)
+    corners, _ = frustums.frustum_lines(camera, RANGE)
     distances = np.linalg.norm(corners - camera.position, axis=1)
     assert distances.max() == pytest.approx(RANGE, abs=1e-9) and distances.min() < RANGE - 1e-4
 
@@ -306,8 +307,150 @@ def test_a_bad_region_is_refused(car, outline):
 
 def test_axes_are_equal_and_name_the_frame(figure):
     scene = figure.layout.scene
-    assert scene.aspectmode == "data"
-    assert "vehicle frame" in scene.xaxis.title.text and scene.yaxis.title.text.startswith("y left")
+    ranges = np.array([scene.xaxis.range, scene.yaxis.range, scene.zaxis.range])
+    lengths = ranges[:, 1] - ranges[:, 0]
+    ratio = np.array([scene.aspectratio.x, scene.aspectratio.y, scene.aspectratio.z])
+    assert scene.aspectmode == "manual" and np.allclose(ratio, lengths / lengths.max())  # one scale on every axis
+    assert "vehicle frame from the vehicle centre" in scene.xaxis.title.text
+    assert scene.yaxis.title.text.startswith("y left")
+
+
+def _drawn_points(figure) -> np.ndarray:
+    """(n, 3): every drawn point of the figure (gaps left out)."""
+    points = []
+    for trace in figure.data:
+        xyz = [np.array([np.nan if v is None else v for v in getattr(trace, a)], dtype=float) for a in "xyz"]
+        points.append(np.stack(xyz, axis=1))
+    points = np.concatenate(points)
+    return points[np.all(np.isfinite(points), axis=1)]
+
+
+def test_the_axes_hold_everything_drawn(figure):
+    scene = figure.layout.scene
+    ranges = np.array([scene.xaxis.range, scene.yaxis.range, scene.zaxis.range])
+    points = _drawn_points(figure)
+    assert np.all(points >= ranges[:, 0]) and np.all(points <= ranges[:, 1])  # nothing clipped by the axes
+
+
+def test_the_view_opens_framed_on_the_vehicle_beside_its_legend(figure, car):
+    scene = figure.layout.scene
+    ranges = np.array([scene.xaxis.range, scene.yaxis.range, scene.zaxis.range])
+    middle, scale = ranges.mean(axis=1), (ranges[:, 1] - ranges[:, 0]).max()
+
+    def to_scene(points):  # plotly's scene coordinates of equal axes
+        return (np.asarray(points) - middle) / scale
+
+    centre = np.array([scene.camera.center.x, scene.camera.center.y, scene.camera.center.z])
+    eye = np.array([scene.camera.eye.x, scene.camera.eye.y, scene.camera.eye.z])
+    low, high = car.mesh.bounds
+    assert np.allclose(centre, to_scene((low + high) / 2))  # looks at the vehicle's centre
+    corners = to_scene(np.array([[(high if (k >> a) & 1 else low)[a] for a in range(3)] for k in range(8)]))
+    view = (centre - eye) / np.linalg.norm(centre - eye)
+    angles = np.degrees(np.arccos(((corners - eye) @ view) / np.linalg.norm(corners - eye, axis=1)))
+    assert angles.max() < 22.5  # plotly's camera sees 45 degrees: the whole box is in view ...
+    assert angles.max() > 12.0  # ... and fills it, not a speck in a scene of frustums and fields
+    assert eye[0] > centre[0] and eye[1] > centre[1] and eye[2] > centre[2]  # from the front left, above
+    assert figure.layout.legend.x >= scene.domain.x[1] and figure.layout.legend.xanchor == "left"
+
+
+def test_frustums_reach_5_m_by_default(car, rig):
+    assert frustums.FRUSTUM_RANGE_M == 5.0
+    trace = next(t for t in traces(scene_figure(car, rig), "frustum") if t.name == "front")
+    camera = rig.cameras[0]
+    assert np.allclose(np.linalg.norm(corners_of(trace) - camera.position, axis=1), 5.0, atol=1e-9)
+
+
+# --- ground footprints -----------------------------------------------------------------------------------
+
+
+def _half_plane(normal_xy, offset, size=500.0):
+    """The ground half-plane normal_xy . g >= offset as a (large) shapely polygon."""
+    import shapely
+
+    length = np.linalg.norm(normal_xy)
+    n, offset = np.asarray(normal_xy) / length, offset / length
+    side, point = np.array([-n[1], n[0]]), n * offset
+    return shapely.Polygon([point + side * size, point - side * size, point - side * size + n * size,
+                            point + side * size + n * size])
+
+
+def _pinhole_footprint_oracle(camera, reach):
+    """The frustum's section by z = 0, by clipping the ground with the pyramid's five planes: its four sides
+    (through the lens and two neighbouring corner rays) and its end (the plane across the axis at the
+    corners' depth)."""
+    import shapely
+
+    width, height = camera.image_size
+    corners = np.array([[0, 0], [width, 0], [width, height], [0, height]], dtype=float)
+    from rigopt.camera import CameraModel
+
+    rays = CameraModel.of_camera(camera).pixel_rays(corners) @ camera.rotation.T
+    region = shapely.box(-100, -100, 100, 100)
+    for a, b in zip(rays, np.roll(rays, -1, axis=0)):
+        normal = np.cross(a, b)
+        normal = normal if normal @ camera.forward > 0 else -normal  # pointing into the pyramid
+        region = region.intersection(_half_plane(normal[:2], normal @ camera.position))
+    axis, depth = camera.forward, reach * rays[0] @ camera.forward
+    return region.intersection(_half_plane(-axis[:2], -(depth + axis @ camera.position)))
+
+
+@pytest.mark.parametrize("yaw, pitch, roll", [(0.3, -0.35, 0.0), (-2.0, -0.6, 0.2), (1.0, -1.2, -0.1)])
+def test_a_pinhole_footprint_is_the_pyramids_section_by_the_ground(yaw, pitch, roll):
+    camera = Camera("c", np.array([1.0, 0.5, 1.2]), rotation_from_yaw_pitch_roll(yaw, pitch, roll), 90.0, (1280, 720))
+    footprint = frustums.frustum_footprint(camera, 5.0)
+    oracle = _pinhole_footprint_oracle(camera, 5.0)
+    assert oracle.area > 1.0
+    assert footprint.area == pytest.approx(oracle.area, rel=1e-6)
+    assert footprint.symmetric_difference(oracle).area < 1e-6 * oracle.area
+
+
+def test_a_camera_looking_up_has_no_footprint_and_draws_none(car):
+    up = Camera("sky", np.array([0.0, 0.0, 1.6]), rotation_from_yaw_pitch_roll(0.0, 1.0, 0.0), 60.0)
+    assert frustums.frustum_footprint(up).is_empty
+    figure = scene_figure(car, Rig("upwards", "vehicle.test.wheelbox", (up,)))
+    assert not traces(figure, "footprint")
+
+
+def test_a_fisheye_looking_down_covers_the_disc_its_sphere_cuts(fisheye):
+    down = Camera.with_lens("down", np.array([0.0, 0.0, 1.5]), rotation_from_yaw_pitch_roll(0.0, -np.pi / 2, 0.0),
+                            fisheye)
+    footprint = frustums.frustum_footprint(down, 5.0)  # wider than 150 degrees: it ends on the 5 m sphere
+    radius = np.sqrt(5.0**2 - 1.5**2)
+    assert footprint.area <= np.pi * radius**2 and footprint.area > 0.9 * np.pi * radius**2
+    assert np.max(np.abs(footprint.bounds)) <= radius + 1e-9
+    assert footprint.contains(__import__("shapely").Point(0.0, 0.0))  # it sees straight down
+
+
+def test_the_footprint_is_drawn_on_the_ground_in_the_cameras_group(car):
+    camera = Camera("down", np.array([2.04, 0.0, 1.2]), rotation_from_yaw_pitch_roll(0.0, -0.6, 0.0), 90.0)
+    figure = scene_figure(car, Rig("r", "vehicle.test.wheelbox", (camera,)))
+    fill = next(t for t in traces(figure, "footprint") if t.type == "mesh3d")
+    points = np.array([fill.x, fill.y, fill.z], dtype=float).T
+    assert np.allclose(points[:, 2], scene_3d.FOOTPRINT_HEIGHT_M)
+    assert fill.legendgroup == "camera r down" and not fill.showlegend
+    area = _areas(points[np.array([fill.i, fill.j, fill.k]).T]).sum()
+    assert area == pytest.approx(_pinhole_footprint_oracle(camera, frustums.FRUSTUM_RANGE_M).area, rel=1e-6)
+
+
+# --- the datum -------------------------------------------------------------------------------------------
+
+
+def test_a_view_from_the_rear_axle_moves_everything_by_the_axle(car, rig):
+    from_centre = scene_figure(car, rig, frustum_range=RANGE)
+    from_axle = scene_figure(car, rig, frustum_range=RANGE, datum="rear_axle")
+    axle = car.rear_axle
+    assert np.allclose(axle, [-1.3, 0.0, 0.0])
+    assert np.allclose(_drawn_points(from_axle), _drawn_points(from_centre) - axle, atol=1e-5)
+    lens = traces(from_axle, "lens")[0]
+    assert "from the rear axle" in lens.hovertext and "from the rear axle" in from_axle.layout.scene.xaxis.title.text
+    x = rig.cameras[0].position[0] - axle[0]
+    assert f"x, y, z: {x:.2f}, " in lens.hovertext and "CARLA" not in lens.hovertext
+    assert scene_3d.frame_text(car, "rear_axle").endswith("origin on the ground below the rear axle's centre")
+
+
+def test_an_unknown_datum_is_refused(car):
+    with pytest.raises(RigoptError, match="unknown view datum 'roof'"):
+        scene_figure(car, datum="roof")
 
 
 def test_the_fragment_carries_plotly_inline_and_needs_no_network(car, rig):
@@ -327,6 +470,8 @@ def test_the_design_page_section_names_the_compared_rig():
     heading, note, scene = scene_section("<div>view</div>", "R1")
     assert heading == "<h2>3D view</h2>" and "R1 is drawn in grey" in note and "ISO 8855" in note
     assert "grey, dashed" not in scene_section("<div>view</div>", None)[1]
+    named = scene_section("<div>view</div>", None, "ISO 8855, origin on the ground below the rear axle's centre")[1]
+    assert "below the rear axle" in named and "to 5 m" in named and "CARLA" not in named
 
 
 def test_the_coverage_page_holds_the_view_when_given_the_vehicle(car, tmp_path):

@@ -87,7 +87,8 @@ def test_the_design_puts_no_camera_on_a_wheel_or_below_half_a_metre(session, mon
     monkeypatch.setenv("RIGOPT_HOME", str(tmp / "home"))
     vehicle = load_vehicle("simcar")
     assert len(vehicle.wheels) == 4  # found on the mesh
-    positions = np.array([c["position"] for c in json.loads(runs["design"].stdout)["cameras"]])
+    summary = json.loads(runs["design"].stdout)  # positions from the rear axle: back to the vehicle centre
+    positions = np.array([c["position"] for c in summary["cameras"]]) + summary["origin_from_vehicle_centre_m"]
     assert on_wheels(vehicle, positions, clearance=0.05) == [[]] * len(positions)
     assert (positions[:, 2] >= 0.5 - 1e-6).all()
 
