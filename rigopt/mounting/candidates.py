@@ -4,7 +4,7 @@ Mount points are lens positions sampled on the zones (:mod:`rigopt.mounting.samp
 and pitch angles (ISO: yaw > 0 left of forward, pitch > 0 up, radians) a direction is *clear* when every
 probe ray of the checked frustum (centre, edge midpoints and corners of the image with each half-angle shrunk by
 ``MountRules.frustum_margin``) travels from ``near`` to ``frustum_range`` without meeting the body (nor a
-keep-out that blocks views, such as a coupled trailer): the
+keep-out that blocks views, such as a coupled trailer, nor the space its front swings through): the
 ray-cast counterpart of the fcl frustum rule, vectorised over all candidates at once.
 """
 
@@ -16,6 +16,7 @@ import numpy as np
 
 from rigopt.camera import CameraModel, Lens
 from rigopt.geometry import rotation_from_yaw_pitch_roll
+from rigopt.mounting.features import segments_hit_swings, trailer_swings
 from rigopt.mounting.practice import keep_out_boxes, segments_hit_boxes
 from rigopt.mounting.rules import MountRules
 from rigopt.mounting.sampling import DEFAULT_SPACING, sample_zone_points
@@ -71,6 +72,10 @@ def clear_directions(vehicle: Vehicle, points, yaws, pitches, lens: float | Lens
     if blockers:
         hit |= segments_hit_boxes(origins.reshape(-1, 3), directions.reshape(-1, 3), rules.frustum_range - rules.near,
                                   blockers)
+    swings = trailer_swings(vehicle, rules.practice.lifted) if rules.practice.feature_rules else []
+    if swings:  # and the space a coupled trailer's front swings through
+        hit |= segments_hit_swings(origins.reshape(-1, 3), directions.reshape(-1, 3), rules.frustum_range - rules.near,
+                                   swings)
     return ~hit.reshape(n, *shape).any(axis=-1)
 
 

@@ -8,7 +8,14 @@ Besides the geometric mount rules (:mod:`rigopt.mounting.rules`) a lens may not 
   - lower than the minimum lens height (tyre spray, kerbs, car washes): ``MountPractice.min_height``, else
     the vehicle's ``min_lens_height``, else 0.5 m;
   - inside one of the vehicle's keep-out boxes (``[[keep_out]]`` in its spec: roll-up locker doors, a
-    coupled semi-trailer), unless that keep-out is optional and lifted by name.
+    coupled semi-trailer), unless that keep-out is optional and lifted by name;
+  - on the body features of :mod:`rigopt.mounting.features`: steps and tailboards, door frames and hinge
+    lines, rails, ladders, light bars and racks, wheel-arch lips, tyre-spray cones, beyond the legal width, in
+    the tilt-cab arc or the trailer's swing, on the windscreen outside the wiped area.
+
+And, for a whole rig (:func:`duplicates`): no two cameras duplicate each other (the same lens, lenses within
+``duplicate_distance`` m, optical axes within ``duplicate_angle_deg``), unless they share a module (a stereo
+pair is one on purpose).
 
 Frames: ISO 8855 vehicle frame, metres.
 """
@@ -19,24 +26,52 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rigopt.vehicle.model import Vehicle
+from rigopt.mounting import features
+from rigopt.rig.model import Rig
+from rigopt.vehicle.model import SurfaceQuery, Vehicle
 
 #: The lowest lens height (m) when neither the rules nor the vehicle say otherwise.
 DEFAULT_MIN_HEIGHT = 0.5
+#: A camera housing (m): width along the surface's horizontal tangent, height, depth along its outward normal.
+DEFAULT_HOUSING = (0.08, 0.06, 0.06)
 
 
 @dataclass(frozen=True)
 class MountPractice:
     """The practice rules' settings: ``min_height`` m (None: the vehicle's, else DEFAULT_MIN_HEIGHT),
     ``enabled`` False switches every practice rule off (to measure what practice costs); ``wheel_clearance`` m
-    around each tyre (its arch lip; a fender camera above the arch, as on the benchmark's
-    cars 8-17 cm from the tread, stays allowed), ``lifted`` names of optional keep-outs
-    switched off (e.g. ``("trailer",)`` for a tractor unit driven solo)."""
+    around each tyre (a fender camera above the arch, as on the benchmark's cars 8-17 cm from the tread, stays
+    allowed), ``lifted`` names of optional keep-outs switched off (e.g. ``("trailer",)`` for a tractor unit
+    driven solo, which lifts the trailer's swing too).
+
+    The body features (:mod:`rigopt.mounting.features`): ``feature_margin`` m, how close to a step's, a
+    fixture's or a door's box a lens counts as on it (a housing's lens sits 3 cm off the surface);
+    ``hinge_band`` m either side of a door's hinged edge; ``lip_band`` m beyond a wheel arch's edge (the
+    housing reaches 3-4 cm towards it, the lip's flange 1-2 cm more); the tyre-spray cone's
+    ``spray_elevation_deg`` (its axis above backwards), ``spray_half_angle_deg`` and ``spray_length`` m;
+    ``width_exempt_zones`` zones whose cameras do not count in the legal width (mirrors); two cameras
+    duplicate each other within ``duplicate_distance`` m and ``duplicate_angle_deg``; ``features`` False
+    switches the body-feature rules, the trailer's swing and the duplicate rule off (the rules before them)."""
 
     min_height: float | None = None
     wheel_clearance: float = 0.05
     lifted: tuple[str, ...] = ()
     enabled: bool = True
+    feature_margin: float = 0.05
+    hinge_band: float = 0.10
+    lip_band: float = 0.05
+    spray_elevation_deg: float = 15.0
+    spray_half_angle_deg: float = 15.0
+    spray_length: float = 2.0
+    width_exempt_zones: tuple[str, ...] = ("mirror",)
+    duplicate_distance: float = 0.5
+    duplicate_angle_deg: float = 10.0
+    features: bool = True
+
+    @property
+    def feature_rules(self) -> bool:
+        """Whether the body-feature rules, the trailer's swing and the duplicate rule apply."""
+        return self.enabled and self.features
 
     def height_floor(self, vehicle: Vehicle) -> float:
         """The minimum lens height (m) on ``vehicle``."""
@@ -48,18 +83,16 @@ class MountPractice:
 
 def on_wheels(vehicle: Vehicle, points, clearance: float) -> list[list[str]]:
     """For each point (n, 3) m: the wheels ('front-left wheel', ...) whose keep-out it is in."""
+    from rigopt.vehicle.arches import wheel_name
+
     points = np.atleast_2d(np.asarray(points, dtype=float))
     found: list[list[str]] = [[] for _ in range(len(points))]
-    axles = vehicle.axles
     for centre, radius, width in vehicle.wheels:
         side = np.sign(centre[1]) or 1.0
         outboard = side * points[:, 1] >= abs(centre[1]) - width / 2.0 - 0.02
         near = np.hypot(points[:, 0] - centre[0], points[:, 2] - centre[2]) <= radius + clearance
-        position = "front" if len(axles) > 1 and centre[0] == axles[0] else (
-            "rear" if len(axles) > 1 and centre[0] == axles[-1] else f"x {centre[0]:.2f} m")
-        name = f"{position}-{'left' if side > 0 else 'right'} wheel"
         for k in np.flatnonzero(outboard & near):
-            found[k].append(name)
+            found[k].append(wheel_name(vehicle.axles, centre))
     return found
 
 
@@ -104,30 +137,94 @@ def segments_hit_boxes(starts, directions, length: float, boxes) -> np.ndarray:
     return hit
 
 
-def practice_problems(vehicle: Vehicle, points, practice: MountPractice = MountPractice()) -> list[list[str]]:
-    """For each lens position (n, 3) m: what mounting practice forbids there (empty lists where nothing)."""
+def practice_problems(vehicle: Vehicle, points, practice: MountPractice = MountPractice(),
+                      housing=DEFAULT_HOUSING, surface: SurfaceQuery | None = None) -> list[list[str]]:
+    """For each lens position (n, 3) m: what mounting practice forbids there (empty lists where nothing).
+
+    ``housing`` (w, h, d) m is the camera's (the legal width counts its outer face); ``surface`` the nearest
+    body surface of ``points`` when the caller has it (else it is queried)."""
     points = np.atleast_2d(np.asarray(points, dtype=float))
     if not practice.enabled:
         return [[] for _ in range(len(points))]
     floor = practice.height_floor(vehicle)
     wheels = on_wheels(vehicle, points, practice.wheel_clearance)
     boxes = in_keep_outs(vehicle, points, practice.lifted)
+    if not practice.features:
+        return [_basic_problems(point, floor, wheels[k], boxes[k]) for k, point in enumerate(points)]
+    surface = vehicle.surface(points) if surface is None else surface
+    zones = vehicle.zone_names(surface.foot, surface.normal)
+    margin = practice.feature_margin
+    listed = [features.on_steps(vehicle, points, margin),
+              features.in_door_frames(vehicle, points, margin, practice.hinge_band),
+              features.on_fixtures(vehicle, points, margin),
+              features.on_arch_lips(vehicle, points, practice.lip_band, practice.wheel_clearance),
+              features.in_spray_cones(vehicle, points, practice)]
+    protrusion = features.width_protrusion(vehicle, points, surface.normal, zones, housing, practice.width_exempt_zones)
+    tilted = features.in_tilt_arc(vehicle, points, margin)
+    swings = [(swing, *swing.holds(points)) for swing in features.trailer_swings(vehicle, practice.lifted)]
+    # a lens on a post (a raised zone) looks through no windscreen
+    on_surface = surface.distance <= housing[2] / 2.0 + margin
+    unwiped = np.where(on_surface, features.outside_wiped_area(vehicle, surface.foot, zones), 0.0)
     problems = []
     for k, point in enumerate(points):
-        mine = []
-        if point[2] < floor - 1e-9:
-            mine.append(f"lens {point[2]:.2f} m above the ground (at least {floor:.2f} m: spray and kerbs)")
-        if wheels[k]:
-            mine.append(f"on the {' and '.join(wheels[k])}: tyre or wheel arch")
-        if boxes[k]:
-            mine.append(f"in the keep-out {', '.join(boxes[k])}")
+        mine = _basic_problems(point, floor, wheels[k], boxes[k])
+        for found in listed:
+            mine += found[k]
+        if protrusion[k] > 1e-3:
+            mine.append(f"protrudes {protrusion[k]:.2f} m beyond the legal width {vehicle.legal_width:.2f} m")
+        if tilted[k]:
+            cab = vehicle.spec.tilt_cab
+            mine.append(f"in the tilt-cab arc (the cab sweeps it tilting up to {cab.angle_deg:.0f} deg about "
+                        f"x {cab.pivot[0]:.2f} m, z {cab.pivot[1]:.2f} m)")
+        for swing, inside, depth in swings:
+            if inside[k] and not any(swing.name in label for label in boxes[k]):
+                mine.append(f"in {swing.describe()}: {depth[k]:.2f} m inside")
+        if unwiped[k] > 1e-3:
+            mine.append(f"on the windscreen outside the wiped area ({unwiped[k]:.2f} m from it)")
         problems.append(mine)
     return problems
 
 
-def practical(vehicle: Vehicle, points, practice: MountPractice = MountPractice()) -> np.ndarray:
-    """(n,) bool: lens positions mounting practice allows."""
-    return np.array([not p for p in practice_problems(vehicle, points, practice)], dtype=bool)
+def _basic_problems(point, floor: float, wheels: list[str], boxes: list[str]) -> list[str]:
+    """A lens's problems with the rules before the body features: height, wheels, keep-outs."""
+    mine = []
+    if point[2] < floor - 1e-9:
+        mine.append(f"lens {point[2]:.2f} m above the ground (at least {floor:.2f} m: spray and kerbs)")
+    if wheels:
+        mine.append(f"on the {' and '.join(wheels)}: tyre or wheel arch")
+    if boxes:
+        mine.append(f"in the keep-out {', '.join(boxes)}")
+    return mine
+
+
+def practical(vehicle: Vehicle, points, practice: MountPractice = MountPractice(), housing=DEFAULT_HOUSING,
+              surface: SurfaceQuery | None = None) -> np.ndarray:
+    """(n,) bool: lens positions mounting practice allows (see :func:`practice_problems`)."""
+    return np.array([not p for p in practice_problems(vehicle, points, practice, housing, surface)], dtype=bool)
+
+
+def duplicates(rig: Rig, practice: MountPractice = MountPractice()) -> list[str | None]:
+    """For each camera of ``rig``: the reason it duplicates an earlier camera ('duplicates CAM_X: same lens,
+    0.31 m apart, 4 deg apart'), or None. Two cameras duplicate each other when they have the same lens (the
+    same FOV and real lens), their lenses lie within ``duplicate_distance`` m and their optical axes within
+    ``duplicate_angle_deg``; cameras of one module (a stereo pair) never do. Only the later camera of a pair is
+    named, so removing it leaves the rig without duplicates."""
+    found: list[str | None] = [None] * len(rig.cameras)
+    if not practice.feature_rules:
+        return found
+    cameras = rig.cameras
+    for j, later in enumerate(cameras):
+        for earlier in cameras[:j]:
+            if later.module is not None and later.module == earlier.module:
+                continue
+            if later.lens_model != earlier.lens_model:
+                continue
+            apart = float(np.linalg.norm(later.position - earlier.position))
+            angle = float(np.rad2deg(np.arccos(np.clip(later.forward @ earlier.forward, -1.0, 1.0))))
+            if apart <= practice.duplicate_distance and angle <= practice.duplicate_angle_deg:
+                found[j] = f"duplicates {earlier.id}: same lens, {apart:.2f} m apart, {angle:.0f} deg apart"
+                break
+    return found
 
 
 #: Spray from a tyre reaches about this far (m) around it, fore and aft and above its top.

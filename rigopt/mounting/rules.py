@@ -12,7 +12,12 @@ A camera is valid on a vehicle when
   5. its housing does not collide with another camera's housing (cameras of one module, ``Camera.module``,
      share a housing and do not clash with each other);
   6. mounting practice allows its lens position (:mod:`rigopt.mounting.practice`: not on a wheel, tyre or
-     arch, not below the minimum lens height, not in a keep-out such as locker doors or a coupled trailer).
+     arch, not below the minimum lens height, not in a keep-out such as locker doors or a coupled trailer, not
+     on a step, a door frame or hinge line, a rail, ladder, light bar or rack, an arch lip, in a tyre's spray,
+     beyond the legal width, in the tilt-cab arc or the trailer's swing, nor on the windscreen outside the
+     wiped area: :mod:`rigopt.mounting.features`), and no keep-out that blocks views (a coupled trailer) nor
+     a trailer's swing is in its near view;
+  7. it does not duplicate another camera of the rig (the same lens, close by, looking the same way).
 The lens sits at the housing's centre, so a well-mounted camera is ``housing[2] / 2`` off the surface.
 
 Raised mounts: a zone with ``raised_max`` > 0 (a roof rack, sensor pod or mast) lets a camera sit up to
@@ -32,7 +37,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from rigopt import raycast
-from rigopt.mounting.practice import MountPractice, keep_out_boxes, practice_problems
+from rigopt.mounting.features import trailer_swings
+from rigopt.mounting.practice import DEFAULT_HOUSING, MountPractice, duplicates, keep_out_boxes, practice_problems
 from rigopt.mounting.shapes import body_object, collides, frustum_object, housing_object, surface_frame
 from rigopt.rig.model import Camera, Rig
 from rigopt.vehicle.model import Vehicle, Zone
@@ -42,7 +48,7 @@ from rigopt.vehicle.model import Vehicle, Zone
 class MountRules:
     """Tolerances of the mount checks; lengths in metres, ``frustum_margin`` a fraction of each half-angle."""
 
-    housing: tuple[float, float, float] = (0.08, 0.06, 0.06)
+    housing: tuple[float, float, float] = DEFAULT_HOUSING
     max_distance: float = 0.05
     penetration_tolerance: float = 0.01
     near: float = 0.02
@@ -134,6 +140,16 @@ def box_object(low, high):
     return fcl.CollisionObject(fcl.Box(*(high - low)), fcl.Transform(np.eye(3), (low + high) / 2.0))
 
 
+def swing_object(swing):
+    """An fcl cylinder filling a trailer's swing (:class:`rigopt.mounting.features.TrailerSwing`)."""
+    from rigopt.mounting.shapes import _fcl
+
+    fcl = _fcl()
+    length = swing.top - swing.kingpin[2]
+    centre = np.array([swing.kingpin[0], swing.kingpin[1], swing.kingpin[2] + length / 2.0])
+    return fcl.CollisionObject(fcl.Cylinder(swing.radius, length), fcl.Transform(np.eye(3), centre))
+
+
 def check_rig(rig: Rig, vehicle: Vehicle, rules: MountRules = MountRules()) -> RigCheck:
     """Apply every mount rule to every camera of ``rig`` on ``vehicle`` (raised mounts: see the module doc)."""
     body = body_object(vehicle)
@@ -152,9 +168,12 @@ def check_rig(rig: Rig, vehicle: Vehicle, rules: MountRules = MountRules()) -> R
     posts = {k: post_object(m, c.forward, rules) for k, (m, c) in enumerate(zip(mounts, rig.cameras))
              if m is not None}
     posts = {k: p for k, p in posts.items() if p is not None}
-    practice = practice_problems(vehicle, rig.positions, rules.practice)
+    practice = practice_problems(vehicle, rig.positions, rules.practice, rules.housing, surface)
     in_force = keep_out_boxes(vehicle, rules.practice.lifted, occluding_only=True) if rules.practice.enabled else []
-    blockers = [(box_object(low, high), label) for low, high, label in in_force]
+    blockers = [(box_object(low, high), label) for low, high, label in sorted(in_force, key=lambda b: b[2])]
+    swings = trailer_swings(vehicle, rules.practice.lifted) if rules.practice.feature_rules else []
+    blockers += [(swing_object(swing), swing.describe()) for swing in swings]
+    duplicated = duplicates(rig, rules.practice)
     checks = []
     for k, camera in enumerate(rig.cameras):
         problems = list(practice[k])
@@ -173,9 +192,10 @@ def check_rig(rig: Rig, vehicle: Vehicle, rules: MountRules = MountRules()) -> R
         frustum = frustum_object(camera, rules)
         if collides(frustum, body):
             problems.append(f"the body is in its view within {rules.frustum_range:g} m")
-        blocked = sorted({label for box, label in blockers if collides(frustum, box)})
-        if blocked:
-            problems.append(f"the keep-out {', '.join(blocked)} is in its view within {rules.frustum_range:g} m")
+        blocked = dict.fromkeys(label for box, label in blockers if collides(frustum, box))
+        for label in blocked:
+            what = label if label.startswith("the ") else f"the keep-out {label}"
+            problems.append(f"{what} is in its view within {rules.frustum_range:g} m")
         seen_posts = [j for j, post in posts.items() if collides(frustum, post)]
         if seen_posts:
             problems.append(f"the post of {', '.join(rig.cameras[j].id for j in seen_posts)} is in its view within "
@@ -187,6 +207,8 @@ def check_rig(rig: Rig, vehicle: Vehicle, rules: MountRules = MountRules()) -> R
                    (collides(housings[k], housings[j]) or (j in posts and collides(housings[k], posts[j])))]
         if clashes:
             problems.append(f"housing collides with {', '.join(clashes)}")
+        if duplicated[k] is not None:
+            problems.append(duplicated[k])
         checks.append(CameraCheck(camera.id, not problems, distance, zone, tuple(problems)))
     return RigCheck(rig.name, vehicle.name, tuple(checks))
 

@@ -145,7 +145,10 @@ def _zone_samples(vehicle: Vehicle, spacing: float, zones, seed: int, rules: Mou
 def _mountable(vehicle: Vehicle, points, normals, names, raised, rules: MountRules, zones) -> np.ndarray:
     """(n,) bool: the samples the mount checks will place in the same zone (near edges the nearest surface of
     the lens can be a neighbouring face with another normal), at the intended distance, with the housing
-    fitting, off the wheels, high enough and out of the keep-outs. Raises when none is."""
+    fitting, where mounting practice allows a lens (:func:`rigopt.mounting.practice.practice_problems`: off the
+    wheels, high enough, out of the keep-outs, off steps, door frames, fixtures, arch lips and tyre spray,
+    within the legal width, out of the tilt-cab arc and the trailer's swing, inside the wiped area). Raises
+    when none is."""
     if len(points) == 0:
         raise RigoptError(f"no mount point was sampled on {vehicle.name}'s zones: the spacing is wider than the "
                           "zones themselves; lower --spacing (the default is sized to the vehicle)")
@@ -156,7 +159,8 @@ def _mountable(vehicle: Vehicle, points, normals, names, raised, rules: MountRul
     agrees &= housing_fits(vehicle, surface.foot, surface.normal, rules)
     agrees = np.where(on_surface, agrees, _raised_ok(vehicle, points, names, normals, surface, rules))
     fitting = agrees.copy()
-    agrees &= practical(vehicle, points, rules.practice)  # off wheels, high enough, out of the keep-outs
+    # off wheels, high enough, out of the keep-outs and off the features practice refuses (steps, door frames...)
+    agrees &= practical(vehicle, points, rules.practice, rules.housing, surface)
     floor = rules.practice.height_floor(vehicle)
     if fitting.any() and not agrees.any() and rules.practice.enabled and points[fitting, 2].max() < floor:
         raise RigoptError(f"no mount point of {vehicle.name} is as high as the minimum lens height {floor:.2f} m "

@@ -9,6 +9,7 @@ import numpy as np
 import trimesh
 
 from rigopt import raycast
+from rigopt.vehicle.arches import WheelArch, trace_arches
 from rigopt.vehicle.build import build_mesh
 from rigopt.vehicle.spec import VehicleSpec, Wheels, ZoneSpec
 from rigopt.vehicle.symmetry import MirrorSymmetry, mirror_symmetry
@@ -139,6 +140,16 @@ class Vehicle:
                 for y in (wheel_set.track / 2, -wheel_set.track / 2):
                     out.append((np.array([x, y, wheel_set.radius]), wheel_set.radius, wheel_set.width))
         return tuple(sorted(out, key=lambda w: (-w[0][0], -w[0][1])))
+
+    @cached_property
+    def wheel_arches(self) -> tuple[WheelArch, ...]:
+        """Each wheel's arch traced on the mesh (:mod:`rigopt.vehicle.arches`), in the order of ``wheels``."""
+        return trace_arches(self.mesh, self.wheels, self.axles)
+
+    @property
+    def legal_width(self) -> float:
+        """The width (m) no camera may stick out beyond: the spec's ``legal_width`` (2.55, or 2.60 refrigerated)."""
+        return self.spec.legal_width
 
     @property
     def rear_axle(self) -> np.ndarray | None:

@@ -53,6 +53,44 @@ vehicle origin on the ground). A spec file::
     radius = 0.37                           # one table per axle
     width = 0.24
     track = 1.66
+
+Features mounting practice refuses lenses on (:mod:`rigopt.mounting.features`), all optional::
+
+    legal_width = 2.55                      # m, the width no camera may stick out beyond (default 2.55,
+    refrigerated = false                    # or 2.60 with refrigerated = true: a refrigerated body)
+
+    [[steps]]                               # a walkable surface: a step, a tailboard, a catwalk; the box
+    name = "tailboard"                      # holds the step itself (tread and riser)
+    min = [x, y, z]
+    max = [x, y, z]
+    mirrored = false
+
+    [[door_frames]]                         # a door or locker door: the box is its opening (thinnest across
+    name = "locker door"                    # the door); no lens within `frame` m of its edges (the frame,
+    min = [x, y, z]                         # the seals, the shut line)
+    max = [x, y, z]
+    frame = 0.10
+    hinge = "front"                         # optional: the hinged edge (front, rear, left, right, top,
+    mirrored = true                         # bottom); no lens within the rules' hinge band of it
+
+    [[fixtures]]                            # a part that carries no camera: kind = rail, ladder,
+    name = "aerial ladder"                  # light_bar or rack
+    kind = "ladder"
+    min = [x, y, z]
+    max = [x, y, z]
+
+    [wiped_area]                            # the windscreen: a lens in `zone` must look through the area
+    zone = "windshield_front"               # the wipers sweep, `outline` [[y, z], ...] m seen from the
+    outline = [[y, z], ...]                 # front (projected along x)
+
+    [tilt_cab]                              # a cab that tilts forward about the axis along y through
+    pivot = [x, z]                          # `pivot` by up to `angle_deg`; the box is the cab that tilts
+    angle_deg = 65
+    min = [x, y, z]
+    max = [x, y, z]
+
+A ``[[keep_out]]`` with ``kingpin = [x, y, z]`` is a semi-trailer: its front corners swing about the kingpin
+when the combination turns (the swing envelope, :func:`rigopt.mounting.features.trailer_swing`).
 """
 
 from __future__ import annotations
@@ -67,6 +105,12 @@ import numpy as np
 from rigopt.errors import DataError, not_utf8
 
 SOLID_TYPES = ("prism", "wheels", "box", "mesh")
+#: Kinds of ``[[fixtures]]``: parts that carry no camera.
+FIXTURE_KINDS = ("rail", "ladder", "light_bar", "rack")
+#: The edges a door's hinge may run along, as (axis, side): front = +x, left = +y, top = +z.
+HINGE_EDGES = {"front": (0, 1), "rear": (0, -1), "left": (1, 1), "right": (1, -1), "top": (2, 1), "bottom": (2, -1)}
+#: The width (m) a vehicle may not exceed (EU: Directive 96/53/EC), and that of a refrigerated body.
+LEGAL_WIDTH_M, REFRIGERATED_WIDTH_M = 2.55, 2.60
 #: UN vehicle categories a spec may name: M (passengers; M1 cars, M2/M3 buses), N (goods; N1 vans up to 3.5 t,
 #: N2 trucks up to 12 t, N3 heavier).
 CATEGORIES = ("M1", "M2", "M3", "N1", "N2", "N3")
@@ -141,6 +185,53 @@ class KeepOutSpec:
     mirrored: bool = False
     optional: bool = False
     occludes: bool = False
+    kingpin: np.ndarray | None = None
+
+
+@dataclass(frozen=True)
+class FeatureBox:
+    """A part of the body a lens may not sit on: ``kind`` "step" (a walkable surface) or a fixture kind
+    (FIXTURE_KINDS), the box [``min``, ``max``] (3,) m that holds the part; ``mirrored`` adds its -y copy."""
+
+    name: str
+    kind: str
+    min: np.ndarray
+    max: np.ndarray
+    mirrored: bool = False
+
+
+@dataclass(frozen=True)
+class DoorFrameSpec:
+    """A door's opening, the box [``min``, ``max``] (3,) m (thinnest across the door); ``frame`` m the band
+    around its edges where no lens goes; ``hinge`` the hinged edge (a HINGE_EDGES key) or None; ``mirrored``
+    adds the -y copy (its hinge on the same edge)."""
+
+    name: str
+    min: np.ndarray
+    max: np.ndarray
+    frame: float = 0.10
+    hinge: str | None = None
+    mirrored: bool = False
+
+
+@dataclass(frozen=True)
+class WipedAreaSpec:
+    """The area of the windscreen the wipers sweep: ``outline`` (k, 2) float (y, z) m seen from the front;
+    lenses whose surface foot lies in ``zone`` must lie inside it."""
+
+    zone: str
+    outline: np.ndarray
+
+
+@dataclass(frozen=True)
+class TiltCabSpec:
+    """A cab that tilts forward by up to ``angle_deg`` about the axis along y through ``pivot`` (x, z) m;
+    the cab is the box [``min``, ``max``] (3,) m."""
+
+    pivot: np.ndarray
+    angle_deg: float
+    min: np.ndarray
+    max: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -163,6 +254,12 @@ class VehicleSpec:
     min_lens_height: float | None = None
     category: str | None = None
     title: str | None = None
+    steps: tuple[FeatureBox, ...] = ()
+    fixtures: tuple[FeatureBox, ...] = ()
+    door_frames: tuple[DoorFrameSpec, ...] = ()
+    wiped_area: WipedAreaSpec | None = None
+    tilt_cab: TiltCabSpec | None = None
+    legal_width: float = LEGAL_WIDTH_M
 
 
 def read_toml(path, what: str) -> dict:
@@ -206,8 +303,15 @@ def spec_from_dict(data: dict, source: str = "<spec>") -> VehicleSpec:
         raise DataError(f"{source}: 'min_lens_height' is a height above the ground in metres, >= 0, got {min_height}")
     category = reader.category(data) if "category" in data else None
     title = reader.text(data, "title") if "title" in data else None
+    steps = tuple(reader.feature(t, f"steps {k}", "step") for k, t in enumerate(reader.table_list(data, "steps")))
+    fixtures = tuple(reader.feature(t, f"fixtures {k}", None)
+                     for k, t in enumerate(reader.table_list(data, "fixtures")))
+    door_frames = tuple(reader.door_frame(t, k) for k, t in enumerate(reader.table_list(data, "door_frames")))
+    wiped = reader.wiped_area(data) if "wiped_area" in data else None
+    tilt_cab = reader.tilt_cab(data) if "tilt_cab" in data else None
     return VehicleSpec(name, blueprint, tuple(aliases), box, solids, zones, source, tuple(float(a) for a in axles),
-                       wheels, keep_outs, min_height, category, title)
+                       wheels, keep_outs, min_height, category, title, steps, fixtures, door_frames, wiped, tilt_cab,
+                       reader.legal_width(data))
 
 
 class _Reader:
@@ -295,11 +399,14 @@ class _Reader:
 
     def named_box(self, table: dict, where: str) -> tuple[str, np.ndarray, np.ndarray]:
         """A table's ``name`` and its box ``min`` < ``max`` (3,) m."""
-        name = self.text(table, "name", where)
+        return (self.text(table, "name", where), *self.box(table, where))
+
+    def box(self, table: dict, where: str) -> tuple[np.ndarray, np.ndarray]:
+        """A table's box ``min`` < ``max`` (3,) m."""
         low, high = np.array(self.numbers(table, "min", 3, where)), np.array(self.numbers(table, "max", 3, where))
         if np.any(low >= high):
             raise self.fail(where, f"'min' must be below 'max' on every axis, got {low.tolist()} and {high.tolist()}")
-        return name, low, high
+        return low, high
 
     def zone(self, table: dict, index: int) -> ZoneSpec:
         where = f"zone {index} ({table.get('name', '?')})"
@@ -324,8 +431,64 @@ class _Reader:
         where = f"keep_out {index} ({table.get('name', '?')})"
         name, low, high = self.named_box(table, where)
         reason = self.text(table, "reason", where) if "reason" in table else name
+        kingpin = np.array(self.numbers(table, "kingpin", 3, where)) if "kingpin" in table else None
+        if kingpin is not None and not kingpin[0] < high[0]:
+            raise self.fail(where, f"the trailer's 'kingpin' must lie behind its front (x < {high[0]:g}), got "
+                                   f"x {kingpin[0]:g}")
         return KeepOutSpec(name, low, high, reason, self.flag(table, "mirrored", where),
-                           self.flag(table, "optional", where), self.flag(table, "occludes", where))
+                           self.flag(table, "optional", where), self.flag(table, "occludes", where), kingpin)
+
+    def table(self, data: dict, key: str) -> dict:
+        value = data.get(key)
+        if not isinstance(value, dict):
+            raise self.fail("top level", f"'{key}' must be a table ([{key}])")
+        return value
+
+    def feature(self, table: dict, where: str, kind: str | None) -> FeatureBox:
+        """A ``[[steps]]`` (``kind`` "step") or ``[[fixtures]]`` (``kind`` None: read from the table) entry."""
+        where = f"{where} ({table.get('name', '?')})"
+        name, low, high = self.named_box(table, where)
+        if kind is None:
+            kind = table.get("kind")
+            if kind not in FIXTURE_KINDS:
+                raise self.fail(where, f"'kind' must be one of {', '.join(FIXTURE_KINDS)}, got {kind!r}")
+        return FeatureBox(name, kind, low, high, self.flag(table, "mirrored", where))
+
+    def door_frame(self, table: dict, index: int) -> DoorFrameSpec:
+        where = f"door_frames {index} ({table.get('name', '?')})"
+        name, low, high = self.named_box(table, where)
+        frame = self.number(table, "frame", where) if "frame" in table else 0.10
+        hinge = table.get("hinge")
+        if hinge is not None and hinge not in HINGE_EDGES:
+            raise self.fail(where, f"'hinge' must be one of {', '.join(HINGE_EDGES)} (the hinged edge), got {hinge!r}")
+        if hinge is not None and HINGE_EDGES[hinge][0] == int(np.argmin(high - low)):
+            raise self.fail(where, f"the hinge '{hinge}' runs across the door: the box's thinnest side is across "
+                                   "the door, its hinge along one of its other edges")
+        return DoorFrameSpec(name, low, high, frame, hinge, self.flag(table, "mirrored", where))
+
+    def wiped_area(self, data: dict) -> WipedAreaSpec:
+        table = self.table(data, "wiped_area")
+        zone = self.text(table, "zone", "wiped_area") if "zone" in table else "windshield_front"
+        return WipedAreaSpec(zone, self.polygon(table, "outline", "wiped_area"))
+
+    def tilt_cab(self, data: dict) -> TiltCabSpec:
+        table = self.table(data, "tilt_cab")
+        pivot = np.array(self.numbers(table, "pivot", 2, "tilt_cab"))
+        angle = self.number(table, "angle_deg", "tilt_cab")
+        if angle > 90:
+            raise self.fail("tilt_cab", f"'angle_deg' is the cab's tilt in degrees, in (0, 90], got {angle:g}")
+        return TiltCabSpec(pivot, angle, *self.box(table, "tilt_cab"))
+
+    def legal_width(self, data: dict) -> float:
+        """The spec's ``legal_width`` m, else REFRIGERATED_WIDTH_M with ``refrigerated = true``, else LEGAL_WIDTH_M."""
+        refrigerated = self.flag(data, "refrigerated", "top level")
+        if "legal_width" not in data:
+            return REFRIGERATED_WIDTH_M if refrigerated else LEGAL_WIDTH_M
+        width = self.number(data, "legal_width", "top level")
+        if not 1.0 <= width <= 4.0:
+            raise self.fail("top level", f"'legal_width' is the vehicle's legal width in metres (2.55 in the EU, "
+                                         f"2.60 for refrigerated bodies), got {width:g}")
+        return width
 
 
 def _is_number(value) -> bool:

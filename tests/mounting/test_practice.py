@@ -43,9 +43,43 @@ def test_wheel_keep_outs_cover_tyre_and_arch_lip_but_not_a_fender_camera_above(f
 
 def test_every_benchmark_rig_stays_clear_of_wheels_heights_and_keep_out_volumes():
     # R9 (the benchmark's solo tractor) is checked against a coupled trailer's view in test_builtin_vehicles
+    before_features = MountPractice(features=False)
     for name in rig_names():
         rig = load_rig(name)
-        assert practical(load_vehicle(rig.vehicle), rig.positions).all(), name
+        assert practical(load_vehicle(rig.vehicle), rig.positions, before_features).all(), name
+
+
+#: The benchmark's cameras the body-feature rules refuse (rigopt/mounting/features.py; docs/vehicles.md): the
+#: benchmark placed its rigs in simulation, the trucks' on bodies wider than the legal 2.55 m.
+FEATURE_FINDINGS = {
+    ("R6", "CAM_FRONT_TOP"): "on the light bar (a light bar: its lamps must stay uncovered)",
+    ("R6", "CAM_BACK"): "on the tailboard step (walkable) at 0.86 m",
+    ("R6", "CAM_FENDER_FRONT_RIGHT"): "protrudes 0.22 m beyond the legal width 2.55 m",
+    ("R6", "CAM_FENDER_FRONT_LEFT"): "protrudes 0.18 m beyond the legal width 2.55 m",
+    ("R6", "CAM_FENDER_BACK_RIGHT"): "protrudes 0.20 m beyond the legal width 2.55 m",
+    ("R6", "CAM_FENDER_BACK_LEFT"): "protrudes 0.26 m beyond the legal width 2.55 m",
+    ("R9", "CAM_FENDER_FRONT_RIGHT"): "protrudes 0.16 m beyond the legal width 2.55 m",
+    ("R9", "CAM_FENDER_FRONT_LEFT"): "protrudes 0.14 m beyond the legal width 2.55 m",
+}
+
+
+def test_the_benchmark_cameras_the_body_features_refuse_are_these_and_for_these_reasons():
+    found = {}
+    for name in rig_names():
+        rig = load_rig(name)
+        for camera, problems in zip(rig.cameras, practice_problems(load_vehicle(rig.vehicle), rig.positions)):
+            if problems:
+                found[(name, camera.id)] = problems
+    assert set(found) == set(FEATURE_FINDINGS)
+    for key, reason in FEATURE_FINDINGS.items():
+        assert found[key] == [reason] or (found[key][0].startswith(reason) and len(found[key]) == 1), (key, found[key])
+
+
+def test_switching_the_feature_rules_off_keeps_the_rules_before_them(firetruck):
+    tailboard, tyre = [-4.40, 0.0, 0.86], [-2.75, -1.28, 0.55]
+    before = practice_problems(firetruck, [tailboard, tyre], MountPractice(features=False))
+    assert before[0] == [] and any("tyre or wheel arch" in p for p in before[1])
+    assert any("tailboard" in p for p in practice_problems(firetruck, [tailboard])[0])
 
 
 def test_the_minimum_lens_height_comes_from_the_rules_else_the_vehicle_else_half_a_metre(firetruck):
