@@ -34,8 +34,9 @@ from rigopt.design.problem import ReferenceRig
 from rigopt.design.refine import (RefineProblem, duty_points, free_radii, frustum_margins, project_to_surface,
                                   refine)
 from rigopt.coverage.regulations import default_presets, region_coverage
+from rigopt.design.near_field import NEAR_FIELD_SPACING, design_near_field
 from rigopt.design.requirements import (DENSE_SPACING, Requirements, design_requirements, explain_uncoverable,
-                                       field_labels)
+                                       field_labels, required_presets)
 from rigopt.design.result import Comparisons, DesignResult, MilpStage, RefinementReport, RigSummary
 from rigopt.design.selection import DesignInfeasible, Selection, prune, select_cameras
 from rigopt.design.settings import DesignSettings
@@ -206,6 +207,10 @@ def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRi
     rigs = [r.rig for r in references]
     reference = rigs[0]
     progress(f"coverage requirements from {', '.join(r.name for r in rigs)} and the required fields")
+    near_field_presets = ()
+    if settings.near_field:  # the fields are the near-field cameras' job, not the perception cameras'
+        near_field_presets = required_presets(vehicle, settings) if settings.require != "none" else ()
+        settings = replace(settings, require="none")
     requirements = design_requirements(references, vehicle, settings)
     # What the design must have, and what it gives up, in this order, when nothing meets it: mirrored pairs
     # (unless asked for or refused) and the category's fields (unless named).
@@ -248,8 +253,17 @@ def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRi
         refinement = _refined(design, vehicle, reference, calibration, requirements, prepared.spacing, settings)
         if refinement.accepted:
             design = refinement.refined
-    regions = field_coverage(design.rig, vehicle, required_fields(requirements, settings) or default_presets(vehicle),
-                             settings)
+    if settings.near_field:
+        progress("near-field cameras for the fields and the near ring")
+        stage = design_near_field(vehicle, design.rig, near_field_presets, min(prepared.spacing, NEAR_FIELD_SPACING),
+                                  settings.is_symmetric_on(vehicle), settings.rules, zones=settings.zones,
+                                  max_nodes=settings.max_nodes, lifted=settings.rules.practice.lifted,
+                                  progress=progress)
+        design = summarise(stage.rig, vehicle, rigs, calibration, requirements, settings,
+                           check_rig(stage.rig, vehicle, settings.rules))
+        requirements = replace(requirements, presets=near_field_presets)
+    regions = field_coverage(design.rig, vehicle, near_field_presets or required_fields(requirements, settings)
+                             or default_presets(vehicle), settings)
 
     reference_coverage = rig_coverage_matrix(reference, references[0].vehicle,
                                              settings.coverage).sees.any(axis=0).mean()
@@ -445,10 +459,10 @@ def _rig_from(chosen: CandidateSet, matched: np.ndarray, reference: Rig, vehicle
 
 def summarise(rig: Rig, vehicle: Vehicle, references: Sequence[Rig], calibration: Calibration,
               requirements: Requirements, settings: DesignSettings, check: RigCheck | None = None) -> RigSummary:
-    """Predicted transfer from each reference, coverage fraction (of the sector points) and requirement check
-    of ``rig``."""
+    """Predicted transfer from each reference (of the rig's perception cameras, the ones a detector is fed),
+    coverage fraction (of the sector points, by every camera) and requirement check of ``rig``."""
     counts = requirements.counts(rig, vehicle, settings)
-    predictions = tuple(predict_transfer(reference, [rig], calibration)[0] for reference in references)
+    predictions = tuple(predict_transfer(reference, [rig.perception()], calibration)[0] for reference in references)
     return RigSummary(rig, predictions, float(np.mean(counts[:requirements.n_sector] >= 1)),
                       bool(np.all(counts >= requirements.needed)), check)
 

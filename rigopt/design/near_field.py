@@ -8,7 +8,8 @@ the body. This stage chooses the near_field cameras of a design, given its perce
     minimise   sum_c (1 + w m_c) x_c            (the fewest cameras, then the cheapest mounts; w < 1 / n)
     subject to sum_c sees_cq x_c >= 1            every required point q: each field point at each of its
                                                  test-object heights, and the near ring around the body
-               at most one camera per mount point and per clashing pair; none where a perception camera sits
+               at most one camera per mount point and per clashing pair (a fisheye at a perception camera's
+               mount shares its housing: the two are one camera module)
                x_c = x_mirror(c)                 (symmetric designs: mirrored pairs or the centreline)
                x binary
 
@@ -45,7 +46,6 @@ from rigopt.design.selection import (
     essential_requirements,
 )
 from rigopt.design.settings import CatalogueCamera
-from rigopt.errors import RigoptError
 from rigopt.mounting.practice import mounting_costs
 from rigopt.mounting.rules import MountRules
 from rigopt.quiet import HIGHS_OPTIONS, quiet_highs
@@ -66,6 +66,9 @@ MAX_BODY_FRACTION = 0.4
 NEAR_RING_DISTANCES = (0.5, 1.0)
 NEAR_RING_HEIGHTS = (0.0, 0.8)
 NEAR_RING_SECTORS = 36
+#: Largest mount point spacing (m) of the near-field candidates (finer than the perception stage's on big bodies:
+#: the ground right behind a bumper is seen only from a few places).
+NEAR_FIELD_SPACING = 0.2
 #: Farthest a near-field camera counts as seeing (m).
 NEAR_FIELD_RANGE = 35.0
 #: Mount points closer than this (m) may not both hold a camera, nor sit this close to a perception camera.
@@ -123,10 +126,11 @@ def near_field_candidates(vehicle: Vehicle, spacing: float, symmetric: bool, rul
 
 @dataclass(frozen=True)
 class NearFieldDesign:
-    """The chosen near-field cameras (``cameras``, role near_field), the candidates' count, the points required
-    (``n_points``, after the dense rounds), the MILP's ``status`` and ``gap``, and ``seconds`` in all."""
+    """``rig``: the perception cameras followed by the chosen near-field cameras (role near_field; one that sits at
+    a perception camera's mount shares its housing, the pair one camera module); the candidates' count, the
+    points required (``n_points``, after the dense rounds), the MILP's ``status`` and ``gap``, and ``seconds``."""
 
-    cameras: tuple
+    rig: Rig
     n_candidates: int
     n_points: int
     status: str
@@ -136,7 +140,8 @@ class NearFieldDesign:
 
 
 def select_near_field(sees: np.ndarray, mount: np.ndarray, mount_points: np.ndarray, mount_cost: np.ndarray,
-                      mirror: np.ndarray | None = None, max_nodes: int = DEFAULT_MAX_NODES) -> tuple[np.ndarray, str, float]:
+                      mirror: np.ndarray | None = None, max_nodes: int = DEFAULT_MAX_NODES,
+                      labels=None) -> tuple[np.ndarray, str, float]:
     """The MILP of the module docstring: (chosen (k,) int, status, relative gap). sees (n, q) bool; mount (n,) int
     into mount_points (m, 3) m; mount_cost (n,) float; mirror (n,) int or None. Raises DesignInfeasible when some
     point no candidate sees, or no selection meets every point."""
@@ -145,7 +150,10 @@ def select_near_field(sees: np.ndarray, mount: np.ndarray, mount_points: np.ndar
     n = sees.shape[0]
     unseen = np.flatnonzero(~sees.any(axis=0))
     if len(unseen):
-        raise DesignInfeasible(f"{len(unseen)} near-field point(s) no near-field candidate sees")
+        named = "; ".join(labels[q] for q in unseen[:6]) if labels is not None else ""
+        raise DesignInfeasible(f"{len(unseen)} near-field point(s) no near-field candidate sees"
+                               f"{': ' + named if named else ''}{' and more' if len(unseen) > 6 and named else ''}; "
+                               "allow more zones or a finer --spacing")
     x = cp.Variable(n, boolean=True)
     needed = essential_requirements(sees, np.ones(sees.shape[1], dtype=int))
     constraints = [sparse.csr_matrix(sees[:, needed].T.astype(float)) @ x >= 1]
@@ -175,22 +183,11 @@ def design_near_field(vehicle: Vehicle, perception: Rig, presets: tuple[RegionPr
                       symmetric: bool, rules: MountRules = MountRules(), catalogue=None, zones=None,
                       max_nodes: int = DEFAULT_MAX_NODES, lifted=(), progress=lambda message: None) -> NearFieldDesign:
     """The near-field cameras of a design whose perception cameras are ``perception`` (on ``vehicle``): they
-    see every field of ``presets`` densely and the near ring, the fewest and cheapest, clear of the perception
-    cameras' housings."""
+    see every field of ``presets`` densely and the near ring, the fewest and cheapest."""
     start = time.perf_counter()
     candidates = near_field_candidates(vehicle, spacing, symmetric, rules, catalogue, zones)
-    free = np.ones(len(candidates.mount_points), dtype=bool)
-    if len(perception):
-        near = cKDTree(perception.positions).query(candidates.mount_points)[0] < CLASH_DISTANCE
-        free &= ~near
-    usable = free[candidates.mount]
-    if candidates.mirror is not None:
-        usable &= usable[candidates.mirror]
-    index = np.flatnonzero(usable)
-    if not len(index):
-        raise RigoptError(f"no mount point of {vehicle.name} is left for a near-field camera beside the perception "
-                          "cameras; allow more zones")
-    mirror = None if candidates.mirror is None else np.searchsorted(index, candidates.mirror[index])
+    index = np.arange(len(candidates))
+    mirror = candidates.mirror
     model = candidates.model(index)
     points = near_field_points(vehicle, presets, lifted)
     progress(f"near field: {len(index)} fisheye candidates, {len(points.points)} points to see")
@@ -201,7 +198,7 @@ def design_near_field(vehicle: Vehicle, perception: Rig, presets: tuple[RegionPr
         sees = visible_by(vehicle.mesh, model, candidates.positions[index], candidates.rotations[index], points.points,
                           NEAR_FIELD_RANGE)
         chosen, status, gap = select_near_field(sees, candidates.mount[index], candidates.mount_points, cost, mirror,
-                                                max_nodes)
+                                                max_nodes, points.labels)
         picked = index[chosen]
         unseen = []
         if dense:
@@ -219,9 +216,15 @@ def design_near_field(vehicle: Vehicle, perception: Rig, presets: tuple[RegionPr
     if missing:
         raise DesignInfeasible(f"after {DENSE_ROUNDS} rounds the near-field cameras still miss {missing} dense field "
                                "point(s); allow more zones or a finer --spacing")
-    cameras = tuple(_near_field_camera(candidates, k, n) for n, k in enumerate(picked))
-    return NearFieldDesign(cameras, len(index), len(points.points), status, gap, time.perf_counter() - start, round_)
-
-
-def _near_field_camera(candidates: CandidateSet, k: int, n: int):
-    return dataclasses.replace(candidates.camera(k, f"CAM_NEAR_FIELD_{n + 1}"), role="near_field")
+    cameras = [dataclasses.replace(candidates.camera(k, f"CAM_NEAR_FIELD_{n + 1}"), role="near_field")
+               for n, k in enumerate(picked)]
+    perception_cameras = list(perception.cameras)
+    if len(perception) and len(cameras):  # a fisheye at a perception camera's mount shares its housing: one module
+        distance, nearest = cKDTree(perception.positions).query(np.array([c.position for c in cameras]))
+        for n, (d, p) in enumerate(zip(distance, nearest)):
+            if d < CLASH_DISTANCE:
+                module = perception_cameras[p].module or f"{perception_cameras[p].id}_MODULE"
+                perception_cameras[p] = dataclasses.replace(perception_cameras[p], module=module)
+                cameras[n] = dataclasses.replace(cameras[n], module=module)
+    rig = Rig(perception.name, perception.vehicle, tuple(perception_cameras) + tuple(cameras), perception.origin)
+    return NearFieldDesign(rig, len(index), len(points.points), status, gap, time.perf_counter() - start, round_)

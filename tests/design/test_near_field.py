@@ -52,7 +52,8 @@ def test_the_tt_sees_its_rear_field_and_near_ring_with_few_fisheyes():
     presets = parse_require("default", tt)
     perception = Rig("none", tt.blueprint, (load_rig("R4").cameras[0],))
     design = near_field.design_near_field(tt, perception, presets, 0.25, tt.symmetry.symmetric)
-    rig = Rig("nf", tt.blueprint, design.cameras)
+    rig = Rig("nf", tt.blueprint, design.rig.cameras[1:])
+    assert design.rig.cameras[0].role == "perception" and len(design.rig.perception()) == 1
     assert all(c.role == "near_field" for c in rig.cameras) and 3 <= len(rig) <= 8
     points = near_field.near_field_points(tt, presets).points
     dense = np.concatenate([p.points(tt, 0.1) for p in presets])
@@ -62,3 +63,31 @@ def test_the_tt_sees_its_rear_field_and_near_ring_with_few_fisheyes():
         assert seen.any(axis=0).all()
     backwards = [c for c in rig.cameras if c.forward[0] < -0.7]
     assert 1 <= len(backwards) <= 2
+
+
+@pytest.mark.slow
+def test_a_two_role_design_leaves_the_fields_to_its_fisheyes():
+    """design_rig(near_field=True) on the tt: R1's eight perception cameras, near-field fisheyes that alone see
+    R158 densely; the predicted drop is the perception cameras'."""
+    from rigopt.design.designer import design_rig
+    from rigopt.design.problem import ReferenceRig
+    from rigopt.design.settings import DesignSettings
+    from rigopt.metrics.calibration import load_weights
+    from rigopt.metrics.ranking import predict_transfer
+
+    tt = load_vehicle("tt")
+    result = design_rig(tt, ReferenceRig.on_own_vehicle(load_rig("R1")), load_weights("joint"),
+                        DesignSettings(near_field=True, refine=False))
+    rig = result.design.rig
+    perception, fisheyes = rig.perception(), [c for c in rig.cameras if c.role == "near_field"]
+    assert len(perception) == 8 and 1 <= len(fisheyes) <= 8
+    assert all(c.lens is not None and c.lens.distortion == "fisheye" for c in fisheyes)
+    assert [r.key for r in result.regions] == ["r158"] and result.regions[0].covered_frac == 1.0
+    nf = Rig("nf", tt.blueprint, tuple(fisheyes))
+    dense = np.concatenate([p.points(tt, 0.1) for p in parse_require("default", tt)])
+    dense = dense[required_mask(tt, dense)]
+    seen = visible_by(tt.mesh, CameraModel.of_cameras(nf.cameras), nf.positions, nf.rotations, dense,
+                      near_field.NEAR_FIELD_RANGE)
+    assert seen.any(axis=0).all()
+    expected = predict_transfer(load_rig("R1"), [perception], load_weights("joint"))[0].predicted_drop
+    assert result.design.prediction.predicted_drop == pytest.approx(expected)
