@@ -14,9 +14,10 @@ Per lens position (the mount points of :mod:`rigopt.mounting.sampling` leave out
   - *tyre-spray cones*: behind each tyre's contact patch, a cone of half-angle ``spray_half_angle_deg``
     around the direction backwards and ``spray_elevation_deg`` up, ``spray_length`` m long (the jet a wet road
     throws off the tread; bodywork in between is not counted);
-  - *the legal width*: the housing sticks out beyond half the vehicle's ``legal_width`` from the centreline,
-    unless its foot lies in one of ``width_exempt_zones`` (mirrors: devices for indirect vision do not count
-    in the width);
+  - *the legal width*: the housing sticks out further than ``width_allowance`` beyond half the vehicle's
+    ``legal_width`` from the centreline (or beyond the body's own side where the body is wider still), unless
+    its foot lies in one of ``width_exempt_zones`` (mirrors: devices for indirect vision do not count in the
+    width);
   - *the tilt-cab arc* (``[tilt_cab]``): a lens not on the cab in the space the cab sweeps as it tilts;
   - *the trailer's swing*: a semi-trailer's front corners turn about its kingpin (``kingpin`` of its
     ``[[keep_out]]``): a lens within that radius of the kingpin, above it, is hit in a turn (the near-view rule
@@ -48,6 +49,10 @@ FIXTURE_REASONS = {
 }
 
 _FLIP = np.array([1.0, -1.0, 1.0])
+#: Parts of the body this close (m) to an exempt zone's box belong to the exempt device (a mirror's arm).
+EXEMPT_REACH_M = 0.2
+#: Protrusions beyond the width this small (m) are rounding (rig files give positions to the centimetre).
+WIDTH_TOLERANCE_M = 0.005
 
 
 def _mirrored(low, high) -> tuple[np.ndarray, np.ndarray]:
@@ -166,17 +171,36 @@ def in_spray_cones(vehicle: Vehicle, points, practice: MountPractice) -> list[li
     return found
 
 
-def width_protrusion(vehicle: Vehicle, points, normals, zones, housing, exempt=("mirror",)) -> np.ndarray:
-    """(n,) float m: how far each housing (``housing`` (w, h, d) m centred on the lens at ``points`` (n, 3), its
-    back on a surface of outward ``normals`` (n, 3)) sticks out beyond half the vehicle's legal width; 0 where
-    it does not or where its foot's zone (``zones`` (n,)) is one of ``exempt``."""
+def width_limits(vehicle: Vehicle, exempt=("mirror",)) -> tuple[float, float]:
+    """(left, right) m: how far from the centreline a housing may reach on each side: half the legal width, or
+    the body's own outermost side where the body is wider (parts within EXEMPT_REACH_M of an ``exempt`` zone's
+    box, the mirror heads and their arms, left out): a camera may not make the vehicle wider than the law
+    allows, nor than the body already is."""
+    vertices = np.asarray(vehicle.mesh.vertices)
+    kept = np.ones(len(vertices), dtype=bool)
+    for zone in vehicle.zones:
+        if zone.name in exempt:
+            kept &= ~_in_box(vertices, zone.min, zone.max, EXEMPT_REACH_M)
+    half = vehicle.legal_width / 2.0
+    return max(half, float(vertices[kept, 1].max())), max(half, float(-vertices[kept, 1].min()))
+
+
+def width_protrusion(vehicle: Vehicle, points, normals, zones, housing, exempt=("mirror",)
+                     ) -> tuple[np.ndarray, np.ndarray]:
+    """How far each housing (``housing`` (w, h, d) m centred on the lens at ``points`` (n, 3), its back on a
+    surface of outward ``normals`` (n, 3)) sticks out beyond its side's limit (:func:`width_limits`): (n,) m,
+    0 where it does not (by more than WIDTH_TOLERANCE_M) or where its foot's zone (``zones`` (n,)) is one of
+    ``exempt``; and that limit (n,) m. Whether a protrusion is allowed is the practice's ``width_allowance``."""
     from rigopt.mounting.shapes import surface_frame
 
     points, normals = np.atleast_2d(points), np.atleast_2d(normals)
     half = np.asarray(housing, dtype=float) / 2.0
     reach = np.array([np.abs(surface_frame(n, np.array([1.0, 0.0, 0.0]))[1]) @ half for n in normals])
-    beyond = np.abs(points[:, 1]) + reach - vehicle.legal_width / 2.0
-    return np.where(np.isin(np.asarray(zones, dtype=object), list(exempt)), 0.0, np.maximum(beyond, 0.0))
+    left, right = width_limits(vehicle, exempt)
+    limit = np.where(points[:, 1] >= 0, left, right)
+    beyond = np.abs(points[:, 1]) + reach - limit
+    exempted = np.isin(np.asarray(zones, dtype=object), list(exempt))
+    return np.where(exempted | (beyond <= WIDTH_TOLERANCE_M), 0.0, beyond), limit
 
 
 def in_tilt_arc(vehicle: Vehicle, points, margin: float, step_deg: float = 1.0) -> np.ndarray:

@@ -49,7 +49,10 @@ class MountPractice:
     ``hinge_band`` m either side of a door's hinged edge; ``lip_band`` m beyond a wheel arch's edge (the
     housing reaches 3-4 cm towards it, the lip's flange 1-2 cm more); the tyre-spray cone's
     ``spray_elevation_deg`` (its axis above backwards), ``spray_half_angle_deg`` and ``spray_length`` m;
-    ``width_exempt_zones`` zones whose cameras do not count in the legal width (mirrors); two cameras
+    ``width_exempt_zones`` zones whose cameras do not count in the legal width (mirrors) and
+    ``width_allowance`` m how far other cameras may stick out beyond it (Regulation (EU) 1230/2012, Annex I,
+    Appendix 1, point 1(c): devices on the sides other than mirrors, up to 100 mm in total, are not counted in
+    the width; 0 refuses any protrusion); two cameras
     duplicate each other within ``duplicate_distance`` m and ``duplicate_angle_deg``; ``features`` False
     switches the body-feature rules, the trailer's swing and the duplicate rule off (the rules before them)."""
 
@@ -64,6 +67,7 @@ class MountPractice:
     spray_half_angle_deg: float = 15.0
     spray_length: float = 2.0
     width_exempt_zones: tuple[str, ...] = ("mirror",)
+    width_allowance: float = 0.10
     duplicate_distance: float = 0.5
     duplicate_angle_deg: float = 10.0
     features: bool = True
@@ -159,7 +163,8 @@ def practice_problems(vehicle: Vehicle, points, practice: MountPractice = MountP
               features.on_fixtures(vehicle, points, margin),
               features.on_arch_lips(vehicle, points, practice.lip_band, practice.wheel_clearance),
               features.in_spray_cones(vehicle, points, practice)]
-    protrusion = features.width_protrusion(vehicle, points, surface.normal, zones, housing, practice.width_exempt_zones)
+    protrusion, limit = features.width_protrusion(vehicle, points, surface.normal, zones, housing,
+                                                  practice.width_exempt_zones)
     tilted = features.in_tilt_arc(vehicle, points, margin)
     swings = [(swing, *swing.holds(points)) for swing in features.trailer_swings(vehicle, practice.lifted)]
     # a lens on a post (a raised zone) looks through no windscreen
@@ -170,8 +175,12 @@ def practice_problems(vehicle: Vehicle, points, practice: MountPractice = MountP
         mine = _basic_problems(point, floor, wheels[k], boxes[k])
         for found in listed:
             mine += found[k]
-        if protrusion[k] > 1e-3:
-            mine.append(f"protrudes {protrusion[k]:.2f} m beyond the legal width {vehicle.legal_width:.2f} m")
+        if protrusion[k] > practice.width_allowance:
+            legal, allowed = vehicle.legal_width, f"side devices may add {practice.width_allowance:.2f} m"
+            mine.append(f"protrudes {protrusion[k]:.2f} m beyond the legal width {legal:.2f} m ({allowed})"
+                        if limit[k] <= legal / 2.0 + 1e-9 else
+                        f"protrudes {protrusion[k]:.2f} m beyond the body's side ({limit[k]:.2f} m from the "
+                        f"centreline: the body is wider than the legal {legal:.2f} m; {allowed})")
         if tilted[k]:
             cab = vehicle.spec.tilt_cab
             mine.append(f"in the tilt-cab arc (the cab sweeps it tilting up to {cab.angle_deg:.0f} deg about "

@@ -267,31 +267,51 @@ def test_the_spray_cone_is_as_long_and_wide_as_the_practice_says(truck):
 # --- the legal width --------------------------------------------------------------------------------------------
 
 
+STRICT = MountPractice(width_allowance=0.0)
+
+
 def test_a_housing_beyond_the_legal_width_protrudes(truck):
-    # on the locker's side (|y| 1.25): the housing's outer face at 1.25 + 0.06 = 1.31, 0.035 m beyond 1.275
-    found = problems_at(truck, [-0.4, 1.28, 1.0])
-    assert mentions(found, "protrudes 0.03 m beyond the legal width 2.55 m") or \
-        mentions(found, "protrudes 0.04 m beyond the legal width 2.55 m")
-    assert features.width_protrusion(truck, [[-0.4, 1.28, 1.0]], [[0.0, 1.0, 0.0]], ["side"],
-                                     (0.08, 0.06, 0.06))[0] == pytest.approx(0.035)
+    # on the locker's side (|y| 1.25): the housing's outer face at 1.28 + 0.03, 0.035 m beyond 1.275
+    found = problems_at(truck, [-0.4, 1.28, 1.0], STRICT)
+    assert "protrudes 0.04 m beyond the legal width 2.55 m (side devices may add 0.00 m)" in found
+    protrusion, limit = features.width_protrusion(truck, [[-0.4, 1.28, 1.0]], [[0.0, 1.0, 0.0]], ["side"],
+                                                  (0.08, 0.06, 0.06))
+    assert protrusion[0] == pytest.approx(0.035) and limit[0] == pytest.approx(1.275)
+
+
+def test_side_devices_may_add_the_allowance_and_no_more(truck):
+    assert not mentions(problems_at(truck, [-0.4, 1.28, 1.0]), "protrudes")  # 0.035 m: within the default 0.10
+    deep = practice_problems(truck, [[-0.4, 1.33, 1.0]], MountPractice(), housing=(0.08, 0.06, 0.16))[0]
+    assert "protrudes 0.14 m beyond the legal width 2.55 m (side devices may add 0.10 m)" in deep
 
 
 def test_a_housing_on_the_narrow_body_stays_within_the_width(truck):
-    assert not mentions(problems_at(truck, [-1.9, 0.93, 1.1]), "legal width")
+    assert not mentions(problems_at(truck, [-1.9, 0.93, 1.1], STRICT), "legal width")
 
 
 def test_a_mirror_camera_does_not_count_in_the_width(truck):
-    assert not mentions(problems_at(truck, [1.7, 1.33, 1.3]), "legal width")
+    assert not mentions(problems_at(truck, [1.7, 1.33, 1.3], STRICT), "legal width")
 
 
 def test_a_refrigerated_body_may_be_2_60_wide_and_a_spec_may_say_its_own(tmp_path):
     reefer = _truck(tmp_path, BOX_TRUCK.replace('blueprint = "vehicle.test.boxtruck"',
                                                 'blueprint = "vehicle.test.boxtruck"\nrefrigerated = true'))
     assert reefer.legal_width == 2.60
-    assert mentions(problems_at(reefer, [-0.4, 1.28, 1.0]), "protrudes 0.01 m beyond the legal width 2.60 m")
+    assert mentions(problems_at(reefer, [-0.4, 1.28, 1.0], STRICT), "protrudes 0.01 m beyond the legal width 2.60 m")
     wide = spec_from_dict({"name": "w", "legal_width": 2.7, "solids": [{"type": "box", "center": [0, 0, 1],
                                                                         "size": [4, 2, 1]}]})
     assert wide.legal_width == 2.7
+
+
+def test_on_a_body_wider_than_the_law_the_body_s_side_is_the_limit(tmp_path):
+    # the locker made 2.8 m wide: the body's own side (1.4 m) is the limit there, the mirror heads left out
+    wide = _truck(tmp_path, BOX_TRUCK.replace("size = [0.6, 2.5, 0.8]", "size = [0.6, 2.8, 0.8]"))
+    assert features.width_limits(wide) == pytest.approx((1.4, 1.4))
+    found = problems_at(wide, [-0.4, 1.43, 1.0], STRICT)  # on the locker: 1.43 + 0.03 sticks out 0.06 beyond it
+    assert ("protrudes 0.06 m beyond the body's side (1.40 m from the centreline: the body is wider than the legal "
+            "2.55 m; side devices may add 0.00 m)") in found
+    assert not mentions(problems_at(wide, [-0.4, 1.43, 1.0]), "protrudes")  # within the default allowance
+    assert not mentions(problems_at(wide, [-0.4, 1.33, 1.0], STRICT), "protrudes")  # beyond 1.275, not the body
 
 
 # --- the tilt-cab arc -------------------------------------------------------------------------------------------
@@ -410,7 +430,7 @@ def test_the_mount_points_leave_out_every_place_the_features_forbid(truck):
 
 def test_practice_switched_off_forbids_none_of_it(truck):
     off = MountPractice(enabled=False)
-    lenses = [[-2.33, 0.0, 0.65], [0.03, 0.93, 1.1], [0.0, 0.7, 1.63], [1.2, 0.93, 0.83], [-0.4, 1.28, 1.0],
+    lenses = [[-2.33, 0.0, 0.65], [0.03, 0.93, 1.1], [0.0, 0.7, 1.63], [1.2, 0.93, 0.83], [-0.3, 0.93, 0.55],
               [2.15, 0.0, 1.33], [-2.7, 1.0, 1.5], [2.03, 0.8, 1.2]]
     assert all(p for p in practice_problems(truck, lenses))
     assert practice_problems(truck, lenses, off) == [[]] * len(lenses)
