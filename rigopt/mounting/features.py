@@ -21,7 +21,8 @@ Per lens position (the mount points of :mod:`rigopt.mounting.sampling` leave out
   - *the tilt-cab arc* (``[tilt_cab]``): a lens not on the cab in the space the cab sweeps as it tilts;
   - *the trailer's swing*: a semi-trailer's front corners turn about its kingpin (``kingpin`` of its
     ``[[keep_out]]``): a lens within that radius of the kingpin, above it, is hit in a turn (the near-view rule
-    also keeps the swing out of every camera's first metre, :func:`swing_cylinders`);
+    of :func:`rigopt.mounting.rules.check_rig` and the clear directions of :mod:`rigopt.mounting.candidates`
+    also keep the swing out of every camera's first metre: :func:`trailer_swings`, :func:`segments_hit_swings`);
   - *the wiped area* (``[wiped_area]``): a lens in the windscreen's zone must look through the wiped glass.
 
 Frames and units: ISO 8855 vehicle frame, metres; angles in degrees where named ``_deg``.
