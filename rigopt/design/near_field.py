@@ -48,6 +48,7 @@ from rigopt.design.selection import (
 from rigopt.design.settings import CatalogueCamera
 from rigopt.mounting.practice import mounting_costs
 from rigopt.mounting.rules import MountRules
+from rigopt.mounting.shapes import NEAR_FIELD_CLEAR_CONE_DEG
 from rigopt.quiet import HIGHS_OPTIONS, quiet_highs
 from rigopt.rig.model import Rig
 from rigopt.vehicle.model import Vehicle
@@ -58,8 +59,8 @@ FISHEYE_IMAGE_SIZE = (1280, 800)
 #: Pitches (deg, > 0 up) and yaw step (deg) of the near-field candidates' orientations.
 NEAR_FIELD_PITCHES_DEG = (-90.0, -60.0, -45.0, -30.0, -15.0, 0.0)
 NEAR_FIELD_YAW_STEP = 45.0
-#: The central cone (a pinhole of this horizontal FOV, deg) that must be clear of the body.
-CLEAR_CONE_DEG = 60.0
+#: The central cone (a pinhole of this horizontal FOV, deg) that must be clear of the body: the mount rules'.
+CLEAR_CONE_DEG = NEAR_FIELD_CLEAR_CONE_DEG
 #: Largest share of a near-field camera's image that may show the ego body.
 MAX_BODY_FRACTION = 0.4
 #: The near ring: distances (m) from the body's footprint and heights (m) that must be seen all around.

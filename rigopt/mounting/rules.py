@@ -7,7 +7,8 @@ A camera is valid on a vehicle when
      normal) whose back face lies on the surface at the lens's foot point, penetrates the body by no more
      than ``penetration_tolerance``;
   3. its near view frustum (from ``near`` to ``frustum_range`` metres, the image shrunk by
-     ``frustum_margin`` of each half-angle) does not intersect the body;
+     ``frustum_margin`` of each half-angle; a near_field camera's central 60-degree cone, since a surround-view
+     fisheye sees its own body at its edges) does not intersect the body;
   4. its foot point and surface normal lie in one of the vehicle's zones;
   5. its housing does not collide with another camera's housing (cameras of one module, ``Camera.module``,
      share a housing and do not clash with each other);

@@ -61,9 +61,18 @@ def housing_object(foot: np.ndarray, normal: np.ndarray, forward: np.ndarray, si
     return fcl.CollisionObject(fcl.Box(w, h, d - sink), fcl.Transform(frame, centre))
 
 
+#: The checked view of a near_field camera: the central cone of a pinhole of this horizontal FOV (deg). A
+#: surround-view fisheye sees its own body at its image's edges by design; its centre must be clear.
+NEAR_FIELD_CLEAR_CONE_DEG = 60.0
+
+
 def frustum_vertices(camera: Camera, rules: MountRules) -> np.ndarray:
-    """(8, 3) float: near-plane then far-plane corners of the checked frustum, vehicle frame, metres."""
-    local = CameraModel.of_camera(camera).frustum_corners(rules.near, rules.frustum_range, 1.0 - rules.frustum_margin)
+    """(8, 3) float: near-plane then far-plane corners of the checked frustum, vehicle frame, metres (for a
+    near_field camera, the central NEAR_FIELD_CLEAR_CONE_DEG cone of its image's aspect)."""
+    model = CameraModel.of_camera(camera)
+    if camera.role == "near_field":
+        model = CameraModel.from_fov(NEAR_FIELD_CLEAR_CONE_DEG, camera.image_size)
+    local = model.frustum_corners(rules.near, rules.frustum_range, 1.0 - rules.frustum_margin)
     return camera.position + local @ camera.rotation.T
 
 

@@ -83,6 +83,7 @@ def test_a_two_role_design_leaves_the_fields_to_its_fisheyes():
     assert len(perception) == 8 and 1 <= len(fisheyes) <= 8
     assert all(c.lens is not None and c.lens.distortion == "fisheye" for c in fisheyes)
     assert [r.key for r in result.regions] == ["r158"] and result.regions[0].covered_frac == 1.0
+    assert result.design.check.valid, [c.problems for c in result.design.check.cameras if not c.valid]
     nf = Rig("nf", tt.blueprint, tuple(fisheyes))
     dense = np.concatenate([p.points(tt, 0.1) for p in parse_require("default", tt)])
     dense = dense[required_mask(tt, dense)]
