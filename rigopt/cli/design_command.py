@@ -114,10 +114,12 @@ def design_command(
     asymmetric: bool = typer.Option(False, "--asymmetric",
                                     help="Place cameras freely; by default a mirror-symmetric vehicle gets cameras "
                                          "in mirrored pairs and on its centreline."),
-    near_field: bool = typer.Option(False, "--near-field",
-                                    help="Two camera roles: perception cameras designed for the reference alone, "
-                                         "then near-field fisheyes (190 deg) that see the regulation fields and the "
-                                         "ground right around the body (docs/design.md, 'Near-field cameras')."),
+    near_field: Optional[bool] = typer.Option(None, "--near-field/--single-set",
+                                              help="Two camera roles (the default): perception cameras designed "
+                                                   "for the reference alone, then near-field fisheyes (190 deg) "
+                                                   "that see the regulation fields and the ground right around "
+                                                   "the body (docs/design.md, 'Near-field cameras'). "
+                                                   "--single-set: one camera set serves both."),
     pareto: bool = typer.Option(False, "--pareto", help="Sweep camera counts (--cameras, default the reference's "
                                                         "+-2) and coverage levels; write the frontier of predicted "
                                                         "drop, unseen near-field ground and mounting cost."),
@@ -161,7 +163,7 @@ def design_command(
         pitches_deg=pitches, yaw_step_deg=yaw_step, spacing=spacing,
         min_coverage=min_coverage, min_overlap=min_overlap, max_nodes=max_nodes, accept_gap=accept_gap,
         rules=mount_rules(min_height, no_trailer), symmetric=False if asymmetric else None, cost_weight=cost_weight,
-        require=require, near_field=near_field)
+        require=require, near_field=not pareto if near_field is None else near_field)
     references = [_reference(name.strip(), ref_vehicle) for name in ref.split(",") if name.strip()]
     if not references:
         raise RigoptError("--ref needs at least one rig")
@@ -173,7 +175,8 @@ def design_command(
     out = check_out_folder(out or Path(f"design-{target.name}-{label}"), force=force)
     status = Console(stderr=True)
     if pareto and near_field:
-        raise RigoptError("--pareto sweeps one camera set; leave out --near-field (or --pareto)")
+        raise RigoptError("--pareto sweeps one camera set; leave out --near-field or add --single-set "
+                          "(or leave out --pareto)")
     if pareto:
         _pareto(target, references, calibration, settings, out, force, as_json, status)
         return

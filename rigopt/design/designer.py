@@ -207,7 +207,7 @@ def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRi
     rigs = [r.rig for r in references]
     reference = rigs[0]
     progress(f"coverage requirements from {', '.join(r.name for r in rigs)} and the required fields")
-    near_field_presets = ()
+    near_field_presets, user_require = (), settings.require
     if settings.near_field:  # the fields are the near-field cameras' job, not the perception cameras'
         near_field_presets = required_presets(vehicle, settings) if settings.require != "none" else ()
         settings = replace(settings, require="none")
@@ -253,15 +253,15 @@ def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRi
         refinement = _refined(design, vehicle, reference, calibration, requirements, prepared.spacing, settings)
         if refinement.accepted:
             design = refinement.refined
+    stage = None
     if settings.near_field:
-        progress("near-field cameras for the fields and the near ring")
-        stage = design_near_field(vehicle, design.rig, near_field_presets, min(prepared.spacing, NEAR_FIELD_SPACING),
-                                  settings.is_symmetric_on(vehicle), settings.rules, zones=settings.zones,
-                                  max_nodes=settings.max_nodes, lifted=settings.rules.practice.lifted,
-                                  progress=progress)
+        stage, near_field_presets, fields_fallback = _near_field_stage(vehicle, design.rig, near_field_presets,
+                                                                       prepared.spacing, settings, user_require,
+                                                                       progress)
         design = summarise(stage.rig, vehicle, rigs, calibration, requirements, settings,
                            check_rig(stage.rig, vehicle, settings.rules))
         requirements = replace(requirements, presets=near_field_presets)
+        settings = replace(settings, require=user_require if near_field_presets else "none")
     regions = field_coverage(design.rig, vehicle, near_field_presets or required_fields(requirements, settings)
                              or default_presets(vehicle), settings)
 
@@ -279,7 +279,37 @@ def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRi
         naive_refinement)
     return DesignResult(design, milp, refinement, comparisons, float(reference_coverage), vehicle, references,
                         calibration, settings, time.perf_counter() - start, symmetry_fallback, regions,
-                        fields_fallback)
+                        fields_fallback, stage)
+
+
+def _near_field_stage(vehicle: Vehicle, perception: Rig, presets: tuple, spacing: float, settings: DesignSettings,
+                      user_require: str | None, progress) -> tuple:
+    """The near-field stage of a two-role design: (NearFieldDesign, the presets its cameras see, the fallback note
+    or None). The category's fields (``user_require`` None) that no near-field cameras see are dropped with a
+    note, the near ring still designed; named fields are strict."""
+    progress("near-field cameras for the fields and the near ring")
+    symmetric = settings.is_symmetric_on(vehicle)
+
+    def stage_for(required):
+        return design_near_field(vehicle, perception, required, min(spacing, NEAR_FIELD_SPACING), symmetric,
+                                 settings.rules, zones=settings.zones, max_nodes=settings.max_nodes,
+                                 lifted=settings.rules.practice.lifted, progress=progress)
+
+    fallback = None
+    try:
+        stage = stage_for(presets)
+    except DesignInfeasible as error:
+        if user_require is not None or not presets:
+            raise
+        fallback = (f"no near-field cameras see all of the vehicle category's fields "
+                    f"{', '.join(p.key for p in presets)} ({error}); they are reported, not required")
+        progress(fallback)
+        stage, presets = stage_for(()), ()
+    if stage.status == "node_limit" and not settings.accept_gap:
+        raise RigoptError(f"the near-field MILP stopped at its work limit of {settings.max_nodes} branch-and-bound "
+                          f"nodes {stage.gap:.1%} from proven best; raise --max-nodes (e.g. --max-nodes "
+                          f"{4 * settings.max_nodes}), or take the best found within it with --accept-gap")
+    return stage, presets, fallback
 
 
 #: Cameras beyond the reference's count a design with required fields may use by default (near-field cameras).

@@ -19,6 +19,8 @@ straight down), whose central cone (a CLEAR_CONE_DEG pinhole) is clear of the bo
 its own body at its edges, which is why it is mounted at the outermost points. ``m_c`` is the relative mounting
 cost (:func:`rigopt.mounting.practice.mounting_costs`). The MILP has a work limit, never a clock. Afterwards the
 fields are checked densely (every ``DENSE_SPACING`` m) and unseen points join the requirements of another round.
+The near ring is asked only where some candidate sees it (a body without mounts at its rear cannot see behind
+it); its other points are reported (``NearFieldDesign.ring_unseeable``).
 """
 
 from __future__ import annotations
@@ -96,6 +98,15 @@ class NearFieldPoints:
     def extended(self, points: np.ndarray, labels) -> "NearFieldPoints":
         return NearFieldPoints(np.concatenate([self.points, points]), self.labels + tuple(labels))
 
+    def subset(self, keep: np.ndarray) -> "NearFieldPoints":
+        """The points where ``keep`` (q,) bool holds."""
+        return NearFieldPoints(self.points[keep], tuple(label for label, k in zip(self.labels, keep) if k))
+
+    @property
+    def on_ring(self) -> np.ndarray:
+        """(q,) bool: the near ring's points (the rest are field points)."""
+        return np.array([label.startswith("near ring") for label in self.labels], dtype=bool)
+
 
 def near_field_points(vehicle: Vehicle, presets: tuple[RegionPreset, ...], lifted=()) -> NearFieldPoints:
     """The near ring around the footprint and every field point of ``presets`` (each at its heights), less the
@@ -138,6 +149,8 @@ class NearFieldDesign:
     gap: float
     seconds: float
     rounds: int
+    ring_unseeable: tuple[str, ...] = ()
+    """The near ring's points no candidate sees (the body allows no mount that sees them): reported, not asked."""
 
 
 def select_near_field(sees: np.ndarray, mount: np.ndarray, mount_points: np.ndarray, mount_cost: np.ndarray,
@@ -192,12 +205,22 @@ def design_near_field(vehicle: Vehicle, perception: Rig, presets: tuple[RegionPr
     model = candidates.model(index)
     points = near_field_points(vehicle, presets, lifted)
     progress(f"near field: {len(index)} fisheye candidates, {len(points.points)} points to see")
+    # The near ring is seen as far as the body allows: its points no candidate sees are reported, not asked;
+    # a field point no candidate sees is an error (select_near_field names it).
+    sees = visible_by(vehicle.mesh, model, candidates.positions[index], candidates.rotations[index], points.points,
+                      NEAR_FIELD_RANGE)
+    unseeable = points.on_ring & ~sees.any(axis=0)
+    ring_unseeable = tuple(label for label, u in zip(points.labels, unseeable) if u)
+    if ring_unseeable:
+        progress(f"near field: {len(ring_unseeable)} near-ring point(s) no candidate sees are left out")
+        points, sees = points.subset(~unseeable), sees[:, ~unseeable]
     cost = mounting_costs(vehicle, candidates.mount_zones[candidates.mount[index]], candidates.positions[index])
     dense = [preset.points(vehicle, DENSE_SPACING) for preset in presets]
     dense = [p[required_mask(vehicle, p, lifted)] for p in dense]
     for round_ in range(1, DENSE_ROUNDS + 1):
-        sees = visible_by(vehicle.mesh, model, candidates.positions[index], candidates.rotations[index], points.points,
-                          NEAR_FIELD_RANGE)
+        if round_ > 1:  # the points the dense check added
+            sees = visible_by(vehicle.mesh, model, candidates.positions[index], candidates.rotations[index],
+                              points.points, NEAR_FIELD_RANGE)
         chosen, status, gap = select_near_field(sees, candidates.mount[index], candidates.mount_points, cost, mirror,
                                                 max_nodes, points.labels)
         picked = index[chosen]
@@ -228,4 +251,5 @@ def design_near_field(vehicle: Vehicle, perception: Rig, presets: tuple[RegionPr
                 perception_cameras[p] = dataclasses.replace(perception_cameras[p], module=module)
                 cameras[n] = dataclasses.replace(cameras[n], module=module)
     rig = Rig(perception.name, perception.vehicle, tuple(perception_cameras) + tuple(cameras), perception.origin)
-    return NearFieldDesign(rig, len(index), len(points.points), status, gap, time.perf_counter() - start, round_)
+    return NearFieldDesign(rig, len(index), len(points.points), status, gap, time.perf_counter() - start, round_,
+                           ring_unseeable)

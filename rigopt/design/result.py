@@ -115,3 +115,6 @@ class DesignResult:
     is required, of the vehicle category's default fields (reported only)."""
     fields_fallback: str | None = None
     """Why the vehicle category's fields, required by default, were dropped (None when they were not)."""
+    near_field: object = None
+    """The near-field stage (:class:`rigopt.design.near_field.NearFieldDesign`) of a two-role design, else None
+    (the fields ``settings.require`` names are then required of its cameras, not of the perception cameras)."""

@@ -244,10 +244,10 @@ class DesignSettings:
     symmetric: bool | None = None
     """Cameras in mirrored pairs across y = 0 or on the centreline: None on a mirror-symmetric vehicle
     (:mod:`rigopt.vehicle.symmetry`), True always, False never (``--asymmetric``)."""
-    near_field: bool = False
-    """Two roles (``--near-field``): the perception cameras are designed for the reference alone (no fields
-    asked of them), then near_field fisheyes (:mod:`rigopt.design.near_field`) see the required fields and the
-    near ring around the body. False: one camera set serves both."""
+    near_field: bool = True
+    """Two roles (the default): the perception cameras are designed for the reference alone (no fields asked
+    of them), then near_field fisheyes (:mod:`rigopt.design.near_field`) see the required fields and the near
+    ring around the body. False (``--single-set``): one camera set serves both."""
 
     def is_symmetric_on(self, vehicle) -> bool:
         """Whether a design on ``vehicle`` places its cameras in mirrored pairs."""

@@ -189,7 +189,8 @@ def render_design_html(summary: dict, figures: dict[str, bytes], scene: str | No
     if summary.get("packaging"):
         parts += packaging_section(summary["packaging"], frame)
     if summary.get("regions"):
-        state = "required" if summary["regions_required"] else "reported, not required (--require to enforce)"
+        state = ("reported, not required (--require to enforce)" if not summary["regions_required"] else
+                 "required of the near-field cameras" if summary["solver"].get("near_field") else "required")
         parts += [f"<h2>Regulation fields ({escape(state)})</h2>",
                   table(["field", "source", "seen", "seen per height", "unseen area"],
                         [[escape(r["key"]), escape(r["source"]), pct(r["covered_frac"]),

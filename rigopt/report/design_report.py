@@ -147,10 +147,13 @@ def design_dict(result: DesignResult, rig_file: Path | None) -> dict:
         "cost_weight": result.settings.cost_weight,
         "solver": {"milp_status": milp.status, "milp_gap": milp.gap, "milp_seconds": milp.selection.seconds,
                    "refine_status": result.refinement.status, "candidates": milp.n_candidates,
-                   "offered_to_milp": milp.n_offered, "repairs": milp.repairs, "seconds": result.seconds},
+                   "offered_to_milp": milp.n_offered, "repairs": milp.repairs, "seconds": result.seconds,
+                   "near_field": near_field_dict(result.near_field)},
         "cameras": camera_rows(design.rig, reference, breakdown.pairs, result.vehicle),
         "packaging": packaging_rows(design.rig, result.vehicle),
         "symmetry": symmetry_dict(result),
+        "roles": {"perception": len(design.rig) - design.rig.near_field_count,
+                  "near_field": design.rig.near_field_count},
         "regions_required": result.settings.require != "none",
         "regions_fallback": result.fields_fallback,
         "regions": regions_dict(result.regions),
@@ -166,6 +169,15 @@ def design_dict(result: DesignResult, rig_file: Path | None) -> dict:
     return summary
 
 
+def near_field_dict(stage) -> dict | None:
+    """The near-field stage's MILP in the summary (None for a one-set design)."""
+    if stage is None:
+        return None
+    return {"status": stage.status, "gap": stage.gap, "cameras": stage.rig.near_field_count,
+            "candidates": stage.n_candidates, "points": stage.n_points, "dense_rounds": stage.rounds,
+            "near_ring_unseeable": len(stage.ring_unseeable), "seconds": stage.seconds}
+
+
 def comparison_notes(summary: dict) -> list[str]:
     """Lines a reader of the comparison table needs: why the design is predicted to lose more than the naive
     transfer when it is (``summary`` is :func:`design_dict` without its notes)."""
@@ -177,7 +189,8 @@ def comparison_notes(summary: dict) -> list[str]:
     if naive["meets_coverage_requirements"]:
         return [f"{lower} and meets every coverage requirement: the design did not find it (mount points and "
                 "orientations are sampled); compare the two in report.html and report it"]
-    fields = [r["key"] for r in summary["regions"]] if summary["regions_required"] else []
+    one_set = summary["solver"]["near_field"] is None  # two roles: the fields are the near-field cameras' job
+    fields = [r["key"] for r in summary["regions"]] if summary["regions_required"] and one_set else []
     needs = "the reference's ring sectors" + (f" and the required fields ({', '.join(fields)})" if fields else "")
     return [f"{lower} but misses what the design must see: {needs}; it sees {naive['coverage']:.1%} of the ring "
             f"sectors (the design {summary['coverage']:.1%})"

@@ -79,8 +79,8 @@ def test_a_design_from_a_catalogue_keeps_each_cameras_lens(tmp_path):
     summary = json.loads(result.stdout)
     catalogue = {c.name: c.lens for c in read_catalogue(tmp_path / "cameras.toml")}
     design = load_rig(out / "rig.json")
-    assert len(design) == 8
-    for camera, entry in zip(design.cameras, summary["cameras"]):
+    assert len(design.perception()) == 8  # the catalogue's lenses; the near-field cameras are fisheyes
+    for camera, entry in zip(design.perception().cameras, summary["cameras"]):
         assert camera.lens_model in catalogue.values()  # refined or not, the lens is the catalogue's
         assert entry["lens"]["width"] == camera.image_size[0] and entry["lens"]["fx"] == camera.lens_model.fx
         assert entry["lens"]["hfov_deg"] == pytest.approx(camera.fov, abs=1e-6)

@@ -104,7 +104,11 @@ def test_each_predicted_drop_has_its_interval_and_the_far_benchmark_rig_is_flagg
 
 def test_json_values_are_plausible(design_run):
     summary, _, _ = design_run
-    assert 8 <= summary["n_cameras"] <= 12  # R1's 8, up to 4 near-field cameras for the firetruck's fields
+    # two roles by default: R1's 8 perception cameras and the near-field fisheyes that see the firetruck's fields
+    assert summary["roles"]["perception"] == 8 and summary["roles"]["near_field"] >= 1
+    assert summary["n_cameras"] == summary["roles"]["perception"] + summary["roles"]["near_field"]
+    assert summary["solver"]["near_field"]["status"] == "optimal"
+    assert summary["solver"]["near_field"]["cameras"] == summary["roles"]["near_field"]
     assert summary["regions_required"] and summary["regions_fallback"] is None
     assert [r["key"] for r in summary["regions"]] == ["r151", "r159", "r158"]
     assert all(r["covered"] and r["covered_frac"] == 1.0 for r in summary["regions"])
@@ -141,7 +145,7 @@ def test_rig_file_loads_for_the_firetruck(design_run):
 def test_rig_file_has_the_reported_rigcd(design_run):
     summary, out, _ = design_run
     joint = load_weights("joint")
-    value = rigcd(load_rig("R1"), load_rig(out / "rig.json"), joint.alpha, joint.lambdas).rigcd
+    value = rigcd(load_rig("R1"), load_rig(out / "rig.json").perception(), joint.alpha, joint.lambdas).rigcd
     assert value == pytest.approx(summary["rigcd"], abs=1e-5)
 
 
