@@ -438,6 +438,8 @@ CASES: list[tuple[str, list[str], str]] = [
     ("design --out not empty", [*DESIGN, "--out", f"{T}/full"], "--force"),
     ("design --out unwritable", [*DESIGN, "--out", "/proc/rigopt-design"], "/proc/rigopt-design"),
     ("design --pareto --out not empty", [*DESIGN, "--pareto", "--out", f"{T}/full"], "--force"),
+    ("design --pareto with --near-field", [*DESIGN, "--pareto", "--near-field", "--out", f"{T}/pareto2"],
+     "--pareto sweeps one camera set"),
     # --- import nuscenes ---
     ("import missing folder", ["import", "nuscenes", f"{T}/none", "--out", f"{T}/r.json"], "no such folder"),
     ("import tables not UTF-8", ["import", "nuscenes", f"{T}/nuscenes_not_utf8", "--out", f"{T}/r.json"],
