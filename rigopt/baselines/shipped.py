@@ -147,48 +147,26 @@ def measure(rigs: Sequence[Rig], detector: ShippedDetector, cache: Path | None =
     Per seed: ``mAP`` and ``mAP_visible`` on the reference's test scenes rendered under the rig, the reference's
     own (from the card), the relative drops and their 95 % intervals over the card's scene resamples (paired
     with the reference's scores under the same resamples: test noise only). Over the seeds: the mean drops and
-    the interval of the mean drop over the same resamples.
+    the interval of the mean drop over the same resamples. Rendering runs in ``workers`` processes, and so does
+    scoring on the CPU (one seed's model per process, the cores shared among them; on a GPU one process).
     """
-    from rigopt.baselines.data import RigSplit
-    from rigopt.baselines.inference import match_split
-    from rigopt.baselines.models import load_checkpoint, model_from_checkpoint
-    from rigopt.baselines.protocol import TEST_SPLIT
-    from rigopt.baselines.validation import interval, sample_blocks
-    from rigopt.bench.evaluation import resampled_maps
+    from rigopt.baselines.validation import interval
+    from rigopt.bench.cluster import run_tasks
 
     cache = Path(cache) if cache is not None else default_cache()
     folders = render_cached(rigs, detector, cache, workers, progress)
-    boot = detector.card["bootstrap"]
-    with np.load(detector.folder / BOOTSTRAP) as stored:
-        reference_maps = {key: stored[key] for key in stored.files}
-    models = {}
-    for seed in detector.seeds:
-        models[seed] = model_from_checkpoint(load_checkpoint(detector.checkpoint(seed), detector.family))[0]
+    scorers = 1 if device != "cpu" else max(1, min(workers, len(detector.seeds)))
+    threads = max(1, (os.cpu_count() or 1) // scorers)
     results = []
     for rig, folder in zip(rigs, folders):
-        split = RigSplit(cache, folder, TEST_SPLIT, None, depths=False)
-        blocks = sample_blocks(split.samples)
-        if len(blocks) != boot["blocks"] or len(split) != detector.card["test_data"]["samples"]:
-            raise DataError(f"{cache / folder}: {len(split)} samples in {len(blocks)} scenes, not the "
-                            f"{detector.card['test_data']['samples']} in {boot['blocks']} the shipped models were "
-                            "scored on; delete that folder and run again")
-        seeds, resampled_drops, resampled_visible = {}, [], []
-        for seed, model in models.items():
-            progress(f"{rig.name}: scoring the {detector.family} model of seed {seed}")
-            matched = match_split(model, split, device)
-            own = detector.card["seeds"][str(seed)]
-            entry = {"mAP": matched.evaluation().map, "mAP_visible": matched.evaluation(visible_only=True).map}
-            drops = []
-            for key, visible in (("", False), ("_visible", True)):
-                maps = resampled_maps([matched], blocks, boot["resamples"], boot["seed"], visible_only=visible)[:, 0]
-                reference = reference_maps[f"seed{seed}_mAP{key}"]
-                drops.append((reference - maps) / reference)
-                entry[f"reference_mAP{key}"] = own[f"mAP{key}"]
-                entry[f"drop{key}"] = (own[f"mAP{key}"] - entry[f"mAP{key}"]) / own[f"mAP{key}"]
-                entry[f"drop{key}_ci"] = interval(drops[-1])
-            resampled_drops.append(drops[0])
-            resampled_visible.append(drops[1])
-            seeds[str(seed)] = entry
+        progress(f"{rig.name}: scoring {len(detector.seeds)} {detector.family} model(s)"
+                 + (f" in {scorers} processes" if scorers > 1 else ""))
+        calls = {seed: (detector, seed, cache, folder, device, threads if scorers > 1 else None)
+                 for seed in detector.seeds}
+        scored = dict(run_tasks(score_seed, calls, workers=scorers, what="scoring seed"))
+        seeds = {str(seed): scored[seed][0] for seed in detector.seeds}
+        resampled_drops = [scored[seed][1] for seed in detector.seeds]
+        resampled_visible = [scored[seed][2] for seed in detector.seeds]
         results.append({
             "rig": rig.name, "n_cameras": len(rig), "cache": str(cache / folder), "seeds": seeds,
             "drop": float(np.mean([s["drop"] for s in seeds.values()])),
@@ -196,6 +174,45 @@ def measure(rigs: Sequence[Rig], detector: ShippedDetector, cache: Path | None =
             "drop_visible": float(np.mean([s["drop_visible"] for s in seeds.values()])),
             "drop_visible_ci": interval(np.mean(resampled_visible, axis=0))})
     return results
+
+
+def score_seed(detector: ShippedDetector, seed: int, cache: Path, folder: str, device: str = "cpu",
+               threads: int | None = None) -> tuple[dict, np.ndarray, np.ndarray]:
+    """One shipped model (``seed``) scored on the rendering ``cache/folder``: its JSON-ready entry (mAPs, the
+    reference's, drops and their intervals) and its (resamples,) drops under the card's scene resamples, fixed
+    set and visible only. ``threads``: torch's CPU threads (None: as set)."""
+    import torch
+
+    from rigopt.baselines.data import RigSplit
+    from rigopt.baselines.inference import match_split
+    from rigopt.baselines.models import load_checkpoint, model_from_checkpoint
+    from rigopt.baselines.protocol import TEST_SPLIT
+    from rigopt.baselines.validation import interval, sample_blocks
+    from rigopt.bench.evaluation import resampled_maps
+
+    if threads is not None:
+        torch.set_num_threads(threads)
+    split = RigSplit(cache, folder, TEST_SPLIT, None, depths=False)
+    blocks = sample_blocks(split.samples)
+    boot = detector.card["bootstrap"]
+    if len(blocks) != boot["blocks"] or len(split) != detector.card["test_data"]["samples"]:
+        raise DataError(f"{cache / folder}: {len(split)} samples in {len(blocks)} scenes, not the "
+                        f"{detector.card['test_data']['samples']} in {boot['blocks']} the shipped models were "
+                        "scored on; delete that folder and run again")
+    model = model_from_checkpoint(load_checkpoint(detector.checkpoint(seed), detector.family))[0]
+    matched = match_split(model, split, device)
+    own = detector.card["seeds"][str(seed)]
+    entry = {"mAP": matched.evaluation().map, "mAP_visible": matched.evaluation(visible_only=True).map}
+    with np.load(detector.folder / BOOTSTRAP) as stored:
+        reference_maps = {key: stored[f"seed{seed}_mAP{key}"] for key in ("", "_visible")}
+    drops = []
+    for key, visible in (("", False), ("_visible", True)):
+        maps = resampled_maps([matched], blocks, boot["resamples"], boot["seed"], visible_only=visible)[:, 0]
+        drops.append((reference_maps[key] - maps) / reference_maps[key])
+        entry[f"reference_mAP{key}"] = own[f"mAP{key}"]
+        entry[f"drop{key}"] = (own[f"mAP{key}"] - entry[f"mAP{key}"]) / own[f"mAP{key}"]
+        entry[f"drop{key}_ci"] = interval(drops[-1])
+    return entry, drops[0], drops[1]
 
 
 def pack(runs: dict[int, Path], data: Path, out: Path, recipe: dict, train_data: dict,

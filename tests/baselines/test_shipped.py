@@ -87,6 +87,16 @@ def test_the_reference_measured_against_itself_loses_nothing_and_a_rerun_renders
     assert again["seeds"] == first["seeds"]
 
 
+def test_scoring_the_seeds_in_two_processes_gives_what_one_gives(use_packed, tmp_path):
+    detector = shipped.shipped_detector("lss", "R1")
+    rig = load_rig("R5")
+    messages = []
+    parallel = shipped.measure([rig], detector, tmp_path / "cache", workers=2, progress=messages.append)[0]
+    assert any("in 2 processes" in m for m in messages)
+    serial = shipped.measure([rig], detector, tmp_path / "cache", workers=1)[0]
+    assert parallel == serial and parallel["drop"] > 0
+
+
 def test_a_rig_scores_as_the_data_path_scores_it(use_packed, tmp_path):
     """The cache path and ``--data``'s (render the rig beside the reference, evaluate the checkpoint) agree."""
     from rigopt.baselines.protocol import evaluate_on_rigs
