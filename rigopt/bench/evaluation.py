@@ -59,6 +59,11 @@ EVAL_RANGE = 50.0
 RECALL_STEPS = 100
 MIN_RECALL = 0.1
 MIN_PRECISION = 0.1
+#: ``resampled_maps`` scores its resamples in chunks of about this many (resample, detection) entries per
+#: working array (int64: 2 MB each, a handful alive at once; small enough to stay in the cache).
+RESAMPLE_CHUNK_ENTRIES = 250_000
+#: The recall points AP keeps (i = 11..100: r > MIN_RECALL).
+KEPT_POINTS = np.arange(round(RECALL_STEPS * MIN_RECALL) + 1, RECALL_STEPS + 1)
 
 
 @dataclass(frozen=True)
@@ -243,6 +248,10 @@ def resampled_maps(matched: Sequence[MatchedDetections], groups: Sequence[Sequen
     so differences are paired).
 
     Groups are the resampling unit: samples that are not independent (consecutive frames) belong together.
+    Resample r counts sample i ``weights[r, i]`` times (how often the drawn groups hold it), and its mAP is
+    ``matched[k].evaluation(weights[r], visible_only).map`` (to rounding, about 1e-16: its sums run in
+    another order), computed for a chunk of resamples at once (``RESAMPLE_CHUNK_ENTRIES``) from the ranked
+    true positives, without expanding the weights.
     """
     if not matched:
         raise DataError("resampling needs at least one matched run")
@@ -253,12 +262,87 @@ def resampled_maps(matched: Sequence[MatchedDetections], groups: Sequence[Sequen
     if not members or any(len(g) == 0 or g.min() < 0 or g.max() >= len(samples) for g in members):
         raise DataError(f"groups must be non-empty lists of sample indices in 0..{len(samples) - 1}")
     rng = np.random.default_rng(seed)
+    widest = max([len(samples), len(KEPT_POINTS)] + [len(ranked) for m in matched for ranked in m.rank_sample])
+    chunk = max(1, RESAMPLE_CHUNK_ENTRIES // widest)
     maps = np.empty((resamples, len(matched)))
-    for r in range(resamples):
-        drawn = np.concatenate([members[i] for i in rng.integers(len(members), size=len(members))])
-        weights = np.bincount(drawn, minlength=len(samples))
-        maps[r] = [m.evaluation(weights, visible_only).map for m in matched]
+    for start in range(0, resamples, chunk):
+        weights = np.array([np.bincount(np.concatenate([members[i] for i in rng.integers(len(members),
+                                                                                         size=len(members))]),
+                                        minlength=len(samples))
+                            for _ in range(min(chunk, resamples - start))])  # (R, S) one draw per row
+        for k, m in enumerate(matched):
+            maps[start:start + len(weights), k] = _weighted_maps(m, weights, visible_only)
     return maps
+
+
+def _weighted_maps(matched: MatchedDetections, weights: np.ndarray, visible_only: bool) -> np.ndarray:
+    """(R,) mAP of ``matched`` with sample i counted ``weights[r, i]`` times in row r of ``weights`` (R, S)
+    int >= 0: ``MatchedDetections.evaluation`` for R weightings at once."""
+    n_gt = weights @ (matched.gt_count_visible if visible_only else matched.gt_count).T  # (R, C)
+    ap = np.full(n_gt.shape + (len(matched.thresholds),), np.nan)  # (R, C, T)
+    for c in np.flatnonzero(n_gt.any(axis=0)):
+        depth = int(np.flatnonzero(matched.tp[c].any(axis=0)).max(initial=-1)) + 1  # none below the last TP counts
+        copies = np.take(weights, matched.rank_sample[c][:depth], axis=1)  # (R, m) copies of each ranked detection
+        ranked = np.cumsum(copies, axis=1)  # (R, m) detections ranked up to each one's last copy
+        # true positives that reach each kept recall point i: 100 tp >= i n_gt <=> tp >= ceil(i n_gt / 100)
+        needed = -(-KEPT_POINTS * n_gt[:, c, None] // RECALL_STEPS)  # (R, 90)
+        for j in range(len(matched.thresholds)):
+            left_out = matched.on_unseen[c][j] if visible_only else None
+            ap[:, c, j] = _weighted_ap(copies, ranked, matched.tp[c][j], left_out, needed)
+    ap[n_gt == 0] = np.nan
+    per_class = ap.mean(axis=2)  # (R, C), NaN for the classes without ground truth
+    has_gt = n_gt > 0
+    counted = has_gt.sum(axis=1)
+    total = np.where(has_gt, per_class, 0.0).sum(axis=1)
+    return np.where(counted > 0, total / np.maximum(counted, 1), np.nan)
+
+
+def _weighted_ap(copies: np.ndarray, ranked: np.ndarray, tp: np.ndarray, left_out: np.ndarray | None,
+                 needed: np.ndarray) -> np.ndarray:
+    """(R,) ``average_precision`` of one class at one threshold under R weightings, without expanding them.
+
+    ``copies`` (R, m) int: copies of each ranked detection (its sample's weight; the copies are ranked next
+    to each other); ``ranked`` (R, m) int: their cumulative sum along the ranking; ``tp`` (m,) bool;
+    ``left_out`` (m,) bool or None: detections left out of the ranking (visible only: those on unseen
+    objects); ``needed`` (R, 90) int: the true positives that reach each kept recall point.
+
+    Why the true positives alone decide it, in the expanded sequence: within a run of copies of a true
+    positive the precision (a + q) / (b + q) rises with q, so the run's best is its last copy, reached
+    after ``ranked`` detections of which ``tp_count`` are true; a run of copies of a false positive is
+    never better than the rank just before it (a / (b + 1) <= a / b). So the best precision at or after any
+    rank inside a true positive's run is the best of the last copies of that and the later true
+    positives. A recall point is first reached inside the run of the first true positive whose cumulative
+    count reaches it (that run has copies: the count rose there). A true positive with no copies has the
+    precision of the last rank before it, which lies after any such first rank, so it changes no maximum.
+    """
+    kept = tp & ~left_out if left_out is not None else tp
+    hits = np.flatnonzero(kept)  # (P,) the true positives' ranks
+    rows, n_hits = len(copies), len(hits)
+    if n_hits == 0:
+        return np.zeros(rows)
+    tp_count = np.cumsum(np.take(copies, hits, axis=1), axis=1)  # (R, P) true positives up to each hit's last copy
+    ranked = np.take(ranked, hits, axis=1)  # (R, P) detections ranked up to each hit's last copy
+    if left_out is not None and left_out.any():
+        dropped = np.flatnonzero(left_out)
+        dropped_count = np.zeros((rows, len(dropped) + 1), dtype=ranked.dtype)  # (R, D + 1) of the first 0..D
+        np.cumsum(np.take(copies, dropped, axis=1), axis=1, out=dropped_count[:, 1:])
+        ranked -= np.take(dropped_count, np.searchsorted(dropped, hits), axis=1)  # those ranked above each hit
+    if not ranked[:, 0].all():  # nothing ranked up to a row's first hits (no copies): 0 / 0 read as 0
+        np.maximum(ranked, 1, out=ranked)
+    # Best precision at or after each hit, [:, P - 1 - p] for hit p. Precisions are >= 0 and non-negative
+    # doubles order as their bit patterns do, so the running maximum runs on int64 (exact, no NaN checks).
+    precision_bits = (tp_count / ranked).view(np.int64)
+    best_to_right = np.maximum.accumulate(precision_bits[:, ::-1], axis=1).view(np.float64)
+    # The first hit reaching each point, for every row at once in one sorted array: row r's counts raised
+    # by r * span, above every earlier row's.
+    span = int(max(tp_count[:, -1].max(), needed.max())) + 1
+    raised = np.arange(rows)[:, None] * span
+    tp_count += raised
+    first = np.searchsorted(tp_count.ravel(), (needed + raised).ravel()).reshape(rows, -1)
+    first -= np.arange(rows)[:, None] * n_hits  # (R, 90) index into the hits; P where never reached
+    best = np.take_along_axis(best_to_right, n_hits - 1 - np.minimum(first, n_hits - 1), axis=1)
+    curve = np.where(first < n_hits, best, 0.0)
+    return np.clip(curve - MIN_PRECISION, 0.0, None).sum(axis=1) / len(KEPT_POINTS) / (1.0 - MIN_PRECISION)
 
 
 def match(detections: Detections, ground_truth: GroundTruth, classes: Sequence[str] = CLASSES,
@@ -298,8 +382,7 @@ def match(detections: Detections, ground_truth: GroundTruth, classes: Sequence[s
             tp.append(np.zeros((len(thresholds), len(order)), dtype=bool))
             on_unseen.append(np.zeros((len(thresholds), len(order)), dtype=bool))
             continue
-        taken = np.array([_match(ranked_sample, ranked_xy, gt_sample[g_rows], gt_xy[g_rows], d)
-                          for d in thresholds]).reshape(len(thresholds), -1)  # (T, m) taken object, -1 none
+        taken = _match(ranked_sample, ranked_xy, gt_sample[g_rows], gt_xy[g_rows], thresholds)  # (T, m), -1 none
         unseen = np.append(~gt_seen[g_rows], False)  # index -1: no object taken
         tp.append(taken >= 0)
         on_unseen.append(unseen[taken])
@@ -334,22 +417,47 @@ def _rank(det_sample: np.ndarray, det_xy: np.ndarray, det_score: np.ndarray) -> 
 
 
 def _match(det_sample: np.ndarray, det_xy: np.ndarray, gt_sample: np.ndarray, gt_xy: np.ndarray,
-           threshold: float) -> np.ndarray:
-    """Greedy matching of one class's ranked detections (m,) to its ground truths (g,) -> (m,) int: the
-    index into the ground truths of the object each detection takes (a true positive), -1 for none."""
+           thresholds: Sequence[float]) -> np.ndarray:
+    """Greedy matching of one class's ranked detections (m,) to its ground truths (g,) at each of T
+    thresholds -> (T, m) int: the index into the ground truths of the object each detection takes (a true
+    positive), -1 for none.
+
+    Samples never share objects, so all samples are matched at once, turn by turn: turn t takes the t-th
+    ranked detection of every sample, which finds the nearest object still free in a table of its sample's
+    objects (one row per sample, in the canonical x, y order, so the first of equal distances wins).
+    """
+    taken = np.full((len(thresholds), len(det_sample)), -1, dtype=int)
     gt_order = np.lexsort((gt_xy[:, 1], gt_xy[:, 0], gt_sample))
     gt_sample, gt_xy = gt_sample[gt_order], gt_xy[gt_order]
-    free = np.ones(len(gt_sample), dtype=bool)
-    taken = np.full(len(det_sample), -1, dtype=int)
-    for rank in range(len(det_sample)):
-        candidates = np.flatnonzero(free & (gt_sample == det_sample[rank]))
-        if len(candidates) == 0:
-            continue
-        distance = np.hypot(*(gt_xy[candidates] - det_xy[rank]).T)
-        nearest = int(np.argmin(distance))  # first of equal distances: canonical (x, y) order
-        if distance[nearest] < threshold:
-            taken[rank] = gt_order[candidates[nearest]]
-            free[candidates[nearest]] = False
+    row_sample, row_start, row_size = np.unique(gt_sample, return_index=True, return_counts=True)
+    row = np.repeat(np.arange(len(row_sample)), row_size)  # (g,) each object's table row and column
+    column = np.arange(len(gt_sample)) - np.repeat(row_start, row_size)
+    table_xy = np.zeros((len(row_sample), int(row_size.max(initial=0)), 2))  # (rows, width, 2) m
+    table_xy[row, column] = gt_xy
+    table_object = np.zeros(table_xy.shape[:2], dtype=int)  # index into the caller's ground truths
+    table_object[row, column] = gt_order
+    free = np.zeros((len(thresholds),) + table_xy.shape[:2], dtype=bool)  # (T, rows, width)
+    free[:, row, column] = True
+
+    det_row = np.searchsorted(row_sample, det_sample)
+    has_objects = det_row < len(row_sample)
+    has_objects[has_objects] = row_sample[det_row[has_objects]] == det_sample[has_objects]
+    matchable = np.flatnonzero(has_objects)  # detections whose sample has objects, in rank order
+    by_row = matchable[np.argsort(det_row[matchable], kind="stable")]  # grouped by row, rank order within
+    turn = np.arange(len(by_row)) - np.searchsorted(det_row[by_row], det_row[by_row])  # rank within its sample
+    by_turn = np.argsort(turn, kind="stable")
+    turn_start = np.searchsorted(turn[by_turn], np.arange(int(turn.max(initial=-1)) + 2))
+    for t in range(len(turn_start) - 1):
+        ranks = by_row[by_turn[turn_start[t]:turn_start[t + 1]]]  # at most one detection per sample
+        rows = det_row[ranks]
+        offset = table_xy[rows] - det_xy[ranks][:, None, :]
+        distance = np.hypot(offset[..., 0], offset[..., 1])  # (n, width) m, as np.hypot of (object - detection)
+        for j, threshold in enumerate(thresholds):
+            candidate = np.where(free[j, rows], distance, np.inf)
+            nearest = np.argmin(candidate, axis=1)  # first of equal distances: canonical (x, y) order
+            hit = candidate[np.arange(len(rows)), nearest] < threshold
+            taken[j, ranks[hit]] = table_object[rows[hit], nearest[hit]]
+            free[j, rows[hit], nearest[hit]] = False
     return taken
 
 
