@@ -289,9 +289,17 @@ def _validate_shipped(rig, ref: str, family: str, calibration, weights: str, dev
         existing_folder(cache, "renderings of the reference's test scenes (made by rigopt validate)", option="--cache")
     rigs = [("rig", rig)]
     if rig.near_field_count:  # the detector is fed the perception cameras; the whole rig is kept for the record
-        rigs = [("perception cameras", rig.perception()), ("whole rig", dataclasses.replace(rig, name=f"{rig.name}_whole"))]
+        rigs = [("perception cameras", rig.perception())]
+        fisheyes = [c.id for c in rig.cameras if c.lens_model.distortion == "fisheye" or c.fov >= 180.0]
+        if fisheyes:  # a pinhole detector cannot take them: the whole rig has no measured drop to record
+            whole = (f"; not measured whole: {len(fisheyes)} of its cameras are fisheyes "
+                     f"({', '.join(fisheyes[:3])}{', ...' if len(fisheyes) > 3 else ''}) and the shipped "
+                     f"{family} models take pinhole images")
+        else:
+            rigs.append(("whole rig", dataclasses.replace(rig, name=f"{rig.name}_whole")))
+            whole = ", and whole for the record"
         note(f"{rig.name}: {rig.near_field_count} near_field camera(s) are not fed to the detector: measured on its "
-             f"{len(rigs[0][1])} perception cameras, and whole for the record")
+             f"{len(rigs[0][1])} perception cameras{whole}")
     if compare:
         rigs += comparison_rigs(rig, reference, calibration)[1:]
     names = [r.name for _, r in rigs]

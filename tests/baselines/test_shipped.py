@@ -178,6 +178,24 @@ def test_near_field_cameras_are_not_fed_to_the_detector(use_packed, tmp_path, ca
     assert "1 near_field camera(s) are not fed to the detector" in captured.err
 
 
+def test_a_rig_with_near_field_fisheyes_is_measured_on_its_perception_cameras_only(use_packed, tmp_path, capsys):
+    """The shipped models take pinhole images: a design's fisheyes are named, the whole rig is not measured."""
+    from rigopt.design.near_field import fisheye_190
+    from rigopt.rig.pccr_format import write_rig
+
+    r5 = load_rig("R5")
+    fisheye = dataclasses.replace(r5.cameras[0], id="FISHEYE", role="near_field", lens=fisheye_190().lens,
+                                  fov=fisheye_190().fov, image_size=(fisheye_190().lens.width, fisheye_190().lens.height))
+    path = write_rig(dataclasses.replace(r5, name="with_fisheye", cameras=(*r5.cameras, fisheye)), tmp_path / "f.json")
+    capsys.readouterr()
+    code = run(["validate", str(path), "--ref", "R1", "--model", "lss", "--json", "--workers", "1",
+                "--cache", str(tmp_path / "cache")])
+    captured = capsys.readouterr()
+    assert code == 0, captured.err
+    assert [(e["role"], e["n_cameras"]) for e in json.loads(captured.out)["rigs"]] == [("perception cameras", 4)]
+    assert "not measured whole" in captured.err and "FISHEYE" in captured.err
+
+
 def test_the_table_says_when_the_prediction_interval_is_uninformative(use_packed, tmp_path, capsys):
     """The joint calibration's interval spans the whole range: the cell and a note say so, JSON keeps it."""
     capsys.readouterr()
