@@ -114,6 +114,14 @@ def design_command(
     asymmetric: bool = typer.Option(False, "--asymmetric",
                                     help="Place cameras freely; by default a mirror-symmetric vehicle gets cameras "
                                          "in mirrored pairs and on its centreline."),
+    match_height: Optional[float] = typer.Option(None, "--match-height", min=0.0, callback=finite(),
+                                                 help="Pose tolerance (m): each perception camera within this "
+                                                      "height of its matched reference camera (a lifting "
+                                                      "detector's depth prior is its training rig's; "
+                                                      "docs/design.md, 'Pose tolerance')."),
+    match_pitch: Optional[float] = typer.Option(None, "--match-pitch", min=0.0, callback=finite(),
+                                                help="Pose tolerance (deg): each perception camera's pitch within "
+                                                     "this of its matched reference camera's."),
     near_field: Optional[bool] = typer.Option(None, "--near-field/--single-set",
                                               help="Two camera roles (the default): perception cameras designed "
                                                    "for the reference alone, then near-field fisheyes (190 deg) "
@@ -163,7 +171,8 @@ def design_command(
         pitches_deg=pitches, yaw_step_deg=yaw_step, spacing=spacing,
         min_coverage=min_coverage, min_overlap=min_overlap, max_nodes=max_nodes, accept_gap=accept_gap,
         rules=mount_rules(min_height, no_trailer), symmetric=False if asymmetric else None, cost_weight=cost_weight,
-        require=require, near_field=not pareto if near_field is None else near_field)
+        require=require, near_field=not pareto if near_field is None else near_field,
+        match_height_m=match_height, match_pitch_deg=match_pitch)
     references = [_reference(name.strip(), ref_vehicle) for name in ref.split(",") if name.strip()]
     if not references:
         raise RigoptError("--ref needs at least one rig")

@@ -111,7 +111,9 @@ def prepare(vehicle: Vehicle, references: Sequence[Rig], calibration: Calibratio
     spacing = settings.spacing or default_spacing(vehicle, settings)
     progress(f"sampling mount candidates on {vehicle.name} (spacing {spacing:.2f} m)")
     candidates = mount_candidates(vehicle, settings, spacing)
-    costs = tuple(matching_costs(candidates, rig, calibration) for rig in references)
+    costs = tuple(np.where(within_pose_tolerance(candidates.positions[:, 2], candidates.pitches, rig, settings),
+                           matching_costs(candidates, rig, calibration), OUT_OF_TOLERANCE_COST)
+                  for rig in references)
     no_sees, no_needs = np.zeros((len(candidates), 0), bool), np.zeros(0, int)
     pool = reduce(np.union1d, [prune(c, no_sees, no_needs, settings.keep_per_reference, 0) for c in costs],
                   _coverage_pool(candidates, list(references), settings))
@@ -172,6 +174,11 @@ def select_valid(prepared: Prepared, vehicle: Vehicle, calibration: Calibration,
                                settings, progress, local_mirror(candidates, offered[keep]),
                                prepared.mount_cost[offered[keep]])
         chosen = offered[keep][best.chosen]
+        paired = best.matched >= 0
+        if np.any(prepared.costs[0][chosen[paired], best.matched[paired]] >= OUT_OF_TOLERANCE_COST):
+            raise DesignInfeasible(f"no selection keeps every perception camera within {tolerance_text(settings)} "
+                                   "of its matched reference camera and meets the requirements; widen "
+                                   "--match-height / --match-pitch, add pitches (--pitch) or allow more zones")
         rig = _rig_from(candidates.subset(chosen), best.matched, prepared.references[0], vehicle)
         check = check_rig(rig, vehicle, settings.rules)
         failed = [(chosen[k], c) for k, c in enumerate(check.cameras) if not c.valid]
@@ -251,6 +258,11 @@ def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRi
     if settings.refine and len(rigs) == 1:
         progress("continuous refinement (casadi + IPOPT)")
         refinement = _refined(design, vehicle, reference, calibration, requirements, prepared.spacing, settings)
+        outside = pose_violations(refinement.refined.rig, reference, calibration, settings) if refinement.accepted \
+            else []
+        if outside:  # the continuous stage may slide and tilt a camera out of the tolerance: keep the MILP's rig
+            refinement = replace(refinement, accepted=False,
+                                 status=f"rejected: moves {', '.join(outside)} out of {tolerance_text(settings)}")
         if refinement.accepted:
             design = refinement.refined
     stage = None
@@ -507,6 +519,47 @@ def calibrated_matching(rig: Rig, reference: Rig, calibration: Calibration) -> n
     matched = np.full(len(rig), -1, dtype=int)
     matched[rows] = cols
     return matched
+
+
+#: Raw-unit matching cost of a (candidate, reference camera) pair outside the pose tolerance: the MILP never
+#: chooses one while a selection within it exists (a chosen one makes the design infeasible).
+OUT_OF_TOLERANCE_COST = 1e3
+
+
+def within_pose_tolerance(heights: np.ndarray, pitches: np.ndarray, reference: Rig,
+                          settings: DesignSettings) -> np.ndarray:
+    """(n, R) bool: whether a camera at height ``heights`` (n,) m above the ground, pitched ``pitches`` (n,)
+    rad, may be matched to each reference camera under ``settings.match_height_m`` and ``match_pitch_deg``."""
+    ok = np.ones((len(heights), len(reference)), dtype=bool)
+    if settings.match_height_m is not None:
+        ok &= np.abs(heights[:, None] - reference.positions[None, :, 2]) <= settings.match_height_m + 1e-9
+    if settings.match_pitch_deg is not None:
+        reference_pitches = np.arcsin(np.clip(reference.rotations[:, 2, 0], -1.0, 1.0))  # forward's z
+        gap = np.rad2deg(np.abs(pitches[:, None] - reference_pitches[None, :]))
+        ok &= gap <= settings.match_pitch_deg + 1e-6
+    return ok
+
+
+def tolerance_text(settings: DesignSettings) -> str:
+    """The pose tolerance in words, e.g. "0.1 m in height and 2 deg in pitch"."""
+    parts = ([f"{settings.match_height_m:g} m in height"] if settings.match_height_m is not None else []) + (
+        [f"{settings.match_pitch_deg:g} deg in pitch"] if settings.match_pitch_deg is not None else [])
+    return " and ".join(parts) or "any pose"
+
+
+def pose_violations(rig: Rig, reference: Rig, calibration: Calibration, settings: DesignSettings) -> list[str]:
+    """The ids of ``rig``'s perception cameras that no matching to the reference (the calibrated cost's
+    cheapest among those within the tolerance, as the MILP's) keeps within the pose tolerance."""
+    perception = rig.perception()
+    if settings.match_height_m is None and settings.match_pitch_deg is None:
+        return []
+    pitches = np.arcsin(np.clip(perception.rotations[:, 2, 0], -1.0, 1.0))
+    ok = within_pose_tolerance(perception.positions[:, 2], pitches, reference, settings)
+    lt, lr, lf = calibration.lambdas
+    t, r, f = camera_costs(perception.positions, perception.rotations, perception.fovs, reference.positions,
+                           reference.rotations, reference.fovs)
+    rows, cols = linear_sum_assignment(np.where(ok, lt * t + lr * r + lf * f, OUT_OF_TOLERANCE_COST))
+    return [perception.cameras[k].id for k, m in zip(rows, cols) if not ok[k, m]]
 
 
 def matching_costs(candidates: CandidateSet, reference: Rig, calibration: Calibration) -> np.ndarray:

@@ -244,6 +244,13 @@ class DesignSettings:
     symmetric: bool | None = None
     """Cameras in mirrored pairs across y = 0 or on the centreline: None on a mirror-symmetric vehicle
     (:mod:`rigopt.vehicle.symmetry`), True always, False never (``--asymmetric``)."""
+    match_height_m: float | None = None
+    """Pose tolerance of the perception cameras (``--match-height``): each may be matched only to a reference
+    camera whose height above the ground is within this many metres of its own (None: any). A lifting
+    detector's depth prior is its training rig's (docs/design.md, "Pose tolerance")."""
+    match_pitch_deg: float | None = None
+    """Pose tolerance (``--match-pitch``): each perception camera's pitch within this many degrees of its
+    matched reference camera's (None: any)."""
     near_field: bool = True
     """Two roles (the default): the perception cameras are designed for the reference alone (no fields asked
     of them), then near_field fisheyes (:mod:`rigopt.design.near_field`) see the required fields and the near
@@ -257,6 +264,9 @@ class DesignSettings:
         object.__setattr__(self, "lenses", catalogue_of(self.lenses))
         if not self.cost_weight >= 0.0:
             raise RigoptError(f"the mounting cost weight must be >= 0, got {self.cost_weight}")
+        for name, value in (("height", self.match_height_m), ("pitch", self.match_pitch_deg)):
+            if value is not None and not (np.isfinite(value) and value >= 0.0):
+                raise RigoptError(f"the {name} tolerance must be a finite number >= 0, got {value}")
         if self.max_body_fraction is not None and not 0.0 <= self.max_body_fraction <= 1.0:
             raise RigoptError(f"the largest ego-body share of an image must be in [0, 1], got {self.max_body_fraction}")
 

@@ -145,6 +145,7 @@ def design_dict(result: DesignResult, rig_file: Path | None) -> dict:
         "reference_coverage": result.reference_coverage,
         "mounting_cost": rig_mounting_cost(design.rig, result.vehicle),
         "cost_weight": result.settings.cost_weight,
+        "pose_tolerance": {"height_m": result.settings.match_height_m, "pitch_deg": result.settings.match_pitch_deg},
         "solver": {"milp_status": milp.status, "milp_gap": milp.gap, "milp_seconds": milp.selection.seconds,
                    "refine_status": result.refinement.status, "candidates": milp.n_candidates,
                    "offered_to_milp": milp.n_offered, "repairs": milp.repairs, "seconds": result.seconds,

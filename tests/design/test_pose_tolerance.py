@@ -1,0 +1,95 @@
+"""The perception cameras' pose tolerance (``--match-height``, ``--match-pitch``): each camera of a design is
+matched only to a reference camera within the tolerance of its height above the ground and its pitch."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from box_car import BOX_ZONES, ROOF_ZONE, spec_text
+from in_process import run_rigopt
+from rigopt.design.designer import (
+    design_rig,
+    pose_violations,
+    within_pose_tolerance,
+)
+from rigopt.design.problem import ReferenceRig
+from rigopt.design.selection import DesignInfeasible
+from rigopt.design.settings import DesignSettings
+from rigopt.errors import RigoptError
+from rigopt.metrics.calibration import load_weights
+from rigopt.rig.library import load_rig
+from rigopt.rig.model import Camera, Rig
+from rigopt.vehicle.model import Vehicle
+from rigopt.vehicle.spec import read_spec
+
+
+@pytest.fixture(scope="module")
+def box_car(tmp_path_factory) -> Vehicle:
+    path = tmp_path_factory.mktemp("posebox") / "vehicle.toml"
+    path.write_text(spec_text("posebox", zones=BOX_ZONES + ROOF_ZONE))
+    return Vehicle.from_spec(read_spec(path))
+
+
+def pitched(pitch_deg: float) -> np.ndarray:
+    """A camera rotation facing +x, pitched ``pitch_deg`` up (forward's z = sin(pitch))."""
+    p = np.deg2rad(pitch_deg)
+    forward = np.array([np.cos(p), 0.0, np.sin(p)])
+    left = np.array([0.0, 1.0, 0.0])
+    return np.column_stack([forward, left, np.cross(forward, left)])
+
+
+def test_the_tolerance_compares_height_above_ground_and_pitch():
+    reference = Rig("ref", "x", (Camera("A", np.array([0.0, 0.0, 1.0]), pitched(0.0), 90.0),
+                                 Camera("B", np.array([0.0, 0.0, 2.0]), pitched(-10.0), 90.0)))
+    heights = np.array([1.05, 1.2, 1.95, 2.0])
+    pitches = np.deg2rad([0.0, 0.0, -10.0, -5.0])
+    free = within_pose_tolerance(heights, pitches, reference, DesignSettings())
+    assert free.all()
+    ok = within_pose_tolerance(heights, pitches, reference, DesignSettings(match_height_m=0.1, match_pitch_deg=2.0))
+    assert ok.tolist() == [[True, False], [False, False], [False, True], [False, False]]
+    height_only = within_pose_tolerance(heights, pitches, reference, DesignSettings(match_height_m=0.1))
+    assert height_only.tolist() == [[True, False], [False, False], [False, True], [False, True]]
+
+
+def test_a_negative_or_infinite_tolerance_is_refused():
+    with pytest.raises(RigoptError, match="height tolerance"):
+        DesignSettings(match_height_m=-0.1)
+    with pytest.raises(RigoptError, match="pitch tolerance"):
+        DesignSettings(match_pitch_deg=float("inf"))
+
+
+def test_a_design_within_the_tolerance_keeps_every_matched_camera_inside_it(box_car):
+    reference = ReferenceRig.on_own_vehicle(load_rig("R1"))
+    settings = DesignSettings(lenses=(90.0, 120.0), yaw_step_deg=30.0, pitches_deg=(-10.0, 0.0), near_field=False,
+                              require="none", match_height_m=0.3, match_pitch_deg=0.0)
+    result = design_rig(box_car, reference, load_weights("joint"), settings)
+    rig = result.design.rig
+    assert pose_violations(rig, reference.rig, load_weights("joint"), settings) == []
+    # every camera has a reference camera within 0.3 m of its height (the matching's partner)
+    gaps = np.abs(rig.positions[:, 2, None] - reference.rig.positions[None, :, 2])
+    assert np.all(gaps.min(axis=1) <= 0.3 + 1e-9)
+    assert np.allclose(rig.rotations[:, 2, 0], 0.0, atol=1e-9)  # R1 looks level: so does every design camera
+    # without the tolerance the same problem is free to pitch cameras down
+    free = design_rig(box_car, reference, load_weights("joint"), DesignSettings(
+        lenses=(90.0, 120.0), yaw_step_deg=30.0, pitches_deg=(-10.0, 0.0), near_field=False, require="none"))
+    assert free.milp.selection.objective <= result.milp.selection.objective + 1e-9
+
+
+def test_a_tolerance_no_design_meets_is_an_error_that_says_how_to_widen_it(box_car):
+    settings = DesignSettings(lenses=(90.0, 120.0), yaw_step_deg=30.0, pitches_deg=(-10.0,), near_field=False,
+                              require="none", match_pitch_deg=2.0)  # R1 looks level; only -10 deg is offered
+    with pytest.raises(DesignInfeasible, match="within 2 deg in pitch.*--match-pitch"):
+        design_rig(box_car, ReferenceRig.on_own_vehicle(load_rig("R1")), load_weights("joint"), settings)
+
+
+def test_the_command_takes_the_tolerance_and_reports_it(tmp_path):
+    result = run_rigopt("design", "--vehicle", "tt", "--ref", "R1", "--match-height", "0.2", "--match-pitch", "0",
+                        "--single-set", "--require", "none", "--yaw-step", "30", "--out", tmp_path / "d", "--json")
+    assert result.returncode == 0, result.stderr
+    import json
+
+    summary = json.loads(result.stdout)
+    assert summary["pose_tolerance"] == {"height_m": 0.2, "pitch_deg": 0.0}
+    bad = run_rigopt("design", "--vehicle", "tt", "--ref", "R1", "--match-height", "-1")
+    assert bad.returncode == 2 and "--match-height" in bad.stderr
