@@ -324,6 +324,9 @@ def export_command(
                                                           "camchain YAML) or carla (spawn list JSON)."),
     out: Path = typer.Option(..., "--out", help="Folder (nuscenes) or file (.urdf, .yaml, .json) to write."),
     force: bool = typer.Option(False, "--force", help="Replace an existing --out."),
+    perception: bool = typer.Option(False, "--perception",
+                                    help="Write only the perception cameras (the ones a detector is fed; e.g. a "
+                                         "CARLA spawn list to render training data), not the near-field ones."),
 ):
     """Write a rig in another format; what the format cannot carry is said on stderr (docs/formats.md).
 
@@ -346,6 +349,9 @@ def export_command(
         if out.exists() and not force:
             raise RigoptError(f"--out {out}: the file exists; add --force to replace it, or choose another --out")
     loaded = load_rig(rig)
+    if perception and loaded.near_field_count:
+        note(f"{loaded.name}: its {loaded.near_field_count} near_field camera(s) left out (--perception)")
+        loaded = loaded.perception()
     vehicle = known_vehicle(loaded)
     if vehicle is not None:
         loaded, change = convert_origin(loaded, vehicle, RigOrigin(EXPORT_ORIGINS[format_name]))

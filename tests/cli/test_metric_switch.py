@@ -79,7 +79,7 @@ def test_design_with_rigcd_plus_minimises_and_reports_rigcd_plus(tmp_path):
     assert summary["metric"] == "rigcd+" and summary["weights"] == "joint"
     assert summary["predicted_drop"] == pytest.approx(float(plus.link(plus.K * summary["rigcd"])), rel=1e-9)
     design = load_rig(out / "rig.json")
-    assert predict_transfer(load_rig("R5"), [design], plus)[0].predicted_drop == pytest.approx(
+    assert predict_transfer(load_rig("R5"), [design.perception()], plus)[0].predicted_drop == pytest.approx(
         summary["predicted_drop"], rel=1e-9)
     assert json.loads((out / "report.json").read_text())["metric"] == "rigcd+"
     # on this coarse grid (yaws every 30 deg, level cameras, two lenses) no 4 cameras in mirrored pairs cover

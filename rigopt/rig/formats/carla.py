@@ -38,8 +38,10 @@ def export_carla(rig: Rig) -> Exported:
     """The CARLA JSON of ``rig`` (key "" of the files) and warnings for what a CARLA camera cannot carry."""
     wide = [f"{c.id} ({c.fov:.1f} deg)" for c in rig.cameras if not c.fov < 180.0]
     if wide:
+        near_field = any(c.role == "near_field" for c in rig.cameras if not c.fov < 180.0)
         raise RigoptError(f"CARLA's pinhole camera needs a FOV under 180 deg; {', '.join(wide)} cannot be written; "
-                          "export with --format opencv instead")
+                          + ("add --perception to write the perception cameras alone, or " if near_field else "")
+                          + "export with --format opencv instead")
     sensors, approximated = [], []
     for camera in rig.cameras:
         if camera.lens is not None:

@@ -140,3 +140,24 @@ def test_nuscenes_list_prints_the_distinct_calibrations():
     folder = Path(__file__).resolve().parents[2] / "fixtures" / "formats" / "nuscenes_two_logs"
     rows = json.loads(run_rigopt("import", "nuscenes", folder, "--list", "--json").stdout)
     assert [r["vehicles"] for r in rows] == [["n015"], ["n008"]]
+
+
+def test_a_design_with_near_field_fisheyes_goes_to_carla_with_its_perception_cameras(tmp_path):
+    """CARLA's pinhole cannot carry a 190-degree fisheye: the error names --perception, which writes the
+    perception cameras alone (with a note)."""
+    import dataclasses
+
+    from rigopt.design.near_field import fisheye_190
+    from rigopt.rig.pccr_format import write_rig
+
+    r1, fisheye = load_rig("R1"), fisheye_190()
+    near = dataclasses.replace(r1.cameras[0], id="NEAR", role="near_field", lens=fisheye.lens, fov=fisheye.fov,
+                               image_size=(fisheye.lens.width, fisheye.lens.height))
+    path = write_rig(dataclasses.replace(r1, name="two_roles", cameras=(*r1.cameras, near)), tmp_path / "rig.json")
+    refused = run_rigopt("export", path, "--format", "carla", "--out", tmp_path / "carla.json")
+    assert refused.returncode == 2 and "--perception" in refused.stderr and "NEAR" in refused.stderr
+    done = run_rigopt("export", path, "--format", "carla", "--perception", "--out", tmp_path / "carla.json")
+    assert done.returncode == 0, done.stderr
+    assert "1 near_field camera(s) left out" in done.stderr
+    sensors = json.loads((tmp_path / "carla.json").read_text())
+    assert "NEAR" not in json.dumps(sensors) and r1.cameras[0].id in json.dumps(sensors)
