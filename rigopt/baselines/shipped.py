@@ -147,7 +147,9 @@ def measure(rigs: Sequence[Rig], detector: ShippedDetector, cache: Path | None =
     Per seed: ``mAP`` and ``mAP_visible`` on the reference's test scenes rendered under the rig, the reference's
     own (from the card), the relative drops and their 95 % intervals over the card's scene resamples (paired
     with the reference's scores under the same resamples: test noise only). Over the seeds: the mean drops and
-    the interval of the mean drop over the same resamples. Rendering runs in ``workers`` processes, and so does
+    the interval of the mean drop over the same resamples. Each seed's entry keeps its (resamples,) fixed-set
+    drops under those resamples (``resampled_drops``, an array: :func:`paired_differences` pairs two rigs by
+    them; drop it before writing JSON). Rendering runs in ``workers`` processes, and so does
     scoring on the CPU (one seed's model per process, the cores shared among them; on a GPU one process).
     """
     from rigopt.baselines.validation import interval
@@ -164,7 +166,7 @@ def measure(rigs: Sequence[Rig], detector: ShippedDetector, cache: Path | None =
         calls = {seed: (detector, seed, cache, folder, device, threads if scorers > 1 else None)
                  for seed in detector.seeds}
         scored = dict(run_tasks(score_seed, calls, workers=scorers, what="scoring seed"))
-        seeds = {str(seed): scored[seed][0] for seed in detector.seeds}
+        seeds = {str(seed): {**scored[seed][0], "resampled_drops": scored[seed][1]} for seed in detector.seeds}
         resampled_drops = [scored[seed][1] for seed in detector.seeds]
         resampled_visible = [scored[seed][2] for seed in detector.seeds]
         results.append({
@@ -174,6 +176,21 @@ def measure(rigs: Sequence[Rig], detector: ShippedDetector, cache: Path | None =
             "drop_visible": float(np.mean([s["drop_visible"] for s in seeds.values()])),
             "drop_visible_ci": interval(np.mean(resampled_visible, axis=0))})
     return results
+
+
+def paired_differences(first: dict, other: dict) -> dict:
+    """``first`` minus ``other`` (two entries of :func:`measure`, scored on the same scene resamples): per seed
+    the difference of the fixed-set drops and its 95 % paired interval (test noise only), and over the seeds the
+    mean difference and the interval of the mean. Below 0: ``first`` loses less."""
+    from rigopt.baselines.validation import interval
+
+    seeds, resampled = {}, []
+    for seed, entry in first["seeds"].items():
+        gap = entry["resampled_drops"] - other["seeds"][seed]["resampled_drops"]
+        resampled.append(gap)
+        seeds[seed] = {"difference": entry["drop"] - other["seeds"][seed]["drop"], "ci": interval(gap)}
+    return {"rig": other["rig"], "seeds": seeds, "difference": float(np.mean([s["difference"] for s in seeds.values()])),
+            "ci": interval(np.mean(resampled, axis=0))}
 
 
 def score_seed(detector: ShippedDetector, seed: int, cache: Path, folder: str, device: str = "cpu",

@@ -276,7 +276,7 @@ def _validate_shipped(rig, ref: str, family: str, calibration, weights: str, dev
     import json
     import os
 
-    from rigopt.baselines.shipped import default_cache, measure, shipped_detector
+    from rigopt.baselines.shipped import default_cache, measure, paired_differences, shipped_detector
     from rigopt.baselines.validation import comparison_rigs
     from rigopt.metrics.ranking import predict_transfer
     from rigopt.output import existing_folder, write_text_atomic
@@ -323,6 +323,12 @@ def _validate_shipped(rig, ref: str, family: str, calibration, weights: str, dev
                         "interval_informative": prediction.interval_informative,
                         "extrapolation": prediction.to_dict()["extrapolation"], "rigcd": prediction.rigcd}
                        for (role, _), entry, prediction in zip(rigs, measured, predictions)]}
+    if compare:  # the rig (its perception cameras) against each yardstick, on the same scene resamples
+        result["paired"] = [{"role": role, **paired_differences(measured[0], entry)}
+                            for (role, _), entry in zip(rigs[1:], measured[1:]) if role != "whole rig"]
+    for entry in result["rigs"]:
+        for seed in entry["seeds"].values():
+            seed.pop("resampled_drops")
     if out is not None:
         write_text_atomic(out, json.dumps(json_ready(result), indent=1) + "\n")
     if as_json:
@@ -338,6 +344,12 @@ def _validate_shipped(rig, ref: str, family: str, calibration, weights: str, dev
                 ["role", "rig", "cameras", "drop per seed", "mean drop", "95 % interval (test scenes)",
                  "visible-only drop", "predicted drop", "90 % prediction interval", "extrapolates"], rows)
     _note_uninformative(result["rigs"], calibration)
+    if result.get("paired"):
+        print_table(f"{rigs[0][1].name} minus each: below 0 it loses less (* the paired 95 % interval excludes 0)",
+                    ["role", "rig", "difference per seed", "mean difference", "95 % interval (test scenes)"],
+                    [[p["role"], p["rig"], " / ".join(f"{s['difference']:+.3f}{_excludes_zero(s['ci'])}"
+                                                       for s in p["seeds"].values()),
+                      f"{p['difference']:+.3f}", _interval(p["ci"])] for p in result["paired"]])
     console.print(f"drops are relative to the model's own fixed-set mAP on {reference.name}; intervals resample the "
                   f"{result['test_scenes']} test scenes (test noise only); renderings kept in {result['cache']}")
 
@@ -370,6 +382,11 @@ def _visible_maps(out: Path, family: str, names: List[str]) -> dict:
         for tested in names:
             found[(trained, tested)] = results.get(tested, {}).get("metrics", {}).get("mAP_visible")
     return found
+
+
+def _excludes_zero(bounds) -> str:
+    """'*' when the interval ``bounds`` lies wholly on one side of 0."""
+    return "*" if None not in bounds and (bounds[0] > 0 or bounds[1] < 0) else ""
 
 
 def _number(value) -> str:

@@ -53,6 +53,8 @@ def main(argv=None) -> int:
         started = time.perf_counter()
         rig = load_rig(HERE / "rigs" / f"{row['rig']}.json")
         entry = measure([rig], detector, args.cache, args.device, args.workers)[0]
+        for s in entry["seeds"].values():
+            s.pop("resampled_drops")  # the scene resamples' drops: not kept
         seconds = time.perf_counter() - started
         fresh = not table.is_file()
         with open(table, "a", newline="") as handle:
