@@ -149,7 +149,7 @@ def measure(rigs: Sequence[Rig], detector: ShippedDetector, cache: Path | None =
     with the reference's scores under the same resamples: test noise only). Over the seeds: the mean drops and
     the interval of the mean drop over the same resamples. Each seed's entry keeps its (resamples,) fixed-set
     drops under those resamples (``resampled_drops``, an array: :func:`paired_differences` pairs two rigs by
-    them; drop it before writing JSON). Rendering runs in ``workers`` processes, and so does
+    them; :func:`without_resamples` before writing JSON). Rendering runs in ``workers`` processes, and so does
     scoring on the CPU (one seed's model per process, the cores shared among them; on a GPU one process).
     """
     from rigopt.baselines.validation import interval
@@ -179,6 +179,12 @@ def measure(rigs: Sequence[Rig], detector: ShippedDetector, cache: Path | None =
             "drop_visible": float(np.mean([s["drop_visible"] for s in seeds.values()])),
             "drop_visible_ci": interval(np.mean(resampled_visible, axis=0))})
     return results
+
+
+def without_resamples(entry: dict) -> dict:
+    """A :func:`measure` entry without its seeds' ``resampled_drops`` arrays: JSON-ready."""
+    return {**entry, "seeds": {seed: {key: value for key, value in fields.items() if key != "resampled_drops"}
+                               for seed, fields in entry["seeds"].items()}}
 
 
 def paired_differences(first: dict, other: dict) -> dict:

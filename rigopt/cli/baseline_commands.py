@@ -276,7 +276,13 @@ def _validate_shipped(rig, ref: str, family: str, calibration, weights: str, dev
     import json
     import os
 
-    from rigopt.baselines.shipped import default_cache, measure, paired_differences, shipped_detector
+    from rigopt.baselines.shipped import (
+        default_cache,
+        measure,
+        paired_differences,
+        shipped_detector,
+        without_resamples,
+    )
     from rigopt.baselines.validation import comparison_rigs
     from rigopt.metrics.ranking import predict_transfer
     from rigopt.output import existing_folder, write_text_atomic
@@ -318,7 +324,7 @@ def _validate_shipped(rig, ref: str, family: str, calibration, weights: str, dev
               "cache": str(cache or default_cache()), "metric": calibration.metric, "weights": calibration.name,
               "interval_note": "95 % intervals over resampled test scenes: the noise of the test, not uncertainty "
                                "over rigs or trainings",
-              "rigs": [{"role": role, **entry, "predicted_drop": prediction.predicted_drop,
+              "rigs": [{"role": role, **without_resamples(entry), "predicted_drop": prediction.predicted_drop,
                         "predicted_interval": prediction.to_dict()["interval"],
                         "interval_informative": prediction.interval_informative,
                         "extrapolation": prediction.to_dict()["extrapolation"], "rigcd": prediction.rigcd}
@@ -326,9 +332,6 @@ def _validate_shipped(rig, ref: str, family: str, calibration, weights: str, dev
     if compare:  # the rig (its perception cameras) against each yardstick, on the same scene resamples
         result["paired"] = [{"role": role, **paired_differences(measured[0], entry)}
                             for (role, _), entry in zip(rigs[1:], measured[1:]) if role != "whole rig"]
-    for entry in result["rigs"]:
-        for seed in entry["seeds"].values():
-            seed.pop("resampled_drops")
     if out is not None:
         write_text_atomic(out, json.dumps(json_ready(result), indent=1) + "\n")
     if as_json:

@@ -41,6 +41,7 @@ from rigopt.design.result import Comparisons, DesignResult, MilpStage, Refinemen
 from rigopt.design.selection import DesignInfeasible, Selection, prune, select_cameras
 from rigopt.design.settings import DesignSettings
 from rigopt.errors import RigoptError
+from rigopt.geometry import yaw_pitch_roll_from_rotation
 from rigopt.metrics.calibration import Calibration
 from rigopt.metrics.ranking import predict_transfer
 from rigopt.metrics.rigcd import camera_costs
@@ -111,9 +112,8 @@ def prepare(vehicle: Vehicle, references: Sequence[Rig], calibration: Calibratio
     spacing = settings.spacing or default_spacing(vehicle, settings)
     progress(f"sampling mount candidates on {vehicle.name} (spacing {spacing:.2f} m)")
     candidates = mount_candidates(vehicle, settings, spacing)
-    costs = tuple(np.where(within_pose_tolerance(candidates.positions[:, 2], candidates.pitches, rig, settings),
-                           matching_costs(candidates, rig, calibration), OUT_OF_TOLERANCE_COST)
-                  for rig in references)
+    costs = tuple(calibrated_costs(candidates.positions, candidates.rotations, candidates.fovs, rig, calibration,
+                                   settings) for rig in references)
     no_sees, no_needs = np.zeros((len(candidates), 0), bool), np.zeros(0, int)
     pool = reduce(np.union1d, [prune(c, no_sees, no_needs, settings.keep_per_reference, 0) for c in costs],
                   _coverage_pool(candidates, list(references), settings))
@@ -512,10 +512,8 @@ def summarise(rig: Rig, vehicle: Vehicle, references: Sequence[Rig], calibration
 def calibrated_matching(rig: Rig, reference: Rig, calibration: Calibration) -> np.ndarray:
     """(k,) int: the reference camera each camera of ``rig`` is matched to by the calibrated RigCD's optimal
     assignment (-1 for cameras beyond the reference's count)."""
-    lt, lr, lf = calibration.lambdas
-    t, r, f = camera_costs(rig.positions, rig.rotations, rig.fovs, reference.positions, reference.rotations,
-                           reference.fovs)
-    rows, cols = linear_sum_assignment(lt * t + lr * r + lf * f)
+    rows, cols = linear_sum_assignment(calibrated_costs(rig.positions, rig.rotations, rig.fovs, reference,
+                                                        calibration))
     matched = np.full(len(rig), -1, dtype=int)
     matched[rows] = cols
     return matched
@@ -534,8 +532,7 @@ def within_pose_tolerance(heights: np.ndarray, pitches: np.ndarray, reference: R
     if settings.match_height_m is not None:
         ok &= np.abs(heights[:, None] - reference.positions[None, :, 2]) <= settings.match_height_m + 1e-9
     if settings.match_pitch_deg is not None:
-        reference_pitches = np.arcsin(np.clip(reference.rotations[:, 2, 0], -1.0, 1.0))  # forward's z
-        gap = np.rad2deg(np.abs(pitches[:, None] - reference_pitches[None, :]))
+        gap = np.rad2deg(np.abs(pitches[:, None] - yaw_pitch_roll_from_rotation(reference.rotations)[1][None, :]))
         ok &= gap <= settings.match_pitch_deg + 1e-6
     return ok
 
@@ -553,21 +550,24 @@ def pose_violations(rig: Rig, reference: Rig, calibration: Calibration, settings
     perception = rig.perception()
     if settings.match_height_m is None and settings.match_pitch_deg is None:
         return []
-    pitches = np.arcsin(np.clip(perception.rotations[:, 2, 0], -1.0, 1.0))
-    ok = within_pose_tolerance(perception.positions[:, 2], pitches, reference, settings)
-    lt, lr, lf = calibration.lambdas
-    t, r, f = camera_costs(perception.positions, perception.rotations, perception.fovs, reference.positions,
-                           reference.rotations, reference.fovs)
-    rows, cols = linear_sum_assignment(np.where(ok, lt * t + lr * r + lf * f, OUT_OF_TOLERANCE_COST))
-    return [perception.cameras[k].id for k, m in zip(rows, cols) if not ok[k, m]]
+    costs = calibrated_costs(perception.positions, perception.rotations, perception.fovs, reference, calibration,
+                             settings)
+    rows, cols = linear_sum_assignment(costs)
+    return [perception.cameras[k].id for k, m in zip(rows, cols) if costs[k, m] >= OUT_OF_TOLERANCE_COST]
 
 
-def matching_costs(candidates: CandidateSet, reference: Rig, calibration: Calibration) -> np.ndarray:
-    """(n, R) float: the calibrated raw-unit cost of matching each candidate to each reference camera."""
+def calibrated_costs(positions: np.ndarray, rotations: np.ndarray, fovs: np.ndarray, reference: Rig,
+                     calibration: Calibration, settings: DesignSettings | None = None) -> np.ndarray:
+    """(n, R) float: the calibrated raw-unit cost of matching each camera (positions (n, 3) m, vehicle frame;
+    rotations (n, 3, 3); fovs (n,) deg) to each reference camera; OUT_OF_TOLERANCE_COST for the pairs outside
+    ``settings``' pose tolerance (None: no tolerance)."""
     lt, lr, lf = calibration.lambdas
-    t, r, f = camera_costs(candidates.positions, candidates.rotations, candidates.fovs,
-                           reference.positions, reference.rotations, reference.fovs)
-    return lt * t + lr * r + lf * f
+    t, r, f = camera_costs(positions, rotations, fovs, reference.positions, reference.rotations, reference.fovs)
+    costs = lt * t + lr * r + lf * f
+    if settings is None:
+        return costs
+    pitches = yaw_pitch_roll_from_rotation(rotations)[1]
+    return np.where(within_pose_tolerance(positions[:, 2], pitches, reference, settings), costs, OUT_OF_TOLERANCE_COST)
 
 
 #: Heights (m) closer than this count as the same for the height-matched transfer.

@@ -207,8 +207,11 @@ def design_near_field(vehicle: Vehicle, perception: Rig, presets: tuple[RegionPr
     progress(f"near field: {len(index)} fisheye candidates, {len(points.points)} points to see")
     # The near ring is seen as far as the body allows: its points no candidate sees are reported, not asked;
     # a field point no candidate sees is an error (select_near_field names it).
-    sees = visible_by(vehicle.mesh, model, candidates.positions[index], candidates.rotations[index], points.points,
-                      NEAR_FIELD_RANGE)
+    def seen_by_candidates(required: NearFieldPoints) -> np.ndarray:
+        return visible_by(vehicle.mesh, model, candidates.positions[index], candidates.rotations[index],
+                          required.points, NEAR_FIELD_RANGE)
+
+    sees = seen_by_candidates(points)
     unseeable = points.on_ring & ~sees.any(axis=0)
     ring_unseeable = tuple(label for label, u in zip(points.labels, unseeable) if u)
     if ring_unseeable:
@@ -219,8 +222,7 @@ def design_near_field(vehicle: Vehicle, perception: Rig, presets: tuple[RegionPr
     dense = [p[required_mask(vehicle, p, lifted)] for p in dense]
     for round_ in range(1, DENSE_ROUNDS + 1):
         if round_ > 1:  # the points the dense check added
-            sees = visible_by(vehicle.mesh, model, candidates.positions[index], candidates.rotations[index],
-                              points.points, NEAR_FIELD_RANGE)
+            sees = seen_by_candidates(points)
         chosen, status, gap = select_near_field(sees, candidates.mount[index], candidates.mount_points, cost, mirror,
                                                 max_nodes, points.labels)
         picked = index[chosen]

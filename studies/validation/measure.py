@@ -38,7 +38,7 @@ def main(argv=None) -> int:
     parser.add_argument("--device", default="cpu")
     parser.add_argument("--only", nargs="*", default=None, help="measure only these rigs")
     args = parser.parse_args(argv)
-    from rigopt.baselines.shipped import measure, shipped_detector
+    from rigopt.baselines.shipped import measure, shipped_detector, without_resamples
     from rigopt.rig.library import load_rig
 
     detector = shipped_detector("lss", "R1")
@@ -52,9 +52,7 @@ def main(argv=None) -> int:
     for k, row in enumerate(todo, start=1):
         started = time.perf_counter()
         rig = load_rig(HERE / "rigs" / f"{row['rig']}.json")
-        entry = measure([rig], detector, args.cache, args.device, args.workers)[0]
-        for s in entry["seeds"].values():
-            s.pop("resampled_drops")  # the scene resamples' drops: not kept
+        entry = without_resamples(measure([rig], detector, args.cache, args.device, args.workers)[0])
         seconds = time.perf_counter() - started
         fresh = not table.is_file()
         with open(table, "a", newline="") as handle:

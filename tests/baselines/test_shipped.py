@@ -73,12 +73,6 @@ def test_pack_writes_half_weights_and_a_card_with_the_packed_models_own_scores(u
     assert card["size_bytes"] == detector.size_bytes() > 0
 
 
-def without_resamples(entry: dict) -> dict:
-    """A measured entry without the per-seed arrays of resampled drops (compared apart)."""
-    return {**entry, "seeds": {k: {f: v for f, v in s.items() if f != "resampled_drops"}
-                               for k, s in entry["seeds"].items()}}
-
-
 def test_the_reference_measured_against_itself_loses_nothing_and_a_rerun_renders_nothing(use_packed, tmp_path):
     detector = shipped.shipped_detector("lss", "R1")
     messages = []
@@ -90,7 +84,7 @@ def test_the_reference_measured_against_itself_loses_nothing_and_a_rerun_renders
     messages.clear()
     again = shipped.measure([load_rig("R1")], detector, tmp_path / "cache", progress=messages.append)[0]
     assert any("done before, skipped" in m for m in messages) and not any("rendered" in m for m in messages)
-    assert without_resamples(again) == without_resamples(first)
+    assert shipped.without_resamples(again) == shipped.without_resamples(first)
     for seed, entry in first["seeds"].items():
         assert np.array_equal(entry["resampled_drops"], again["seeds"][seed]["resampled_drops"])
 
@@ -102,7 +96,7 @@ def test_scoring_the_seeds_in_two_processes_gives_what_one_gives(use_packed, tmp
     parallel = shipped.measure([rig], detector, tmp_path / "cache", workers=2, progress=messages.append)[0]
     assert any("in 2 processes" in m for m in messages)
     serial = shipped.measure([rig], detector, tmp_path / "cache", workers=1)[0]
-    assert without_resamples(parallel) == without_resamples(serial) and parallel["drop"] > 0
+    assert shipped.without_resamples(parallel) == shipped.without_resamples(serial) and parallel["drop"] > 0
 
 
 def test_a_rig_scores_as_the_data_path_scores_it(use_packed, tmp_path):

@@ -1,6 +1,6 @@
 """The fast scene bootstrap and matching of ``rigopt.bench.evaluation`` against their plain definitions.
 
-Oracles, kept here and not in the package:
+Oracles (``evaluation_oracles.py`` beside this file, which the speed benchmark shares), not in the package:
 
 * ``plain_resampled_maps``: one ``MatchedDetections.evaluation(weights)`` per resample (which expands the
   weighted true-positive flags with ``np.repeat`` and scores them with ``average_precision``), the way
@@ -28,37 +28,9 @@ from rigopt.bench.evaluation import (
 )
 from rigopt.bench.scene_model import CLASSES
 
+from evaluation_oracles import plain_match, plain_resampled_maps
+
 TOLERANCE = 1e-12
-
-
-def plain_resampled_maps(matched, groups, resamples, seed, visible_only=False) -> np.ndarray:
-    """(resamples, K) mAP, one ``evaluation`` call per resample and run; the same draws as resampled_maps."""
-    members = [np.asarray(g, dtype=int) for g in groups]
-    rng = np.random.default_rng(seed)
-    maps = np.empty((resamples, len(matched)))
-    for r in range(resamples):
-        drawn = np.concatenate([members[i] for i in rng.integers(len(members), size=len(members))])
-        weights = np.bincount(drawn, minlength=len(matched[0].samples))
-        maps[r] = [m.evaluation(weights, visible_only).map for m in matched]
-    return maps
-
-
-def plain_match(det_sample, det_xy, gt_sample, gt_xy, threshold) -> np.ndarray:
-    """(m,) object taken by each ranked detection at one threshold, -1 for none: one detection at a time."""
-    gt_order = np.lexsort((gt_xy[:, 1], gt_xy[:, 0], gt_sample))
-    gt_sample, gt_xy = gt_sample[gt_order], gt_xy[gt_order]
-    free = np.ones(len(gt_sample), dtype=bool)
-    taken = np.full(len(det_sample), -1, dtype=int)
-    for rank in range(len(det_sample)):
-        candidates = np.flatnonzero(free & (gt_sample == det_sample[rank]))
-        if len(candidates) == 0:
-            continue
-        distance = np.hypot(*(gt_xy[candidates] - det_xy[rank]).T)
-        nearest = int(np.argmin(distance))
-        if distance[nearest] < threshold:
-            taken[rank] = gt_order[candidates[nearest]]
-            free[candidates[nearest]] = False
-    return taken
 
 
 def random_set(seed: int, n_samples: int = 20, n_classes: int = 4):
