@@ -214,8 +214,8 @@ def render_design_html(summary: dict, figures: dict[str, bytes], scene: str | No
 NEXT_STEPS = (
     ("rigopt check rig.json", "every mount rule, camera by camera"),
     ("rigopt coverage rig.json --out coverage", "rings, blind zone and regulation fields as a page of its own"),
-    ("rigopt export rig.json --format carla --out rig_carla.json", "a CARLA spawn list to render the rig; "
-     "nuscenes, urdf and opencv too"),
+    ("rigopt export rig.json --format carla --perception --out rig_carla.json", "a CARLA spawn list of the "
+     "perception cameras, to render what the detector sees; opencv also carries the near-field fisheyes"),
 )
 
 
