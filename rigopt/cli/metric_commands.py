@@ -63,7 +63,7 @@ def rigcd_command(
     calibration = load_weights(weights or DEFAULT_WEIGHTS, metric)
     (rig_a, rig_b), changes = _comparable([a, b], vehicle)
     p = predict_transfer(rig_a, [rig_b], calibration)[0]
-    if weights is None:  # the distance with the definition's unit weights, the drop from the default calibration
+    if weights is None and calibration.lifting is None:  # RigCD's unit-weight distance, the default drop
         unit = predict_transfer(rig_a, [rig_b], None)[0]
         p = replace(p, rigcd=unit.rigcd, match=unit.match)
     _note_changes((rig_a, rig_b), changes)

@@ -24,6 +24,7 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 from scipy.spatial import cKDTree
 
+from rigopt.camera import CameraModel
 from rigopt.design.naming import mount_name, unique
 from rigopt.mounting.practice import mounting_costs
 from rigopt.mounting.rules import RigCheck, check_rig
@@ -43,6 +44,7 @@ from rigopt.design.settings import DesignSettings
 from rigopt.errors import RigoptError
 from rigopt.geometry import yaw_pitch_roll_from_rotation
 from rigopt.metrics.calibration import Calibration
+from rigopt.metrics.lifting import pair_terms
 from rigopt.metrics.ranking import predict_transfer
 from rigopt.metrics.rigcd import camera_costs
 from rigopt.rig.model import Rig
@@ -113,7 +115,7 @@ def prepare(vehicle: Vehicle, references: Sequence[Rig], calibration: Calibratio
     progress(f"sampling mount candidates on {vehicle.name} (spacing {spacing:.2f} m)")
     candidates = mount_candidates(vehicle, settings, spacing)
     costs = tuple(calibrated_costs(candidates.positions, candidates.rotations, candidates.fovs, rig, calibration,
-                                   settings) for rig in references)
+                                   settings, candidates.model()) for rig in references)
     no_sees, no_needs = np.zeros((len(candidates), 0), bool), np.zeros(0, int)
     pool = reduce(np.union1d, [prune(c, no_sees, no_needs, settings.keep_per_reference, 0) for c in costs],
                   _coverage_pool(candidates, list(references), settings))
@@ -255,7 +257,10 @@ def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRi
         raise DesignInfeasible("the selected rig does not meet the coverage requirements when recomputed; "
                                "this should not happen: please report it")
     refinement = RefinementReport("off" if len(rigs) == 1 else "off (fleet design)")
-    if settings.refine and len(rigs) == 1:
+    if calibration.lifting is not None:  # the continuous stage's objective has RigCD's terms only
+        refinement = RefinementReport(f"off ({calibration.metric}: the continuous stage weighs RigCD's terms only)")
+    refines = settings.refine and len(rigs) == 1 and calibration.lifting is None
+    if refines:
         progress("continuous refinement (casadi + IPOPT)")
         refinement = _refined(design, vehicle, reference, calibration, requirements, prepared.spacing, settings)
         outside = pose_violations(refinement.refined.rig, reference, calibration, settings) if refinement.accepted \
@@ -281,7 +286,7 @@ def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRi
                                              settings.coverage).sees.any(axis=0).mean()
     naive = naive_transfer(vehicle, reference, prepared.candidates, settings)
     naive_refinement = "off"
-    if naive is not None and settings.refine and len(rigs) == 1:
+    if naive is not None and refines:
         progress("refining the naive transfer as the design")
         naive, naive_refinement = refine_comparison(naive, vehicle, reference, calibration, requirements,
                                                     prepared.spacing, settings)
@@ -512,8 +517,7 @@ def summarise(rig: Rig, vehicle: Vehicle, references: Sequence[Rig], calibration
 def calibrated_matching(rig: Rig, reference: Rig, calibration: Calibration) -> np.ndarray:
     """(k,) int: the reference camera each camera of ``rig`` is matched to by the calibrated RigCD's optimal
     assignment (-1 for cameras beyond the reference's count)."""
-    rows, cols = linear_sum_assignment(calibrated_costs(rig.positions, rig.rotations, rig.fovs, reference,
-                                                        calibration))
+    rows, cols = linear_sum_assignment(rig_costs(rig, reference, calibration))
     matched = np.full(len(rig), -1, dtype=int)
     matched[rows] = cols
     return matched
@@ -550,24 +554,35 @@ def pose_violations(rig: Rig, reference: Rig, calibration: Calibration, settings
     perception = rig.perception()
     if settings.match_height_m is None and settings.match_pitch_deg is None:
         return []
-    costs = calibrated_costs(perception.positions, perception.rotations, perception.fovs, reference, calibration,
-                             settings)
+    costs = rig_costs(perception, reference, calibration, settings)
     rows, cols = linear_sum_assignment(costs)
     return [perception.cameras[k].id for k, m in zip(rows, cols) if costs[k, m] >= OUT_OF_TOLERANCE_COST]
 
 
 def calibrated_costs(positions: np.ndarray, rotations: np.ndarray, fovs: np.ndarray, reference: Rig,
-                     calibration: Calibration, settings: DesignSettings | None = None) -> np.ndarray:
+                     calibration: Calibration, settings: DesignSettings | None = None,
+                     model: CameraModel | None = None) -> np.ndarray:
     """(n, R) float: the calibrated raw-unit cost of matching each camera (positions (n, 3) m, vehicle frame;
-    rotations (n, 3, 3); fovs (n,) deg) to each reference camera; OUT_OF_TOLERANCE_COST for the pairs outside
-    ``settings``' pose tolerance (None: no tolerance)."""
+    rotations (n, 3, 3); fovs (n,) deg; lenses ``model`` of batch (n,), needed by a lifting metric's depth
+    prior) to each reference camera; OUT_OF_TOLERANCE_COST for the pairs outside ``settings``' pose tolerance
+    (None: no tolerance)."""
     lt, lr, lf = calibration.lambdas
     t, r, f = camera_costs(positions, rotations, fovs, reference.positions, reference.rotations, reference.fovs)
     costs = lt * t + lr * r + lf * f
+    if calibration.lifting is not None:
+        if model is None:
+            raise ValueError(f"calibrated_costs under {calibration.metric} needs the cameras' lenses (model)")
+        costs = costs + pair_terms(positions, rotations, model, reference) @ np.asarray(calibration.lifting)
     if settings is None:
         return costs
     pitches = yaw_pitch_roll_from_rotation(rotations)[1]
     return np.where(within_pose_tolerance(positions[:, 2], pitches, reference, settings), costs, OUT_OF_TOLERANCE_COST)
+
+
+def rig_costs(rig: Rig, reference: Rig, calibration: Calibration, settings: DesignSettings | None = None) -> np.ndarray:
+    """(len(rig), R) float: :func:`calibrated_costs` of ``rig``'s cameras to the reference's."""
+    return calibrated_costs(rig.positions, rig.rotations, rig.fovs, reference, calibration, settings,
+                            CameraModel.of_cameras(rig.cameras))
 
 
 #: Heights (m) closer than this count as the same for the height-matched transfer.

@@ -13,13 +13,20 @@ Predictions always come from (K, alpha, lambdas). That linear prediction is unbo
 also carry a saturating link into [0, 1], a prediction interval and its calibration pairs' domain
 (``prediction.py``), which turn it into the predicted drop users see (:meth:`Calibration.drop`).
 
-Two metrics share this model and differ only in the matching under which the features are measured:
+The published metric and RigCD+ share this model and differ only in the matching under which the features are
+measured:
 
 - ``rigcd`` (the published RigCD, the default): the unit-weight matching, lambdas (1, 1, 1);
 - ``rigcd+`` (RigCD+ with calibrated matching, variant V6 of ``studies/rigcd_plus``): the matching that
   minimises the calibration's own weighted cost ``lt t + lr r + lf f``, found by iterating fit -> rematch ->
   refit until the training features stop changing (``matched_fit.py``). Its predicted drop is exactly
   K x RigCD under its own weights, the quantity ``rigopt design`` minimises.
+
+A lifting metric (LIFTING_METRICS; ``lifting.py``) keeps RigCD's unit-weight matching and adds per-pair terms for
+what a lifting detector's depth network depends on (height, pitch and roll, the depth prior) to the pair cost:
+``lifting`` weighs them beside the lambdas. Its weights are fitted and frozen by ``studies/validation`` (a plain
+non-negative least squares over the terms, :func:`lifting_calibration` turns them into this form) and its
+prediction is linear, clipped to [0, 1] (:meth:`Calibration.bounded_drop`).
 """
 
 from __future__ import annotations
@@ -32,6 +39,7 @@ from typing import Sequence
 import numpy as np
 
 from rigopt.errors import DataError, RigoptError, not_utf8, unknown_name
+from rigopt.metrics.lifting import PAIR_TERMS, TERMS
 from rigopt.metrics.prediction import LINKS, Domain, Interval, Link
 from rigopt.metrics.rigcd import DEFAULT_ALPHA, rigcd_matrix, tie_broken_lambdas
 from rigopt.output import existing_file
@@ -46,9 +54,11 @@ AVG_EPSILON = 1e-9
 AGREEMENT_OBJECTIVE_RTOL = 1e-6
 AGREEMENT_BETA_ATOL = 1e-3
 FIT_SOLVERS = ("lbfgsb", "qp")
+#: Lifting metrics (see the module docstring): RigCD's matching and terms plus ``lifting.PAIR_TERMS``.
+LIFTING_METRICS: tuple[str, ...] = ()
 #: The rig distances a calibration can belong to (see the module docstring), and their shipped weights.
-METRICS = ("rigcd", "rigcd+")
-WEIGHTS_FOLDERS = {"rigcd": "weights", "rigcd+": "weights-plus"}
+METRICS = ("rigcd", "rigcd+") + LIFTING_METRICS
+WEIGHTS_FOLDERS = {"rigcd": "weights", "rigcd+": "weights-plus", **{m: f"weights-{m}" for m in LIFTING_METRICS}}
 UNIT_LAMBDAS = (1.0, 1.0, 1.0)
 #: Features are rounded to this many decimals so that pairs of identical geometry tie exactly whatever
 #: the floating-point path (ties change Spearman rho in the fourth decimal); far below any real difference.
@@ -65,7 +75,8 @@ class Calibration:
     its features are measured under: ``rigcd`` unit weights, ``rigcd+`` its own lambdas
     (:attr:`match_lambdas`); ``link``, ``interval``, ``domain``: the bounded link, the prediction interval
     and the calibration pairs' features (None in weights files that predate them: the drop is then the
-    linear prediction, unbounded, with no interval).
+    linear prediction, unbounded, with no interval); ``lifting`` the weights of ``lifting.PAIR_TERMS`` in the pair
+    cost beside the lambdas (a lifting metric's; None for RigCD's).
     """
 
     name: str
@@ -80,6 +91,7 @@ class Calibration:
     link: Link | None = None
     interval: Interval | None = None
     domain: Domain | None = None
+    lifting: tuple[float, ...] | None = None
 
     @property
     def lambdas(self) -> tuple[float, float, float]:
@@ -91,18 +103,25 @@ class Calibration:
         calibration's own for rigcd+."""
         return self.lambdas if self.metric == "rigcd+" else UNIT_LAMBDAS
 
-    def linear_drop(self, t, r, f, count) -> np.ndarray:
+    def linear_drop(self, t, r, f, count, extra=None) -> np.ndarray:
         """The linear prediction ``K (alpha (lambda_t t + lambda_r r + lambda_f f) + (1 - alpha) count)``, the score
         the benchmark's calibration fits: unbounded (it can pass 1); t (m), r (rad), f (deg), count (-) are
-        broadcastable arrays. The relative mAP drop rigopt reports is :meth:`bounded_drop`."""
+        broadcastable arrays. A lifting metric adds ``lifting . extra`` to the match, ``extra`` (..., 5) its mean
+        matched-pair terms (``lifting.PAIR_TERMS``). The relative mAP drop rigopt reports is :meth:`bounded_drop`."""
         match = self.lambda_t * np.asarray(t) + self.lambda_r * np.asarray(r) + self.lambda_f * np.asarray(f)
+        if self.lifting is not None:
+            if extra is None:
+                raise RigoptError(f"{self.metric} predictions need the lifting terms (rigopt.metrics.lifting)")
+            match = match + np.asarray(extra) @ np.asarray(self.lifting)
         return self.K * (self.alpha * match + (1.0 - self.alpha) * np.asarray(count))
 
-    def bounded_drop(self, t, r, f, count) -> np.ndarray:
+    def bounded_drop(self, t, r, f, count, extra=None) -> np.ndarray:
         """The predicted relative mAP drop the commands report: :meth:`linear_drop` through the calibration's
-        link (in [0, 1]); without a link the linear prediction itself."""
-        linear = self.linear_drop(t, r, f, count)
-        return self.link(linear) if self.link is not None else linear
+        link (in [0, 1]); without a link the linear prediction itself, clipped to [0, 1] for a lifting metric."""
+        linear = self.linear_drop(t, r, f, count, extra)
+        if self.link is not None:
+            return self.link(linear)
+        return np.clip(linear, 0.0, 1.0) if self.lifting is not None else linear
 
     def knocked_out(self, component: str) -> "Calibration":
         """The same weights with one component removed: lambda_t, lambda_r, lambda_f (set to 0) or count
@@ -114,8 +133,10 @@ class Calibration:
         raise RigoptError(f"unknown knockout component {component!r}; use lambda_t, lambda_r, lambda_f or count")
 
     def to_dict(self) -> dict:
-        data = {k: v for k, v in asdict(self).items() if k not in ("link", "interval", "domain")}
+        data = {k: v for k, v in asdict(self).items() if k not in ("link", "interval", "domain", "lifting")}
         data["beta"] = dict(zip(FEATURES, self.beta))
+        if self.lifting is not None:
+            data["lifting"] = dict(zip(PAIR_TERMS, self.lifting))
         for key in ("link", "interval", "domain"):
             if getattr(self, key) is not None:
                 data[key] = getattr(self, key).to_dict()
@@ -134,6 +155,20 @@ def reparameterise(beta: Sequence[float], name: str) -> Calibration:
         return Calibration(name, max(avg + bc, 1.0), DEFAULT_ALPHA, 1.0, 1.0, 1.0, (bt, br, bf, bc), True)
     k = avg + bc
     return Calibration(name, k, avg / k, bt / avg, br / avg, bf / avg, (bt, br, bf, bc), False)
+
+
+def lifting_calibration(name: str, weights: dict[str, float], metric: str) -> Calibration:
+    """The Calibration of a lifting metric's linear weights ``weights`` {term: weight} over ``lifting.TERMS`` (a
+    term left out weighs 0): prediction = sum of weight x term. In this form K alpha = 1, so the lambdas and
+    ``lifting`` are the pair cost's weights per unit (1/m, 1/rad, 1/deg, 1/log-m) and K = 1 + the count's weight."""
+    unknown = sorted(set(weights) - set(TERMS))
+    if unknown or any(not np.isfinite(w) or w < 0 for w in weights.values()):
+        raise DataError(f"{name}: lifting weights must be finite and non-negative, over {', '.join(TERMS)}; got "
+                        f"{weights}")
+    w = {term: float(weights.get(term, 0.0)) for term in TERMS}
+    k = 1.0 + w["count"]
+    return Calibration(name, k, 1.0 / k, w["t"], w["r"], w["f"], (w["t"], w["r"], w["f"], w["count"]), False,
+                       metric, lifting=tuple(w[term] for term in PAIR_TERMS))
 
 
 def pair_features(rigs: Sequence[Rig], train: Sequence[str], test: Sequence[str],
@@ -323,7 +358,24 @@ def _calibration_from_dict(data, path: Path) -> Calibration:
     if metric not in METRICS:
         raise DataError(f"{path}: metric must be one of {', '.join(METRICS)}, got {metric!r}")
     return Calibration(str(data.get("name", path.stem)), **values, beta=beta, fallback=bool(data.get("fallback", False)),
-                       metric=metric, **_prediction_parts(data, path))
+                       metric=metric, **_prediction_parts(data, path), lifting=_lifting_weights(data, metric, path))
+
+
+def _lifting_weights(data: dict, metric: str, path: Path) -> tuple[float, ...] | None:
+    """The ``lifting`` weights of a lifting metric's file (every term of ``lifting.PAIR_TERMS``, non-negative);
+    None for RigCD's metrics, which must not carry them."""
+    weights = data.get("lifting")
+    if metric not in LIFTING_METRICS:
+        if weights is not None:
+            raise DataError(f"{path}: 'lifting' weights belong to a lifting metric ({', '.join(LIFTING_METRICS)}), "
+                            f"not {metric}; remove them or set the metric")
+        return None
+    if not isinstance(weights, dict) or set(weights) != set(PAIR_TERMS) or any(
+            isinstance(v, bool) or not isinstance(v, (int, float)) or not np.isfinite(v) or v < 0
+            for v in weights.values()):
+        raise DataError(f"{path}: a {metric} weights file needs 'lifting': an object of non-negative numbers for "
+                        f"{', '.join(PAIR_TERMS)}")
+    return tuple(float(weights[term]) for term in PAIR_TERMS)
 
 
 def _prediction_parts(data: dict, path: Path) -> dict:

@@ -17,9 +17,9 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from rigopt.errors import DataError
-from rigopt.metrics.calibration import (UNIT_LAMBDAS, Calibration, CalibrationFit, check_metric, fit_calibration,
-                                       fit_exact, pair_features, reparameterise)
+from rigopt.errors import DataError, RigoptError
+from rigopt.metrics.calibration import (LIFTING_METRICS, UNIT_LAMBDAS, Calibration, CalibrationFit, check_metric,
+                                       fit_calibration, fit_exact, pair_features, reparameterise)
 from rigopt.metrics.matched_fit import fit_rematched
 from rigopt.metrics.prediction import (IntervalReport, LinkChoice, choose_link, domain_of, interval_report,
                                        rig_folds)
@@ -185,6 +185,9 @@ def calibrate(table: TransferTable, control_rigs: Sequence[str] = CONTROL_RIGS,
     """Run the protocol on measured transfer ``table`` for ``metric`` (rigcd or rigcd+); rigs are resolved
     by name with ``rig_lookup``."""
     metric = check_metric(metric)
+    if metric in LIFTING_METRICS:
+        raise RigoptError(f"rigopt calibrate fits rigcd and rigcd+; {metric}'s weights were fitted and frozen by the "
+                          "validation study (studies/validation/candidates.py): use --metric rigcd or rigcd+")
     control_rigs = tuple(control_rigs)
     drops = table.drops()
     if len(drops.delta) == 0:

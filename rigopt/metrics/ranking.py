@@ -8,6 +8,7 @@ from typing import Sequence
 import numpy as np
 
 from rigopt.metrics.calibration import Calibration
+from rigopt.metrics.lifting import lifting_terms
 from rigopt.metrics.prediction import Extrapolation, interval_informative
 from rigopt.metrics.rigcd import DEFAULT_ALPHA, DEFAULT_LAMBDAS, rigcd_matrix, tie_broken_lambdas
 from rigopt.rig.model import Rig
@@ -64,7 +65,10 @@ class TransferPrediction:
 
 def predict_transfer(reference: Rig, candidates: Sequence[Rig],
                      calibration: Calibration | None = None) -> list[TransferPrediction]:
-    """One prediction per candidate, in the candidates' order."""
+    """One prediction per candidate, in the candidates' order. A lifting metric's pairs (its per-pair terms need
+    heights above the ground) must be measured from their vehicle's centre on the ground, as RigCD's."""
+    if calibration is not None and calibration.lifting is not None:
+        return _lifting_predictions(reference, candidates, calibration)
     match_lambdas = calibration.match_lambdas if calibration is not None else DEFAULT_LAMBDAS
     features = rigcd_matrix([reference], candidates, DEFAULT_ALPHA, tie_broken_lambdas(match_lambdas))
     n = len(candidates)
@@ -86,6 +90,22 @@ def predict_transfer(reference: Rig, candidates: Sequence[Rig],
                            float(x[k, 3]), float(x[k, 0]), float(x[k, 1]), float(x[k, 2]), drops[k], linear[k],
                            intervals[k], flags[k], fallback,
                            calibration.interval.halfwidth if intervals[k] is not None else None)
+        for k, rig in enumerate(candidates)
+    ]
+
+
+def _lifting_predictions(reference: Rig, candidates: Sequence[Rig], calibration: Calibration) -> list[TransferPrediction]:
+    """predict_transfer under a lifting metric: its terms over RigCD's unit-weight matching; ``rigcd`` is the
+    metric's own distance (alpha x match + (1 - alpha) x count, the quantity the designer minimises), ``match``
+    its mean matched-pair cost."""
+    terms = lifting_terms([reference] * len(candidates), list(candidates))  # (n, len(TERMS))
+    t, r, f, count = terms[:, :4].T
+    linear = calibration.linear_drop(t, r, f, count, terms[:, 4:])
+    drops = calibration.bounded_drop(t, r, f, count, terms[:, 4:])
+    return [
+        TransferPrediction(reference.name, rig.name, float(linear[k] / calibration.K),
+                           float((linear[k] / calibration.K - (1 - calibration.alpha) * count[k]) / calibration.alpha),
+                           float(count[k]), float(t[k]), float(r[k]), float(f[k]), float(drops[k]), float(linear[k]))
         for k, rig in enumerate(candidates)
     ]
 

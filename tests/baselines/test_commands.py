@@ -6,10 +6,10 @@ from __future__ import annotations
 import json
 import shutil
 import subprocess
-import sys
 from pathlib import Path
 
 import pytest
+from console import run_console
 
 torch = pytest.importorskip("torch")
 
@@ -37,10 +37,7 @@ def run_cli(capsys, *args) -> tuple[int, str]:
 
 def console_script(*args) -> subprocess.CompletedProcess:
     """The installed ``rigopt`` script run in a real process (what a user's shell runs)."""
-    script = Path(sys.executable).parent / "rigopt"
-    script = str(script) if script.is_file() else shutil.which("rigopt")
-    assert script, "the rigopt console script is not installed; pip install -e . first"
-    return subprocess.run([script, *map(str, args)], capture_output=True, text=True, timeout=300)
+    return run_console(*args)
 
 
 @pytest.fixture(scope="module")

@@ -7,12 +7,11 @@ import dataclasses
 import json
 import os
 import shutil
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
+from console import run_console
 
 torch = pytest.importorskip("torch")
 
@@ -132,10 +131,9 @@ def test_the_cache_key_follows_the_geometry_not_the_name():
 def test_validate_without_data_through_the_console_script(packed, tmp_path):
     """The installed script in a real process: stdout is JSON only."""
     _, root = packed
-    script = Path(sys.executable).parent / "rigopt"
     env = {**os.environ, "RIGOPT_DETECTORS": str(root), "RIGOPT_HOME": str(tmp_path / "home")}
-    process = subprocess.run([str(script), "validate", "R5", "--ref", "R1", "--model", "lss", "--json",
-                              "--workers", "1"], capture_output=True, text=True, env=env, timeout=600)
+    process = run_console("validate", "R5", "--ref", "R1", "--model", "lss", "--json", "--workers", "1", env=env,
+                          timeout=600)
     assert process.returncode == 0, process.stderr
     result = json.loads(process.stdout)
     assert result["models"] == "shipped" and result["seeds"] == [0, 1]

@@ -5,10 +5,10 @@ vehicle's centre, the frame the synthetic benchmark renders it in, with a note."
 from __future__ import annotations
 
 import json
-import subprocess
 from pathlib import Path
 
 import numpy as np
+from console import run_console
 
 from rigopt.rig.library import load_rig
 from rigopt.rig.pccr_format import write_rig
@@ -50,8 +50,7 @@ def test_calibrate_on_results_with_a_dataset_rig(tmp_path):
         results = {b: {"metrics": {"mAP": 0.3 if a == b else float(0.3 * rng.uniform(0.2, 0.9))}} for b in rigs}
         (tmp_path / "lss" / f"trained_on_{a}.json").write_text(json.dumps({"model": "lss", "trained_on": a,
                                                                           "results": results}))
-    done = subprocess.run(["rigopt", "calibrate", "--results", str(tmp_path), "--rigs", str(REAL_RIGS),
-                           "--bootstrap", "0", "--json"], capture_output=True, text=True)
+    done = run_console("calibrate", "--results", tmp_path, "--rigs", REAL_RIGS, "--bootstrap", "0", "--json")
     assert done.returncode == 0, done.stderr
     report = json.loads(done.stdout)
     assert list(report["models"]) == ["lss"] and report["joint"]

@@ -11,12 +11,11 @@ from __future__ import annotations
 
 import json
 import os
-import shutil
 import subprocess
-import sys
 from pathlib import Path
 
 import pytest
+from console import console_script
 
 REPO = Path(__file__).resolve().parents[2]
 SHIPPED_CSV = REPO / "metrics" / "pccr_transfer.csv"
@@ -37,15 +36,6 @@ JSON_COMMANDS = {
     "design --pareto": (["design", *SMALL_DESIGN, "--cameras", "6-7", "--pareto", "--json", "--out",
                          "{tmp}/pareto"], {0}),
 }
-
-
-def console_script() -> Path:
-    """The ``rigopt`` script installed beside this Python (a venv's bin/) or on PATH."""
-    beside = Path(sys.executable).parent / ("rigopt.exe" if os.name == "nt" else "rigopt")
-    found = beside if beside.is_file() else shutil.which("rigopt")
-    if found is None:
-        pytest.fail("the rigopt console script is not installed; pip install -e . first")
-    return Path(found)
 
 
 def start(args, tmp: Path) -> subprocess.Popen:

@@ -8,8 +8,9 @@ import numpy as np
 import pytest
 
 from rigopt.geometry import rotation_from_yaw_pitch_roll
-from rigopt.metrics.lifting import DEPTH_RANGE, TERMS, ground_depths, lifting_terms
-from rigopt.metrics.rigcd import rigcd
+from rigopt.camera import CameraModel
+from rigopt.metrics.lifting import DEPTH_RANGE, PAIR_TERMS, TERMS, ground_depths, lifting_terms, pair_terms
+from rigopt.metrics.rigcd import DEFAULT_ALPHA, DEFAULT_LAMBDAS, RigBatch, match_pairs, rigcd
 from rigopt.rig.library import load_rig
 from rigopt.rig.model import Camera, Rig
 
@@ -58,3 +59,32 @@ def test_pitch_counts_as_tilt_and_changes_the_depth_prior():
     assert _column(values, "r_tilt")[0] == pytest.approx(0.2)
     assert _column(values, "r_yaw")[0] == pytest.approx(0, abs=1e-12)
     assert _column(values, "dpm")[0] > 0.3
+
+
+def test_pair_terms_averaged_over_the_matching_are_the_lifting_terms():
+    r1, r6 = load_rig("R1"), load_rig("R6")
+    pairs = pair_terms(r6.positions, r6.rotations, CameraModel.of_cameras(r6.cameras), r1)  # (9, 8, 5)
+    assert pairs.shape == (len(r6), len(r1), len(PAIR_TERMS))
+    _, assignment = match_pairs(RigBatch.from_rigs([r6]), np.arange(1), RigBatch.from_rigs([r1]), np.arange(1),
+                                DEFAULT_ALPHA, DEFAULT_LAMBDAS, keep_assignment=True)
+    rows, cols = assignment[0]
+    assert pairs[rows, cols].mean(axis=0) == pytest.approx(lifting_terms([r6], [r1])[0, 4:], rel=1e-12, abs=1e-12)
+    itself = pair_terms(r1.positions, r1.rotations, CameraModel.of_cameras(r1.cameras), r1)
+    assert np.allclose(np.diagonal(itself, axis1=0, axis2=1), 0)
+
+
+def test_a_lifting_calibration_predicts_its_weighted_terms_clipped_to_one():
+    from rigopt.metrics.calibration import lifting_calibration
+    from rigopt.metrics.ranking import predict_transfer
+
+    r1, r6, r4 = load_rig("R1"), load_rig("R6"), load_rig("R4")
+    weights = {"t": 0.05, "f": 0.01, "count": 0.3, "t_vert": 0.2, "r_tilt": 2.0, "dpm": 0.7}
+    calibration = lifting_calibration("test", weights, "test-metric")
+    terms = lifting_terms([r1, r1], [r6, r4])
+    expected = sum(w * _column(terms, name) for name, w in weights.items())
+    predicted = predict_transfer(r1, [r6, r4], calibration)
+    assert [p.linear_drop for p in predicted] == pytest.approx(expected, rel=1e-12)
+    assert [p.predicted_drop for p in predicted] == pytest.approx(np.clip(expected, 0, 1), rel=1e-12)
+    assert [p.rigcd * calibration.K for p in predicted] == pytest.approx(expected, rel=1e-12)
+    with pytest.raises(Exception, match="lifting weights"):
+        lifting_calibration("bad", {"height": 1.0}, "test-metric")

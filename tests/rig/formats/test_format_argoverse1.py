@@ -6,14 +6,11 @@ from __future__ import annotations
 
 import json
 import math
-import os
-import shutil
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
+from console import run_console
 from in_process import run_rigopt
 from scipy.optimize import brentq
 from scipy.spatial.transform import Rotation
@@ -178,13 +175,8 @@ def test_import_command_writes_the_rig(tmp_path):
 
 
 def test_console_script_prints_json(tmp_path):
-    beside = Path(sys.executable).parent / ("rigopt.exe" if os.name == "nt" else "rigopt")
-    script = beside if beside.is_file() else shutil.which("rigopt")
-    if script is None:
-        pytest.skip("the rigopt console script is not installed")
     out = tmp_path / "av1.json"
-    done = subprocess.run([str(script), "import", "argoverse1", str(LOG), "--out", str(out), "--json"],
-                          capture_output=True, text=True, timeout=120)
+    done = run_console("import", "argoverse1", LOG, "--out", out, "--json", timeout=120)
     assert done.returncode == 0, done.stderr
     summary = json.loads(done.stdout)
     assert summary["source"] == "argoverse1" and summary["origin"] == "rear_axle"
