@@ -171,12 +171,11 @@ def _print_tables(report: dict) -> None:
                   e["weights"]["lambda_f"], "yes" if e["weights"]["fallback"] else "no",
                   "yes" if e["weights"]["qp_agrees"] else "NO"] for m, e in models.items()])
     joint = report["joint"]
-    rows = [[m, e["control"]["rho"], e["heldout"]["rho"], _ci(e["heldout"]["ci"]), e["heldout"]["mae"]]
-            for m, e in models.items()]
-    rows += [[f"{m} (joint)", e["control"]["rho"], e["heldout"]["rho"], _ci(e["heldout"]["ci"]), e["heldout"]["mae"]]
-             for m, e in joint["models"].items()]
-    print_table("Reliability (Spearman rho, 95 % bootstrap CI)", ["model", "rho ctrl", "rho held", "CI held",
-                                                                  "MAE held"], rows)
+    rows = [[label, e["control"]["rho"], e["heldout"]["rho"], _ci(e["heldout"]["ci"]),
+             _ci(e["heldout"].get("rig_ci", [None, None])), e["heldout"]["mae"]]
+            for label, e in [*models.items(), *((f"{m} (joint)", e) for m, e in joint["models"].items())]]
+    print_table("Reliability (Spearman rho; 95 % intervals resampling the pairs, the benchmark's, and the rigs)",
+                ["model", "rho ctrl", "rho held", "CI held (pairs)", "CI held (rigs)", "MAE held"], rows)
     w = joint["weights"]
     console.print(f"joint weights: K {w['K']:.3f}  alpha {w['alpha']:.3f}  lambdas {w['lambda_t']:.3f} "
                   f"{w['lambda_r']:.3f} {w['lambda_f']:.3f}  QP agrees: {'yes' if w['qp_agrees'] else 'NO'}")

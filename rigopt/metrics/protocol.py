@@ -168,8 +168,8 @@ def _predictions(drops: TransferDrops, features: np.ndarray, calibration: Calibr
 
 
 def _split_reliability(pairs: PairPredictions, resamples: int, seed: int) -> tuple[Reliability, Reliability]:
-    return tuple(reliability(pairs.predicted[mask], pairs.delta[mask], resamples, seed)
-                 for mask in (pairs.control, ~pairs.control))
+    return tuple(reliability(pairs.predicted[mask], pairs.delta[mask], resamples, seed,
+                             (pairs.train[mask], pairs.test[mask])) for mask in (pairs.control, ~pairs.control))
 
 
 def _knockout(calibration: Calibration, pairs: PairPredictions) -> Knockout:

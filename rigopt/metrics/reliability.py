@@ -16,7 +16,9 @@ class Reliability:
     """Agreement of ``n`` predictions with observations.
 
     ``rho`` and ``p``: Spearman rank correlation and its two-sided p-value (NaN when either side is
-    constant or n < 3); ``ci``: (2.5, 97.5) percentiles of rho over bootstrap resamples of the pairs;
+    constant or n < 3); ``ci``: (2.5, 97.5) percentiles of rho over bootstrap resamples of the pairs (the
+    benchmark's interval: the rigs held fixed); ``rig_ci``: the same over resamples of the rigs
+    (:func:`rig_bootstrap_rho`: what the rho says about other rigs; None when the pairs' rigs are not given);
     ``mae``, ``rmse``: in units of relative drop.
     """
 
@@ -26,10 +28,15 @@ class Reliability:
     mae: float
     rmse: float
     n: int
+    rig_ci: tuple[float, float] | None = None
 
     def to_dict(self) -> dict:
-        return {"rho": finite_or_none(self.rho), "p": finite_or_none(self.p), "ci": [finite_or_none(v) for v in self.ci],
-                "mae": finite_or_none(self.mae), "rmse": finite_or_none(self.rmse), "n": self.n}
+        data = {"rho": finite_or_none(self.rho), "p": finite_or_none(self.p),
+                "ci": [finite_or_none(v) for v in self.ci], "mae": finite_or_none(self.mae),
+                "rmse": finite_or_none(self.rmse), "n": self.n}
+        if self.rig_ci is not None:
+            data["rig_ci"] = [finite_or_none(v) for v in self.rig_ci]
+        return data
 
 
 def finite_or_none(value: float):
@@ -66,6 +73,29 @@ def rho_gain(predicted: np.ndarray, other: np.ndarray, observed: np.ndarray, res
     return (gain, *(_interval(rhos[0] - rhos[1]) if rhos is not None else (float("nan"), float("nan"))))
 
 
+def rig_bootstrap_rho(predicted: np.ndarray, observed: np.ndarray, train, test, resamples: int = DEFAULT_BOOTSTRAP,
+                      seed: int = DEFAULT_SEED) -> tuple[float, float]:
+    """95 % interval of Spearman rho over resamples of the rigs: the rigs named in ``train`` and ``test`` (n,)
+    (each pair's two rigs) drawn with replacement, each pair kept as often as the product of its rigs' draws
+    (the vertex bootstrap of pairwise data). Unlike :func:`bootstrap_rho`, which holds the rigs fixed, its width
+    is what the rho says about other rigs. Resamples with fewer than 3 pairs or a constant side are skipped;
+    (nan, nan) if none remain."""
+    predicted, observed = np.asarray(predicted, dtype=float), np.asarray(observed, dtype=float)
+    rigs, codes = np.unique(np.concatenate([np.asarray(train, dtype=str), np.asarray(test, dtype=str)]),
+                            return_inverse=True)
+    a, b = codes[:len(observed)], codes[len(observed):]
+    if len(observed) < 3 or resamples <= 0:
+        return float("nan"), float("nan")
+    draws = np.random.default_rng(seed).integers(0, len(rigs), (resamples, len(rigs)))
+    rhos = []
+    for draw in draws:
+        counts = np.bincount(draw, minlength=len(rigs))
+        index = np.repeat(np.arange(len(observed)), counts[a] * counts[b])
+        if len(index) >= 3 and np.ptp(observed[index]) > 0 and np.ptp(predicted[index]) > 0:
+            rhos.append(_pearson_rows(rankdata(predicted[index])[None], rankdata(observed[index])[None])[0])
+    return _interval(np.array(rhos)) if rhos else (float("nan"), float("nan"))
+
+
 def _resampled_rhos(predictions: list[np.ndarray], observed: np.ndarray, resamples: int,
                     seed: int) -> np.ndarray | None:
     """Spearman rho (k, m) of each of k predictions (n,) against ``observed`` (n,) on the same m resamples of
@@ -97,14 +127,17 @@ def _pearson_rows(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.einsum("ij,ij->i", a, b) / np.sqrt(np.einsum("ij,ij->i", a, a) * np.einsum("ij,ij->i", b, b))
 
 
-def reliability(predicted, observed, resamples: int = DEFAULT_BOOTSTRAP, seed: int = DEFAULT_SEED) -> Reliability:
-    """All agreement measures of predictions (n,) against observations (n,)."""
+def reliability(predicted, observed, resamples: int = DEFAULT_BOOTSTRAP, seed: int = DEFAULT_SEED,
+                rigs: tuple | None = None) -> Reliability:
+    """All agreement measures of predictions (n,) against observations (n,); ``rigs`` (train (n,), test (n,)),
+    the pairs' rig names, adds the rig-level interval."""
     predicted, observed = np.asarray(predicted, dtype=float), np.asarray(observed, dtype=float)
     rho, p = spearman(predicted, observed)
     error = predicted - observed
     mae = float(np.mean(np.abs(error))) if len(error) else float("nan")
     rmse = float(np.sqrt(np.mean(error**2))) if len(error) else float("nan")
-    return Reliability(rho, p, bootstrap_rho(predicted, observed, resamples, seed), mae, rmse, len(observed))
+    rig_ci = rig_bootstrap_rho(predicted, observed, *rigs, resamples, seed) if rigs is not None else None
+    return Reliability(rho, p, bootstrap_rho(predicted, observed, resamples, seed), mae, rmse, len(observed), rig_ci)
 
 
 def drop_ranks(drops) -> np.ndarray:

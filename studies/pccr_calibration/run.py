@@ -42,13 +42,15 @@ def main() -> None:
     weight_keys = ["K", "alpha", "lambda_t", "lambda_r", "lambda_f", "beta_t", "beta_r", "beta_f", "beta_count"]
     per_model = write_csv(out / "calibration.csv",
                           ["model", *weight_keys, "fallback", "qp_agrees", "rho_control", "rho_heldout",
-                           "ci_low", "ci_high", "p_heldout", "mae_heldout", "rmse_heldout"],
+                           "ci_low", "ci_high", "p_heldout", "mae_heldout", "rmse_heldout", "rig_ci_low", "rig_ci_high"],
                           [[m, *(e["weights"][k] for k in weight_keys), e["weights"]["fallback"],
                             e["weights"]["qp_agrees"], e["control"]["rho"], e["heldout"]["rho"], *e["heldout"]["ci"],
-                            e["heldout"]["p"], e["heldout"]["mae"], e["heldout"]["rmse"]]
+                            e["heldout"]["p"], e["heldout"]["mae"], e["heldout"]["rmse"], *e["heldout"]["rig_ci"]]
                            for m, e in report["models"].items()])
-    joint = write_csv(out / "joint.csv", ["model", "rho_control", "rho_heldout", "ci_low", "ci_high", "mae_heldout"],
-                      [[m, e["control"]["rho"], e["heldout"]["rho"], *e["heldout"]["ci"], e["heldout"]["mae"]]
+    joint = write_csv(out / "joint.csv", ["model", "rho_control", "rho_heldout", "ci_low", "ci_high", "mae_heldout",
+                                          "rig_ci_low", "rig_ci_high"],
+                      [[m, e["control"]["rho"], e["heldout"]["rho"], *e["heldout"]["ci"], e["heldout"]["mae"],
+                        *e["heldout"]["rig_ci"]]
                        for m, e in report["joint"]["models"].items()])
     knockout = write_csv(out / "knockout.csv", ["model", "full", "no_lambda_t", "no_lambda_r", "no_lambda_f", "no_count"],
                          [[m, *(e["knockout"][k] for k in ("full", "lambda_t", "lambda_r", "lambda_f", "count"))]

@@ -174,3 +174,36 @@ def test_rho_gain_of_the_reversed_prediction_is_two():
     observed = np.arange(10.0)
     gain, low, high = rho_gain(observed, -observed, observed, 100, 0)
     assert gain == pytest.approx(2.0) and low == pytest.approx(2.0) and high == pytest.approx(2.0)
+
+
+def _rig_bootstrap_by_hand(predicted, observed, train, test, resamples, seed):
+    """The vertex bootstrap spelled out: every ordered pair of drawn rig instances keeps its pairs."""
+    from scipy.stats import spearmanr
+
+    rigs = sorted(set(train) | set(test))
+    draws = np.random.default_rng(seed).integers(0, len(rigs), (resamples, len(rigs)))
+    rhos = []
+    for draw in draws:
+        keep = [p for i in draw for j in draw for p in range(len(observed))
+                if train[p] == rigs[i] and test[p] == rigs[j]]
+        o, q = observed[keep], predicted[keep]
+        if len(keep) >= 3 and np.ptp(o) > 0 and np.ptp(q) > 0:
+            rhos.append(spearmanr(q, o).statistic)
+    return tuple(np.percentile(rhos, [2.5, 97.5]))
+
+
+def test_the_rig_bootstrap_resamples_rigs_and_keeps_their_pairs():
+    from rigopt.metrics.reliability import rig_bootstrap_rho
+
+    rng = np.random.default_rng(3)
+    names = [f"R{k}" for k in range(6)]
+    train, test = map(np.array, zip(*[(a, b) for a in names for b in names if a != b]))
+    effect = dict(zip(names, rng.normal(0, 1, 6)))  # a rig effect the pair bootstrap cannot see
+    observed = np.array([effect[b] for b in test]) + rng.normal(0, 0.3, len(test))
+    predicted = observed + rng.normal(0, 0.8, len(test))
+    low, high = rig_bootstrap_rho(predicted, observed, train, test, 300, 1)
+    assert (low, high) == pytest.approx(_rig_bootstrap_by_hand(predicted, observed, train, test, 300, 1), abs=1e-12)
+    assert rig_bootstrap_rho(observed * 2, observed, train, test, 50, 0) == pytest.approx((1.0, 1.0))
+    rel = reliability(predicted, observed, 300, 1, (train, test))
+    assert rel.rig_ci == (low, high) and rel.to_dict()["rig_ci"] == [low, high]
+    assert "rig_ci" not in reliability(predicted, observed, 50, 1).to_dict()
