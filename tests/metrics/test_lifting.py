@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from rigopt.geometry import rotation_from_yaw_pitch_roll
+from rigopt.metrics.calibration import LIFTING_METRICS
 from rigopt.camera import CameraModel
 from rigopt.metrics.lifting import DEPTH_RANGE, PAIR_TERMS, TERMS, ground_depths, lifting_terms, pair_terms
 from rigopt.metrics.rigcd import DEFAULT_ALPHA, DEFAULT_LAMBDAS, RigBatch, match_pairs, rigcd
@@ -88,3 +89,21 @@ def test_a_lifting_calibration_predicts_its_weighted_terms_clipped_to_one():
     assert [p.rigcd * calibration.K for p in predicted] == pytest.approx(expected, rel=1e-12)
     with pytest.raises(Exception, match="lifting weights"):
         lifting_calibration("bad", {"height": 1.0}, "test-metric")
+
+
+@pytest.mark.parametrize("metric", LIFTING_METRICS)
+def test_a_shipped_lifting_metric_predicts_with_the_study_s_frozen_weights(metric):
+    """The shipped weights are the validation study's candidate, fitted before its measurement, unchanged."""
+    import json
+    from pathlib import Path
+
+    from rigopt.metrics.calibration import load_weights
+    from rigopt.metrics.ranking import predict_transfer
+
+    frozen = json.loads((Path(__file__).resolve().parents[2] / "studies" / "validation" / "candidates.json")
+                        .read_text())["candidates"][metric.replace("-", "_")]["weights"]
+    r1, others = load_rig("R1"), [load_rig(name) for name in ("R2", "R5", "R6", "R9")]
+    terms = lifting_terms([r1] * len(others), others)
+    expected = sum(w * _column(terms, name) for name, w in frozen.items())
+    calibration = load_weights("joint", metric)
+    assert [p.linear_drop for p in predict_transfer(r1, others, calibration)] == pytest.approx(expected, rel=1e-12)
