@@ -72,11 +72,11 @@ def rigcd_command(
     if as_json:
         print_json(data)
         return
-    distance = "unit weights" if weights is None else f"{weights} weights"
+    distance = "unit weights" if weights is None and calibration.lifting is None else f"{calibration.name} weights"
     columns = [f"{metric} ({distance})", f"match ({distance})", "count", "t (m)", "r (rad)", "f (deg)",
                f"predicted drop ({calibration.name})", "interval"]
     drop = "-" if p.predicted_drop is None else p.predicted_drop
-    print_table(f"RigCD {p.reference} -> {p.rig}", columns,
+    print_table(f"{'RigCD' if calibration.lifting is None else metric} {p.reference} -> {p.rig}", columns,
                 [[p.rigcd, p.match, p.count, p.t, p.r, p.f, drop, _interval(p)]])
     _warn_prediction([p], calibration)
 
