@@ -55,6 +55,9 @@ def calibrate_command(
     from rigopt.report.calibration_tables import study_dict, write_study_tables
     from rigopt.vehicle.placement import benchmark_rig_lookup
 
+    from rigopt.metrics.protocol import refuse_lifting
+
+    refuse_lifting(metric)
     if null and test_on is None:
         raise RigoptError("--null judges chance calibrations on other measured transfer: give --test-on too "
                           "(e.g. --test-on ../shared/pccr/results)")

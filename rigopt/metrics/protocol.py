@@ -179,15 +179,22 @@ def _knockout(calibration: Calibration, pairs: PairPredictions) -> Knockout:
     return Knockout(full=spearman(calibration.linear_drop(*x.T), delta)[0], **rhos)
 
 
+def refuse_lifting(metric: str) -> str:
+    """``metric`` checked (:func:`check_metric`) and refused when it is a lifting metric, whose weights the
+    validation study fitted and froze (studies/validation/candidates.py): this protocol fits rigcd and rigcd+."""
+    metric = check_metric(metric)
+    if metric in LIFTING_METRICS:
+        raise RigoptError(f"rigopt calibrate fits rigcd and rigcd+; {metric}'s weights were fitted and frozen by the "
+                          "validation study (studies/validation/candidates.py): use --metric rigcd or rigcd+")
+    return metric
+
+
 def calibrate(table: TransferTable, control_rigs: Sequence[str] = CONTROL_RIGS,
               rig_lookup: Callable[[str], Rig] = load_rig, resamples: int = DEFAULT_BOOTSTRAP,
               seed: int = DEFAULT_SEED, solver: str = "lbfgsb", metric: str = "rigcd") -> CalibrationStudy:
     """Run the protocol on measured transfer ``table`` for ``metric`` (rigcd or rigcd+); rigs are resolved
     by name with ``rig_lookup``."""
-    metric = check_metric(metric)
-    if metric in LIFTING_METRICS:
-        raise RigoptError(f"rigopt calibrate fits rigcd and rigcd+; {metric}'s weights were fitted and frozen by the "
-                          "validation study (studies/validation/candidates.py): use --metric rigcd or rigcd+")
+    metric = refuse_lifting(metric)
     control_rigs = tuple(control_rigs)
     drops = table.drops()
     if len(drops.delta) == 0:

@@ -4,6 +4,7 @@ rigcd and rank predict with it, calibrate refuses to refit it."""
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -13,6 +14,8 @@ from rigopt.metrics.calibration import LIFTING_METRICS, load_weights
 from rigopt.metrics.ranking import predict_transfer
 from rigopt.rig.library import load_rig
 from rigopt.vehicle.placement import in_vehicle_frame
+
+SHIPPED_CSV = Path(__file__).resolve().parents[2] / "metrics" / "pccr_transfer.csv"
 
 
 def _centred(name: str):
@@ -35,7 +38,7 @@ def test_rigcd_and_rank_predict_with_the_lifting_metric(metric):
 
 @pytest.mark.parametrize("metric", LIFTING_METRICS)
 def test_calibrate_refuses_to_refit_a_lifting_metric(metric):
-    done = run_rigopt("calibrate", "--metric", metric, "--bootstrap", "0")
+    done = run_rigopt("calibrate", "--results", SHIPPED_CSV, "--metric", metric, "--bootstrap", "0")
     assert done.returncode == 2 and "studies/validation" in done.stderr and "Traceback" not in done.stderr
     unknown = run_rigopt("rank", "R5", "--ref", "R1", "--metric", metric, "--weights", "PETR")
     assert unknown.returncode == 2 and "joint" in unknown.stderr
