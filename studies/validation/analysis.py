@@ -185,6 +185,42 @@ def plot(name: str, predicted, measured, vehicles, rigs, path: Path) -> None:
     plt.close(figure)
 
 
+def markdown(report: dict, groups: list[str]) -> str:
+    """results.md: the pre-registered figures of every candidate and the decision, from ``report``."""
+    def cell(value, ci=None):
+        return f"{value:.3f}" + (f" [{ci[0]:.3f}, {ci[1]:.3f}]" if ci is not None else "")
+
+    lines = [f"# Validation study: results ({report['rigs']} test rigs: "
+             + ", ".join(f"{g} {n}" for g, n in report["per_vehicle"].items()) + ")", "",
+             "Spearman rho of each candidate's prediction against the measured drops (mean of 3 seeds), within each "
+             "vehicle and their mean (the primary statistic), with 95 % intervals over rigs resampled within each "
+             f"vehicle ({BOOTSTRAP} resamples); one-sided permutation p of the mean ({PERMUTATIONS} permutations "
+             "within vehicles); the paired difference to rigcd_joint on the same resamples.", "",
+             "| candidate | mean within-vehicle rho | " + " | ".join(groups) + " | pooled | p (mean) | "
+             "difference to rigcd_joint (mean) |", "|---" * (len(groups) + 5) + "|"]
+    for name, entry in report["candidates"].items():
+        rho, ci, diff = entry["rho"], entry["rho_ci"], entry["difference_to_rigcd"]["mean"]
+        lines.append(f"| {name} | {cell(rho['mean'], ci['mean'])} | "
+                     + " | ".join(cell(rho[g], ci[g]) for g in groups)
+                     + f" | {cell(rho['pooled'], ci['pooled'])} | {entry['permutation_p']['mean']:.5f} | "
+                     + ("-" if name == BASELINE else cell(diff["value"], diff["ci"])) + " |")
+    decision = report["decision"]
+    lines += ["", f"## Decision (pre-registered rule; one-sided bounds at {decision['level']:.4f})", "",
+              "| candidate | mean rho | lower bound of the difference to rigcd_joint | per vehicle | beats RigCD |",
+              "|---|---|---|---|---|"]
+    for name, row in decision["candidates"].items():
+        per_vehicle = ", ".join(f"{g} {b:+.3f}" for g, b in row["per_vehicle_lower_bounds"].items())
+        lines.append(f"| {name} | {row['mean_rho']:.3f} | {row['difference_lower_bound']:+.3f} | {per_vehicle} | "
+                     f"{'yes' if row['beats_baseline'] else 'no'} |")
+    ships = decision["ships"]
+    lines += ["", f"Ships: {ships or 'none'}; the designer's default objective for lifting detectors: "
+              f"{'yes' if decision['designer_default'] else 'no'}.", "",
+              "Visible-only drops (secondary), mean within-vehicle rho: "
+              + ", ".join(f"{n} {e['rho_visible_only']['mean']:.3f}" for n, e in report["candidates"].items()) + ".",
+              ""]
+    return "\n".join(lines)
+
+
 def main() -> int:
     rigs, vehicles, measured, measured_visible, _ = read_measured(RESULTS / "measured.csv")
     candidates = json.loads((HERE / "candidates.json").read_text())["candidates"]
@@ -211,6 +247,7 @@ def main() -> int:
         plot(c, predicted[c], measured, vehicles, rigs, RESULTS / f"{c}.png")
     report["decision"] = decide(resampled, observed, groups)
     (RESULTS / "analysis.json").write_text(json.dumps(report, indent=2) + "\n")
+    (RESULTS / "results.md").write_text(markdown(report, groups))
     print(json.dumps(report["decision"], indent=2))
     return 0
 

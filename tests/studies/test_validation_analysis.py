@@ -68,3 +68,22 @@ def test_the_rule_ships_a_clearly_better_candidate_and_nothing_when_none_is():
     resampled, observed, vehicles = _case({"base": 0.1, "worse": 3.0})
     decision = analysis.decide(resampled, observed, vehicles, new=("worse",), baseline="base")
     assert decision["ships"] is None and not decision["designer_default"]
+
+
+def test_the_results_page_shows_every_candidate_and_the_decision():
+    groups = ["a", "b"]
+    rho = {"a": 0.5, "b": 0.7, "mean": 0.6, "pooled": 0.55}
+    entry = {"rho": rho, "rho_ci": {k: [v - 0.2, v + 0.1] for k, v in rho.items()},
+             "rho_visible_only": {**rho, "mean": 0.4}, "permutation_p": {"mean": 0.0123},
+             "difference_to_rigcd": {k: {"value": 0.25, "ci": [0.05, 0.4]} for k in [*groups, "mean", "pooled"]}}
+    report = {"rigs": 6, "per_vehicle": {"a": 3, "b": 3},
+              "candidates": {analysis.BASELINE: entry, "split": entry},
+              "decision": {"level": 0.9875, "ships": "split", "designer_default": False,
+                           "candidates": {"split": {"mean_rho": 0.6, "difference_lower_bound": 0.01,
+                                                    "per_vehicle_lower_bounds": {"a": -0.1, "b": 0.2},
+                                                    "beats_baseline": True}}}}
+    page = analysis.markdown(report, groups)
+    assert "| split | 0.600 [0.400, 0.700] | 0.500 [0.300, 0.600] | 0.700 [0.500, 0.800] |" in page
+    assert f"| {analysis.BASELINE} | 0.600" in page and "| 0.01230 | - |" in page
+    assert "| split | 0.600 | +0.010 | a -0.100, b +0.200 | yes |" in page
+    assert "Ships: split; the designer's default objective for lifting detectors: no." in page
