@@ -48,14 +48,12 @@ def calibrate_command(
     as_json: bool = typer.Option(False, "--json", help="Print the JSON report instead of tables."),
 ):
     """Fit calibrated RigCD (or RigCD+) per detector and jointly; report reliability on control and held-out pairs."""
-    from rigopt.metrics.protocol import calibrate
+    from rigopt.metrics.protocol import calibrate, refuse_lifting
     from rigopt.metrics.reliability import DEFAULT_BOOTSTRAP, DEFAULT_SEED
     from rigopt.metrics.transfer import read_transfer
     from rigopt.output import atomic_folder, check_out_folder, published
     from rigopt.report.calibration_tables import study_dict, write_study_tables
     from rigopt.vehicle.placement import benchmark_rig_lookup
-
-    from rigopt.metrics.protocol import refuse_lifting
 
     refuse_lifting(metric)
     if null and test_on is None:

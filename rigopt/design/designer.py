@@ -256,9 +256,9 @@ def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRi
     if not design.meets_requirements:
         raise DesignInfeasible("the selected rig does not meet the coverage requirements when recomputed; "
                                "this should not happen: please report it")
-    refinement = RefinementReport("off" if len(rigs) == 1 else "off (fleet design)")
-    if calibration.lifting is not None:  # the continuous stage's objective has RigCD's terms only
-        refinement = RefinementReport(f"off ({calibration.metric}: the continuous stage weighs RigCD's terms only)")
+    refinement = RefinementReport(  # the continuous stage's objective has RigCD's terms only
+        f"off ({calibration.metric}: the continuous stage weighs RigCD's terms only)" if calibration.lifting is not None
+        else "off" if len(rigs) == 1 else "off (fleet design)")
     refines = settings.refine and len(rigs) == 1 and calibration.lifting is None
     if refines:
         progress("continuous refinement (casadi + IPOPT)")
@@ -573,7 +573,7 @@ def calibrated_costs(positions: np.ndarray, rotations: np.ndarray, fovs: np.ndar
         if model is None:
             raise ValueError(f"calibrated_costs under {calibration.metric} needs the cameras' lenses (model)")
         costs = costs + pair_terms(positions, rotations, model, reference) @ np.asarray(calibration.lifting)
-    if settings is None:
+    if settings is None or (settings.match_height_m is None and settings.match_pitch_deg is None):
         return costs
     pitches = yaw_pitch_roll_from_rotation(rotations)[1]
     return np.where(within_pose_tolerance(positions[:, 2], pitches, reference, settings), costs, OUT_OF_TOLERANCE_COST)

@@ -100,12 +100,13 @@ def _lifting_predictions(reference: Rig, candidates: Sequence[Rig], calibration:
     its mean matched-pair cost."""
     terms = lifting_terms([reference] * len(candidates), list(candidates))  # (n, len(TERMS))
     t, r, f, count = terms[:, :4].T
+    match = terms[:, :3] @ np.asarray(calibration.lambdas) + terms[:, 4:] @ np.asarray(calibration.lifting)
+    distance = calibration.alpha * match + (1.0 - calibration.alpha) * count
     linear = calibration.linear_drop(t, r, f, count, terms[:, 4:])
     drops = calibration.bounded_drop(t, r, f, count, terms[:, 4:])
     return [
-        TransferPrediction(reference.name, rig.name, float(linear[k] / calibration.K),
-                           float((linear[k] / calibration.K - (1 - calibration.alpha) * count[k]) / calibration.alpha),
-                           float(count[k]), float(t[k]), float(r[k]), float(f[k]), float(drops[k]), float(linear[k]))
+        TransferPrediction(reference.name, rig.name, float(distance[k]), float(match[k]), float(count[k]),
+                           float(t[k]), float(r[k]), float(f[k]), float(drops[k]), float(linear[k]))
         for k, rig in enumerate(candidates)
     ]
 
