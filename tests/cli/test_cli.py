@@ -225,8 +225,9 @@ def test_calibrate_json_shape(calibrate_report):
             assert 0.0 <= entry["bounded"][split]["interval_coverage"] <= 1.0
         assert set(entry["knockout"]) == {"full", "lambda_t", "lambda_r", "lambda_f", "count"}
         for split in ("control", "heldout"):
-            assert set(entry[split]) == {"rho", "p", "ci", "mae", "rmse", "n"}
-            assert len(entry[split]["ci"]) == 2
+            assert set(entry[split]) == {"rho", "p", "ci", "rig_ci", "mae", "rmse", "n"}
+            for interval in (entry[split]["ci"], entry[split]["rig_ci"]):
+                assert len(interval) == 2 and -1.0 <= interval[0] <= interval[1] <= 1.0
     assert set(report["joint"]) == {"weights", "link", "models"}
     assert set(report["joint"]["models"]) == MODELS
     assert all(set(entry) == {"control", "heldout", "bounded"} for entry in report["joint"]["models"].values())
