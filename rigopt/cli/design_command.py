@@ -122,6 +122,18 @@ def design_command(
     match_pitch: Optional[float] = typer.Option(None, "--match-pitch", min=0.0, callback=finite(),
                                                 help="Pose tolerance (deg): each perception camera's pitch within "
                                                      "this of its matched reference camera's."),
+    match_yaw: Optional[float] = typer.Option(None, "--match-yaw", min=0.0, callback=finite(),
+                                              help="Pose tolerance (deg): each perception camera's yaw within this "
+                                                   "of its matched reference camera's (half the yaw step keeps the "
+                                                   "nearest grid yaw)."),
+    match_fov: Optional[float] = typer.Option(None, "--match-fov", min=0.0, callback=finite(),
+                                              help="Lens tolerance (deg): each perception camera's horizontal FOV "
+                                                   "within this of its matched reference camera's (0: the "
+                                                   "reference's lens)."),
+    perception_range: float = typer.Option(0.0, "--perception-range", min=0.0, callback=finite(),
+                                           help="With near-field cameras: the perception cameras keep the "
+                                                "reference's coverage only on the rings at least this far (m) from "
+                                                "the body (rings at 2, 5, 10, 20 m; 0: all of them)."),
     near_field: Optional[bool] = typer.Option(None, "--near-field/--single-set",
                                               help="Two camera roles (the default): perception cameras designed "
                                                    "for the reference alone, then near-field fisheyes (190 deg) "
@@ -172,7 +184,8 @@ def design_command(
         min_coverage=min_coverage, min_overlap=min_overlap, max_nodes=max_nodes, accept_gap=accept_gap,
         rules=mount_rules(min_height, no_trailer), symmetric=False if asymmetric else None, cost_weight=cost_weight,
         require=require, near_field=not pareto if near_field is None else near_field,
-        match_height_m=match_height, match_pitch_deg=match_pitch)
+        match_height_m=match_height, match_pitch_deg=match_pitch, match_yaw_deg=match_yaw, match_fov_deg=match_fov,
+        perception_range_m=perception_range)
     references = [_reference(name.strip(), ref_vehicle) for name in ref.split(",") if name.strip()]
     if not references:
         raise RigoptError("--ref needs at least one rig")

@@ -179,8 +179,9 @@ def select_valid(prepared: Prepared, vehicle: Vehicle, calibration: Calibration,
         paired = best.matched >= 0
         if np.any(prepared.costs[0][chosen[paired], best.matched[paired]] >= OUT_OF_TOLERANCE_COST):
             raise DesignInfeasible(f"no selection keeps every perception camera within {tolerance_text(settings)} "
-                                   "of its matched reference camera and meets the requirements; widen "
-                                   "--match-height / --match-pitch, add pitches (--pitch) or allow more zones")
+                                   "of its matched reference camera and meets the requirements; widen the tolerance "
+                                   "(--match-height, --match-pitch, --match-yaw, --match-fov), add pitches (--pitch) "
+                                   "or allow more zones")
         rig = _rig_from(candidates.subset(chosen), best.matched, prepared.references[0], vehicle)
         check = check_rig(rig, vehicle, settings.rules)
         failed = [(chosen[k], c) for k, c in enumerate(check.cameras) if not c.valid]
@@ -528,23 +529,32 @@ def calibrated_matching(rig: Rig, reference: Rig, calibration: Calibration) -> n
 OUT_OF_TOLERANCE_COST = 1e3
 
 
-def within_pose_tolerance(heights: np.ndarray, pitches: np.ndarray, reference: Rig,
-                          settings: DesignSettings) -> np.ndarray:
+def within_pose_tolerance(heights: np.ndarray, pitches: np.ndarray, reference: Rig, settings: DesignSettings,
+                          yaws: np.ndarray | None = None, fovs: np.ndarray | None = None) -> np.ndarray:
     """(n, R) bool: whether a camera at height ``heights`` (n,) m above the ground, pitched ``pitches`` (n,)
-    rad, may be matched to each reference camera under ``settings.match_height_m`` and ``match_pitch_deg``."""
+    rad, turned to ``yaws`` (n,) rad with horizontal FOV ``fovs`` (n,) deg, may be matched to each reference
+    camera under ``settings``' tolerances (``match_height_m``, ``match_pitch_deg``, ``match_yaw_deg``,
+    ``match_fov_deg``; yaws and fovs needed only by their own)."""
     ok = np.ones((len(heights), len(reference)), dtype=bool)
+    ref_yaws, ref_pitches, _ = yaw_pitch_roll_from_rotation(reference.rotations)
     if settings.match_height_m is not None:
         ok &= np.abs(heights[:, None] - reference.positions[None, :, 2]) <= settings.match_height_m + 1e-9
     if settings.match_pitch_deg is not None:
-        gap = np.rad2deg(np.abs(pitches[:, None] - yaw_pitch_roll_from_rotation(reference.rotations)[1][None, :]))
+        gap = np.rad2deg(np.abs(pitches[:, None] - ref_pitches[None, :]))
         ok &= gap <= settings.match_pitch_deg + 1e-6
+    if settings.match_yaw_deg is not None:
+        gap = np.rad2deg(np.abs(np.angle(np.exp(1j * (yaws[:, None] - ref_yaws[None, :])))))
+        ok &= gap <= settings.match_yaw_deg + 1e-6
+    if settings.match_fov_deg is not None:
+        ok &= np.abs(fovs[:, None] - reference.fovs[None, :]) <= settings.match_fov_deg + 1e-6
     return ok
 
 
 def tolerance_text(settings: DesignSettings) -> str:
     """The pose tolerance in words, e.g. "0.1 m in height and 2 deg in pitch"."""
-    parts = ([f"{settings.match_height_m:g} m in height"] if settings.match_height_m is not None else []) + (
-        [f"{settings.match_pitch_deg:g} deg in pitch"] if settings.match_pitch_deg is not None else [])
+    parts = [f"{value:g} {unit} in {name}" for value, unit, name in (
+        (settings.match_height_m, "m", "height"), (settings.match_pitch_deg, "deg", "pitch"),
+        (settings.match_yaw_deg, "deg", "yaw"), (settings.match_fov_deg, "deg", "FOV")) if value is not None]
     return " and ".join(parts) or "any pose"
 
 
@@ -552,7 +562,7 @@ def pose_violations(rig: Rig, reference: Rig, calibration: Calibration, settings
     """The ids of ``rig``'s perception cameras that no matching to the reference (the calibrated cost's
     cheapest among those within the tolerance, as the MILP's) keeps within the pose tolerance."""
     perception = rig.perception()
-    if settings.match_height_m is None and settings.match_pitch_deg is None:
+    if not settings.tolerances:
         return []
     costs = rig_costs(perception, reference, calibration, settings)
     rows, cols = linear_sum_assignment(costs)
@@ -573,10 +583,11 @@ def calibrated_costs(positions: np.ndarray, rotations: np.ndarray, fovs: np.ndar
         if model is None:
             raise ValueError(f"calibrated_costs under {calibration.metric} needs the cameras' lenses (model)")
         costs = costs + pair_terms(positions, rotations, model, reference) @ np.asarray(calibration.lifting)
-    if settings is None or (settings.match_height_m is None and settings.match_pitch_deg is None):
+    if settings is None or not settings.tolerances:
         return costs
-    pitches = yaw_pitch_roll_from_rotation(rotations)[1]
-    return np.where(within_pose_tolerance(positions[:, 2], pitches, reference, settings), costs, OUT_OF_TOLERANCE_COST)
+    yaws, pitches, _ = yaw_pitch_roll_from_rotation(rotations)
+    within = within_pose_tolerance(positions[:, 2], pitches, reference, settings, yaws, np.asarray(fovs, float))
+    return np.where(within, costs, OUT_OF_TOLERANCE_COST)
 
 
 def rig_costs(rig: Rig, reference: Rig, calibration: Calibration, settings: DesignSettings | None = None) -> np.ndarray:

@@ -112,6 +112,8 @@ def design_requirements(references: Sequence[ReferenceRig], vehicle: Vehicle,
     """The sector points of ``vehicle`` with the references' needs, then the required fields' points."""
     points, distance, height, _, azimuth = sector_points(Footprint.of_mesh(vehicle.mesh), settings.coverage)
     needed = fleet_requirements(references, settings, vehicle, points)
+    if settings.near_field:  # the nearer rings are the near-field cameras' ground
+        needed = np.where(distance < settings.perception_range_m, 0, needed)
     labels = [f"ring {d:g} m at height {h:g} m, azimuth {np.rad2deg(a):+.0f} deg"
               for d, h, a in zip(distance, height, azimuth)]
     presets = required_presets(vehicle, settings)

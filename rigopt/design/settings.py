@@ -251,10 +251,26 @@ class DesignSettings:
     match_pitch_deg: float | None = None
     """Pose tolerance (``--match-pitch``): each perception camera's pitch within this many degrees of its
     matched reference camera's (None: any)."""
+    match_yaw_deg: float | None = None
+    """Pose tolerance (``--match-yaw``): each perception camera's yaw within this many degrees of its matched
+    reference camera's (None: any). On the yaw grid, half its step keeps the nearest grid yaw."""
+    match_fov_deg: float | None = None
+    """Lens tolerance (``--match-fov``): each perception camera's horizontal FOV within this many degrees of its
+    matched reference camera's (None: any; 0: the reference's lens)."""
+    perception_range_m: float = 0.0
+    """With near-field cameras: the perception cameras keep the reference's coverage only on the rings at least
+    this far (m) from the body (``--perception-range``; 0: every ring); the nearer rings are the near-field
+    cameras' ground."""
     near_field: bool = True
     """Two roles (the default): the perception cameras are designed for the reference alone (no fields asked
     of them), then near_field fisheyes (:mod:`rigopt.design.near_field`) see the required fields and the near
     ring around the body. False (``--single-set``): one camera set serves both."""
+
+    @property
+    def tolerances(self) -> bool:
+        """Whether any pose or lens tolerance constrains the perception cameras."""
+        return any(v is not None for v in (self.match_height_m, self.match_pitch_deg, self.match_yaw_deg,
+                                           self.match_fov_deg))
 
     def is_symmetric_on(self, vehicle) -> bool:
         """Whether a design on ``vehicle`` places its cameras in mirrored pairs."""
@@ -264,9 +280,13 @@ class DesignSettings:
         object.__setattr__(self, "lenses", catalogue_of(self.lenses))
         if not self.cost_weight >= 0.0:
             raise RigoptError(f"the mounting cost weight must be >= 0, got {self.cost_weight}")
-        for name, value in (("height", self.match_height_m), ("pitch", self.match_pitch_deg)):
+        for name, value in (("height", self.match_height_m), ("pitch", self.match_pitch_deg),
+                            ("yaw", self.match_yaw_deg), ("FOV", self.match_fov_deg)):
             if value is not None and not (np.isfinite(value) and value >= 0.0):
                 raise RigoptError(f"the {name} tolerance must be a finite number >= 0, got {value}")
+        if not (np.isfinite(self.perception_range_m) and self.perception_range_m >= 0.0):
+            raise RigoptError(f"the perception range must be a finite number of metres >= 0, got "
+                              f"{self.perception_range_m}")
         if self.max_body_fraction is not None and not 0.0 <= self.max_body_fraction <= 1.0:
             raise RigoptError(f"the largest ego-body share of an image must be in [0, 1], got {self.max_body_fraction}")
 

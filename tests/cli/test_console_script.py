@@ -41,7 +41,15 @@ JSON_COMMANDS = {
 def start(args, tmp: Path) -> subprocess.Popen:
     env = {**os.environ, "RIGOPT_HOME": str(tmp / "home")}  # no user vehicles of the machine
     return subprocess.Popen([str(console_script()), *(a.format(tmp=tmp) for a in args)], cwd=tmp, env=env,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, preexec_fn=_default_sigint)
+
+
+def _default_sigint():
+    """Ctrl-C's default disposition in the child: a suite started in the background (``pytest &``) passes on
+    SIGINT ignored, and Python then installs no KeyboardInterrupt handler."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 @pytest.fixture(scope="module")

@@ -1,5 +1,6 @@
-"""The perception cameras' pose tolerance (``--match-height``, ``--match-pitch``): each camera of a design is
-matched only to a reference camera within the tolerance of its height above the ground and its pitch."""
+"""The perception cameras' pose tolerance (``--match-height``, ``--match-pitch``, ``--match-yaw``, ``--match-fov``):
+each camera of a design is matched only to a reference camera within the tolerance of its height above the
+ground, its pitch, its yaw and its lens; and the perception range (``--perception-range``)."""
 
 from __future__ import annotations
 
@@ -52,11 +53,53 @@ def test_the_tolerance_compares_height_above_ground_and_pitch():
     assert height_only.tolist() == [[True, False], [False, False], [False, True], [False, True]]
 
 
+def test_the_yaw_tolerance_wraps_around_and_the_fov_tolerance_compares_lenses():
+    reference = Rig("ref", "x", (Camera("back", np.zeros(3), pitched(0.0) @ _turn(180.0), 65.0),
+                                 Camera("front", np.zeros(3), pitched(0.0), 90.0)))
+    yaws = np.deg2rad([-176.0, 170.0, 4.0, 30.0])
+    fovs = np.array([65.0, 65.0, 90.0, 70.0])
+    level, heights = np.zeros(4), np.ones(4)
+    by_yaw = within_pose_tolerance(heights, level, reference, DesignSettings(match_yaw_deg=5.0), yaws, fovs)
+    assert by_yaw.tolist() == [[True, False], [False, False], [False, True], [False, False]]
+    by_lens = within_pose_tolerance(heights, level, reference, DesignSettings(match_fov_deg=0.0), yaws, fovs)
+    assert by_lens.tolist() == [[True, False], [True, False], [False, True], [False, False]]
+    both = within_pose_tolerance(heights, level, reference, DesignSettings(match_yaw_deg=5.0, match_fov_deg=5.0),
+                                 yaws, fovs)
+    assert both.tolist() == [[True, False], [False, False], [False, True], [False, False]]
+
+
+def _turn(yaw_deg: float) -> np.ndarray:
+    """A rotation about the vertical axis by ``yaw_deg`` (for a camera frame whose first column looks forward)."""
+    c, s = np.cos(np.deg2rad(yaw_deg)), np.sin(np.deg2rad(yaw_deg))
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def test_the_perception_range_frees_the_near_rings_only_with_near_field_cameras(box_car):
+    from rigopt.design.requirements import design_requirements
+
+    reference = [ReferenceRig.on_own_vehicle(load_rig("R1"))]
+    base = DesignSettings(require="none")
+    every = design_requirements(reference, box_car, base)
+    far = design_requirements(reference, box_car, DesignSettings(require="none", perception_range_m=10.0))
+    single = design_requirements(reference, box_car, DesignSettings(require="none", perception_range_m=10.0,
+                                                                   near_field=False))
+    near = np.array([label.startswith(("ring 2 m", "ring 5 m")) for label in every.labels])
+    assert near.any() and every.needed[near].sum() > 0
+    assert far.needed[near].sum() == 0 and np.array_equal(far.needed[~near], every.needed[~near])
+    assert np.array_equal(single.needed, every.needed)
+    with pytest.raises(RigoptError, match="perception range"):
+        DesignSettings(perception_range_m=-1.0)
+
+
 def test_a_negative_or_infinite_tolerance_is_refused():
     with pytest.raises(RigoptError, match="height tolerance"):
         DesignSettings(match_height_m=-0.1)
     with pytest.raises(RigoptError, match="pitch tolerance"):
         DesignSettings(match_pitch_deg=float("inf"))
+    with pytest.raises(RigoptError, match="yaw tolerance"):
+        DesignSettings(match_yaw_deg=-5.0)
+    with pytest.raises(RigoptError, match="FOV tolerance"):
+        DesignSettings(match_fov_deg=float("nan"))
 
 
 def test_a_design_within_the_tolerance_keeps_every_matched_camera_inside_it(box_car):
@@ -85,11 +128,15 @@ def test_a_tolerance_no_design_meets_is_an_error_that_says_how_to_widen_it(box_c
 
 def test_the_command_takes_the_tolerance_and_reports_it(tmp_path):
     result = run_rigopt("design", "--vehicle", "tt", "--ref", "R1", "--match-height", "0.2", "--match-pitch", "0",
-                        "--single-set", "--require", "none", "--yaw-step", "30", "--out", tmp_path / "d", "--json")
+                        "--match-fov", "30", "--single-set", "--require", "none", "--yaw-step", "30", "--out", tmp_path / "d", "--json")
     assert result.returncode == 0, result.stderr
     import json
 
     summary = json.loads(result.stdout)
-    assert summary["pose_tolerance"] == {"height_m": 0.2, "pitch_deg": 0.0}
+    assert summary["pose_tolerance"] == {"height_m": 0.2, "pitch_deg": 0.0, "yaw_deg": None, "fov_deg": 30.0}
+    assert summary["perception_range_m"] == 0.0
+    assert all(abs(c["fov"] - 65.0) <= 30.0 for c in summary["cameras"])  # R1's lenses are all 65 deg
     bad = run_rigopt("design", "--vehicle", "tt", "--ref", "R1", "--match-height", "-1")
     assert bad.returncode == 2 and "--match-height" in bad.stderr
+    bad = run_rigopt("design", "--vehicle", "tt", "--ref", "R1", "--perception-range", "-3")
+    assert bad.returncode == 2 and "--perception-range" in bad.stderr
