@@ -256,10 +256,10 @@ def _pareto(target, references, calibration, settings, out: Path, force: bool, a
             status: Console) -> None:
     from dataclasses import asdict
 
-    from rigopt.design.pareto import default_counts, pareto_designs, write_pareto
+    from rigopt.design.pareto import pareto_designs, sweep_counts, write_pareto
     from rigopt.output import atomic_folder, published
 
-    counts = settings.cameras or default_counts(references)
+    counts = settings.cameras or sweep_counts(references)
     with status.status("sweeping camera counts and coverage levels") as spinner:
         points = pareto_designs(target, references, calibration, settings, counts,
                                 progress=lambda message: spinner.update(message) or status.print(f"  {message}"))
