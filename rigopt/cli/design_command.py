@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
-from typing import Optional
+from typing import TYPE_CHECKING, Optional
 
 import typer
 
@@ -15,6 +15,9 @@ from rigopt.cli.parsing import parse_image_size
 from rigopt.design.defaults import BENCHMARK_IMAGE_SIZE as DEFAULT_IMAGE_SIZE
 from rigopt.design.defaults import DEFAULT_LENSES, DEFAULT_MAX_NODES, DEFAULT_PITCHES_DEG, DEFAULT_YAW_STEP_DEG
 from rigopt.errors import RigoptError
+
+if TYPE_CHECKING:
+    from rich.console import Console
 
 #: Widest mount point spacing (m) --spacing takes: a zone narrower than it would hold no mount point.
 MAX_SPACING_M = 2.0
