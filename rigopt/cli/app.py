@@ -18,8 +18,6 @@ app = typer.Typer(
     add_completion=False,
     pretty_exceptions_enable=False,
 )
-import_app = typer.Typer(help="Convert rigs from other formats into rigopt's (the benchmark's) JSON.", no_args_is_help=True)
-app.add_typer(import_app, name="import")
 vehicle_app = typer.Typer(help="Vehicles: show, export and add your own.", no_args_is_help=True)
 app.add_typer(vehicle_app, name="vehicle")
 

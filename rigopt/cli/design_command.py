@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
-from typing import Optional
+from typing import TYPE_CHECKING, Optional
 
 import typer
 
@@ -15,6 +15,9 @@ from rigopt.cli.parsing import parse_image_size
 from rigopt.design.defaults import BENCHMARK_IMAGE_SIZE as DEFAULT_IMAGE_SIZE
 from rigopt.design.defaults import DEFAULT_LENSES, DEFAULT_MAX_NODES, DEFAULT_PITCHES_DEG, DEFAULT_YAW_STEP_DEG
 from rigopt.errors import RigoptError
+
+if TYPE_CHECKING:
+    from rich.console import Console
 
 #: Widest mount point spacing (m) --spacing takes: a zone narrower than it would hold no mount point.
 MAX_SPACING_M = 2.0
@@ -269,10 +272,10 @@ def _pareto(target, references, calibration, settings, out: Path, force: bool, a
             status: Console) -> None:
     from dataclasses import asdict
 
-    from rigopt.design.pareto import default_counts, pareto_designs, write_pareto
+    from rigopt.design.pareto import pareto_designs, sweep_counts, write_pareto
     from rigopt.output import atomic_folder, published
 
-    counts = settings.cameras or default_counts(references)
+    counts = settings.cameras or sweep_counts(references)
     with status.status("sweeping camera counts and coverage levels") as spinner:
         points = pareto_designs(target, references, calibration, settings, counts,
                                 progress=lambda message: spinner.update(message) or status.print(f"  {message}"))

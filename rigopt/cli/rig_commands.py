@@ -1,4 +1,5 @@
-"""``rigopt rigs`` (the built-in library), ``rigopt import FORMAT`` and ``rigopt export`` (docs/formats.md)."""
+"""``rigopt rigs`` (the built-in library), ``rigopt import FORMAT PATH`` and ``rigopt export`` (docs/formats.md):
+one command each way over the format registry (``rigopt.rig.formats.FORMATS``)."""
 
 from __future__ import annotations
 
@@ -7,7 +8,7 @@ from typing import Optional
 
 import typer
 
-from rigopt.cli.app import app, console, import_app, note, print_json, print_next, print_table, status_console
+from rigopt.cli.app import app, console, note, print_json, print_next, print_table, status_console
 from rigopt.cli.parsing import parse_image_size, parse_origin_offset
 from rigopt.errors import RigoptError
 
@@ -96,8 +97,8 @@ def _finish_import(imported, out: Path, as_json: bool, source: str) -> None:
     rig = imported.rig
     with atomic_file(out) as work:
         write_rig(rig, work)
-    for note in imported.notes:
-        status_console.print(note, highlight=False, markup=False, soft_wrap=True)
+    for line in imported.notes:
+        status_console.print(line, highlight=False, markup=False, soft_wrap=True)
     if as_json:
         print_json({"rig": rig.name, "vehicle": rig.vehicle, "out": str(out), "source": source,
                     "origin": rig.origin.kind, "notes": list(imported.notes),
@@ -125,196 +126,74 @@ def _print_listing(rows: list[dict], as_json: bool, title: str) -> None:
                                  for r in rows])
 
 
-@import_app.command("nuscenes")
-def import_nuscenes_command(
-    directory: Path = typer.Argument(..., help="nuScenes table folder (sensor.json, calibrated_sensor.json; "
-                                               "sample_data, sample, scene and log tables where present)."),
+#: The import options each takes, for the check that a format takes what it is given: option -> request field.
+IMPORT_OPTIONS = {"--calibration": "calibration", "--list": "calibration", "--image-size": "image_sizes",
+                  "--log": "log", "--scene": "scene", "--segment": "segment", "--cameras": "cameras",
+                  "--raw-lens": "raw_lens", "--axle-height": "axle_height"}
+
+
+@app.command("import")
+def import_command(
+    format_name: str = typer.Argument(..., metavar="FORMAT", help="The file's format: nuscenes, argoverse1, "
+                                      "argoverse2, dgp, waymo, opencv, urdf or carla (docs/formats.md)."),
+    path: Path = typer.Argument(..., help="The calibration file or folder (each format's is in docs/formats.md)."),
     out: Optional[Path] = typer.Option(None, "--out", help=OUT_HELP),
-    log: Optional[str] = typer.Option(None, help="Take the calibration this log used (logfile name or token)."),
-    scene: Optional[str] = typer.Option(None, help="Take the calibration this scene used (name or token)."),
-    calibration: Optional[int] = typer.Option(None, help="Take the K-th distinct calibration (0-based; --list)."),
-    list_: bool = typer.Option(False, "--list", help="List the distinct calibrations with their logs and vehicles."),
-    image_size: str = typer.Option("1600x900", help="Image size WIDTHxHEIGHT where sample_data gives none; "
-                                                    "per channel: 1600x900,CAM_BACK=1440x900."),
-    vehicle: Optional[str] = typer.Option(None, help="The rigopt vehicle the rig is on (default: nuscenes)."),
-    name: Optional[str] = typer.Option(None, help="The rig's name (default: the log's or the folder's)."),
+    vehicle: Optional[str] = typer.Option(None, help="The rigopt vehicle the rig is on (default: the format's name; "
+                                                     "carla: the file's)."),
+    name: Optional[str] = typer.Option(None, help="The rig's name (default: the log's, scene's, segment's or file's)."),
     origin: Optional[str] = typer.Option(None, help=ORIGIN_HELP),
     origin_offset: Optional[str] = typer.Option(None, "--origin-offset", help=ORIGIN_OFFSET_HELP),
+    calibration: Optional[int] = typer.Option(None, help="nuscenes, dgp, waymo: take the K-th distinct calibration "
+                                                         "(0-based; --list)."),
+    list_: bool = typer.Option(False, "--list", help="nuscenes, dgp, waymo: list the distinct calibrations with "
+                                                     "their logs, files or segments."),
+    image_size: Optional[str] = typer.Option(None, help="nuscenes, dgp: image size WIDTHxHEIGHT where the files give "
+                                                        "none (nuscenes 1600x900, per channel: 1600x900,CAM_BACK="
+                                                        "1440x900; dgp 1936x1216)."),
+    log: Optional[str] = typer.Option(None, help="nuscenes: take the calibration this log used (logfile or token)."),
+    scene: Optional[str] = typer.Option(None, help="nuscenes: take the calibration this scene used (name or token)."),
+    segment: Optional[str] = typer.Option(None, help="waymo: take this segment's calibration "
+                                                     "(key.segment_context_name)."),
+    cameras: Optional[str] = typer.Option(None, help="argoverse1: ring (the seven ring cameras, default) or all (and "
+                                                     "the two stereo cameras)."),
+    raw_lens: bool = typer.Option(False, "--raw-lens", help="argoverse1: keep the lenses' radial distortion (radtan "
+                                                            "k1, k2, 0, 0, k3) instead of the undistorted pinholes."),
+    axle_height: Optional[float] = typer.Option(None, help="argoverse1: the rear axle's height above the ground in "
+                                                           "metres, by which positions are raised (default 0.328, "
+                                                           "the Ford Fusion Hybrid's tyre radius)."),
     force: bool = typer.Option(False, "--force", help=IMPORT_FORCE_HELP),
     as_json: bool = typer.Option(False, "--json", help="Print JSON instead of a summary."),
 ):
-    """Read a rig from nuScenes calibration tables (camera channels, rectified) and write it as a rig file."""
-    from rigopt.rig.formats.nuscenes import describe_calibrations, nuscenes_calibrations, read_nuscenes
+    """Read a rig from another format's calibration and write it as a rig file (rigopt's, the benchmark's JSON).
 
-    sizes = parse_image_sizes(image_size)
+    Formats: nuscenes (calibration tables), argoverse1, argoverse2, dgp (DDAD), waymo (v2 Parquet, v1 TFRecord),
+    opencv (Kalibr camchain), urdf, carla (spawn list). Each format's options are marked with its name."""
+    from rigopt.rig.formats import ImportRequest, find_format
+
+    fmt = find_format(format_name)
+    given = {"--calibration": calibration is not None, "--list": list_, "--image-size": image_size is not None,
+             "--log": log is not None, "--scene": scene is not None, "--segment": segment is not None,
+             "--cameras": cameras is not None, "--raw-lens": raw_lens, "--axle-height": axle_height is not None}
+    foreign = [option for option, used in given.items() if used and IMPORT_OPTIONS[option] not in fmt.options
+               and not (option == "--list" and fmt.listing is not None)]
+    if foreign:
+        takes = sorted(o for o, f in IMPORT_OPTIONS.items() if f in fmt.options and (o != "--list" or fmt.listing))
+        raise RigoptError(f"{', '.join(foreign)}: not an option of {format_name} (it takes "
+                          f"{', '.join(takes) or 'none beyond --out, --vehicle, --name, --origin'}); drop "
+                          f"{'them' if len(foreign) > 1 else 'it'}")
+    sizes = parse_image_sizes(image_size or fmt.image_size) if "image_sizes" in fmt.options else None
+    if sizes is not None and format_name != "nuscenes" and set(sizes) != {None}:
+        raise RigoptError(f"--image-size {image_size}: {format_name} takes one WIDTHxHEIGHT for every camera")
+    request = ImportRequest(path, name, vehicle, None, calibration, sizes, log, scene, segment, cameras or "ring",
+                            raw_lens, axle_height)
     if list_:
-        _print_listing(describe_calibrations(nuscenes_calibrations(directory, sizes)), as_json,
-                       f"distinct calibrations in {directory}")
+        _print_listing(fmt.listing(request), as_json, f"distinct calibrations in {path}")
         return
     out = _check_out(out, force, False)
     _check_vehicle(vehicle)
-    imported = read_nuscenes(directory, sizes, calibration, log, scene, name, vehicle or "nuscenes", _origin(origin, origin_offset))
-    _finish_import(imported, out, as_json, "nuscenes")
+    from dataclasses import replace
 
-
-@import_app.command("argoverse1")
-def import_argoverse1_command(
-    path: Path = typer.Argument(..., help="Argoverse 1 log folder (holding vehicle_calibration_info.json) or the "
-                                          "file itself."),
-    out: Optional[Path] = typer.Option(None, "--out", help=OUT_HELP),
-    cameras: str = typer.Option("ring", help="ring (the seven ring cameras) or all (and the two stereo cameras)."),
-    raw_lens: bool = typer.Option(False, "--raw-lens", help="Keep the lenses' radial distortion (radtan k1, k2, 0, 0, "
-                                                            "k3) instead of the pinholes of the undistorted images."),
-    axle_height: Optional[float] = typer.Option(None, help="The rear axle's height above the ground in metres, by "
-                                                           "which positions are raised (default: 0.328, the Ford "
-                                                           "Fusion Hybrid's tyre radius)."),
-    vehicle: Optional[str] = typer.Option(None, help="The rigopt vehicle the rig is on (default: argoverse1)."),
-    name: Optional[str] = typer.Option(None, help="The rig's name (default: the log folder's)."),
-    origin: Optional[str] = typer.Option(None, help=ORIGIN_HELP),
-    origin_offset: Optional[str] = typer.Option(None, "--origin-offset", help=ORIGIN_OFFSET_HELP),
-    force: bool = typer.Option(False, "--force", help=IMPORT_FORCE_HELP),
-    as_json: bool = typer.Option(False, "--json", help="Print JSON instead of a summary."),
-):
-    """Read a rig from Argoverse 1 calibration (vehicle_calibration_info.json of argoverse-api)."""
-    from rigopt.rig.formats.argoverse1 import read_argoverse1
-
-    out = _check_out(out, force, False)
-    _check_vehicle(vehicle)
-    imported = read_argoverse1(path, name, vehicle or "argoverse1", _origin(origin, origin_offset), axle_height,
-                               cameras, raw_lens)
-    _finish_import(imported, out, as_json, "argoverse1")
-
-
-@import_app.command("argoverse2")
-def import_argoverse2_command(
-    path: Path = typer.Argument(..., help="Argoverse 2 log folder (holding calibration/) or its calibration/ folder."),
-    out: Optional[Path] = typer.Option(None, "--out", help=OUT_HELP),
-    vehicle: Optional[str] = typer.Option(None, help="The rigopt vehicle the rig is on (default: argoverse2)."),
-    name: Optional[str] = typer.Option(None, help="The rig's name (default: the log folder's)."),
-    origin: Optional[str] = typer.Option(None, help=ORIGIN_HELP),
-    origin_offset: Optional[str] = typer.Option(None, "--origin-offset", help=ORIGIN_OFFSET_HELP),
-    force: bool = typer.Option(False, "--force", help=IMPORT_FORCE_HELP),
-    as_json: bool = typer.Option(False, "--json", help="Print JSON instead of a summary."),
-):
-    """Read a rig from Argoverse 2 calibration (egovehicle_SE3_sensor.feather, intrinsics.feather)."""
-    from rigopt.rig.formats.datasets import read_argoverse2
-
-    out = _check_out(out, force, False)
-    _check_vehicle(vehicle)
-    _finish_import(read_argoverse2(path, name, vehicle or "argoverse2", _origin(origin, origin_offset)), out, as_json, "argoverse2")
-
-
-@import_app.command("dgp")
-def import_dgp_command(
-    path: Path = typer.Argument(..., help="DGP (DDAD) scene folder (calibration/*.json, scene*.json) or a "
-                                          "calibration JSON."),
-    out: Optional[Path] = typer.Option(None, "--out", help=OUT_HELP),
-    calibration: Optional[int] = typer.Option(None, help="Take the K-th distinct calibration (0-based; --list)."),
-    list_: bool = typer.Option(False, "--list", help="List the distinct calibrations with their files."),
-    image_size: str = typer.Option("1936x1216", help="Image size WIDTHxHEIGHT where no scene JSON gives one."),
-    vehicle: Optional[str] = typer.Option(None, help="The rigopt vehicle the rig is on (default: dgp)."),
-    name: Optional[str] = typer.Option(None, help="The rig's name (default: the scene folder's)."),
-    origin: Optional[str] = typer.Option(None, help=ORIGIN_HELP),
-    origin_offset: Optional[str] = typer.Option(None, "--origin-offset", help=ORIGIN_OFFSET_HELP),
-    force: bool = typer.Option(False, "--force", help=IMPORT_FORCE_HELP),
-    as_json: bool = typer.Option(False, "--json", help="Print JSON instead of a summary."),
-):
-    """Read a rig from a DGP (DDAD) calibration JSON (names, intrinsics, extrinsics)."""
-    from rigopt.rig.formats.datasets import dgp_calibrations, read_dgp
-
-    size = parse_image_size(image_size)
-    if list_:
-        _print_listing(dgp_calibrations(path, size), as_json, f"distinct calibrations in {path}")
-        return
-    out = _check_out(out, force, False)
-    _check_vehicle(vehicle)
-    _finish_import(read_dgp(path, size, calibration, name, vehicle or "dgp", _origin(origin, origin_offset)), out, as_json, "dgp")
-
-
-@import_app.command("waymo")
-def import_waymo_command(
-    path: Path = typer.Argument(..., help="Waymo v2 camera_calibration Parquet file or v1 Frame .tfrecord file, or "
-                                          "a folder of them."),
-    out: Optional[Path] = typer.Option(None, "--out", help=OUT_HELP),
-    segment: Optional[str] = typer.Option(None, help="Take this segment's calibration (key.segment_context_name)."),
-    calibration: Optional[int] = typer.Option(None, help="Take the K-th distinct calibration (0-based; --list)."),
-    list_: bool = typer.Option(False, "--list", help="List the distinct calibrations with their segments."),
-    vehicle: Optional[str] = typer.Option(None, help="The rigopt vehicle the rig is on (default: waymo)."),
-    name: Optional[str] = typer.Option(None, help="The rig's name (default: the segment's)."),
-    origin: Optional[str] = typer.Option(None, help=ORIGIN_HELP),
-    origin_offset: Optional[str] = typer.Option(None, "--origin-offset", help=ORIGIN_OFFSET_HELP),
-    force: bool = typer.Option(False, "--force", help=IMPORT_FORCE_HELP),
-    as_json: bool = typer.Option(False, "--json", help="Print JSON instead of a summary."),
-):
-    """Read a rig from the Waymo Open Dataset: v2 camera_calibration (Parquet) or v1 Frame TFRecords."""
-    from rigopt.rig.formats.datasets import read_waymo, waymo_calibrations
-
-    if list_:
-        rows = [{"calibration": k, "cameras": [c.id for c in g["cameras"]], "segments": g["segments"]}
-                for k, g in enumerate(waymo_calibrations(path))]
-        _print_listing(rows, as_json, f"distinct calibrations in {path}")
-        return
-    out = _check_out(out, force, False)
-    _check_vehicle(vehicle)
-    imported = read_waymo(path, calibration, segment, name, vehicle or "waymo", _origin(origin, origin_offset))
-    _finish_import(imported, out, as_json, "waymo")
-
-
-@import_app.command("opencv")
-def import_opencv_command(
-    path: Path = typer.Argument(..., help="Kalibr / OpenCV camchain YAML (cam0, cam1, ...)."),
-    out: Optional[Path] = typer.Option(None, "--out", help=OUT_HELP),
-    vehicle: Optional[str] = typer.Option(None, help="The rigopt vehicle the rig is on (default: opencv)."),
-    name: Optional[str] = typer.Option(None, help="The rig's name (default: the file's stem)."),
-    origin: Optional[str] = typer.Option(None, help=ORIGIN_HELP),
-    origin_offset: Optional[str] = typer.Option(None, "--origin-offset", help=ORIGIN_OFFSET_HELP),
-    force: bool = typer.Option(False, "--force", help=IMPORT_FORCE_HELP),
-    as_json: bool = typer.Option(False, "--json", help="Print JSON instead of a summary."),
-):
-    """Read a rig from a Kalibr camchain YAML (pinhole cameras, radtan or equidistant distortion)."""
-    from rigopt.rig.formats.opencv import read_camchain
-
-    out = _check_out(out, force, False)
-    _check_vehicle(vehicle)
-    _finish_import(read_camchain(path, name, vehicle or "opencv", _origin(origin, origin_offset)), out, as_json, "opencv")
-
-
-@import_app.command("urdf")
-def import_urdf_command(
-    path: Path = typer.Argument(..., help="URDF with <gazebo> camera sensors (as rigopt export writes)."),
-    out: Optional[Path] = typer.Option(None, "--out", help=OUT_HELP),
-    vehicle: Optional[str] = typer.Option(None, help="The rigopt vehicle the rig is on (default: urdf)."),
-    name: Optional[str] = typer.Option(None, help="The rig's name (default: the robot's name)."),
-    origin: Optional[str] = typer.Option(None, help=ORIGIN_HELP),
-    origin_offset: Optional[str] = typer.Option(None, "--origin-offset", help=ORIGIN_OFFSET_HELP),
-    force: bool = typer.Option(False, "--force", help=IMPORT_FORCE_HELP),
-    as_json: bool = typer.Option(False, "--json", help="Print JSON instead of a summary."),
-):
-    """Read a rig from a ROS URDF: camera links under the root link, SDFormat camera sensors."""
-    from rigopt.rig.formats.urdf import read_urdf
-
-    out = _check_out(out, force, False)
-    _check_vehicle(vehicle)
-    _finish_import(read_urdf(path, name, vehicle or "urdf", _origin(origin, origin_offset)), out, as_json, "urdf")
-
-
-@import_app.command("carla")
-def import_carla_command(
-    path: Path = typer.Argument(..., help="CARLA camera spawn list JSON (as rigopt export writes)."),
-    out: Optional[Path] = typer.Option(None, "--out", help=OUT_HELP),
-    vehicle: Optional[str] = typer.Option(None, help="The rigopt vehicle the rig is on (default: the file's)."),
-    name: Optional[str] = typer.Option(None, help="The rig's name (default: the file's)."),
-    origin: Optional[str] = typer.Option(None, help=ORIGIN_HELP),
-    origin_offset: Optional[str] = typer.Option(None, "--origin-offset", help=ORIGIN_OFFSET_HELP),
-    force: bool = typer.Option(False, "--force", help=IMPORT_FORCE_HELP),
-    as_json: bool = typer.Option(False, "--json", help="Print JSON instead of a summary."),
-):
-    """Read a rig from a CARLA camera spawn list (sensor.camera.rgb blueprints and transforms)."""
-    from rigopt.rig.formats.carla import read_carla
-
-    out = _check_out(out, force, False)
-    _check_vehicle(vehicle)
-    _finish_import(read_carla(path, name, vehicle, _origin(origin, origin_offset)), out, as_json, "carla")
+    _finish_import(fmt.read(replace(request, origin=_origin(origin, origin_offset))), out, as_json, format_name)
 
 
 @app.command("export")
@@ -334,14 +213,13 @@ def export_command(
     centre) when rigopt knows the rig's vehicle, and the conversion is noted; otherwise they are written
     unchanged, with a warning."""
     from rigopt.output import atomic_file, atomic_folder, check_out_file, check_out_folder
-    from rigopt.rig.formats import EXPORT_FORMATS, EXPORT_ORIGINS, EXPORT_SUFFIXES, export_rig
+    from rigopt.rig.formats import find_format
     from rigopt.rig.library import load_rig
     from rigopt.rig.model import RigOrigin
     from rigopt.vehicle.placement import convert_origin, known_vehicle
 
-    if format_name not in EXPORT_FORMATS:
-        raise RigoptError(f"--format {format_name!r} is not one rigopt writes; use one of {', '.join(EXPORT_FORMATS)}")
-    suffixes = EXPORT_SUFFIXES[format_name]
+    fmt = find_format(format_name, writing=True)
+    suffixes = fmt.suffixes
     if suffixes is None:
         out = check_out_folder(out, force=force)
     else:
@@ -354,10 +232,10 @@ def export_command(
         loaded = loaded.perception()
     vehicle = known_vehicle(loaded)
     if vehicle is not None:
-        loaded, change = convert_origin(loaded, vehicle, RigOrigin(EXPORT_ORIGINS[format_name]))
+        loaded, change = convert_origin(loaded, vehicle, RigOrigin(fmt.origin))
         if change is not None:
             note(change.describe())
-    exported = export_rig(loaded, format_name)
+    exported = fmt.write(loaded)
     if suffixes is None:
         with atomic_folder(out, force=force) as work:
             for file_name, text in exported.files.items():

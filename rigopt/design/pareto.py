@@ -153,7 +153,7 @@ def write_pareto(points: list[ParetoPoint], out_dir) -> list[Path]:
     return [table, picture]
 
 
-def default_counts(references: Sequence[ReferenceRig]) -> tuple[int, int]:
-    """The (first) reference's camera count +- 2 (at least 1)."""
+def sweep_counts(references: Sequence[ReferenceRig]) -> tuple[int, int]:
+    """The camera counts a Pareto sweep spans without --cameras: the (first) reference's count +- 2 (at least 1)."""
     n = len(references[0].rig)
     return max(1, n - 2), n + 2

@@ -1,7 +1,7 @@
 """Coverage reports of all 14 library rigs on their own vehicles.
 
-Writes studies/coverage/results/<rig>/ (coverage.json and report.html, whose figures are embedded) and
-results.md: per rig the covered and overlapped fractions of the 10 m ring at 0.8 m, the ground ring at 2 m,
+Writes studies/coverage/results/<rig>/ (coverage.json, committed, and report.html, whose figures are embedded:
+about 1 MB each, so not committed; this script makes them) and results.md: per rig the covered and overlapped fractions of the 10 m ring at 0.8 m, the ground ring at 2 m,
 the blind ground area within 5 m and the largest self-occluded image fraction.
 Usage: python studies/coverage/run.py
 """
