@@ -57,29 +57,30 @@ class LSSDetector(nn.Module):
         lifted = self.depth_net(features)
         depth = lifted[:, :self.config.depth_bins].softmax(dim=1)  # (B*N, D, h, w)
         context = lifted[:, self.config.depth_bins:]  # (B*N, Cc, h, w)
-        volume = depth[:, :, None] * context[:, None]  # (B*N, D, Cc, h, w)
-        bev = self.splat(volume.view(b, n, *volume.shape[1:]), batch, (h, w))
+        bev = self.splat(depth.view(b, n, *depth.shape[1:]), context.view(b, n, *context.shape[1:]), batch)
         near = self.bev_near(bev)
         far = F.interpolate(self.bev_far(near), size=near.shape[-2:], mode="bilinear", align_corners=False)
         outputs = self.head(self.bev_merge(torch.cat([near, far], dim=1)))
         outputs["depth_logits"] = lifted[:, :self.config.depth_bins]
         return outputs
 
-    def splat(self, volume: torch.Tensor, batch: Batch, feature_hw) -> torch.Tensor:
-        """(B, N, D, Cc, h, w) lifted features -> (B, Cc, G, G) bird's-eye features (sum per cell)."""
-        b, n, d, c, h, w = volume.shape
+    def splat(self, depth: torch.Tensor, context: torch.Tensor, batch: Batch) -> torch.Tensor:
+        """Lift and splat: depth (B, N, D, h, w) probabilities and context (B, N, Cc, h, w) features -> (B, Cc, G, G)
+        bird's-eye features, the sum per cell of depth x context over the frustum points that fall in the grid.
+        Only those points' products are formed (not the whole (B, N, D, Cc, h, w) volume)."""
+        b, n, d, h, w = depth.shape
         g, cell, half = self.head.grid, self.config.bev_cell, self.config.bev_range
-        origins, directions = pixel_rays(batch.intrinsics, batch.cam_to_ego, feature_hw, self.encoder.stride)
+        origins, directions = pixel_rays(batch.intrinsics, batch.cam_to_ego, (h, w), self.encoder.stride)
         points = origins[:, :, None] + self.depths[None, None, :, None, None, None] * directions[:, :, None]
         ix = torch.floor((points[..., 0] + half) / cell).long()  # (B, N, D, h, w)
         iy = torch.floor((points[..., 1] + half) / cell).long()
         kept = (ix >= 0) & (ix < g) & (iy >= 0) & (iy < g) & (points[..., 2] >= HEIGHT_LIMITS[0]) & (
             points[..., 2] <= HEIGHT_LIMITS[1])
-        sample = torch.arange(b, device=volume.device)[:, None, None, None, None].expand_as(ix)
-        flat = (sample * g * g + ix * g + iy)[kept]
-        values = volume.permute(0, 1, 2, 4, 5, 3)[kept]  # (P, Cc)
-        bev = volume.new_zeros(b * g * g, c).index_add_(0, flat, values)
-        return bev.view(b, g, g, c).permute(0, 3, 1, 2).contiguous()
+        sample, camera, _, row, col = kept.nonzero(as_tuple=True)  # in the volume's order
+        flat = sample * g * g + ix[kept] * g + iy[kept]
+        values = depth[kept][:, None] * context.permute(0, 1, 3, 4, 2)[sample, camera, row, col]  # (P, Cc)
+        bev = depth.new_zeros(b * g * g, context.shape[2]).index_add_(0, flat, values)
+        return bev.view(b, g, g, -1).permute(0, 3, 1, 2).contiguous()
 
     def loss(self, outputs: dict, batch: Batch) -> tuple[torch.Tensor, dict]:
         loss, parts = self.head.loss(outputs, batch.boxes)

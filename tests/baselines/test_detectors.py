@@ -332,11 +332,12 @@ def test_splat_puts_each_lifted_feature_in_the_cell_below_it():
                (0, 2, 3, 3, 0, 4.0),   # (27, 5.4, -3.7): inside the square but below the ground, dropped
                (0, 2, 0, 3, 3, 16.0),  # (27, 5.4, 11.9): inside the square but too high, dropped
                (1, 5, 2, 4, 1, 8.0)]   # (-1.3, 56, 5.0): within the height limits but beyond the square
-    volume = torch.zeros(2, 1, len(depths), channels, h, w)
+    # one entry per pixel: its depth bin carries the value, its channel 1, so depth x context is the entry alone
+    depth, context = torch.zeros(2, 1, len(depths), h, w), torch.zeros(2, 1, channels, h, w)
     expected = torch.zeros(2, channels, model.head.grid, model.head.grid)
     kept_cells = []
     for b, k, i, j, c, value in entries:
-        volume[b, 0, k, c, i, j] = value
+        depth[b, 0, k, i, j], context[b, 0, c, i, j] = value, 1.0
         u, v = 8 * j + 0.5, 8 * i + 0.5
         x, y, z = hand_point(*cameras[b], fx, fy, cx, cy, u, v, depths[k])
         ix, iy = math.floor((x + 51.2) / 0.8), math.floor((y + 51.2) / 0.8)
@@ -345,10 +346,40 @@ def test_splat_puts_each_lifted_feature_in_the_cell_below_it():
             kept_cells.append((b, c, ix, iy))
     assert kept_cells == [(0, 2, 85, 56), (1, 5, 42, 96)]  # the hand geometry itself, spelled out
 
-    bev = model.splat(volume, batch, (h, w))
+    bev = model.splat(depth, context, batch)
     assert bev.shape == (2, channels, 128, 128)
     assert torch.count_nonzero(bev) == 2
     torch.testing.assert_close(bev, expected)
+
+
+def test_splat_equals_summing_the_whole_lifted_volume():
+    """The splat forms only the kept points' products; summing the whole (B, N, D, Cc, h, w) volume of depth x
+    context into the same cells in the same order gives the same bird's-eye features, bit for bit."""
+    config = model_config("lss", "tiny")
+    model = LSSDetector(config)
+    generator = torch.Generator().manual_seed(3)
+    b, n, d, c, h, w = 2, 3, len(model.depths), 5, 4, 8
+    depth = torch.rand(b, n, d, h, w, generator=generator).softmax(dim=2)
+    context = torch.randn(b, n, c, h, w, generator=generator)
+    K = intrinsics(40.0, 40.0, 28.5, 16.5).expand(b, n, 3, 3)
+    T = torch.stack([torch.stack([camera_to_ego(yaw, [0.5 * k, -0.2 * k, 1.2 + 0.3 * k]) for k, yaw in
+                                  enumerate((0.3, 2.0, -1.9))]) for _ in range(b)])
+    batch = Batch(torch.zeros(b, n, 3, HEIGHT, WIDTH), K, T, [], ["a", "b"])
+    bev = model.splat(depth, context, batch)
+
+    g, cell, half = model.head.grid, config.bev_cell, config.bev_range
+    origins, directions = pixel_rays(K, T, (h, w), model.encoder.stride)
+    points = origins[:, :, None] + model.depths[None, None, :, None, None, None] * directions[:, :, None]
+    ix = torch.floor((points[..., 0] + half) / cell).long()
+    iy = torch.floor((points[..., 1] + half) / cell).long()
+    kept = (ix >= 0) & (ix < g) & (iy >= 0) & (iy < g) & (points[..., 2] >= HEIGHT_LIMITS[0]) & (
+        points[..., 2] <= HEIGHT_LIMITS[1])
+    volume = depth[:, :, :, None] * context[:, :, None]  # (B, N, D, Cc, h, w)
+    sample = torch.arange(b)[:, None, None, None, None].expand_as(ix)
+    flat = (sample * g * g + ix * g + iy)[kept]
+    whole = torch.zeros(b * g * g, c).index_add_(0, flat, volume.permute(0, 1, 2, 4, 5, 3)[kept])
+    assert kept.any() and not kept.all()
+    assert torch.equal(bev, whole.view(b, g, g, c).permute(0, 3, 1, 2))
 
 
 def test_splat_keeps_the_in_range_points_of_a_level_ray_and_sums_shared_cells():
@@ -360,10 +391,11 @@ def test_splat_keeps_the_in_range_points_of_a_level_ray_and_sums_shared_cells():
     K = intrinsics(40.0, 40.0, 28.5, 16.5)[None, None]  # on feature row 2; column 4 (u = 32.5) is 4 px right
     T = camera_to_ego(0.0, [0.0, 0.0, 1.5])[None, None]
     batch = Batch(torch.zeros(1, 1, 3, HEIGHT, WIDTH), K, T, [], ["a"])
-    volume = torch.zeros(1, 1, 6, 3, 4, 8)
-    volume[0, 0, :, 1, 2, 4] = torch.arange(1.0, 7.0)  # bins 0..5 carry 1..6; cell (2, 4) has u = 32.5
-    volume[0, 0, 0, 1, 2, 5] = 10.0  # u = 40.5: (6, -1.8, 1.5), the cell (8, 7) of bin 0 above
-    bev = model.splat(volume, batch, (4, 8))
+    depth, context = torch.zeros(1, 1, 6, 4, 8), torch.zeros(1, 1, 3, 4, 8)
+    depth[0, 0, :, 2, 4] = torch.arange(1.0, 7.0)  # bins 0..5 carry 1..6; cell (2, 4) has u = 32.5
+    depth[0, 0, 0, 2, 5] = 10.0  # u = 40.5: (6, -1.8, 1.5), the cell (8, 7) of bin 0 above
+    context[0, 0, 1, 2, 4:6] = 1.0  # channel 1 of both pixels
+    bev = model.splat(depth, context, batch)
     # u = 32.5 is 4 px right of cx: y = -d * 0.1, so y in [-5.6, -0.6] -> iy = floor((y + 51.2) / 6.4) = 7
     expected = torch.zeros(3, 16, 16)
     for value, depth in zip(range(1, 7), (6.0, 16.0, 26.0, 36.0, 46.0, 56.0)):
