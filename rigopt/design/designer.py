@@ -105,6 +105,8 @@ class Prepared:
     sees_pool: np.ndarray
     spacing: float
     mount_cost: np.ndarray
+    lifted: tuple[np.ndarray, ...] = ()
+    """Per reference, (R_k,) bool: the cameras whose pose tolerance is lifted (:func:`lifted_tolerances`)."""
 
 
 def prepare(vehicle: Vehicle, references: Sequence[Rig], calibration: Calibration, settings: DesignSettings,
@@ -116,6 +118,15 @@ def prepare(vehicle: Vehicle, references: Sequence[Rig], calibration: Calibratio
     candidates = mount_candidates(vehicle, settings, spacing)
     costs = tuple(calibrated_costs(candidates.positions, candidates.rotations, candidates.fovs, rig, calibration,
                                    settings, candidates.model()) for rig in references)
+    lifted = tuple(lifted_tolerances(c) for c in costs)
+    if any(mask.any() for mask in lifted):  # the tolerance of a reference camera no mount allows is lifted
+        costs = tuple(calibrated_costs(candidates.positions, candidates.rotations, candidates.fovs, rig, calibration,
+                                       settings, candidates.model(), mask) if mask.any() else c
+                      for rig, c, mask in zip(references, costs, lifted))
+        for rig, mask in zip(references, lifted):
+            if mask.any():
+                progress(f"no mount keeps {', '.join(rig.cameras[k].id for k in np.flatnonzero(mask))} of "
+                         f"{rig.name} within {tolerance_text(settings)}: matched without the tolerance")
     no_sees, no_needs = np.zeros((len(candidates), 0), bool), np.zeros(0, int)
     pool = reduce(np.union1d, [prune(c, no_sees, no_needs, settings.keep_per_reference, 0) for c in costs],
                   _coverage_pool(candidates, list(references), settings))
@@ -123,7 +134,8 @@ def prepare(vehicle: Vehicle, references: Sequence[Rig], calibration: Calibratio
     progress(f"coverage of {len(points)} requirement points by {len(pool)} of {len(candidates)} candidates")
     sees_pool = _pool_sees(vehicle, candidates, pool, points, settings)
     per_mount = mounting_costs(vehicle, candidates.mount_zones, candidates.mount_points)
-    return Prepared(tuple(references), candidates, costs, points, pool, sees_pool, spacing, per_mount[candidates.mount])
+    return Prepared(tuple(references), candidates, costs, points, pool, sees_pool, spacing, per_mount[candidates.mount],
+                    lifted)
 
 
 def _pool_sees(vehicle: Vehicle, candidates: CandidateSet, pool: np.ndarray, points: np.ndarray,
@@ -264,8 +276,9 @@ def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRi
     if refines:
         progress("continuous refinement (casadi + IPOPT)")
         refinement = _refined(design, vehicle, reference, calibration, requirements, prepared.spacing, settings)
-        outside = pose_violations(refinement.refined.rig, reference, calibration, settings) if refinement.accepted \
-            else []
+        lifted = prepared.lifted[0] if prepared.lifted else None
+        outside = (pose_violations(refinement.refined.rig, reference, calibration, settings, lifted)
+                   if refinement.accepted else [])
         if outside:  # the continuous stage may slide and tilt a camera out of the tolerance: keep the MILP's rig
             refinement = replace(refinement, accepted=False,
                                  status=f"rejected: moves {', '.join(outside)} out of {tolerance_text(settings)}")
@@ -297,7 +310,9 @@ def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRi
         naive_refinement)
     return DesignResult(design, milp, refinement, comparisons, float(reference_coverage), vehicle, references,
                         calibration, settings, time.perf_counter() - start, symmetry_fallback, regions,
-                        fields_fallback, stage)
+                        fields_fallback, stage,
+                        tuple(reference.cameras[k].id for k in np.flatnonzero(prepared.lifted[0]))
+                        if prepared.lifted else ())
 
 
 def _near_field_stage(vehicle: Vehicle, perception: Rig, presets: tuple, spacing: float, settings: DesignSettings,
@@ -558,24 +573,27 @@ def tolerance_text(settings: DesignSettings) -> str:
     return " and ".join(parts) or "any pose"
 
 
-def pose_violations(rig: Rig, reference: Rig, calibration: Calibration, settings: DesignSettings) -> list[str]:
+def pose_violations(rig: Rig, reference: Rig, calibration: Calibration, settings: DesignSettings,
+                    lifted: np.ndarray | None = None) -> list[str]:
     """The ids of ``rig``'s perception cameras that no matching to the reference (the calibrated cost's
-    cheapest among those within the tolerance, as the MILP's) keeps within the pose tolerance."""
+    cheapest among those within the tolerance, as the MILP's) keeps within the pose tolerance (lifted for the
+    reference cameras ``lifted`` (R,) bool marks)."""
     perception = rig.perception()
     if not settings.tolerances:
         return []
-    costs = rig_costs(perception, reference, calibration, settings)
+    costs = rig_costs(perception, reference, calibration, settings, lifted)
     rows, cols = linear_sum_assignment(costs)
     return [perception.cameras[k].id for k, m in zip(rows, cols) if costs[k, m] >= OUT_OF_TOLERANCE_COST]
 
 
 def calibrated_costs(positions: np.ndarray, rotations: np.ndarray, fovs: np.ndarray, reference: Rig,
                      calibration: Calibration, settings: DesignSettings | None = None,
-                     model: CameraModel | None = None) -> np.ndarray:
+                     model: CameraModel | None = None, lifted: np.ndarray | None = None) -> np.ndarray:
     """(n, R) float: the calibrated raw-unit cost of matching each camera (positions (n, 3) m, vehicle frame;
     rotations (n, 3, 3); fovs (n,) deg; lenses ``model`` of batch (n,), needed by a lifting metric's depth
     prior) to each reference camera; OUT_OF_TOLERANCE_COST for the pairs outside ``settings``' pose tolerance
-    (None: no tolerance)."""
+    (None: no tolerance), except for the reference cameras ``lifted`` (R,) bool marks (see
+    :func:`lifted_tolerances`)."""
     lt, lr, lf = calibration.lambdas
     t, r, f = camera_costs(positions, rotations, fovs, reference.positions, reference.rotations, reference.fovs)
     costs = lt * t + lr * r + lf * f
@@ -587,13 +605,24 @@ def calibrated_costs(positions: np.ndarray, rotations: np.ndarray, fovs: np.ndar
         return costs
     yaws, pitches, _ = yaw_pitch_roll_from_rotation(rotations)
     within = within_pose_tolerance(positions[:, 2], pitches, reference, settings, yaws, np.asarray(fovs, float))
+    if lifted is not None:
+        within |= np.asarray(lifted, dtype=bool)[None, :]
     return np.where(within, costs, OUT_OF_TOLERANCE_COST)
 
 
-def rig_costs(rig: Rig, reference: Rig, calibration: Calibration, settings: DesignSettings | None = None) -> np.ndarray:
+def lifted_tolerances(costs: np.ndarray) -> np.ndarray:
+    """(R,) bool: the reference cameras no candidate can match within the pose tolerance (every entry of their
+    column of the candidates' :func:`calibrated_costs` (n, R) is OUT_OF_TOLERANCE_COST): where the body offers no
+    mount for them (a rearward view past a trailer), their tolerance is lifted and they are matched by the
+    calibrated cost alone."""
+    return np.all(costs >= OUT_OF_TOLERANCE_COST, axis=0) if len(costs) else np.zeros(costs.shape[1], bool)
+
+
+def rig_costs(rig: Rig, reference: Rig, calibration: Calibration, settings: DesignSettings | None = None,
+              lifted: np.ndarray | None = None) -> np.ndarray:
     """(len(rig), R) float: :func:`calibrated_costs` of ``rig``'s cameras to the reference's."""
     return calibrated_costs(rig.positions, rig.rotations, rig.fovs, reference, calibration, settings,
-                            CameraModel.of_cameras(rig.cameras))
+                            CameraModel.of_cameras(rig.cameras), lifted)
 
 
 #: Heights (m) closer than this count as the same for the height-matched transfer.

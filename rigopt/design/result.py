@@ -118,3 +118,5 @@ class DesignResult:
     near_field: object = None
     """The near-field stage (:class:`rigopt.design.near_field.NearFieldDesign`) of a two-role design, else None
     (the fields ``settings.require`` names are then required of its cameras, not of the perception cameras)."""
+    tolerance_lifted: tuple[str, ...] = ()
+    """The reference cameras no mount keeps within the pose tolerance: matched without it."""

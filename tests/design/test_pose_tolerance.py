@@ -4,18 +4,22 @@ ground, its pitch, its yaw and its lens; and the perception range (``--perceptio
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
 from box_car import BOX_ZONES, ROOF_ZONE, spec_text
 from in_process import run_rigopt
+
 from rigopt.design.designer import (
+    OUT_OF_TOLERANCE_COST,
     design_rig,
+    lifted_tolerances,
     pose_violations,
     within_pose_tolerance,
 )
 from rigopt.design.problem import ReferenceRig
-from rigopt.design.selection import DesignInfeasible
 from rigopt.design.settings import DesignSettings
 from rigopt.errors import RigoptError
 from rigopt.metrics.calibration import load_weights
@@ -119,11 +123,20 @@ def test_a_design_within_the_tolerance_keeps_every_matched_camera_inside_it(box_
     assert free.milp.selection.objective <= result.milp.selection.objective + 1e-9
 
 
-def test_a_tolerance_no_design_meets_is_an_error_that_says_how_to_widen_it(box_car):
+def test_a_reference_camera_no_mount_allows_is_matched_without_the_tolerance(box_car):
+    costs = np.array([[1.0, OUT_OF_TOLERANCE_COST, OUT_OF_TOLERANCE_COST],
+                      [OUT_OF_TOLERANCE_COST, OUT_OF_TOLERANCE_COST, 2.0]])
+    assert lifted_tolerances(costs).tolist() == [False, True, False]
+    # R1 looks level and only -10 deg is offered: no camera of R1 can keep 2 deg, so every tolerance is lifted
+    # and the design is the one without the tolerance
     settings = DesignSettings(lenses=(90.0, 120.0), yaw_step_deg=30.0, pitches_deg=(-10.0,), near_field=False,
-                              require="none", match_pitch_deg=2.0)  # R1 looks level; only -10 deg is offered
-    with pytest.raises(DesignInfeasible, match="within 2 deg in pitch.*--match-pitch"):
-        design_rig(box_car, ReferenceRig.on_own_vehicle(load_rig("R1")), load_weights("joint"), settings)
+                              require="none", match_pitch_deg=2.0)
+    reference = ReferenceRig.on_own_vehicle(load_rig("R1"))
+    lifted = design_rig(box_car, reference, load_weights("joint"), settings)
+    free = design_rig(box_car, reference, load_weights("joint"), replace(settings, match_pitch_deg=None))
+    assert lifted.tolerance_lifted == tuple(c.id for c in reference.rig.cameras)
+    assert lifted.milp.selection.objective == pytest.approx(free.milp.selection.objective, abs=1e-9)
+    assert free.tolerance_lifted == ()
 
 
 def test_the_command_takes_the_tolerance_and_reports_it(tmp_path):
@@ -133,7 +146,8 @@ def test_the_command_takes_the_tolerance_and_reports_it(tmp_path):
     import json
 
     summary = json.loads(result.stdout)
-    assert summary["pose_tolerance"] == {"height_m": 0.2, "pitch_deg": 0.0, "yaw_deg": None, "fov_deg": 30.0}
+    assert summary["pose_tolerance"] == {"height_m": 0.2, "pitch_deg": 0.0, "yaw_deg": None, "fov_deg": 30.0,
+                                          "lifted_for": []}
     assert summary["perception_range_m"] == 0.0
     assert all(abs(c["fov"] - 65.0) <= 30.0 for c in summary["cameras"])  # R1's lenses are all 65 deg
     bad = run_rigopt("design", "--vehicle", "tt", "--ref", "R1", "--match-height", "-1")
