@@ -22,10 +22,11 @@ from pathlib import Path
 
 import numpy as np
 
-from rigopt.report.tables import markdown, write_csv
-
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from run import MATRIX, REAL_RESULTS, RESULTS, RIGS, null_summary, rig_name  # noqa: E402
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # studies/: the studies' shared code (studylib)
+from studylib.tables import markdown, write_csv  # noqa: E402
 
 RIG_SETS = {"v1 (9 rigs)": ["R1", "R1-r", "R1-t", "R1-f", "R1-c6", "R1-c10", "R2", "R5", "R9"],
             "v2 matrix (20 rigs)": [rig_name(rig) for rig in MATRIX]}

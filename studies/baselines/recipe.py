@@ -15,9 +15,11 @@ Writes results/recipe.csv. Runs go to <data>/recipe-runs/<variant>.
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
-from rigopt.report.tables import markdown, read_csv, write_csv
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # studies/: the studies' shared code (studylib)
+from studylib.tables import markdown, read_csv, write_csv  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 #: variant -> (training scenes, settings of the small preset changed)

@@ -28,10 +28,13 @@ import csv
 import json
 import shutil
 import subprocess
+import sys
 from pathlib import Path
 
 from rigopt.output import write_text_atomic
-from rigopt.report.tables import markdown, read_csv, write_csv
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # studies/: the studies' shared code (studylib)
+from studylib.tables import markdown, read_csv, write_csv  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 RESULTS = HERE / "results"  # the readings: tables, calibration, logs
@@ -214,8 +217,8 @@ def agreement_step() -> list[list]:
     """Spearman rho of every synthetic family against every real detector on the pairs both hold (the
     counterparts marked), and, as a yardstick, of the real detectors against one another on those rigs."""
     import numpy as np
+    from studylib.agreement import drop_agreement
 
-    from rigopt.metrics.agreement import drop_agreement
     from rigopt.metrics.transfer import read_transfer
     from rigopt.resources import data_dir
 

@@ -10,11 +10,15 @@ its output. Usage: python studies/pccr_calibration/intervals.py [--metric rigcd|
 from __future__ import annotations
 
 import argparse
+import sys
+from pathlib import Path
 
 from rigopt.metrics.protocol import CalibrationStudy, calibrate
 from rigopt.metrics.transfer import read_transfer
-from rigopt.report.tables import markdown
 from rigopt.resources import data_dir
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # studies/: the studies' shared code (studylib)
+from studylib.tables import markdown  # noqa: E402
 
 
 def fits(study: CalibrationStudy) -> list:

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 from pathlib import Path
 
 from rigopt.metrics.calibration import Calibration
@@ -17,9 +18,11 @@ from rigopt.metrics.rigv import rigv
 from rigopt.metrics.transfer import read_transfer
 from rigopt.report.calibration_figures import write_calibration_figures
 from rigopt.report.calibration_tables import study_dict, write_study_tables
-from rigopt.report.tables import markdown, write_csv
 from rigopt.resources import data_dir
 from rigopt.rig.library import library_rig, rig_names
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # studies/: the studies' shared code (studylib)
+from studylib.tables import markdown, write_csv  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 

@@ -16,22 +16,25 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 import time
 from dataclasses import asdict
 from pathlib import Path
 
 import numpy as np
-
 import plus_study as ps
 from plus_study import BASELINE, PRIMARY_SOLVER, VARIANTS
 from plus_terms import TERMS, PlusSettings, RigProfile, rig_profile, term_matrices
+
 from rigopt.metrics.matched_fit import SOLVERS
 from rigopt.metrics.prediction import choose_link
 from rigopt.metrics.transfer import read_transfer
-from rigopt.report.tables import markdown, write_csv
 from rigopt.resources import data_dir
 from rigopt.rig.library import load_rig, rig_names
 from rigopt.vehicle.library import load_vehicle
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # studies/: the studies' shared code (studylib)
+from studylib.tables import markdown, write_csv  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 RESULTS = HERE / "results"

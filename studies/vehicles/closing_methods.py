@@ -21,8 +21,10 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
-from rigopt.report.tables import markdown, write_csv
 from rigopt.vehicle import closing
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # studies/: the studies' shared code (studylib)
+from studylib.tables import markdown, write_csv  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parents[1] / "tests"))  # the raw vehicles are the tests' own

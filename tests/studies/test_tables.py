@@ -2,7 +2,11 @@
 
 from __future__ import annotations
 
-from rigopt.report.tables import markdown, read_csv, write_csv
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "studies"))  # the studies' shared code
+from studylib.tables import markdown, read_csv, write_csv  # noqa: E402
 
 
 def test_csv_round_trip_keeps_text_and_numbers_to_six_significant_digits(tmp_path):

@@ -2,11 +2,17 @@
 
 from __future__ import annotations
 
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
 
 from rigopt.errors import DataError
-from rigopt.metrics.agreement import drop_agreement, shared_drops
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "studies"))  # the studies' shared code
+from studylib.agreement import drop_agreement, shared_drops  # noqa: E402
+
 from rigopt.metrics.transfer import TransferTable
 
 
