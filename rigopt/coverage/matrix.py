@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rigopt.coverage.footprint import Footprint
+from rigopt.vehicle.footprint import Footprint
 from rigopt.coverage.measures import CoverageSettings
 from rigopt.camera import CameraModel
 from rigopt.coverage.visibility import visible_by
@@ -57,7 +57,7 @@ def coverage_matrix(vehicle: Vehicle, positions, rotations, fovs=None, image_siz
         if image_sizes is None:
             image_sizes = np.tile(DEFAULT_IMAGE_SIZE, (len(positions), 1))
         model = CameraModel.from_fov(fovs, image_sizes)
-    points, distance, height, sector, azimuth = sector_points(Footprint.of_mesh(vehicle.mesh), settings)
+    points, distance, height, sector, azimuth = sector_points(vehicle.footprint, settings)
     sees = visible_by(vehicle.mesh, model, positions, rotations, points, settings.max_range, settings.backend)
     return CoverageMatrix(sees, distance, height, sector, azimuth, points)
 

@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from rigopt.coverage.footprint import Footprint
+from rigopt.vehicle.footprint import Footprint
 from rigopt.errors import RigoptError
 from rigopt.raycast import first_hit_distance
 from rigopt.camera import CameraModel, Lens
@@ -195,7 +195,7 @@ def camera_coverage(vehicle: Vehicle, rig: Rig, settings: CoverageSettings, foot
 
 def coverage_report(rig: Rig, vehicle: Vehicle, settings: CoverageSettings = CoverageSettings()) -> CoverageReport:
     """All coverage measures of ``rig`` on ``vehicle``; cameras inside the body are listed and still used."""
-    footprint = Footprint.of_mesh(vehicle.mesh)
+    footprint = vehicle.footprint
     inside = vehicle.surface(rig.positions).distance < 0
     return CoverageReport(
         rig.name, vehicle.name, settings, footprint,
@@ -210,7 +210,7 @@ def coverage_report(rig: Rig, vehicle: Vehicle, settings: CoverageSettings = Cov
 def ring_report(rig: Rig, vehicle: Vehicle, settings: CoverageSettings = CoverageSettings()) -> RingReport:
     """The rings of ``rig`` on ``vehicle``, as in ``coverage_report`` and at a fraction of its cost."""
     return RingReport(rig.name, vehicle.name, settings,
-                      ring_coverage(vehicle, rig, settings, Footprint.of_mesh(vehicle.mesh)))
+                      ring_coverage(vehicle, rig, settings, vehicle.footprint))
 
 
 @dataclass(frozen=True)

@@ -43,7 +43,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rigopt.camera import CameraModel
-from rigopt.coverage.footprint import Footprint
+from rigopt.vehicle.footprint import Footprint
 from rigopt.raycast import first_hit_distance, segments_clear
 from rigopt.rig.model import Camera, Rig
 from rigopt.vehicle.model import Vehicle
@@ -287,7 +287,7 @@ def nearest_visible_ground(camera: Camera, vehicle: Vehicle, footprint: Footprin
         return None, None
     ground = camera.position[:2] + along[seen, None] * rays[seen, :2]
     from_lens = np.linalg.norm(ground - camera.position[:2], axis=1)
-    footprint = footprint or Footprint.of_mesh(vehicle.mesh)
+    footprint = footprint or vehicle.footprint
     return float(from_lens.min()), float(footprint.distance_to(ground).min())
 
 
@@ -309,7 +309,7 @@ def camera_packaging(camera: Camera, vehicle: Vehicle, footprint: Footprint | No
     mount_point, normal = surface.foot[0], surface.normal[0] / np.linalg.norm(surface.normal[0])
     zone, nearest, nearest_m = body_feature(vehicle, mount_point, normal)
     wedge = float(np.rad2deg(np.arccos(np.clip(normal @ camera.forward, -1.0, 1.0))))
-    footprint = footprint or Footprint.of_mesh(vehicle.mesh)
+    footprint = footprint or vehicle.footprint
     ground_m, body_m = nearest_visible_ground(camera, vehicle, footprint, backend)
     directions = person_directions(camera)
     people = tuple(PersonHeight(name, height, PERSON_DISTANCE_M,
@@ -327,5 +327,5 @@ def rig_packaging(rig: Rig, vehicle: Vehicle, backend: str = "auto") -> tuple[Ca
     """Every camera's packaging sheet, the rig first moved to ``vehicle``'s centre frame (RigoptError when its
     origin needs axles the vehicle lacks)."""
     placed, _ = to_vehicle_centre(rig, vehicle)
-    footprint = Footprint.of_mesh(vehicle.mesh)
+    footprint = vehicle.footprint
     return tuple(camera_packaging(camera, vehicle, footprint, backend) for camera in placed.cameras)

@@ -26,7 +26,6 @@ import numpy as np
 import shapely
 
 from rigopt.camera import CameraModel
-from rigopt.coverage.footprint import Footprint
 from rigopt.coverage.visibility import DEFAULT_MAX_RANGE, visible_by
 from rigopt.errors import RigoptError
 from rigopt.mounting.practice import keep_out_boxes
@@ -138,7 +137,7 @@ class BodyReference:
         """The reference on the ground, vehicle frame (m): the convex hull of the kept mesh in plan, joined
         with the plan rectangle of each coupled trailer."""
         if self.whole_body:
-            return Footprint.of_mesh(vehicle.mesh).polygon
+            return vehicle.footprint.polygon
         points = _mesh_points_below(vehicle.mesh, self.max_height)
         keep = np.ones(len(points), dtype=bool)
         for zone in vehicle.zones:
@@ -501,7 +500,7 @@ def required_mask(vehicle: Vehicle, points, lifted=()) -> np.ndarray:
     inside a keep-out box in force (a coupled trailer fills the space behind a tractor; ``lifted`` names the
     optional keep-outs lifted, as in MountPractice)."""
     points = np.asarray(points, dtype=float).reshape(-1, 3)
-    needed = Footprint.of_mesh(vehicle.mesh).distance_to(points[:, :2]) > 0
+    needed = vehicle.footprint.distance_to(points[:, :2]) > 0
     for low, high, _ in keep_out_boxes(vehicle, lifted):
         needed &= ~np.all((points >= low) & (points <= high), axis=1)
     return needed

@@ -35,7 +35,6 @@ import scipy.sparse as sparse
 from scipy.spatial import cKDTree
 
 from rigopt.camera import Lens
-from rigopt.coverage.footprint import Footprint
 from rigopt.coverage.regulations import RegionPreset, required_mask
 from rigopt.coverage.visibility import visible_by
 from rigopt.design.candidates import CandidateSet, build_candidates
@@ -111,7 +110,7 @@ class NearFieldPoints:
 def near_field_points(vehicle: Vehicle, presets: tuple[RegionPreset, ...], lifted=()) -> NearFieldPoints:
     """The near ring around the footprint and every field point of ``presets`` (each at its heights), less the
     points inside the footprint or a keep-out in force (a coupled trailer)."""
-    footprint = Footprint.of_mesh(vehicle.mesh)
+    footprint = vehicle.footprint
     azimuths = np.linspace(-np.pi, np.pi, NEAR_RING_SECTORS, endpoint=False)
     parts, labels = [], []
     for height in NEAR_RING_HEIGHTS:

@@ -85,13 +85,12 @@ def pareto_designs(vehicle: Vehicle, references: Sequence[ReferenceRig], calibra
 def near_field(rig: Rig, vehicle: Vehicle, settings: DesignSettings) -> tuple[float, float, float, float]:
     """(ground fraction seen on the 2 m ring, unseen ground m^2 within 5 m, smallest covered fraction of the
     vehicle category's regulation fields, relative mounting cost) of ``rig`` on ``vehicle``."""
-    from rigopt.coverage.footprint import Footprint
     from rigopt.coverage.measures import CoverageSettings, blind_zone, ring_coverage
     from rigopt.coverage.regulations import default_presets
     from rigopt.design.designer import field_coverage
     from rigopt.mounting.practice import mounting_costs
 
-    footprint, measures = Footprint.of_mesh(vehicle.mesh), CoverageSettings(ring_distances=(2.0,), ring_heights=(0.0,))
+    footprint, measures = vehicle.footprint, CoverageSettings(ring_distances=(2.0,), ring_heights=(0.0,))
     ring = ring_coverage(vehicle, rig, measures, footprint)[0].covered_frac
     blind = blind_zone(vehicle, rig, measures, footprint).area_m2
     fields = min((r.covered_frac for r in field_coverage(rig, vehicle, default_presets(vehicle), settings)), default=1.0)

@@ -23,7 +23,6 @@ from typing import Sequence
 import numpy as np
 
 from rigopt.camera import CameraModel
-from rigopt.coverage.footprint import Footprint
 from rigopt.coverage.matrix import rig_coverage_matrix, sector_points
 from rigopt.coverage.regulations import RegionPreset, parse_require, required_mask
 from rigopt.coverage.visibility import visible_by
@@ -110,7 +109,7 @@ def required_presets(vehicle: Vehicle, settings: DesignSettings) -> tuple[Region
 def design_requirements(references: Sequence[ReferenceRig], vehicle: Vehicle,
                         settings: DesignSettings) -> Requirements:
     """The sector points of ``vehicle`` with the references' needs, then the required fields' points."""
-    points, distance, height, _, azimuth = sector_points(Footprint.of_mesh(vehicle.mesh), settings.coverage)
+    points, distance, height, _, azimuth = sector_points(vehicle.footprint, settings.coverage)
     needed = fleet_requirements(references, settings, vehicle, points)
     if settings.near_field:  # the nearer rings are the near-field cameras' ground
         needed = np.where(distance < settings.perception_range_m, 0, needed)

@@ -40,7 +40,7 @@ import numpy as np
 from rigopt import raycast
 from rigopt.mounting.features import trailer_swings
 from rigopt.mounting.practice import DEFAULT_HOUSING, MountPractice, duplicates, keep_out_boxes, practice_problems
-from rigopt.mounting.shapes import body_object, collides, frustum_object, housing_object, surface_frame
+from rigopt.mounting.shapes import collides, frustum_object, housing_object, surface_frame
 from rigopt.rig.model import Camera, Rig
 from rigopt.vehicle.model import Vehicle, Zone
 
@@ -86,7 +86,7 @@ class RigCheck:
 def housing_fits(vehicle: Vehicle, feet, normals, rules: MountRules = MountRules()) -> np.ndarray:
     """(n,) bool: a housing with its back face at each foot point (n, 3) on a surface of normal (n, 3) sinks
     no deeper than ``rules.penetration_tolerance`` into the body (the housing rule, for mount points)."""
-    body = body_object(vehicle)
+    body = vehicle.collision_object
     feet, normals = np.atleast_2d(feet), np.atleast_2d(normals)
     forward = np.array([1.0, 0.0, 0.0])
     return np.array([not collides(housing_object(foot, normal, forward, rules.housing, rules.penetration_tolerance),
@@ -153,7 +153,7 @@ def swing_object(swing):
 
 def check_rig(rig: Rig, vehicle: Vehicle, rules: MountRules = MountRules()) -> RigCheck:
     """Apply every mount rule to every camera of ``rig`` on ``vehicle`` (raised mounts: see the module doc)."""
-    body = body_object(vehicle)
+    body = vehicle.collision_object
     surface = vehicle.surface(rig.positions)
     zones = vehicle.zone_names(surface.foot, surface.normal)
     far = surface.distance > rules.max_distance

@@ -203,10 +203,10 @@ def _raised_ok(vehicle: Vehicle, points, names, axes, surface, rules: MountRules
     """(n,) bool: raised lens positions that the mount checks will put on a post of their own zone, with the
     housing clear of the body."""
     from rigopt.mounting.rules import raised_mounts
-    from rigopt.mounting.shapes import body_object, collides, housing_object
+    from rigopt.mounting.shapes import collides, housing_object
 
     ok = np.zeros(len(points), dtype=bool)
-    body = body_object(vehicle)
+    body = vehicle.collision_object
     far = surface.distance > rules.max_distance
     for k, mount in zip(np.flatnonzero(far), raised_mounts(vehicle, points[far])):
         if mount is None or mount.zone.name != names[k]:

@@ -6,14 +6,12 @@ Frames and units: vehicle frame (ISO 8855), metres. python-fcl is imported on fi
 
 from __future__ import annotations
 
-from functools import lru_cache
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from rigopt.camera import CameraModel
 from rigopt.rig.model import Camera
-from rigopt.vehicle.model import Vehicle
 
 if TYPE_CHECKING:
     from rigopt.mounting.rules import MountRules
@@ -23,18 +21,6 @@ def _fcl():
     import fcl
 
     return fcl
-
-
-@lru_cache(maxsize=16)
-def body_object(vehicle: Vehicle):
-    """The body as an fcl BVH collision object; one per vehicle."""
-    fcl = _fcl()
-    model = fcl.BVHModel()
-    mesh = vehicle.mesh
-    model.beginModel(len(mesh.vertices), len(mesh.faces))
-    model.addSubModel(np.asarray(mesh.vertices, dtype=float), np.asarray(mesh.faces, dtype=np.int32))
-    model.endModel()
-    return fcl.CollisionObject(model, fcl.Transform())
 
 
 def surface_frame(normal: np.ndarray, forward: np.ndarray) -> np.ndarray:

@@ -11,6 +11,7 @@ import trimesh
 from rigopt import raycast
 from rigopt.vehicle.arches import WheelArch, trace_arches
 from rigopt.vehicle.build import build_mesh
+from rigopt.vehicle.footprint import Footprint
 from rigopt.vehicle.spec import VehicleSpec, Wheels, ZoneSpec
 from rigopt.vehicle.symmetry import MirrorSymmetry, mirror_symmetry
 
@@ -168,6 +169,22 @@ class Vehicle:
     def symmetry(self) -> MirrorSymmetry:
         """How mirror-symmetric the body is across y = 0 (:mod:`rigopt.vehicle.symmetry`)."""
         return mirror_symmetry(self.mesh)
+
+    @cached_property
+    def footprint(self) -> Footprint:
+        """The body's convex footprint on the ground (:class:`rigopt.vehicle.footprint.Footprint`)."""
+        return Footprint.of_mesh(self.mesh)
+
+    @cached_property
+    def collision_object(self):
+        """The body as a python-fcl BVH collision object (mesh triangles, vehicle frame), built once."""
+        import fcl
+
+        model = fcl.BVHModel()
+        model.beginModel(len(self.mesh.vertices), len(self.mesh.faces))
+        model.addSubModel(np.asarray(self.mesh.vertices, dtype=float), np.asarray(self.mesh.faces, dtype=np.int32))
+        model.endModel()
+        return fcl.CollisionObject(model, fcl.Transform())
 
     @cached_property
     def size(self) -> np.ndarray:

@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rigopt.coverage.footprint import Footprint
+from rigopt.vehicle.footprint import Footprint
 from rigopt.coverage.measures import CoverageSettings
 from rigopt.geometry import rotation_from_yaw_pitch_roll
 from rigopt.rig.model import Camera, Rig

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 import shapely
 
-from rigopt.coverage.footprint import Footprint
+from rigopt.vehicle.footprint import Footprint
 from rigopt.vehicle.library import load_vehicle
 
 AZIMUTHS = np.linspace(-np.pi, np.pi, 721)[:-1]
@@ -56,7 +56,7 @@ def test_radius_on_a_corner_arc(box_footprint):
 @pytest.mark.parametrize("which", ["box", "etron"])
 def test_ring_points_are_distance_from_the_footprint(which, distance, box_vehicle):
     vehicle = box_vehicle if which == "box" else load_vehicle("etron")
-    footprint = Footprint.of_mesh(vehicle.mesh)
+    footprint = vehicle.footprint
     points = footprint.ring_points(AZIMUTHS, distance, 0.8)
     measured = shapely.distance(footprint.polygon, shapely.points(points[:, :2]))
     np.testing.assert_allclose(measured, distance, rtol=0, atol=1e-6)

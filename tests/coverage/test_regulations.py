@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 import shapely
 
-from rigopt.coverage.footprint import Footprint
+from rigopt.vehicle.footprint import Footprint
 from rigopt.coverage.regulations import (
     EYE_SETBACK,
     NEAR_BODY_CLEARANCE,

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from rigopt.camera import focal_from_fov
-from rigopt.coverage.footprint import Footprint
+from rigopt.vehicle.footprint import Footprint
 from rigopt.coverage.matrix import sector_points
 from rigopt.coverage.measures import CoverageSettings, camera_coverage
 from rigopt.coverage.visibility import visible
@@ -209,7 +209,7 @@ def test_each_rig_is_measured_on_its_own_vehicle(tmp_path, box):
     short, long = rig(*mast, name="short"), rig(*mast, name="long", vehicle="vehicle.test.longbox")
     states = []
     for vehicle, r in ((box, short), (long_box, long)):
-        points = sector_points(Footprint.of_mesh(vehicle.mesh), ring10.coverage)[0]
+        points = sector_points(vehicle.footprint, ring10.coverage)[0]
         sees = visible(vehicle.mesh, r.positions, r.rotations, r.fovs, np.array([c.image_size for c in r.cameras]),
                        points, ring10.coverage.max_range)
         assert sees.any(axis=0).all()
