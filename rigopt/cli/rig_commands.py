@@ -3,6 +3,7 @@ one command each way over the format registry (``rigopt.rig.formats.FORMATS``)."
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 from typing import Optional
 
@@ -191,8 +192,6 @@ def import_command(
         return
     out = _check_out(out, force, False)
     _check_vehicle(vehicle)
-    from dataclasses import replace
-
     _finish_import(fmt.read(replace(request, origin=_origin(origin, origin_offset))), out, as_json, format_name)
 
 

@@ -105,7 +105,7 @@ class Prepared:
     sees_pool: np.ndarray
     spacing: float
     mount_cost: np.ndarray
-    lifted: tuple[np.ndarray, ...] = ()
+    lifted: tuple[np.ndarray, ...]
     """Per reference, (R_k,) bool: the cameras whose pose tolerance is lifted (:func:`lifted_tolerances`)."""
 
 
@@ -116,17 +116,19 @@ def prepare(vehicle: Vehicle, references: Sequence[Rig], calibration: Calibratio
     spacing = settings.spacing or default_spacing(vehicle, settings)
     progress(f"sampling mount candidates on {vehicle.name} (spacing {spacing:.2f} m)")
     candidates = mount_candidates(vehicle, settings, spacing)
-    costs = tuple(calibrated_costs(candidates.positions, candidates.rotations, candidates.fovs, rig, calibration,
-                                   settings, candidates.model()) for rig in references)
-    lifted = tuple(lifted_tolerances(c) for c in costs)
-    if any(mask.any() for mask in lifted):  # the tolerance of a reference camera no mount allows is lifted
-        costs = tuple(calibrated_costs(candidates.positions, candidates.rotations, candidates.fovs, rig, calibration,
-                                       settings, candidates.model(), mask) if mask.any() else c
-                      for rig, c, mask in zip(references, costs, lifted))
-        for rig, mask in zip(references, lifted):
-            if mask.any():
-                progress(f"no mount keeps {', '.join(rig.cameras[k].id for k in np.flatnonzero(mask))} of "
-                         f"{rig.name} within {tolerance_text(settings)}: matched without the tolerance")
+    model = candidates.model()
+    raw = tuple(calibrated_costs(candidates.positions, candidates.rotations, candidates.fovs, rig, calibration,
+                                 None, model) for rig in references)
+    costs = tuple(_tolerated(c, candidates.positions, candidates.rotations, candidates.fovs, rig, settings)
+                  for c, rig in zip(raw, references))
+    lifted = tuple(lifted_tolerances(c) if settings.tolerances else np.zeros(len(rig), bool)
+                   for c, rig in zip(costs, references))
+    # the tolerance of a reference camera no mount allows is lifted: its column keeps the calibrated costs
+    costs = tuple(np.where(mask, r, c) for r, c, mask in zip(raw, costs, lifted))
+    for rig, mask in zip(references, lifted):
+        if mask.any():
+            progress(f"no mount keeps {', '.join(rig.cameras[k].id for k in np.flatnonzero(mask))} of "
+                     f"{rig.name} within {tolerance_text(settings)}: matched without the tolerance")
     no_sees, no_needs = np.zeros((len(candidates), 0), bool), np.zeros(0, int)
     pool = reduce(np.union1d, [prune(c, no_sees, no_needs, settings.keep_per_reference, 0) for c in costs],
                   _coverage_pool(candidates, list(references), settings))
@@ -276,8 +278,7 @@ def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRi
     if refines:
         progress("continuous refinement (casadi + IPOPT)")
         refinement = _refined(design, vehicle, reference, calibration, requirements, prepared.spacing, settings)
-        lifted = prepared.lifted[0] if prepared.lifted else None
-        outside = (pose_violations(refinement.refined.rig, reference, calibration, settings, lifted)
+        outside = (pose_violations(refinement.refined.rig, reference, calibration, settings, prepared.lifted[0])
                    if refinement.accepted else [])
         if outside:  # the continuous stage may slide and tilt a camera out of the tolerance: keep the MILP's rig
             refinement = replace(refinement, accepted=False,
@@ -311,8 +312,7 @@ def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRi
     return DesignResult(design, milp, refinement, comparisons, float(reference_coverage), vehicle, references,
                         calibration, settings, time.perf_counter() - start, symmetry_fallback, regions,
                         fields_fallback, stage,
-                        tuple(reference.cameras[k].id for k in np.flatnonzero(prepared.lifted[0]))
-                        if prepared.lifted else ())
+                        tuple(reference.cameras[k].id for k in np.flatnonzero(prepared.lifted[0])))
 
 
 def _near_field_stage(vehicle: Vehicle, perception: Rig, presets: tuple, spacing: float, settings: DesignSettings,
@@ -601,6 +601,13 @@ def calibrated_costs(positions: np.ndarray, rotations: np.ndarray, fovs: np.ndar
         if model is None:
             raise ValueError(f"calibrated_costs under {calibration.metric} needs the cameras' lenses (model)")
         costs = costs + pair_terms(positions, rotations, model, reference) @ np.asarray(calibration.lifting)
+    return _tolerated(costs, positions, rotations, fovs, reference, settings, lifted)
+
+
+def _tolerated(costs: np.ndarray, positions: np.ndarray, rotations: np.ndarray, fovs: np.ndarray, reference: Rig,
+               settings: DesignSettings | None, lifted: np.ndarray | None = None) -> np.ndarray:
+    """(n, R) ``costs`` with OUT_OF_TOLERANCE_COST for the pairs outside ``settings``' pose tolerance, except in
+    the columns of the reference cameras ``lifted`` (R,) bool marks."""
     if settings is None or not settings.tolerances:
         return costs
     yaws, pitches, _ = yaw_pitch_roll_from_rotation(rotations)
