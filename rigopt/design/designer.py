@@ -105,8 +105,8 @@ class Prepared:
     sees_pool: np.ndarray
     spacing: float
     mount_cost: np.ndarray
-    lifted: tuple[np.ndarray, ...]
-    """Per reference, (R_k,) bool: the cameras whose pose tolerance is lifted (:func:`lifted_tolerances`)."""
+    gaps: tuple[np.ndarray, ...]
+    """Per reference, (n, R_k) float: each candidate's :func:`pose_gaps` to each reference camera."""
 
 
 def prepare(vehicle: Vehicle, references: Sequence[Rig], calibration: Calibration, settings: DesignSettings,
@@ -119,16 +119,11 @@ def prepare(vehicle: Vehicle, references: Sequence[Rig], calibration: Calibratio
     model = candidates.model()
     raw = tuple(calibrated_costs(candidates.positions, candidates.rotations, candidates.fovs, rig, calibration,
                                  None, model) for rig in references)
-    costs = tuple(_tolerated(c, candidates.positions, candidates.rotations, candidates.fovs, rig, settings)
-                  for c, rig in zip(raw, references))
-    lifted = tuple(lifted_tolerances(c) if settings.tolerances else np.zeros(len(rig), bool)
-                   for c, rig in zip(costs, references))
-    # the tolerance of a reference camera no mount allows is lifted: its column keeps the calibrated costs
-    costs = tuple(np.where(mask, r, c) for r, c, mask in zip(raw, costs, lifted))
-    for rig, mask in zip(references, lifted):
-        if mask.any():
-            progress(f"no mount keeps {', '.join(rig.cameras[k].id for k in np.flatnonzero(mask))} of "
-                     f"{rig.name} within {tolerance_text(settings)}: matched without the tolerance")
+    gaps = tuple(tolerance_gaps(candidates.positions, candidates.rotations, candidates.fovs, rig, settings)
+                 for rig in references)
+    # beyond the tolerance a camera costs EXCESS_COST per tolerance: chosen only where the body offers no mount
+    # within it, at the nearest pose it allows
+    costs = tuple(r + tolerance_penalty(g) for r, g in zip(raw, gaps))
     no_sees, no_needs = np.zeros((len(candidates), 0), bool), np.zeros(0, int)
     pool = reduce(np.union1d, [prune(c, no_sees, no_needs, settings.keep_per_reference, 0) for c in costs],
                   _coverage_pool(candidates, list(references), settings))
@@ -137,7 +132,7 @@ def prepare(vehicle: Vehicle, references: Sequence[Rig], calibration: Calibratio
     sees_pool = _pool_sees(vehicle, candidates, pool, points, settings)
     per_mount = mounting_costs(vehicle, candidates.mount_zones, candidates.mount_points)
     return Prepared(tuple(references), candidates, costs, points, pool, sees_pool, spacing, per_mount[candidates.mount],
-                    lifted)
+                    gaps)
 
 
 def _pool_sees(vehicle: Vehicle, candidates: CandidateSet, pool: np.ndarray, points: np.ndarray,
@@ -267,6 +262,14 @@ def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRi
                        "required" if auto_fields and not with_fields else None)
 
     progress("validating the design: mount checks, coverage, RigCD")
+    matched = np.sort(milp.selection.matched[milp.selection.matched >= 0])  # the rig's cameras come in this order
+    gaps = tolerance_gaps(milp.rig.positions[:len(matched)], milp.rig.rotations[:len(matched)],
+                          milp.rig.fovs[:len(matched)], reference, settings)
+    widen = matched_widening(gaps, matched)
+    for k in np.flatnonzero(widen > 1.0):
+        progress(f"no mount keeps {reference.cameras[k].id} within {tolerance_text(settings)}: "
+                 + (f"the nearest pose the body allows, {widen[k]:.2f}x the tolerance" if np.isfinite(widen[k])
+                    else "matched without the tolerance"))
     design = summarise(milp.rig, vehicle, rigs, calibration, requirements, settings, milp.check)
     if not design.meets_requirements:
         raise DesignInfeasible("the selected rig does not meet the coverage requirements when recomputed; "
@@ -278,7 +281,7 @@ def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRi
     if refines:
         progress("continuous refinement (casadi + IPOPT)")
         refinement = _refined(design, vehicle, reference, calibration, requirements, prepared.spacing, settings)
-        outside = (pose_violations(refinement.refined.rig, reference, calibration, settings, prepared.lifted[0])
+        outside = (pose_violations(refinement.refined.rig, reference, calibration, settings, widen)
                    if refinement.accepted else [])
         if outside:  # the continuous stage may slide and tilt a camera out of the tolerance: keep the MILP's rig
             refinement = replace(refinement, accepted=False,
@@ -312,7 +315,7 @@ def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRi
     return DesignResult(design, milp, refinement, comparisons, float(reference_coverage), vehicle, references,
                         calibration, settings, time.perf_counter() - start, symmetry_fallback, regions,
                         fields_fallback, stage,
-                        tuple(reference.cameras[k].id for k in np.flatnonzero(prepared.lifted[0])))
+                        tuple((reference.cameras[k].id, float(widen[k])) for k in np.flatnonzero(widen > 1.0)))
 
 
 def _near_field_stage(vehicle: Vehicle, perception: Rig, presets: tuple, spacing: float, settings: DesignSettings,
@@ -539,30 +542,53 @@ def calibrated_matching(rig: Rig, reference: Rig, calibration: Calibration) -> n
     return matched
 
 
-#: Raw-unit matching cost of a (candidate, reference camera) pair outside the pose tolerance: the MILP never
-#: chooses one while a selection within it exists (a chosen one makes the design infeasible).
-OUT_OF_TOLERANCE_COST = 1e3
+#: Raw-unit matching cost of a (candidate, reference camera) pair that breaks a zero tolerance (or, in
+#: :func:`_tolerated`, lies outside the tolerance): the MILP never chooses one while another selection exists
+#: (a chosen one makes the design infeasible).
+OUT_OF_TOLERANCE_COST = 1e6
+
+
+def pose_gaps(heights: np.ndarray, pitches: np.ndarray, reference: Rig, settings: DesignSettings,
+              yaws: np.ndarray | None = None, fovs: np.ndarray | None = None) -> np.ndarray:
+    """(n, R) float: how far a camera at height ``heights`` (n,) m above the ground, pitched ``pitches`` (n,) rad,
+    turned to ``yaws`` (n,) rad with horizontal FOV ``fovs`` (n,) deg lies from each reference camera, in units
+    of ``settings``' tolerances (``match_height_m``, ``match_pitch_deg``, ``match_yaw_deg``, ``match_fov_deg``;
+    yaws and fovs needed only by their own): the largest gap over the tolerances set, each less a rounding
+    allowance (1e-9 m, 1e-6 deg) and divided by its tolerance; a zero tolerance gives 0 or inf. <= 1: within."""
+    ref_yaws, ref_pitches, _ = yaw_pitch_roll_from_rotation(reference.rotations)
+    gaps = [(np.abs(heights[:, None] - reference.positions[None, :, 2]), settings.match_height_m, 1e-9),
+            (np.rad2deg(np.abs(pitches[:, None] - ref_pitches[None, :])), settings.match_pitch_deg, 1e-6)]
+    if settings.match_yaw_deg is not None:
+        gaps.append((np.rad2deg(np.abs(np.angle(np.exp(1j * (yaws[:, None] - ref_yaws[None, :]))))),
+                     settings.match_yaw_deg, 1e-6))
+    if settings.match_fov_deg is not None:
+        gaps.append((np.abs(np.asarray(fovs, float)[:, None] - reference.fovs[None, :]), settings.match_fov_deg, 1e-6))
+    worst = np.zeros((len(heights), len(reference)))
+    for gap, tolerance, allowance in gaps:
+        if tolerance is None:
+            continue
+        excess = np.maximum(gap - allowance, 0.0)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            scaled = excess / tolerance if tolerance > 0 else np.where(excess > 0, np.inf, 0.0)
+        worst = np.maximum(worst, scaled)
+    return worst
 
 
 def within_pose_tolerance(heights: np.ndarray, pitches: np.ndarray, reference: Rig, settings: DesignSettings,
                           yaws: np.ndarray | None = None, fovs: np.ndarray | None = None) -> np.ndarray:
-    """(n, R) bool: whether a camera at height ``heights`` (n,) m above the ground, pitched ``pitches`` (n,)
-    rad, turned to ``yaws`` (n,) rad with horizontal FOV ``fovs`` (n,) deg, may be matched to each reference
-    camera under ``settings``' tolerances (``match_height_m``, ``match_pitch_deg``, ``match_yaw_deg``,
-    ``match_fov_deg``; yaws and fovs needed only by their own)."""
-    ok = np.ones((len(heights), len(reference)), dtype=bool)
-    ref_yaws, ref_pitches, _ = yaw_pitch_roll_from_rotation(reference.rotations)
-    if settings.match_height_m is not None:
-        ok &= np.abs(heights[:, None] - reference.positions[None, :, 2]) <= settings.match_height_m + 1e-9
-    if settings.match_pitch_deg is not None:
-        gap = np.rad2deg(np.abs(pitches[:, None] - ref_pitches[None, :]))
-        ok &= gap <= settings.match_pitch_deg + 1e-6
-    if settings.match_yaw_deg is not None:
-        gap = np.rad2deg(np.abs(np.angle(np.exp(1j * (yaws[:, None] - ref_yaws[None, :])))))
-        ok &= gap <= settings.match_yaw_deg + 1e-6
-    if settings.match_fov_deg is not None:
-        ok &= np.abs(fovs[:, None] - reference.fovs[None, :]) <= settings.match_fov_deg + 1e-6
-    return ok
+    """(n, R) bool: whether each camera may be matched to each reference camera under ``settings``' tolerances
+    (:func:`pose_gaps` <= 1)."""
+    return pose_gaps(heights, pitches, reference, settings, yaws, fovs) <= 1.0
+
+
+def tolerance_gaps(positions: np.ndarray, rotations: np.ndarray, fovs: np.ndarray, reference: Rig,
+                   settings: DesignSettings | None) -> np.ndarray:
+    """(n, R) float: :func:`pose_gaps` of cameras at ``positions`` (n, 3) m (vehicle frame, ground at z = 0)
+    with ``rotations`` (n, 3, 3) and ``fovs`` (n,) deg; zeros without a tolerance."""
+    if settings is None or not settings.tolerances:
+        return np.zeros((len(positions), len(reference)))
+    yaws, pitches, _ = yaw_pitch_roll_from_rotation(rotations)
+    return pose_gaps(positions[:, 2], pitches, reference, settings, yaws, np.asarray(fovs, float))
 
 
 def tolerance_text(settings: DesignSettings) -> str:
@@ -574,26 +600,25 @@ def tolerance_text(settings: DesignSettings) -> str:
 
 
 def pose_violations(rig: Rig, reference: Rig, calibration: Calibration, settings: DesignSettings,
-                    lifted: np.ndarray | None = None) -> list[str]:
+                    widen: np.ndarray | None = None) -> list[str]:
     """The ids of ``rig``'s perception cameras that no matching to the reference (the calibrated cost's
-    cheapest among those within the tolerance, as the MILP's) keeps within the pose tolerance (lifted for the
-    reference cameras ``lifted`` (R,) bool marks)."""
+    cheapest among those within the tolerance, as the MILP's) keeps within the pose tolerance (widened per reference
+    camera by ``widen`` (R,), `matched_widening`)."""
     perception = rig.perception()
     if not settings.tolerances:
         return []
-    costs = rig_costs(perception, reference, calibration, settings, lifted)
+    costs = rig_costs(perception, reference, calibration, settings, widen)
     rows, cols = linear_sum_assignment(costs)
     return [perception.cameras[k].id for k, m in zip(rows, cols) if costs[k, m] >= OUT_OF_TOLERANCE_COST]
 
 
 def calibrated_costs(positions: np.ndarray, rotations: np.ndarray, fovs: np.ndarray, reference: Rig,
                      calibration: Calibration, settings: DesignSettings | None = None,
-                     model: CameraModel | None = None, lifted: np.ndarray | None = None) -> np.ndarray:
+                     model: CameraModel | None = None, widen: np.ndarray | None = None) -> np.ndarray:
     """(n, R) float: the calibrated raw-unit cost of matching each camera (positions (n, 3) m, vehicle frame;
     rotations (n, 3, 3); fovs (n,) deg; lenses ``model`` of batch (n,), needed by a lifting metric's depth
     prior) to each reference camera; OUT_OF_TOLERANCE_COST for the pairs outside ``settings``' pose tolerance
-    (None: no tolerance), except for the reference cameras ``lifted`` (R,) bool marks (see
-    :func:`lifted_tolerances`)."""
+    (None: no tolerance), widened per reference camera by ``widen`` (R,) (see `matched_widening`)."""
     lt, lr, lf = calibration.lambdas
     t, r, f = camera_costs(positions, rotations, fovs, reference.positions, reference.rotations, reference.fovs)
     costs = lt * t + lr * r + lf * f
@@ -601,35 +626,61 @@ def calibrated_costs(positions: np.ndarray, rotations: np.ndarray, fovs: np.ndar
         if model is None:
             raise ValueError(f"calibrated_costs under {calibration.metric} needs the cameras' lenses (model)")
         costs = costs + pair_terms(positions, rotations, model, reference) @ np.asarray(calibration.lifting)
-    return _tolerated(costs, positions, rotations, fovs, reference, settings, lifted)
+    return _tolerated(costs, positions, rotations, fovs, reference, settings, widen)
 
 
 def _tolerated(costs: np.ndarray, positions: np.ndarray, rotations: np.ndarray, fovs: np.ndarray, reference: Rig,
-               settings: DesignSettings | None, lifted: np.ndarray | None = None) -> np.ndarray:
-    """(n, R) ``costs`` with OUT_OF_TOLERANCE_COST for the pairs outside ``settings``' pose tolerance, except in
-    the columns of the reference cameras ``lifted`` (R,) bool marks."""
+               settings: DesignSettings | None, widen: np.ndarray | None = None) -> np.ndarray:
+    """(n, R) ``costs`` with OUT_OF_TOLERANCE_COST for the pairs outside ``settings``' pose tolerance, widened
+    per reference camera by ``widen`` (R,) (`matched_widening`; None: as set)."""
     if settings is None or not settings.tolerances:
         return costs
-    yaws, pitches, _ = yaw_pitch_roll_from_rotation(rotations)
-    within = within_pose_tolerance(positions[:, 2], pitches, reference, settings, yaws, np.asarray(fovs, float))
-    if lifted is not None:
-        within |= np.asarray(lifted, dtype=bool)[None, :]
-    return np.where(within, costs, OUT_OF_TOLERANCE_COST)
+    gaps = tolerance_gaps(positions, rotations, fovs, reference, settings)
+    limit = np.ones(len(reference)) if widen is None else np.asarray(widen, float)
+    return np.where(gaps <= limit[None, :], costs, OUT_OF_TOLERANCE_COST)
 
 
-def lifted_tolerances(costs: np.ndarray) -> np.ndarray:
-    """(R,) bool: the reference cameras no candidate can match within the pose tolerance (every entry of their
-    column of the candidates' :func:`calibrated_costs` (n, R) is OUT_OF_TOLERANCE_COST): where the body offers no
-    mount for them (a rearward view past a trailer), their tolerance is lifted and they are matched by the
-    calibrated cost alone."""
-    return np.all(costs >= OUT_OF_TOLERANCE_COST, axis=0) if len(costs) else np.zeros(costs.shape[1], bool)
+#: Matching cost (raw units) per tolerance of a pair beyond the pose tolerance: far above any calibrated cost
+#: difference, so a design keeps each camera as near its reference camera's pose as the body allows.
+EXCESS_COST = 100.0
+#: Tolerances beyond which a pair costs no more (kept well below OUT_OF_TOLERANCE_COST).
+MAX_EXCESS = 1000.0
+
+
+def tolerance_penalty(gaps: np.ndarray) -> np.ndarray:
+    """(n, R) float added to the calibrated costs of n candidates for R reference cameras, from their
+    :func:`pose_gaps`: EXCESS_COST per tolerance beyond the tolerance (where the body offers no mount within it,
+    a rearward view past a trailer or a bumper height a tailboard takes, the design keeps the nearest pose it
+    allows); OUT_OF_TOLERANCE_COST for a broken zero tolerance, except in the columns of reference cameras no
+    candidate meets (lifted: matched by the calibrated cost alone)."""
+    finite = np.isfinite(gaps)
+    excess = np.minimum(np.maximum(np.where(finite, gaps, 0.0) - 1.0, 0.0), MAX_EXCESS)
+    penalty = np.where(finite, EXCESS_COST * excess, OUT_OF_TOLERANCE_COST)
+    return np.where(finite.any(axis=0)[None, :], penalty, 0.0)
+
+
+def matched_widening(gaps: np.ndarray, matched: np.ndarray) -> np.ndarray:
+    """(R,) float: per reference camera, the factor its pose tolerance was widened by in a design whose cameras
+    have the :func:`pose_gaps` ``gaps`` (k, R) and are matched to the reference cameras ``matched`` (k,) int:
+    1 where the matched camera is within the tolerance (or none is matched), its gap where it lies beyond,
+    inf where a zero tolerance is broken (lifted)."""
+    widen = np.ones(gaps.shape[1])
+    if len(matched):
+        mine = gaps[np.arange(len(matched)), matched]
+        widen[matched] = np.maximum(mine + WIDENING_SLACK * (mine > 1.0), 1.0)
+    return widen
+
+
+#: Added to a widened tolerance (in its units) so that a continuous stage that keeps a camera's pose up to
+#: rounding stays within it.
+WIDENING_SLACK = 1e-6
 
 
 def rig_costs(rig: Rig, reference: Rig, calibration: Calibration, settings: DesignSettings | None = None,
-              lifted: np.ndarray | None = None) -> np.ndarray:
+              widen: np.ndarray | None = None) -> np.ndarray:
     """(len(rig), R) float: :func:`calibrated_costs` of ``rig``'s cameras to the reference's."""
     return calibrated_costs(rig.positions, rig.rotations, rig.fovs, reference, calibration, settings,
-                            CameraModel.of_cameras(rig.cameras), lifted)
+                            CameraModel.of_cameras(rig.cameras), widen)
 
 
 #: Heights (m) closer than this count as the same for the height-matched transfer.

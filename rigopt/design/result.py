@@ -118,5 +118,6 @@ class DesignResult:
     near_field: object = None
     """The near-field stage (:class:`rigopt.design.near_field.NearFieldDesign`) of a two-role design, else None
     (the fields ``settings.require`` names are then required of its cameras, not of the perception cameras)."""
-    tolerance_lifted: tuple[str, ...] = ()
-    """The reference cameras no mount keeps within the pose tolerance: matched without it."""
+    tolerance_widened: tuple[tuple[str, float], ...] = ()
+    """(reference camera id, factor): the reference cameras no mount keeps within the pose tolerance, with the
+    factor their tolerance was widened by (inf: matched without it)."""

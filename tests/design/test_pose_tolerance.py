@@ -13,10 +13,13 @@ from box_car import BOX_ZONES, ROOF_ZONE, spec_text
 from in_process import run_rigopt
 
 from rigopt.design.designer import (
+    EXCESS_COST,
     OUT_OF_TOLERANCE_COST,
     design_rig,
-    lifted_tolerances,
+    matched_widening,
+    pose_gaps,
     pose_violations,
+    tolerance_penalty,
     within_pose_tolerance,
 )
 from rigopt.design.problem import ReferenceRig
@@ -123,20 +126,44 @@ def test_a_design_within_the_tolerance_keeps_every_matched_camera_inside_it(box_
     assert free.milp.selection.objective <= result.milp.selection.objective + 1e-9
 
 
-def test_a_reference_camera_no_mount_allows_is_matched_without_the_tolerance(box_car):
-    costs = np.array([[1.0, OUT_OF_TOLERANCE_COST, OUT_OF_TOLERANCE_COST],
-                      [OUT_OF_TOLERANCE_COST, OUT_OF_TOLERANCE_COST, 2.0]])
-    assert lifted_tolerances(costs).tolist() == [False, True, False]
-    # R1 looks level and only -10 deg is offered: no camera of R1 can keep 2 deg, so every tolerance is lifted
-    # and the design is the one without the tolerance
+def test_gaps_are_in_units_of_the_tolerance():
+    reference = Rig("ref", "vehicle.test", (Camera("a", np.array([0.0, 0.0, 1.0]), pitched(0.0), 65.0),))
+    settings = DesignSettings(match_height_m=0.2, match_pitch_deg=5.0, match_fov_deg=0.0)
+    heights, pitches = np.array([1.0, 1.3, 1.1, 1.0]), np.deg2rad([0.0, 0.0, -15.0, 0.0])
+    gaps = pose_gaps(heights, pitches, reference, settings, fovs=np.array([65.0, 65.0, 65.0, 70.0]))
+    # 0.3 m is 1.5 tolerances; 15 deg of pitch is 3 (the larger of 0.5 and 3); any FOV gap against 0 is infinite
+    assert gaps[:, 0] == pytest.approx([0.0, 1.5, 3.0, np.inf], rel=1e-6)
+    assert within_pose_tolerance(heights, pitches, reference, settings,
+                                 fovs=np.array([65.0, 65.0, 65.0, 70.0]))[:, 0].tolist() == [True, False, False, False]
+
+
+def test_beyond_the_tolerance_a_camera_pays_per_tolerance():
+    gaps = np.array([[0.5, 2.0, np.inf], [3.0, 1.5, np.inf]])
+    penalty = tolerance_penalty(gaps)
+    # within: free; 2 and 1.5 tolerances away: 1 and 0.5 tolerances beyond; a column no candidate can meet: lifted
+    assert penalty.tolist() == [[0.0, EXCESS_COST, 0.0], [2 * EXCESS_COST, 0.5 * EXCESS_COST, 0.0]]
+    broken = tolerance_penalty(np.array([[np.inf], [0.0]]))  # a zero tolerance one candidate meets
+    assert broken[:, 0].tolist() == [OUT_OF_TOLERANCE_COST, 0.0]
+    widen = matched_widening(np.array([[0.5, 2.0, 0.0], [3.0, 1.5, 0.0]]), np.array([1, 0]))
+    assert widen.tolist() == pytest.approx([3.0, 2.0, 1.0])
+
+
+def test_a_reference_camera_no_mount_allows_keeps_the_nearest_pose(box_car):
+    # R1 looks level and only -10 deg is offered: no camera can keep 2 deg of pitch, so each camera keeps the
+    # nearest pitch there is, 5 tolerances away, as every candidate does: the design is the one without it
     settings = DesignSettings(lenses=(90.0, 120.0), yaw_step_deg=30.0, pitches_deg=(-10.0,), near_field=False,
                               require="none", match_pitch_deg=2.0)
     reference = ReferenceRig.on_own_vehicle(load_rig("R1"))
-    lifted = design_rig(box_car, reference, load_weights("joint"), settings)
+    widened = design_rig(box_car, reference, load_weights("joint"), settings)
     free = design_rig(box_car, reference, load_weights("joint"), replace(settings, match_pitch_deg=None))
-    assert lifted.tolerance_lifted == tuple(c.id for c in reference.rig.cameras)
+    assert sorted(k for k, _ in widened.tolerance_widened) == sorted(c.id for c in reference.rig.cameras)
+    assert [f for _, f in widened.tolerance_widened] == pytest.approx([(10.0 - 1e-6) / 2.0] * len(reference.rig))
+    assert np.array_equal(widened.milp.rig.positions, free.milp.rig.positions)
+    assert free.tolerance_widened == ()
+    # a zero tolerance no candidate meets is lifted: the cameras are matched without it
+    lifted = design_rig(box_car, reference, load_weights("joint"), replace(settings, match_pitch_deg=0.0))
+    assert all(not np.isfinite(f) for _, f in lifted.tolerance_widened)
     assert lifted.milp.selection.objective == pytest.approx(free.milp.selection.objective, abs=1e-9)
-    assert free.tolerance_lifted == ()
 
 
 def test_the_command_takes_the_tolerance_and_reports_it(tmp_path):
@@ -147,7 +174,7 @@ def test_the_command_takes_the_tolerance_and_reports_it(tmp_path):
 
     summary = json.loads(result.stdout)
     assert summary["pose_tolerance"] == {"height_m": 0.2, "pitch_deg": 0.0, "yaw_deg": None, "fov_deg": 30.0,
-                                          "lifted_for": []}
+                                          "lifted_for": [], "widened_by": {}}
     assert summary["perception_range_m"] == 0.0
     assert all(abs(c["fov"] - 65.0) <= 30.0 for c in summary["cameras"])  # R1's lenses are all 65 deg
     bad = run_rigopt("design", "--vehicle", "tt", "--ref", "R1", "--match-height", "-1")
