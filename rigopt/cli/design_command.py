@@ -119,9 +119,9 @@ def design_command(
                                          "in mirrored pairs and on its centreline."),
     match_height: Optional[float] = typer.Option(None, "--match-height", min=0.0, callback=finite(),
                                                  help="Pose tolerance (m): each perception camera within this "
-                                                      "height of its matched reference camera (a lifting "
-                                                      "detector's depth prior is its training rig's; "
-                                                      "docs/design.md, 'Pose tolerance')."),
+                                                      "height of its matched reference camera, or as near as the "
+                                                      "body allows (a lifting detector's depth prior is its "
+                                                      "training rig's; docs/design.md, 'Pose tolerance')."),
     match_pitch: Optional[float] = typer.Option(None, "--match-pitch", min=0.0, callback=finite(),
                                                 help="Pose tolerance (deg): each perception camera's pitch within "
                                                      "this of its matched reference camera's."),
