@@ -2,18 +2,17 @@
 anywhere else.
 
 What counts as rotation maths (each rule an AST pattern, so comments and strings never trip it):
-
 - ``library``: an import of ``scipy.spatial.transform`` or a use of trimesh's rotation builders
-  (``transformations.rotation_matrix``, ``euler_matrix``, ``quaternion_matrix`` and their inverses): SO(3)
-  goes through the owner, whose conventions (sequence letters, quaternion order) are stated once;
+  (``transformations.rotation_matrix``, ``euler_matrix``, ``quaternion_matrix`` and their inverses): SO(3) goes
+  through the owner, whose conventions (sequence letters, quaternion order) are stated once;
 - ``matrix_angle``: an ``arctan2`` / ``atan2`` / ``arcsin`` / ``asin`` / ``arccos`` / ``acos`` of a matrix entry
-  (``r[1, 0]``, ``r[..., 2, 1]``, a name ``r00`` .. ``r22``) or of a ``trace`` (a call, or a name ``trace``): an Euler decomposition or an angle
-  read off a rotation matrix;
-- ``builder``: a 3 x 3 array written out (nested lists or tuples, or array-making calls, ``ARRAY_CALLS``: ``np.stack``,
-  ``np.array``, ``ca.vertcat`` / ``ca.horzcat``, ... of three rows of three) holding a ``cos`` or ``sin``, directly or through a name
-  assigned from one in the same function: an elementary rotation built by hand;
-- ``quaternion``: a quaternion-to-matrix term ``2 * (a * b +- c * d)`` over the names w, x, y, z (qw, ...), one
-  of them the scalar w;
+  (``r[1, 0]``, ``r[..., 2, 1]``, a name ``r00`` .. ``r22``) or of a ``trace`` (a call, or a name ``trace``): an
+  Euler decomposition or an angle read off a rotation matrix;
+- ``builder``: a 3 x 3 array written out (nested lists or tuples, or array-making calls, ``ARRAY_CALLS``:
+  ``np.stack``, ``np.array``, ``ca.vertcat`` / ``ca.horzcat``, ... of three rows of three) holding a ``cos`` or
+  ``sin``, directly or through a name assigned from one in the same function: an elementary rotation built by hand;
+- ``quaternion``: a quaternion-to-matrix term ``2 * (a * b +- c * d)`` over the names w, x, y, z (qw, ...), one of
+  them the scalar w;
 - ``frame``: a signed permutation matrix other than the identity written as a 3 x 3 literal, or a matrix product
   with the owner's ``R_CAM_OPTICAL`` / ``S_CARLA_ISO``: a frame convention (the optical frame, CARLA's reflection)
   restated outside the owner instead of its conversions (``body_from_optical``, ``carla_to_iso``, ...).
@@ -229,9 +228,11 @@ CAUGHT = {
                      "pitch = math.asin(rotation[2, 0])",
                      "a = np.arccos((np.trace(m) - 1) / 2)",
                      "a = ca.atan2(s, (ca.trace(m) - 1) / 2)",
-                     "trace = sum(a[k][i] * b[k][i] for i in range(3) for k in range(3))\na = math.acos(trace / 2 - 0.5)",
+                     "trace = sum(a[k][i] * b[k][i] for i in range(3) for k in range(3))\n"
+                     "a = math.acos(trace / 2 - 0.5)",
                      "w = np.sqrt(1 + r00 + r11 + r22) / 2; x = np.arctan2(r21, r00)"],
-    "builder": ["def f(a):\n    c, s = np.cos(a), np.sin(a)\n    return np.array([[c, -s, 0.0], [s, c, 0.0], [0, 0, 1]])",
+    "builder": ["def f(a):\n    c, s = np.cos(a), np.sin(a)\n"
+                "    return np.array([[c, -s, 0.0], [s, c, 0.0], [0, 0, 1]])",
                 "t = np.stack([np.stack([np.cos(a), -np.sin(a), z], -1), np.stack([z, o, z], -1), "
                 "np.stack([z, z, o], -1)], -2)",
                 "m = ca.vertcat(ca.horzcat(cy, -sy, 0), ca.horzcat(sy, cy, 0), ca.horzcat(0, 0, ca.cos(p)))"],
