@@ -28,14 +28,14 @@ def synthetic_batch(rig_name: str, batch_size: int, size=(160, 90), boxes: int =
     import numpy as np
 
     from rigopt.camera import intrinsic_matrix
-    from rigopt.geometry import R_CAM_OPTICAL
+    from rigopt.geometry import optical_from_body
 
     generator = torch.Generator().manual_seed(seed)
     rig = load_rig(rig_name)
     intrinsics = torch.tensor(np.stack([intrinsic_matrix(c.fov, *size) for c in rig.cameras]), dtype=torch.float32)
     poses = np.tile(np.eye(4), (len(rig), 1, 1))
     for k, camera in enumerate(rig.cameras):
-        poses[k, :3, :3], poses[k, :3, 3] = camera.rotation @ R_CAM_OPTICAL, camera.position
+        poses[k, :3, :3], poses[k, :3, 3] = optical_from_body(camera.rotation), camera.position
     cam_to_ego = torch.tensor(poses, dtype=torch.float32)
     n = len(rig)
     targets = [BoxTargets(torch.cat([torch.rand(boxes, 2, generator=generator) * 80 - 40, torch.ones(boxes, 1)], 1),

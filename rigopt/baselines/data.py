@@ -24,6 +24,7 @@ import torch
 from rigopt.bench.dataset import TrainingSample, read_dataset
 from rigopt.bench.generate import DEPTH_SCALE
 from rigopt.errors import DataError
+from rigopt.geometry import rot_z
 
 
 @dataclass(frozen=True)
@@ -163,8 +164,7 @@ def augment(batch: Batch, rng: np.random.Generator, max_yaw: float = np.pi / 8) 
     for b, targets in enumerate(batch.boxes):
         angle = rng.uniform(-max_yaw, max_yaw)
         mirror = np.diag([rng.choice([-1.0, 1.0]), rng.choice([-1.0, 1.0]), 1.0])
-        turn = np.array([[np.cos(angle), -np.sin(angle), 0.0], [np.sin(angle), np.cos(angle), 0.0], [0.0, 0.0, 1.0]])
-        A = torch.tensor(turn @ mirror, dtype=cam_to_ego.dtype, device=cam_to_ego.device)
+        A = torch.tensor(rot_z(angle) @ mirror, dtype=cam_to_ego.dtype, device=cam_to_ego.device)
         cam_to_ego[b, :, :3, :] = A @ cam_to_ego[b, :, :3, :]
         heading = torch.stack([torch.cos(targets.yaws), torch.sin(targets.yaws), torch.zeros_like(targets.yaws)], 1)
         heading = heading @ A.T

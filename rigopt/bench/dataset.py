@@ -31,7 +31,7 @@ import numpy as np
 
 from rigopt.bench.scene_model import CLASSES
 from rigopt.errors import DataError, not_utf8
-from rigopt.geometry import matrix_to_quaternion, quaternion_to_matrix, rot_z
+from rigopt.geometry import matrix_to_quaternion, quaternion_to_matrix, rot_z, yaw_pitch_roll_from_rotation
 from rigopt.rig.formats.nuscenes import nuscenes_token
 
 TABLES = ("log", "scene", "sample", "sample_data", "sensor", "calibrated_sensor", "ego_pose", "sample_annotation",
@@ -194,7 +194,8 @@ def _fraction(record: dict) -> float:
 
 
 def _yaw(rotation: np.ndarray) -> float:
-    return float(np.arctan2(rotation[1, 0], rotation[0, 0]))
+    """Heading (yaw about z, radians in (-pi, pi]) of a box's or the ego's rotation (3, 3)."""
+    return float(yaw_pitch_roll_from_rotation(rotation)[0])
 
 
 def box_rotation(yaw: float) -> list[float]:

@@ -218,17 +218,23 @@ def _write_inward_rig(path: Path) -> None:
 def _write_posed_meshes(mesh, tmp: Path) -> None:
     """The tt's mesh in centimetres, turned by 90 degrees, facing backwards and with y up (for vehicle add)."""
     import numpy as np
-    import trimesh
+
+    from rigopt.geometry import rot_x, rot_z
 
     def write(name, matrix):
         posed = mesh.copy()
         posed.apply_transform(matrix)
         posed.export(tmp / name)
 
+    def turn(rotation):
+        transform = np.eye(4)
+        transform[:3, :3] = rotation
+        return transform
+
     write("car_cm.stl", np.diag([100.0, 100.0, 100.0, 1.0]))
-    write("car_turned.stl", trimesh.transformations.rotation_matrix(np.pi / 2, [0, 0, 1]))
-    write("car_backwards.stl", trimesh.transformations.rotation_matrix(np.pi, [0, 0, 1]))
-    write("car_y_up.stl", trimesh.transformations.rotation_matrix(-np.pi / 2, [1, 0, 0]))
+    write("car_turned.stl", turn(rot_z(np.pi / 2)))
+    write("car_backwards.stl", turn(rot_z(np.pi)))
+    write("car_y_up.stl", turn(rot_x(-np.pi / 2)))
 
 
 T = "{tmp}"
