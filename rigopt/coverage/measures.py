@@ -21,7 +21,6 @@ import numpy as np
 
 from rigopt.vehicle.footprint import Footprint
 from rigopt.errors import RigoptError
-from rigopt.raycast import first_hit_distance
 from rigopt.camera import CameraModel, Lens
 from rigopt.coverage.visibility import DEFAULT_MAX_RANGE, visible_by
 from rigopt.rig.model import Rig
@@ -133,8 +132,8 @@ class RingReport:
 
 
 def _seen(vehicle: Vehicle, rig: Rig, points: np.ndarray, settings: CoverageSettings) -> np.ndarray:
-    return visible_by(vehicle.mesh, CameraModel.of_cameras(rig.cameras), rig.positions, rig.rotations, points,
-                      settings.max_range, settings.backend)
+    return visible_by(vehicle.caster(settings.backend), CameraModel.of_cameras(rig.cameras), rig.positions,
+                      rig.rotations, points, settings.max_range)
 
 
 def ring_coverage(vehicle: Vehicle, rig: Rig, settings: CoverageSettings, footprint: Footprint):
@@ -185,8 +184,8 @@ def camera_coverage(vehicle: Vehicle, rig: Rig, settings: CoverageSettings, foot
     out = []
     for k, camera in enumerate(rig.cameras):
         rays = CameraModel.of_camera(camera).grid_rays(settings.image_grid) @ camera.rotation.T
-        hits = first_hit_distance(vehicle.mesh, np.repeat(camera.position[None], len(rays), axis=0), rays,
-                                  settings.backend)
+        hits = vehicle.caster(settings.backend).first_hit_distance(
+            np.repeat(camera.position[None], len(rays), axis=0), rays)
         overlap = {other.id: float((ring[k] & ring[j]).sum() * degrees)
                    for j, other in enumerate(rig.cameras) if j != k and (ring[k] & ring[j]).any()}
         out.append(CameraCoverage(camera.id, float(np.mean(hits <= settings.max_range)), overlap, camera.lens_model))

@@ -143,8 +143,8 @@ def prepare(vehicle: Vehicle, references: Sequence[Rig], calibration: Calibratio
 def _pool_sees(vehicle: Vehicle, candidates: CandidateSet, pool: np.ndarray, points: np.ndarray,
                settings: DesignSettings) -> np.ndarray:
     """(p, q) bool: which of ``points`` (q, 3) m each pool candidate sees."""
-    return visible_by(vehicle.mesh, candidates.model(pool), candidates.positions[pool], candidates.rotations[pool],
-                      points, settings.coverage.max_range, settings.coverage.backend)
+    return visible_by(vehicle.caster(settings.coverage.backend), candidates.model(pool), candidates.positions[pool],
+                      candidates.rotations[pool], points, settings.coverage.max_range)
 
 
 def with_points(prepared: Prepared, vehicle: Vehicle, points: np.ndarray, settings: DesignSettings) -> Prepared:

@@ -207,7 +207,7 @@ def design_near_field(vehicle: Vehicle, perception: Rig, presets: tuple[RegionPr
     # The near ring is seen as far as the body allows: its points no candidate sees are reported, not asked;
     # a field point no candidate sees is an error (select_near_field names it).
     def seen_by_candidates(required: NearFieldPoints) -> np.ndarray:
-        return visible_by(vehicle.mesh, model, candidates.positions[index], candidates.rotations[index],
+        return visible_by(vehicle.ray_caster, model, candidates.positions[index], candidates.rotations[index],
                           required.points, NEAR_FIELD_RANGE)
 
     sees = seen_by_candidates(points)
@@ -229,7 +229,7 @@ def design_near_field(vehicle: Vehicle, perception: Rig, presets: tuple[RegionPr
         if dense:
             chosen_model = candidates.model(picked)
             for preset, field in zip(presets, dense):
-                seen = visible_by(vehicle.mesh, chosen_model, candidates.positions[picked],
+                seen = visible_by(vehicle.ray_caster, chosen_model, candidates.positions[picked],
                                   candidates.rotations[picked], field, NEAR_FIELD_RANGE).any(axis=0)
                 unseen.append((preset.key, field[~seen]))
         missing = sum(len(u) for _, u in unseen)

@@ -8,7 +8,7 @@ from functools import cached_property
 import numpy as np
 import trimesh
 
-from rigopt import raycast
+from rigopt.raycast import RayCaster, resolve_backend
 from rigopt.vehicle.arches import WheelArch, trace_arches
 from rigopt.vehicle.build import build_mesh
 from rigopt.vehicle.footprint import Footprint
@@ -145,7 +145,7 @@ class Vehicle:
     @cached_property
     def wheel_arches(self) -> tuple[WheelArch, ...]:
         """Each wheel's arch traced on the mesh (:mod:`rigopt.vehicle.arches`), in the order of ``wheels``."""
-        return trace_arches(self.mesh, self.wheels, self.axles)
+        return trace_arches(self.ray_caster, self.wheels, self.axles)
 
     @property
     def legal_width(self) -> float:
@@ -169,6 +169,18 @@ class Vehicle:
     def symmetry(self) -> MirrorSymmetry:
         """How mirror-symmetric the body is across y = 0 (:mod:`rigopt.vehicle.symmetry`)."""
         return mirror_symmetry(self.mesh)
+
+    @cached_property
+    def ray_caster(self) -> RayCaster:
+        """The body's ray caster (:class:`rigopt.raycast.RayCaster`, the "auto" backend), built once."""
+        return RayCaster(self.mesh)
+
+    def caster(self, backend: str = "auto") -> RayCaster:
+        """The body's ray caster for ``backend``: :attr:`ray_caster` when the backend is the one "auto" picks,
+        else a caster of its own (built each call: another backend is for comparing backends)."""
+        if resolve_backend(backend) == self.ray_caster.backend:
+            return self.ray_caster
+        return RayCaster(self.mesh, backend)
 
     @cached_property
     def footprint(self) -> Footprint:
@@ -195,7 +207,7 @@ class Vehicle:
         """Nearest surface of ``points`` (n, 3) m; the sign of the distance comes from containment."""
         points = np.atleast_2d(np.asarray(points, dtype=float))
         foot, unsigned, face = trimesh.proximity.closest_point(self.mesh, points)
-        inside = raycast.inside(self.mesh, points)
+        inside = self.ray_caster.inside(points)
         normal = self.mesh.face_normals[face]
         return SurfaceQuery(foot, np.where(inside, -unsigned, unsigned), normal, face)
 
