@@ -208,9 +208,10 @@ def design_command(
     with status.status(f"designing a rig on {target.name} from {label}") as spinner:
         result = design_rig(target, references, calibration, settings, compare_with=benchmark_rigs(target),
                             progress=lambda message: spinner.update(message) or status.print(f"  {message}"))
+    summary = design_dict(result, Path("rig.json"))  # as report.json names it; then as written
     with atomic_folder(out, force=force) as work:
-        files = published(write_design_outputs(result, work), work, out)
-    summary = design_dict(result, files[0])
+        files = published(write_design_outputs(result, work, summary), work, out)
+    summary = {**summary, "rig_file": str(files[0])}
     if as_json:
         print_json(summary)
         return

@@ -122,13 +122,16 @@ class CoverageReport:
 
 @dataclass(frozen=True)
 class RingReport:
-    """The rings alone of ``rig`` on ``vehicle`` (what a ring plot needs, without the bird's-eye map, the
-    blind zone and the per-camera facts of a full ``CoverageReport``)."""
+    """The rings alone of ``rig`` on ``vehicle`` (what a ring plot and the regulation fields' picture need,
+    without the bird's-eye map, the blind zone and the per-camera facts of a full ``CoverageReport``); the
+    ``footprint`` and the ``cameras_inside`` the body as in a ``CoverageReport``."""
 
     rig: str
     vehicle: str
     settings: CoverageSettings
     rings: tuple[RingCoverage, ...]
+    footprint: Footprint
+    cameras_inside: tuple[str, ...]
 
 
 def _seen(vehicle: Vehicle, rig: Rig, points: np.ndarray, settings: CoverageSettings) -> np.ndarray:
@@ -192,24 +195,29 @@ def camera_coverage(vehicle: Vehicle, rig: Rig, settings: CoverageSettings, foot
     return tuple(out)
 
 
+def cameras_inside(rig: Rig, vehicle: Vehicle) -> tuple[str, ...]:
+    """The ids of ``rig``'s cameras inside ``vehicle``'s body."""
+    inside = vehicle.surface(rig.positions).distance < 0
+    return tuple(c.id for c, flag in zip(rig.cameras, inside) if flag)
+
+
 def coverage_report(rig: Rig, vehicle: Vehicle, settings: CoverageSettings = CoverageSettings()) -> CoverageReport:
     """All coverage measures of ``rig`` on ``vehicle``; cameras inside the body are listed and still used."""
     footprint = vehicle.footprint
-    inside = vehicle.surface(rig.positions).distance < 0
     return CoverageReport(
         rig.name, vehicle.name, settings, footprint,
         ring_coverage(vehicle, rig, settings, footprint),
         bev_map(vehicle, rig, settings, footprint),
         blind_zone(vehicle, rig, settings, footprint),
         camera_coverage(vehicle, rig, settings, footprint),
-        tuple(c.id for c, flag in zip(rig.cameras, inside) if flag),
+        cameras_inside(rig, vehicle),
     )
 
 
 def ring_report(rig: Rig, vehicle: Vehicle, settings: CoverageSettings = CoverageSettings()) -> RingReport:
     """The rings of ``rig`` on ``vehicle``, as in ``coverage_report`` and at a fraction of its cost."""
-    return RingReport(rig.name, vehicle.name, settings,
-                      ring_coverage(vehicle, rig, settings, vehicle.footprint))
+    return RingReport(rig.name, vehicle.name, settings, ring_coverage(vehicle, rig, settings, vehicle.footprint),
+                      vehicle.footprint, cameras_inside(rig, vehicle))
 
 
 @dataclass(frozen=True)

@@ -396,10 +396,11 @@ def write_blind_figure(report: CoverageReport, path) -> Path:
 # ------------------------------------------------------------------------------------- regulation fields
 
 
-def regions_figure(regions: tuple[RegionCoverage, ...], report: CoverageReport, rig: Rig | None = None
-                   ) -> Figure:
+def regions_figure(regions: tuple[RegionCoverage, ...], report: CoverageReport | RingReport,
+                   rig: Rig | None = None) -> Figure:
     """Top view of the regulation fields (outlines) over the body, the ground positions where some height is
-    unseen marked, and ``rig``'s cameras with their frustum wedges; forward up, the vehicle's left on the left."""
+    unseen marked, and ``rig``'s cameras with their frustum wedges; forward up, the vehicle's left on the left.
+    Either report kind: only its footprint and cameras inside the body are drawn."""
     bounds = [report.footprint.polygon.bounds] + [r.polygon.bounds for r in regions if not r.polygon.is_empty]
     low, high = np.min([b[:2] for b in bounds], axis=0) - 1.0, np.max([b[2:] for b in bounds], axis=0) + 1.0
     aspect = (high[1] - low[1]) / (high[0] - low[0])  # across / along, as drawn
@@ -432,7 +433,7 @@ def _rings(geometry) -> list[np.ndarray]:
     return [shapely.get_coordinates(ring) for ring in shapely.get_rings(shapely.get_parts(geometry))]
 
 
-def write_regions_figure(regions: tuple[RegionCoverage, ...], report: CoverageReport, path,
+def write_regions_figure(regions: tuple[RegionCoverage, ...], report: CoverageReport | RingReport, path,
                          rig: Rig | None = None) -> Path:
     """The regulation fields figure (:func:`regions_figure`) as a PNG at ``path``."""
     return _save(regions_figure(regions, report, rig), path)

@@ -201,14 +201,15 @@ def comparison_notes(summary: dict) -> list[str]:
             + ("; --require none designs without the fields" if fields else "")]
 
 
-def write_design_outputs(result: DesignResult, out_dir) -> list[Path]:
+def write_design_outputs(result: DesignResult, out_dir, summary: dict | None = None) -> list[Path]:
     """Write rig.json (benchmark format), report.json, the pictures (with the regulation fields over the
     near-field blind zones, fields.png) and report.html (with the interactive 3D view of the design on its
     vehicle, the fields on the ground and the reference rig in grey when it sits on the same vehicle) into
     ``out_dir``. The reports name the rig file relative to their folder (``rig.json``), so that a report
-    holds no machine path and stays valid where the folder is moved.
+    holds no machine path and stays valid where the folder is moved. ``summary``: the report's
+    :func:`design_dict` (rig file ``rig.json``) when the caller has it already.
     """
-    from rigopt.coverage.measures import coverage_report, ring_report
+    from rigopt.coverage.measures import ring_report
     from rigopt.report.coverage_figures import write_regions_figure, write_rings_figure
     from rigopt.report.design_html import write_design_html
     from rigopt.report.scene_3d import scene_html
@@ -217,7 +218,8 @@ def write_design_outputs(result: DesignResult, out_dir) -> list[Path]:
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     rig_file = write_rig(result.design.rig, out_dir / "rig.json")
-    summary = design_dict(result, Path(rig_file.name))  # named relative to the report's folder: no machine paths
+    if summary is None:  # the rig file named relative to the report's folder: no machine paths
+        summary = design_dict(result, Path(rig_file.name))
     report = out_dir / "report.json"
     report.write_text(json.dumps(json_ready(summary), indent=2) + "\n")
     vehicle, reference = result.vehicle, result.references[0]
@@ -230,8 +232,8 @@ def write_design_outputs(result: DesignResult, out_dir) -> list[Path]:
     reference_coverage = ring_report(reference.rig, reference.vehicle)
     pictures["coverage"] = write_rings_figure(design_coverage, out_dir / "coverage.png", compare=reference_coverage)
     if result.regions:
-        pictures["fields"] = write_regions_figure(result.regions, coverage_report(result.design.rig, vehicle),
-                                                  out_dir / "fields.png", result.design.rig)
+        pictures["fields"] = write_regions_figure(result.regions, design_coverage, out_dir / "fields.png",
+                                                  result.design.rig)
     compared = next((r.rig for r in result.references if r.vehicle.name == vehicle.name), None)
     outlines = [(r.key, np.asarray(r.polygon.exterior.coords)[:, :2]) for r in result.regions
                 if r.polygon.geom_type == "Polygon"]

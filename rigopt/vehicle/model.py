@@ -117,7 +117,8 @@ class Vehicle:
     def fine_face_zones(self) -> np.ndarray:
         """(F,) object: the zone name of each face of ``fine_mesh`` (first matching zone), None outside all."""
         fine = self.fine_mesh
-        return np.array(self.zone_names(fine.triangles_center, fine.face_normals), dtype=object)
+        names = np.array([z.name for z in self.zones] + [None], dtype=object)
+        return names[self.zone_indices(fine.triangles_center, fine.face_normals)]
 
     @cached_property
     def axles(self) -> tuple[float, ...]:
@@ -211,11 +212,16 @@ class Vehicle:
         normal = self.mesh.face_normals[face]
         return SurfaceQuery(foot, np.where(inside, -unsigned, unsigned), normal, face)
 
+    def zone_indices(self, points, normals) -> np.ndarray:
+        """(n,) int: the index in ``zones`` of the first zone containing each surface point (n, 3) with normal
+        (n, 3); -1 where none does."""
+        points, normals = np.atleast_2d(points), np.atleast_2d(normals)
+        index = np.full(len(points), -1)
+        for k, zone in reversed(list(enumerate(self.zones))):  # the first zone is written last
+            index[zone.contains(points, normals)] = k
+        return index
+
     def zone_names(self, points, normals) -> list[str | None]:
         """Name of the first zone containing each surface point (n, 3) with normal (n, 3); None if none."""
-        points, normals = np.atleast_2d(points), np.atleast_2d(normals)
-        names: list[str | None] = [None] * len(points)
-        for zone in self.zones:
-            for k in np.flatnonzero(zone.contains(points, normals)):
-                names[k] = names[k] or zone.name
-        return names
+        names = [z.name for z in self.zones] + [None]
+        return [names[k] for k in self.zone_indices(points, normals)]
