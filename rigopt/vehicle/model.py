@@ -29,6 +29,61 @@ def infer_category(size) -> str:
     return "N3" if length > HEAVY_LENGTH or height > HEAVY_HEIGHT else "M1"
 
 
+def subdivide_to_size(vertices, faces, max_edge: float, max_iter: int = 10) -> tuple[np.ndarray, np.ndarray]:
+    """``trimesh.remesh.subdivide_to_size`` (every edge longer than ``max_edge`` m bisected at one shared midpoint,
+    until none is), the same vertices (j, 3) float and faces (q, 3) int in the same order, faster: each round
+    looks only at the faces the last round made (a face with no long edge is final, and its place in trimesh's
+    order is fixed: after the faces finished before it) and sorts only the long edges. vertices (n, 3) float m,
+    faces (m, 3) int."""
+    vertices = np.array(vertices, dtype=np.float64, copy=True)
+    active = np.array(faces, dtype=np.int64, copy=True)
+    done = []
+    for i in range(max_iter + 1):
+        corners = vertices[active]  # (f, 3, 3); edge k runs from corner k to corner k + 1 (either way: same length)
+        lengths = ((corners - corners[:, [1, 2, 0]]) ** 2).sum(axis=2) ** 0.5
+        long_edge = lengths > max_edge
+        if not long_edge.any():
+            break
+        if i >= max_iter:
+            raise ValueError("max_iter exceeded!")
+        # trimesh numbers the midpoints in the order of its edge keys (b << 32 | a for a sorted edge (a, b))
+        edges = np.sort(np.stack([active, active[:, [1, 2, 0]]], axis=2)[long_edge], axis=1)
+        unique, first, inverse = np.unique((edges[:, 1] << 32) | edges[:, 0], return_index=True, return_inverse=True)
+        face_mid = np.full(active.shape, -1, dtype=np.int64)
+        face_mid[long_edge] = inverse.reshape(-1) + len(vertices)
+        vertices = np.vstack((vertices, vertices[edges[first]].mean(axis=1)))
+        split = face_mid >= 0
+        count = split.sum(axis=1)
+        done.append(active[count == 0])
+        # the splits as trimesh makes them: one long edge, two, three
+        one = count == 1
+        j = np.argmax(split[one], axis=1)
+        r = np.arange(len(j))
+        f1, mid1 = active[one], face_mid[one]
+        a, b, c = f1[r, j], f1[r, (j + 1) % 3], f1[r, (j + 2) % 3]
+        p = mid1[r, j]
+        faces_one = np.column_stack((a, p, c, p, b, c)).reshape((-1, 3))
+        two = count == 2
+        j = (np.argmin(split[two], axis=1) + 1) % 3
+        r = np.arange(len(j))
+        f2, mid2 = active[two], face_mid[two]
+        a, b, c = f2[r, j], f2[r, (j + 1) % 3], f2[r, (j + 2) % 3]
+        p, q = mid2[r, j], mid2[r, (j + 1) % 3]
+        use_aq = (((vertices[a, :3] - vertices[q, :3]) ** 2).sum(axis=1)
+                  <= ((vertices[p, :3] - vertices[c, :3]) ** 2).sum(axis=1))[:, None]
+        corner = np.column_stack((p, b, q))
+        quad_a = np.where(use_aq, np.column_stack((a, p, q)), np.column_stack((a, p, c)))
+        quad_b = np.where(use_aq, np.column_stack((a, q, c)), np.column_stack((p, q, c)))
+        faces_two = np.vstack((corner, quad_a, quad_b))
+        three = count == 3
+        f3, mid3 = active[three], face_mid[three]
+        v0, v1, v2 = f3.T
+        m0, m1, m2 = mid3.T
+        faces_three = np.column_stack((v0, m0, m2, m0, v1, m1, m2, m1, v2, m0, m1, m2)).reshape((-1, 3))
+        active = np.vstack((faces_one, faces_two, faces_three)).astype(np.int64)
+    return vertices, np.vstack(done + [active])
+
+
 @dataclass(frozen=True)
 class Zone:
     """One mounting region: box [``min``, ``max``] (3,) m and outward-normal cone around ``normal`` (3,);
@@ -50,7 +105,9 @@ class Zone:
     def contains(self, points, normals) -> np.ndarray:
         """(n,) bool: surface points (n, 3) m with outward normals (n, 3) inside the zone."""
         points, normals = np.atleast_2d(points), np.atleast_2d(normals)
-        inside = np.all((points >= self.min) & (points <= self.max), axis=1)
+        inside = (points[:, 0] >= self.min[0]) & (points[:, 0] <= self.max[0])
+        for axis in (1, 2):
+            inside &= (points[:, axis] >= self.min[axis]) & (points[:, axis] <= self.max[axis])
         return inside & (normals @ self.normal >= np.cos(np.deg2rad(self.cone_deg)) - 1e-12)
 
 
@@ -110,7 +167,7 @@ class Vehicle:
     def fine_mesh(self) -> trimesh.Trimesh:
         """The body subdivided to edges of at most ZONE_QUERY_EDGE m: zone membership is decided per face
         (centre and normal), so large flat faces of the built mesh are split first."""
-        vertices, faces = trimesh.remesh.subdivide_to_size(self.mesh.vertices, self.mesh.faces, ZONE_QUERY_EDGE)
+        vertices, faces = subdivide_to_size(self.mesh.vertices, self.mesh.faces, ZONE_QUERY_EDGE)
         return trimesh.Trimesh(vertices, faces, process=False)
 
     @cached_property
@@ -216,10 +273,16 @@ class Vehicle:
         """(n,) int: the index in ``zones`` of the first zone containing each surface point (n, 3) with normal
         (n, 3); -1 where none does."""
         points, normals = np.atleast_2d(points), np.atleast_2d(normals)
+        order = np.argsort(points[:, 0], kind="stable")  # sorted by x, each zone tests the slice in its x range
+        points, normals = points[order], normals[order]
         index = np.full(len(points), -1)
         for k, zone in reversed(list(enumerate(self.zones))):  # the first zone is written last
-            index[zone.contains(points, normals)] = k
-        return index
+            near = slice(np.searchsorted(points[:, 0], zone.min[0], "left"),
+                         np.searchsorted(points[:, 0], zone.max[0], "right"))
+            index[near][zone.contains(points[near], normals[near])] = k
+        unsorted = np.empty_like(index)
+        unsorted[order] = index
+        return unsorted
 
     def zone_names(self, points, normals) -> list[str | None]:
         """Name of the first zone containing each surface point (n, 3) with normal (n, 3); None if none."""
