@@ -145,6 +145,15 @@ class Vehicle:
     def from_spec(cls, spec: VehicleSpec) -> "Vehicle":
         return cls(spec, build_mesh(spec))
 
+    def __getstate__(self) -> dict:
+        """A pickled vehicle (to a worker process) is its spec and its mesh's vertices and faces: its derived data,
+        and the mesh's own caches (a spatial index does not survive pickling), are built again where needed."""
+        return {"spec": self.spec, "vertices": np.asarray(self.mesh.vertices), "faces": np.asarray(self.mesh.faces)}
+
+    def __setstate__(self, state: dict) -> None:
+        object.__setattr__(self, "spec", state["spec"])
+        object.__setattr__(self, "mesh", trimesh.Trimesh(state["vertices"], state["faces"], process=False))
+
     @property
     def name(self) -> str:
         return self.spec.name

@@ -114,3 +114,20 @@ def test_fine_face_zones_are_the_first_zone_of_each_face(box_car):
             expected[k] = expected[k] or zone.name
     assert box_car.fine_face_zones.tolist() == expected
     assert len({name for name in expected if name}) >= 2 and None in expected
+
+
+def test_a_pickled_vehicle_is_its_spec_and_mesh(box_car):
+    """To a worker process a vehicle travels as its spec and mesh (no caches: a mesh's spatial index does not
+    survive pickling) and answers there as here."""
+    import pickle
+
+    box_car.fine_face_zones, box_car.ray_caster  # derived data built here first
+    copy = pickle.loads(pickle.dumps(box_car))
+    assert copy.name == box_car.name and [z.name for z in copy.zones] == [z.name for z in box_car.zones]
+    assert "fine_mesh" not in copy.__dict__ and "ray_caster" not in copy.__dict__
+    np.testing.assert_array_equal(copy.mesh.vertices, box_car.mesh.vertices)
+    np.testing.assert_array_equal(copy.mesh.faces, box_car.mesh.faces)
+    np.testing.assert_array_equal(copy.mesh.face_normals, box_car.mesh.face_normals)
+    points = [[2.03, 0.1, 1.0], [1.9, 0.1, 1.0], [0.5, -0.95, 0.8]]
+    np.testing.assert_array_equal(copy.surface(points).distance, box_car.surface(points).distance)
+    assert copy.fine_face_zones.tolist() == box_car.fine_face_zones.tolist()
