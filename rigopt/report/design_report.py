@@ -125,7 +125,7 @@ def design_dict(result: DesignResult, rig_file: Path | None) -> dict:
     ``frame`` (ISO 8855 from the ground below the rear axle's centre, :func:`frame_dict`): the cameras'
     poses and the ``packaging`` sheets (:func:`packaging_rows`); CARLA's frame is only the rig file's."""
     from rigopt.metrics.rigcd import rigcd
-    from rigopt.report.coverage_figures import regions_dict
+    from rigopt.report.coverage_tables import regions_dict
 
     design, milp, comparisons = result.design, result.milp, result.comparisons
     reference = result.references[0].rig
