@@ -220,8 +220,8 @@ def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRi
     """Design a rig on ``vehicle`` for a detector trained on the reference (one rig, or a fleet of rigs, each
     on its own vehicle; see the module docstring), judged beside the naive transfer and ``compare_with``
     (e.g. ``problem.benchmark_rigs(vehicle)``). With a ``background`` worker the near-field stage (which needs
-    nothing of the perception cameras until they share housings) runs there while the perception cameras are
-    designed here: the same design."""
+    nothing of the perception cameras until they share housings) and the naive transfer's refinement run there
+    while the perception cameras are designed and refined here: the same design."""
     start = time.perf_counter()
     references = (references,) if isinstance(references, ReferenceRig) else tuple(references)
     if not references:
@@ -273,6 +273,12 @@ def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRi
                        f"{', '.join(p.key for p in requirements.presets)} ({reasons[-1]}); they are reported, not "
                        "required" if auto_fields and not with_fields else None)
 
+    refines = settings.refine and len(rigs) == 1 and calibration.lifting is None
+    naive = naive_transfer(vehicle, reference, prepared.candidates, settings)
+    naive_job = None
+    if naive is not None and refines and background.parallel:  # its refinement needs nothing of the design
+        naive_job = background.submit(refine_comparison, naive, vehicle, reference, calibration, requirements,
+                                      prepared.spacing, settings)
     progress("validating the design: mount checks, coverage, RigCD")
     design = summarise(milp.rig, vehicle, rigs, calibration, requirements, settings, milp.check)
     if not design.meets_requirements:
@@ -281,7 +287,6 @@ def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRi
     refinement = RefinementReport(  # the continuous stage's objective has RigCD's terms only
         f"off ({calibration.metric}: the continuous stage weighs RigCD's terms only)" if calibration.lifting is not None
         else "off" if len(rigs) == 1 else "off (fleet design)")
-    refines = settings.refine and len(rigs) == 1 and calibration.lifting is None
     if refines:
         progress("continuous refinement (casadi + IPOPT)")
         refinement = _refined(design, vehicle, reference, calibration, requirements, prepared.spacing, settings)
@@ -306,12 +311,11 @@ def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRi
 
     reference_coverage = rig_coverage_matrix(reference, references[0].vehicle,
                                              settings.coverage).sees.any(axis=0).mean()
-    naive = naive_transfer(vehicle, reference, prepared.candidates, settings)
     naive_refinement = "off"
     if naive is not None and refines:
         progress("refining the naive transfer as the design")
-        naive, naive_refinement = refine_comparison(naive, vehicle, reference, calibration, requirements,
-                                                    prepared.spacing, settings)
+        naive, naive_refinement = naive_job.result() if naive_job is not None else refine_comparison(
+            naive, vehicle, reference, calibration, requirements, prepared.spacing, settings)
     comparisons = Comparisons(
         summarise(naive, vehicle, rigs, calibration, requirements, settings) if naive else None,
         tuple(summarise(rig, vehicle, rigs, calibration, requirements, settings) for rig in compare_with),

@@ -448,12 +448,12 @@ def camera_values(rig: Rig) -> list:
 
 @pytest.mark.parametrize("zones", [("front",), None], ids=["fields-dropped", "fields-seen"])
 def test_a_design_with_a_background_worker_is_the_inline_design(box_car, zones):
-    """The near-field stage run in a worker process gives the design it gives inline: the same cameras to the
-    bit, the same fallback note and the same progress messages in the same order."""
+    """The near-field stage and the naive transfer's refinement run in a worker process give the design they give
+    inline: the same cameras to the bit, the same fallback note and the same progress messages in the same order."""
     from rigopt.background import Background
 
-    settings = DesignSettings(lenses=(100.0, 120.0), yaw_step_deg=30.0, pitches_deg=(-20.0, 0.0), refine=False,
-                              near_field=True, zones=zones)
+    settings = DesignSettings(lenses=(100.0, 120.0), yaw_step_deg=30.0, pitches_deg=(-20.0, 0.0), near_field=True,
+                              zones=zones)
     said_inline, said_beside = [], []
     inline = design_rig(box_car, front_reference(box_car), load_weights("joint"), settings,
                         progress=said_inline.append)
@@ -466,6 +466,9 @@ def test_a_design_with_a_background_worker_is_the_inline_design(box_car, zones):
     assert beside.fields_fallback == inline.fields_fallback and said_beside == said_inline
     assert (beside.near_field.status, beside.near_field.n_points) == (inline.near_field.status,
                                                                        inline.near_field.n_points)
+    naive, naive_beside = inline.comparisons.naive_transfer, beside.comparisons.naive_transfer
+    assert camera_values(naive_beside.rig) == camera_values(naive.rig)
+    assert beside.comparisons.naive_refinement == inline.comparisons.naive_refinement != "off"
 
 
 def test_a_near_field_choice_for_another_symmetry_is_made_again(box_car):
