@@ -220,8 +220,8 @@ def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRi
     """Design a rig on ``vehicle`` for a detector trained on the reference (one rig, or a fleet of rigs, each
     on its own vehicle; see the module docstring), judged beside the naive transfer and ``compare_with``
     (e.g. ``problem.benchmark_rigs(vehicle)``). With a ``background`` worker the near-field stage (which needs
-    nothing of the perception cameras until they share housings) and the naive transfer's refinement run there
-    while the perception cameras are designed and refined here: the same design."""
+    nothing of the perception cameras until they share housings) runs there while the perception cameras are
+    designed and refined here, and the naive transfer refined: the same design."""
     start = time.perf_counter()
     references = (references,) if isinstance(references, ReferenceRig) else tuple(references)
     if not references:
@@ -275,10 +275,6 @@ def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRi
 
     refines = settings.refine and len(rigs) == 1 and calibration.lifting is None
     naive = naive_transfer(vehicle, reference, prepared.candidates, settings)
-    naive_job = None
-    if naive is not None and refines and background.parallel:  # its refinement needs nothing of the design
-        naive_job = background.submit(refine_comparison, naive, vehicle, reference, calibration, requirements,
-                                      prepared.spacing, settings)
     progress("validating the design: mount checks, coverage, RigCD")
     design = summarise(milp.rig, vehicle, rigs, calibration, requirements, settings, milp.check)
     if not design.meets_requirements:
@@ -297,6 +293,11 @@ def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRi
                                  status=f"rejected: moves {', '.join(outside)} out of {tolerance_text(settings)}")
         if refinement.accepted:
             design = refinement.refined
+    naive_refinement = "off"
+    if naive is not None and refines:  # before the near-field stage: meanwhile a background worker finishes it
+        progress("refining the naive transfer as the design")
+        naive, naive_refinement = refine_comparison(naive, vehicle, reference, calibration, requirements,
+                                                    prepared.spacing, settings)
     stage = None
     if settings.near_field:
         stage, near_field_presets, fields_fallback = _near_field_stage(vehicle, design.rig, near_field_presets,
@@ -311,11 +312,6 @@ def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRi
 
     reference_coverage = rig_coverage_matrix(reference, references[0].vehicle,
                                              settings.coverage).sees.any(axis=0).mean()
-    naive_refinement = "off"
-    if naive is not None and refines:
-        progress("refining the naive transfer as the design")
-        naive, naive_refinement = naive_job.result() if naive_job is not None else refine_comparison(
-            naive, vehicle, reference, calibration, requirements, prepared.spacing, settings)
     comparisons = Comparisons(
         summarise(naive, vehicle, rigs, calibration, requirements, settings) if naive else None,
         tuple(summarise(rig, vehicle, rigs, calibration, requirements, settings) for rig in compare_with),
