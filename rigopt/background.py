@@ -73,10 +73,12 @@ class Job:
 
 class Background:
     """One worker process (``workers`` True), or none: calls then run inline, when their result is asked for
-    (``workers`` None: :func:`wanted`). Use as a context manager; closing ends the worker, finished or not."""
+    (``workers`` None: :func:`wanted`). ``later_imports``: modules the worker imports right after the first call
+    (what a later call needs, loaded while the worker would wait for it). Use as a context manager; closing ends
+    the worker, finished or not."""
 
-    def __init__(self, workers: bool | None = None):
-        self._pool = None
+    def __init__(self, workers: bool | None = None, later_imports: tuple[str, ...] = ()):
+        self._pool, self._later_imports = None, tuple(later_imports)
         if wanted() if workers is None else workers:
             import multiprocessing
 
@@ -91,12 +93,10 @@ class Background:
         """Run ``function(*args, **kwargs)`` in the worker (a module-level function; picklable arguments), or
         inline at the first :meth:`Job.result`."""
         pending = self._pool.apply_async(function, args, kwargs) if self._pool is not None else None
+        if pending is not None and self._later_imports:
+            self._pool.apply_async(_import, (self._later_imports,))
+            self._later_imports = ()
         return Job(function, args, kwargs, pending)
-
-    def preload(self, *modules: str) -> None:
-        """Import ``modules`` in the worker now (a no-op without one), so that later calls find them loaded."""
-        if self._pool is not None:
-            self._pool.apply_async(_import, (modules,))
 
     def close(self) -> None:
         """End the worker (whatever it is doing: results not asked for are not needed)."""

@@ -57,3 +57,15 @@ def test_closing_ends_the_worker():
 def test_the_environment_turns_the_worker_on_or_off(monkeypatch, setting, expected):
     monkeypatch.setenv("RIGOPT_WORKERS", setting)
     assert wanted() is expected
+
+
+def imported(module: str) -> bool:
+    import sys
+
+    return module in sys.modules
+
+
+def test_later_imports_follow_the_first_call():
+    with Background(workers=True, later_imports=("rigopt.report.palette",)) as background:
+        assert background.submit(imported, "rigopt.report.palette").result() is False  # the first call: not yet
+        assert background.submit(imported, "rigopt.report.palette").result() is True  # then imported

@@ -191,7 +191,8 @@ def design_command(
         match_height_m=match_height, match_pitch_deg=match_pitch, match_yaw_deg=match_yaw, match_fov_deg=match_fov,
         perception_range_m=perception_range)
     # a worker process beside this one (with a second core): the near-field stage and the pictures go there
-    background = INLINE if pareto else Background()
+    background = INLINE if pareto else Background(later_imports=("rigopt.report.vehicle_figures",
+                                                                 "rigopt.report.coverage_figures"))
     try:
         references = [_reference(name.strip(), ref_vehicle) for name in ref.split(",") if name.strip()]
         if not references:
