@@ -59,7 +59,7 @@ class Job:
         if not self._done:
             try:
                 if self._pending is not None:
-                    self._value = self._pending.get()
+                    self._value = self._pending.result()  # a worker that died raises BrokenProcessPool
                 else:
                     function, args, kwargs = self._call
                     self._value = function(*args, **kwargs)
@@ -81,8 +81,9 @@ class Background:
         self._pool, self._later_imports = None, tuple(later_imports)
         if wanted() if workers is None else workers:
             import multiprocessing
+            from concurrent.futures import ProcessPoolExecutor
 
-            self._pool = multiprocessing.get_context("spawn").Pool(1, initializer=_worker_setup)
+            self._pool = ProcessPoolExecutor(1, multiprocessing.get_context("spawn"), initializer=_worker_setup)
 
     @property
     def parallel(self) -> bool:
@@ -92,17 +93,21 @@ class Background:
     def submit(self, function: Callable, *args, **kwargs) -> Job:
         """Run ``function(*args, **kwargs)`` in the worker (a module-level function; picklable arguments), or
         inline at the first :meth:`Job.result`."""
-        pending = self._pool.apply_async(function, args, kwargs) if self._pool is not None else None
+        pending = self._pool.submit(function, *args, **kwargs) if self._pool is not None else None
         if pending is not None and self._later_imports:
-            self._pool.apply_async(_import, (self._later_imports,))
+            self._pool.submit(_import, self._later_imports)
             self._later_imports = ()
         return Job(function, args, kwargs, pending)
 
     def close(self) -> None:
         """End the worker (whatever it is doing: results not asked for are not needed)."""
         if self._pool is not None:
-            self._pool.terminate()
-            self._pool.join()
+            processes = list(getattr(self._pool, "_processes", {}).values())
+            self._pool.shutdown(wait=False, cancel_futures=True)
+            for process in processes:  # a call still running is not needed: end it now
+                process.terminate()
+            for process in processes:
+                process.join()
             self._pool = None
 
     def __enter__(self) -> "Background":

@@ -69,3 +69,26 @@ def test_later_imports_follow_the_first_call():
     with Background(workers=True, later_imports=("rigopt.report.palette",)) as background:
         assert background.submit(imported, "rigopt.report.palette").result() is False  # the first call: not yet
         assert background.submit(imported, "rigopt.report.palette").result() is True  # then imported
+
+
+def die() -> None:
+    os._exit(3)
+
+
+def test_a_worker_that_dies_is_an_error_not_a_wait():
+    from concurrent.futures.process import BrokenProcessPool
+
+    with Background(workers=True) as background:
+        with pytest.raises(BrokenProcessPool):
+            background.submit(die).result()
+
+
+def test_closing_ends_a_call_still_running():
+    import time
+
+    background = Background(workers=True)
+    pid, _ = background.submit(pid_and_square, 1).result()
+    background.submit(time.sleep, 600)  # never asked for
+    background.close()  # returns without waiting for it: the worker is ended
+    with pytest.raises(ProcessLookupError):
+        os.kill(pid, 0)
