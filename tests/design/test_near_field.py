@@ -59,7 +59,7 @@ def test_the_tt_sees_its_rear_field_and_near_ring_with_few_fisheyes():
     dense = np.concatenate([p.points(tt, 0.1) for p in presets])
     model = CameraModel.of_cameras(rig.cameras)
     for pts in (points, dense[required_mask(tt, dense)]):
-        seen = visible_by(tt.mesh, model, rig.positions, rig.rotations, pts, near_field.NEAR_FIELD_RANGE)
+        seen = visible_by(tt.ray_caster, model, rig.positions, rig.rotations, pts, near_field.NEAR_FIELD_RANGE)
         assert seen.any(axis=0).all()
     backwards = [c for c in rig.cameras if c.forward[0] < -0.7]
     assert 1 <= len(backwards) <= 2
@@ -87,7 +87,7 @@ def test_a_two_role_design_leaves_the_fields_to_its_fisheyes():
     nf = Rig("nf", tt.blueprint, tuple(fisheyes))
     dense = np.concatenate([p.points(tt, 0.1) for p in parse_require("default", tt)])
     dense = dense[required_mask(tt, dense)]
-    seen = visible_by(tt.mesh, CameraModel.of_cameras(nf.cameras), nf.positions, nf.rotations, dense,
+    seen = visible_by(tt.ray_caster, CameraModel.of_cameras(nf.cameras), nf.positions, nf.rotations, dense,
                       near_field.NEAR_FIELD_RANGE)
     assert seen.any(axis=0).all()
     expected = predict_transfer(load_rig("R1"), [perception], load_weights("joint"))[0].predicted_drop

@@ -27,7 +27,7 @@ import trimesh
 
 from rigopt.validation.synthetic.scene_model import Boxes, Road, Scene
 from rigopt.camera import CameraModel, pixel_centres
-from rigopt.raycast import first_hits
+from rigopt.raycast import RayCaster
 from rigopt.rig.model import Camera, Rig
 
 #: Unit vector towards the sun, world frame.
@@ -299,21 +299,23 @@ def _ego_hits(mesh: trimesh.Trimesh, position, dirs: np.ndarray, limit: np.ndarr
     lo, hi = mesh.bounds
     near, far = _slab(position - (lo + hi) / 2.0, dirs.T, (hi - lo) / 2.0 + 1e-6)
     cast = np.flatnonzero((near <= far) & (far > 0) & (near < limit))
+    caster = RayCaster(mesh)
     for start in range(0, len(cast), CHUNK):
-        _cast_ego(mesh, position, dirs, cast[start:start + CHUNK], depth, normal)
+        _cast_ego(caster, position, dirs, cast[start:start + CHUNK], depth, normal)
     return depth, normal
 
 
-def _cast_ego(mesh: trimesh.Trimesh, position, dirs: np.ndarray, cast: np.ndarray, depth, normal):
-    """Cast the rays ``dirs[cast]`` at the body; write their depths and normals into depth, normal."""
+def _cast_ego(caster: RayCaster, position, dirs: np.ndarray, cast: np.ndarray, depth, normal):
+    """Cast the rays ``dirs[cast]`` at the body (the mesh of ``caster``); write their depths and normals into
+    depth, normal."""
     norm = np.linalg.norm(dirs[cast], axis=1)
     unit = dirs[cast] / norm[:, None]
-    hits = first_hits(mesh, position + EGO_RAY_OFFSET * unit, unit)
+    hits = caster.first_hits(position + EGO_RAY_OFFSET * unit, unit)
     rays = np.flatnonzero(hits.face >= 0)
     if len(rays):
         faces, distance = hits.face[rays], np.linalg.norm(hits.location[rays] - position, axis=1)
         depth[cast[rays]] = distance / norm[rays]
-        n = mesh.face_normals[faces]
+        n = caster.mesh.face_normals[faces]
         normal[cast[rays]] = np.where(np.sum(n * unit[rays], axis=1, keepdims=True) > 0, -n, n)
 
 
