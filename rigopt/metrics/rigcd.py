@@ -20,7 +20,7 @@ same operations as :func:`column_costs`, so the same bits); only the exact assig
 assignment is scipy's ``linear_sum_assignment`` on the wide orientation of each cost matrix (what scipy
 itself solves for a tall one), so every pairing, ties included, is scipy's. A lockstep
 shortest-augmenting-path solver over all pairs at once in numpy reproduced scipy's pairings bit for bit but
-took 3-5x the per-pair loop's time (about 15 augmenting steps per 6-10-camera pair, each a dozen array
+took about 5x the per-pair loop's time (about 15 augmenting steps per 6-10-camera pair, each a dozen array
 operations; docs/benchmarks.md), so the per-pair solve stays.
 """
 
