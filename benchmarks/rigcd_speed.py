@@ -90,7 +90,8 @@ def main() -> None:
         diff = np.max(np.abs(values - batched))
         print(f"{name:<16} {seconds:9.3f} {args.pairs / seconds:10.0f} {seconds / t_batched:7.1f}x {diff:11.2e}")
     print(f"(batched: median of {args.repeats} calls on the Rig lists; the naive numpy loop takes "
-          f"{t_numpy / t_batched:.1f}x its time; load average {load_before:.2f} before, {os.getloadavg()[0]:.2f} after)")
+          f"{t_numpy / t_batched:.1f}x its time; load average {load_before:.2f} before, "
+          f"{os.getloadavg()[0]:.2f} after)")
 
 
 if __name__ == "__main__":

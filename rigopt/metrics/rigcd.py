@@ -149,7 +149,7 @@ class RigBatch:
         """The batch of ``rigs``, in order (each rig's columns are built once and cached on the rig)."""
         if len(rigs) == 0:
             raise RigoptError("no rigs given; pass at least one rig")
-        batch = cls.__new__(cls)
+        batch = cls.__new__(cls)  # the blocks are the rigs' own checked columns: nothing to validate or copy
         batch._blocks = list(map(attrgetter("columns"), rigs))
         batch._columns = None
         batch.counts = np.fromiter(map(len, map(attrgetter("cameras"), rigs)), dtype=int, count=len(rigs))
