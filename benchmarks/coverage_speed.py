@@ -7,18 +7,22 @@ Usage: python benchmarks/coverage_speed.py [--rays 20000] [--candidates 5000] [-
 from __future__ import annotations
 
 import argparse
+import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
 from rigopt.coverage.matrix import coverage_matrix
 from rigopt.coverage.measures import CoverageSettings, coverage_report
-from rigopt.coverage.reference import first_hit_distance_bruteforce
 from rigopt.raycast import RayCaster, has_embree
 from rigopt.geometry import rotation_from_yaw_pitch_roll
 from rigopt.rig.library import load_rig
 from rigopt.mounting.sampling import sample_zone_points
 from rigopt.vehicle.library import load_vehicle
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # the oracles live with the tests
+from oracles.raycast import first_hit_distance_bruteforce  # noqa: E402
 
 
 def timed(function):

@@ -187,6 +187,19 @@ def test_studies_and_benchmarks_import_only_modules_that_exist(folder):
     assert not missing, f"imports of rigopt modules that do not exist: {missing}"
 
 
+def test_benchmarks_import_only_oracles_that_exist():
+    """benchmarks/ reach the tests' oracles (tests/oracles/) by putting tests/ on sys.path."""
+    oracles = PACKAGE.parent / "tests" / "oracles"
+    used, missing = set(), []
+    for path in sorted((PACKAGE.parent / "benchmarks").rglob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom) and (node.module or "").startswith("oracles."):
+                used.add(node.module)
+                if not (oracles / f"{node.module.split('.', 1)[1]}.py").is_file():
+                    missing.append(f"{path.name} line {node.lineno}: {node.module}")
+    assert used >= {"oracles.metrics", "oracles.raycast"} and not missing, missing
+
+
 def test_the_core_imports_no_torch():
     code = ("import sys; import rigopt.design.designer, rigopt.coverage.regulations, rigopt.metrics.calibration, "
             "rigopt.cli; print('torch' in sys.modules)")

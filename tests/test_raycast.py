@@ -1,5 +1,5 @@
-"""Ray casting: embree and trimesh's triangle intersector agree with each other and with a brute-force
-Möller–Trumbore intersection written here; segments and first hits by hand on a box.
+"""Ray casting: embree and trimesh's triangle intersector agree with each other and with the brute-force
+Möller–Trumbore oracle (tests/oracles/raycast.py); segments and first hits by hand on a box.
 
 The box is the coverage tests' box car as a plain trimesh box: x in [-2, 2], y in [-1, 1], z in [0.3, 1.5] m.
 """
@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 import trimesh
 
+from oracles.raycast import first_hit_distance_bruteforce
 from rigopt.errors import RigoptError
 from rigopt.raycast import RayCaster, has_embree
 from rigopt.vehicle.library import load_vehicle
@@ -133,22 +134,6 @@ def test_inside_by_hand(box_vehicle, backend):
 
 # --- brute force ---------------------------------------------------------------------------------------------
 
-def moller_trumbore(triangles, origin, direction, eps=1e-12):
-    """Distance along one unit ray to the nearest of ``triangles`` (t, 3, 3) it crosses (two-sided); inf if none."""
-    v0, v1, v2 = triangles[:, 0], triangles[:, 1], triangles[:, 2]
-    e1, e2 = v1 - v0, v2 - v0
-    p = np.cross(direction, e2)
-    det = np.einsum("ij,ij->i", e1, p)
-    ok = np.abs(det) > eps
-    inv = np.where(ok, 1.0 / np.where(ok, det, 1.0), 0.0)
-    s = origin - v0
-    u = np.einsum("ij,ij->i", s, p) * inv
-    q = np.cross(s, e1)
-    v = (q @ direction) * inv
-    t = np.einsum("ij,ij->i", e2, q) * inv
-    hit = ok & (u >= 0) & (v >= 0) & (u + v <= 1) & (t > eps)
-    return float(t[hit].min()) if hit.any() else np.inf
-
 
 @pytest.mark.parametrize("backend", ["auto", "triangle"])
 def test_first_hit_equals_brute_force(box_vehicle, backend):
@@ -159,8 +144,7 @@ def test_first_hit_equals_brute_force(box_vehicle, backend):
     outside = ~mesh.contains(origins)
     origins, directions = origins[outside][:200], directions[outside][:200]
     assert len(origins) == 200
-    triangles = np.asarray(mesh.triangles, dtype=float)
-    expected = np.array([moller_trumbore(triangles, o, d) for o, d in zip(origins, directions)])
+    expected = first_hit_distance_bruteforce(mesh.triangles, origins, directions)
     assert 50 < np.isfinite(expected).sum() < 190  # both hits and misses
     got = RayCaster(mesh, backend).first_hit_distance(origins, directions)
     np.testing.assert_array_equal(np.isinf(got), np.isinf(expected))
@@ -169,11 +153,11 @@ def test_first_hit_equals_brute_force(box_vehicle, backend):
 
 
 def test_brute_force_reference_by_hand(box_vehicle):
-    """The reference itself: a ray along -x from (5, 0, 0.9) meets the front face x = 2 at 3 m."""
-    triangles = np.asarray(box_vehicle.mesh.triangles, dtype=float)
-    assert moller_trumbore(triangles, np.array([5.0, 0, 0.9]), np.array([-1.0, 0, 0])) == pytest.approx(3.0)
-    assert moller_trumbore(triangles, np.array([5.0, 0, 0.9]), np.array([1.0, 0, 0])) == np.inf
-    assert moller_trumbore(triangles, np.array([0.0, 0, 3.0]), np.array([0.0, 0, -1.0])) == pytest.approx(1.5)
+    """The reference itself: a ray along -x from (5, 0, 0.9) meets the front face x = 2 at 3 m; along +x it
+    meets nothing; down from (0, 0, 3) it meets the roof z = 1.5 at 1.5 m."""
+    got = first_hit_distance_bruteforce(box_vehicle.mesh.triangles, [[5.0, 0, 0.9], [5.0, 0, 0.9], [0.0, 0, 3.0]],
+                                        [[-1.0, 0, 0], [1.0, 0, 0], [0.0, 0, -1.0]], chunk=2)
+    assert got[0] == pytest.approx(3.0) and got[1] == np.inf and got[2] == pytest.approx(1.5)
 
 
 # --- the vehicle's own caster ------------------------------------------------------------------------------------

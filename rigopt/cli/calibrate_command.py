@@ -33,7 +33,7 @@ def calibrate_command(
                                                                    "its real/ holds the real datasets' rigs); may "
                                                                    "be given several times, the first holding a "
                                                                    "rig wins."),
-    solver: str = typer.Option("lbfgsb", help="Whose beta is reported: lbfgsb (the benchmark's) or qp (cvxpy)."),
+    solver: str = typer.Option("lbfgsb", help="Whose beta is reported: lbfgsb (the benchmark's) or qp (the exact optimum, scipy's NNLS)."),
     metric: str = typer.Option("rigcd", "--metric", help=METRIC_HELP),
     test_on: Optional[Path] = typer.Option(None, "--test-on",
                                            help="Other measured transfer (e.g. the real benchmark's results) on "

@@ -23,10 +23,9 @@ from pathlib import Path
 
 import numpy as np
 import plus_study as ps
-from plus_study import BASELINE, PRIMARY_SOLVER, VARIANTS
+from plus_study import BASELINE, PRIMARY_SOLVER, SOLVERS, VARIANTS
 from plus_terms import TERMS, PlusSettings, RigProfile, rig_profile, term_matrices
 
-from rigopt.metrics.matched_fit import SOLVERS
 from rigopt.metrics.prediction import choose_link
 from rigopt.metrics.transfer import read_transfer
 from rigopt.resources import data_dir

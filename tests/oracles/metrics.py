@@ -1,6 +1,7 @@
-"""Slow, obvious implementations of the metrics, written straight from the definitions.
+"""Slow, obvious implementations of the metrics (rigopt.metrics), written straight from the definitions.
 
-They are the oracles of the tests and the baselines of ``benchmarks/``; never used by the tool itself.
+They are the oracles of the tests and the baselines of ``benchmarks/`` (which put this checkout's ``tests``
+folder on sys.path); the tool itself never uses them. Import as ``from oracles.metrics import ...``.
 """
 
 from __future__ import annotations

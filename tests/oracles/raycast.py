@@ -1,5 +1,6 @@
-"""A brute-force ray-triangle intersection (Moller-Trumbore against every triangle): the oracle of the
-ray backends in tests and benchmarks, never used by the tool itself."""
+"""A brute-force ray-triangle intersection (Moller-Trumbore against every triangle): the oracle of the ray
+backends (rigopt.raycast) in tests and benchmarks, never used by the tool itself. Import as
+``from oracles.raycast import first_hit_distance_bruteforce``."""
 
 from __future__ import annotations
 
