@@ -117,6 +117,10 @@ def design_command(
     asymmetric: bool = typer.Option(False, "--asymmetric",
                                     help="Place cameras freely; by default a mirror-symmetric vehicle gets cameras "
                                          "in mirrored pairs and on its centreline."),
+    free_perception: bool = typer.Option(False, "--free-perception",
+                                         help="Place the perception cameras freely (the reference's own layout, "
+                                              "which a mirrored body may not offer) while the near-field cameras "
+                                              "keep their mirrored pairs."),
     match_height: Optional[float] = typer.Option(None, "--match-height", min=0.0, callback=finite(),
                                                  help="Pose tolerance (m): each perception camera within this "
                                                       "height of its matched reference camera, or as near as the "
@@ -187,6 +191,7 @@ def design_command(
         pitches_deg=pitches, yaw_step_deg=yaw_step, spacing=spacing,
         min_coverage=min_coverage, min_overlap=min_overlap, max_nodes=max_nodes, accept_gap=accept_gap,
         rules=mount_rules(min_height, no_trailer), symmetric=False if asymmetric else None, cost_weight=cost_weight,
+        perception_symmetric=not free_perception,
         require=require, near_field=not pareto if near_field is None else near_field,
         match_height_m=match_height, match_pitch_deg=match_pitch, match_yaw_deg=match_yaw, match_fov_deg=match_fov,
         perception_range_m=perception_range)

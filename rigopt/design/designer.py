@@ -240,9 +240,10 @@ def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRi
     requirements = design_requirements(references, vehicle, settings)
     # What the design must have, and what it gives up, in this order, when nothing meets it: mirrored pairs
     # (unless asked for or refused) and the category's fields (unless named).
-    auto_symmetry = settings.symmetric is None and settings.is_symmetric_on(vehicle)
+    auto_symmetry = settings.symmetric is None and settings.perception_mirrored_on(vehicle)
     auto_fields = settings.require is None and bool(requirements.presets)
-    attempts = [(settings.is_symmetric_on(vehicle), True)] + [(False, True)] * auto_symmetry
+    near_field_mirrored = settings.is_symmetric_on(vehicle)
+    attempts = [(settings.perception_mirrored_on(vehicle), True)] + [(False, True)] * auto_symmetry
     attempts += [(s, False) for s, _ in attempts] if auto_fields else []
     prepared_for, reasons = {}, []
     for k, (symmetric, with_fields) in enumerate(attempts):
@@ -264,6 +265,7 @@ def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRi
     settings, requirements = tried, needs
     symmetry_fallback = (f"no symmetric design meets the requirements ({reasons[0]}); designed without symmetry"
                          if auto_symmetry and not symmetric else None)
+    near_field_mirrored &= symmetry_fallback is None
     fields_fallback = (f"no design sees all of the vehicle category's fields "
                        f"{', '.join(p.key for p in requirements.presets)} ({reasons[-1]}); they are reported, not "
                        "required" if auto_fields and not with_fields else None)
@@ -303,9 +305,9 @@ def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRi
                                                     prepared.spacing, settings)
     stage = None
     if settings.near_field:
-        stage, near_field_presets, fields_fallback = _near_field_stage(vehicle, design.rig, near_field_presets,
-                                                                       prepared.spacing, settings, user_require,
-                                                                       progress, near_field_job)
+        stage, near_field_presets, fields_fallback = _near_field_stage(
+            vehicle, design.rig, near_field_presets, prepared.spacing, replace(settings, symmetric=near_field_mirrored),
+            user_require, progress, near_field_job)
         design = summarise(stage.rig, vehicle, rigs, calibration, requirements, settings,
                            check_rig(stage.rig, vehicle, settings.rules))
         requirements = replace(requirements, presets=near_field_presets)
@@ -322,7 +324,8 @@ def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRi
     return DesignResult(design, milp, refinement, comparisons, float(reference_coverage), vehicle, references,
                         calibration, settings, time.perf_counter() - start, symmetry_fallback, regions,
                         fields_fallback, stage,
-                        tuple((reference.cameras[k].id, float(widen[k])) for k in np.flatnonzero(widen > 1.0)))
+                        tuple((reference.cameras[k].id, float(widen[k])) for k in np.flatnonzero(widen > 1.0)),
+                        settings.near_field and near_field_mirrored)
 
 
 def near_field_stage_choice(vehicle: Vehicle, presets: tuple, settings: DesignSettings, user_require: str | None,

@@ -114,10 +114,13 @@ def symmetry_dict(result: DesignResult) -> dict:
     """The design's mirror symmetry: whether it was asked for, the vehicle's, and the pairs it has."""
     symmetry = rig_symmetry(result.design.rig)
     asked = result.settings.is_symmetric_on(result.vehicle)
+    free_perception = result.near_field_mirrored and not asked
     describe = (symmetry.describe() if asked else result.symmetry_fallback
-                or f"symmetry not required ({symmetry.describe()})")
+                or (f"perception cameras placed freely, near-field cameras in mirrored pairs ({symmetry.describe()})"
+                    if free_perception else f"symmetry not required ({symmetry.describe()})"))
     return {"required": asked, "vehicle": result.vehicle.symmetry.describe(), **symmetry.to_dict(),
-            "fallback": result.symmetry_fallback, "describe": describe}
+            "near_field_mirrored": result.near_field_mirrored, "fallback": result.symmetry_fallback,
+            "describe": describe}
 
 
 def design_dict(result: DesignResult, rig_file: Path | None) -> dict:
