@@ -1,9 +1,9 @@
 """The detector families: the interface every family's detector satisfies, and the registry by name.
 
-A family is one module with one ``torch.nn.Module`` subclass that satisfies :class:`Detector`, plus one
-entry in :data:`DETECTORS`. Everything else (building, checkpoints, training, inference, evaluation, the
+A family is one module with one ``torch.nn.Module`` subclass that satisfies :class:`Detector`, plus an
+entry in :data:`DETECTORS` (its settings' defaults, plain data, in ``config.FAMILY_DEFAULTS``). Everything else (building, checkpoints, training, inference, evaluation, the
 command line's ``--model``) reaches the family only through this registry and this interface: a third
-family is its module and its line here.
+family is its module, its line here and its defaults in ``config.FAMILY_DEFAULTS``.
 """
 
 from __future__ import annotations

@@ -18,7 +18,7 @@ from typer.testing import CliRunner  # noqa: E402
 from rigopt.validation.detectors.protocol import evaluate_on, write_results  # noqa: E402
 from rigopt.cli import INPUT_ERROR, app, run  # noqa: E402
 
-REPO = Path(__file__).resolve().parents[2]
+REPO = Path(__file__).resolve().parents[3]
 runner = CliRunner()
 
 

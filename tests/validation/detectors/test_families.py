@@ -10,7 +10,7 @@ import pytest
 
 torch = pytest.importorskip("torch")
 
-from rigopt.validation.detectors.config import model_config  # noqa: E402
+from rigopt.validation.detectors.config import FAMILY_DEFAULTS, model_config  # noqa: E402
 from rigopt.validation.detectors.families import DETECTORS, Detector  # noqa: E402
 from rigopt.validation.detectors.models import build_model, load_checkpoint, model_from_checkpoint  # noqa: E402
 from rigopt.validation.detectors.protocol import evaluate_on, train_on  # noqa: E402
@@ -66,8 +66,14 @@ def test_a_family_default_gives_way_to_an_override():
     assert model_config("petr", "tiny", lr=0.123).lr == 0.123
 
 
-def test_a_third_family_is_one_class_and_one_registry_entry(tiny_data, tmp_path, monkeypatch):
+def test_every_family_s_defaults_are_its_class_s():
+    assert set(FAMILY_DEFAULTS) == set(DETECTORS)
+    assert all(DETECTORS[name].config_defaults == FAMILY_DEFAULTS[name] for name in DETECTORS)
+
+
+def test_a_third_family_is_one_class_with_its_registry_and_defaults_entries(tiny_data, tmp_path, monkeypatch):
     monkeypatch.setitem(DETECTORS, "meanbox", MeanBoxDetector)
+    monkeypatch.setitem(FAMILY_DEFAULTS, "meanbox", MeanBoxDetector.config_defaults)
     config = model_config("meanbox", "tiny", epochs=2)
     assert config.family == "meanbox" and config.lr == 0.05
     assert isinstance(build_model(config), Detector)
@@ -86,6 +92,7 @@ def test_a_third_family_is_one_class_and_one_registry_entry(tiny_data, tmp_path,
 
 def test_a_checkpoint_of_an_unregistered_family_is_a_clear_error(tiny_data, tmp_path, monkeypatch):
     monkeypatch.setitem(DETECTORS, "meanbox", MeanBoxDetector)
+    monkeypatch.setitem(FAMILY_DEFAULTS, "meanbox", MeanBoxDetector.config_defaults)
     run = train_on(tiny_data, "R5", model_config("meanbox", "tiny", epochs=1), tmp_path / "runs", "cpu", 0)
     monkeypatch.delitem(DETECTORS, "meanbox")
     with pytest.raises(DataError, match="meanbox.*families: lss, petr"):
