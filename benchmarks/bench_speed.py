@@ -10,9 +10,9 @@ import argparse
 import tempfile
 import time
 
-from rigopt.bench.generate import generate_split
-from rigopt.bench.render import render_rig
-from rigopt.bench.scenes import generate_scene, split_seeds
+from rigopt.validation.synthetic.generate import generate_split
+from rigopt.validation.synthetic.render import render_rig
+from rigopt.validation.synthetic.scenes import generate_scene, split_seeds
 from rigopt.rig.library import load_rig
 from rigopt.vehicle.library import load_vehicle
 
@@ -51,7 +51,7 @@ def ego_body_cache(scene, rig, mesh, frames: int = 10) -> None:
     time and identical images."""
     import numpy as np
 
-    from rigopt.bench import render
+    from rigopt.validation.synthetic import render
 
     def run(fresh: bool):
         images, start = [], time.perf_counter()

@@ -7,18 +7,22 @@ Usage: python benchmarks/coverage_speed.py [--rays 20000] [--candidates 5000] [-
 from __future__ import annotations
 
 import argparse
+import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
 from rigopt.coverage.matrix import coverage_matrix
 from rigopt.coverage.measures import CoverageSettings, coverage_report
-from rigopt.coverage.reference import first_hit_distance_bruteforce
-from rigopt.raycast import first_hit_distance, has_embree
+from rigopt.raycast import RayCaster, has_embree
 from rigopt.geometry import rotation_from_yaw_pitch_roll
 from rigopt.rig.library import load_rig
 from rigopt.mounting.sampling import sample_zone_points
 from rigopt.vehicle.library import load_vehicle
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # the oracles live with the tests
+from oracles.raycast import first_hit_distance_bruteforce  # noqa: E402
 
 
 def timed(function):
@@ -47,8 +51,9 @@ def main() -> None:
     rows = [("brute force", t_brute, reference)]
     backends = (["embree"] if has_embree() else []) + ["triangle"]
     for backend in backends:
-        first_hit_distance(mesh, origins[:10], directions[:10], backend)  # build the intersector once
-        hits, seconds = timed(lambda: first_hit_distance(mesh, origins, directions, backend))
+        caster = RayCaster(mesh, backend)
+        caster.first_hit_distance(origins[:10], directions[:10])  # build the intersector once
+        hits, seconds = timed(lambda: caster.first_hit_distance(origins, directions))
         rows.append((backend, seconds, hits))
     print(f"\n{args.rays} random rays against the body")
     print(f"{'backend':<12} {'seconds':>8} {'rays/s':>12} {'vs brute':>9} {'disagree':>9}")

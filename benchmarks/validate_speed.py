@@ -25,8 +25,8 @@ def main(argv=None) -> int:
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--skip-plain", action="store_true", help="time only the command")
     args = parser.parse_args(argv)
-    from rigopt.baselines.protocol import evaluate_on_rigs
-    from rigopt.baselines.shipped import render_cached, shipped_detector
+    from rigopt.validation.detectors.protocol import evaluate_on_rigs
+    from rigopt.validation.detectors.shipped import render_cached, shipped_detector
     from rigopt.rig.library import load_rig
 
     detector = shipped_detector("lss", "R1")

@@ -18,8 +18,8 @@ from pathlib import Path
 
 import numpy as np
 
-from rigopt.bench.evaluation import Detections, GroundTruth, _rank, match, resampled_maps
-from rigopt.bench.scene_model import CLASSES
+from rigopt.validation.synthetic.evaluation import Detections, GroundTruth, _rank, match, resampled_maps
+from rigopt.validation.synthetic.scene_model import CLASSES
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "bench"))  # the oracles live with the tests
 from evaluation_oracles import plain_match, plain_resampled_maps  # noqa: E402

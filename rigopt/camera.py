@@ -399,9 +399,15 @@ def pixel_centres(width: int, height: int) -> np.ndarray:
 
 def camera_frame_points(positions, rotations, points) -> np.ndarray:
     """(c, p, 3) float: ``points`` (p, 3) m, vehicle frame, in the body frames of c cameras at
-    ``positions`` (c, 3) m with ``rotations`` (c, 3, 3) R_vehicle_cam: ``R^T (p - t)``."""
-    return np.einsum("cji,cpj->cpi", np.asarray(rotations, dtype=float),
-                     np.asarray(points, dtype=float)[None] - np.asarray(positions, dtype=float)[:, None])
+    ``positions`` (c, 3) m with ``rotations`` (c, 3, 3) R_vehicle_cam: ``R^T (p - t)``.
+
+    Summed term by term in the order (and from the zero) of ``np.einsum("cji,cpj->cpi", R, p - t)``, so the
+    values are einsum's to the bit (tested), at a fifth of its time."""
+    rotations = np.asarray(rotations, dtype=float)
+    points, positions = np.asarray(points, dtype=float), np.asarray(positions, dtype=float)
+    offset = [points[None, :, j] - positions[:, j, None] for j in range(3)]  # (c, p) each
+    return np.stack([0.0 + rotations[:, 0, i, None] * offset[0] + rotations[:, 1, i, None] * offset[1]
+                     + rotations[:, 2, i, None] * offset[2] for i in range(3)], axis=-1)
 
 
 def _read_only(values) -> np.ndarray:
@@ -540,6 +546,16 @@ class CameraModel:
         sx, sy = sizes[..., 0] / self.width, sizes[..., 1] / self.height
         return CameraModel(sizes[..., 0], sizes[..., 1], self.fx * sx, self.fy * sy, self.cx * sx, self.cy * sy,
                            self.distortion, self.coefficients)
+
+    def take(self, index) -> "CameraModel":
+        """The cameras ``index`` (a slice or an index array into the batch (c,)) as a model of their own, with
+        what this one has derived already (``distorted``, ``valid_angles``)."""
+        part = CameraModel(self.width[index], self.height[index], self.fx[index], self.fy[index], self.cx[index],
+                           self.cy[index], self.distortion[index], self.coefficients[index])
+        for name in ("distorted", "valid_angles"):
+            if name in self.__dict__:
+                part.__dict__[name] = self.__dict__[name][index]
+        return part
 
     # -------------------------------------------------------------------------------------------- reading
 
@@ -726,6 +742,20 @@ class CameraModel:
         xd, yd = distorted_coordinates(-y, -z, depth, self.distortion[..., None], self.coefficients[..., None, :])
         return angle, self.cx[..., None] + self.fx[..., None] * xd, self.cy[..., None] + self.fy[..., None] * yd
 
+    def _fisheye_view(self, local) -> np.ndarray:
+        """(..., p) bool: the image test of :meth:`in_view` for a batch of fisheyes only, each value computed as
+        the general path (:meth:`_distorted_view`, :func:`distorted_coordinates`) computes it, without its
+        second angle and the pinhole division it discards."""
+        x, y, z = local[..., 0], local[..., 1], local[..., 2]
+        radius = np.hypot(y, z)  # = hypot(-y, -z), the distorted_coordinates' radius
+        angle = np.arctan2(radius, x)  # the angle from the axis, and the fisheye's theta (its depth is x)
+        theta_d = fisheye_distort(angle, self.coefficients[..., None, :4])
+        scale = np.where(radius > 0, theta_d / np.where(radius > 0, radius, 1.0), 0.0)
+        u = self.cx[..., None] + self.fx[..., None] * (-y * scale)
+        v = self.cy[..., None] + self.fy[..., None] * (-z * scale)
+        return ((angle < self.valid_angles[..., None]) & (0 <= u) & (u <= self.width[..., None])
+                & (0 <= v) & (v <= self.height[..., None]))
+
     def in_view(self, points, max_range: float = np.inf) -> np.ndarray:
         """(..., p) bool: body-frame ``points`` (..., p, 3) m inside the image (edges included), at most
         ``max_range`` m (Euclidean) from the lens, and, for a distorted lens, less than its
@@ -733,6 +763,9 @@ class CameraModel:
         its range, does not count). A pinhole's test is the exact edge-tangent one: in front, between the
         edges."""
         local = np.asarray(points, dtype=float)
+        if self.distortion.size and np.all(self.distortion == "fisheye"):
+            real = self._fisheye_view(local)
+            return real & (np.einsum("...i,...i->...", local, local) <= max_range**2)
         inside = None
         if not np.all(self.distorted):
             left, right, up, down = (t[..., None] for t in self.edge_tangents())
@@ -770,10 +803,28 @@ class CameraModel:
         return margin
 
 
+#: Working-array size (entries, cameras x points) of one block of :func:`in_frustum`: its temporaries stay in
+#: the cache.
+FRUSTUM_BLOCK_ENTRIES = 200_000
+
+
 def in_frustum(model: CameraModel, positions, rotations, points, max_range: float = np.inf) -> np.ndarray:
     """(c, p) bool: point p inside camera c's view frustum (no occlusion).
 
     model : CameraModel of batch shape (c,); positions : (c, 3) m; rotations : (c, 3, 3) R_vehicle_cam;
-    points : (p, 3) m, vehicle frame; max_range : m, Euclidean from the lens.
+    points : (p, 3) m, vehicle frame; max_range : m, Euclidean from the lens. Computed in blocks of cameras
+    (each camera's row is the same whatever its block).
     """
-    return model.in_view(camera_frame_points(positions, rotations, points), max_range)
+    positions, rotations = np.asarray(positions, dtype=float), np.asarray(rotations, dtype=float)
+    points = np.asarray(points, dtype=float)
+    if model.shape != (len(positions),):
+        return model.in_view(camera_frame_points(positions, rotations, points), max_range)
+    step = max(1, FRUSTUM_BLOCK_ENTRIES // max(len(points), 1))
+    if step >= len(positions):
+        return model.in_view(camera_frame_points(positions, rotations, points), max_range)
+    seen = np.zeros((len(positions), len(points)), dtype=bool)
+    for start in range(0, len(positions), step):
+        block = slice(start, start + step)
+        seen[block] = model.take(block).in_view(camera_frame_points(positions[block], rotations[block], points),
+                                                max_range)
+    return seen

@@ -10,13 +10,16 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from rigopt.camera import (CameraModel, camera_frame_points, focal_from_fov, fov_from_focal, in_frustum,
+from rigopt.camera import (CameraModel, Lens, camera_frame_points, focal_from_fov, fov_from_focal, in_frustum,
                            intrinsic_matrix, pinhole_half_tangents, pixel_centres, vertical_fov)
 from rigopt.errors import RigoptError
 from rigopt.geometry import R_CAM_OPTICAL, rotation_from_yaw_pitch_roll
 from rigopt.rig.model import Camera
 
 fov_deg = st.floats(1.0, 179.0)
+#: The near-field stage's equidistant 190-degree fisheye, 1280 x 800 px.
+FISHEYE_190 = Lens(1280, 800, 640 / math.radians(95.0), 640 / math.radians(95.0), 640.0, 400.0, "fisheye",
+                   (0.0, 0.0, 0.0, 0.0))
 width_px = st.integers(16, 8192)
 
 
@@ -347,3 +350,62 @@ def test_in_frustum_of_many_cameras_is_each_cameras():
                         rotations[k:k + 1], points, 15.0)[0] for k in range(5)]
     np.testing.assert_array_equal(together, alone)
     assert 0 < together.sum() < together.size
+
+
+# --- the fast paths give the plain computation's values to the bit ------------------------------------------------
+
+def test_camera_frame_points_are_einsums_to_the_bit():
+    rng = np.random.default_rng(8)
+    yaws, pitches = np.meshgrid(np.deg2rad(np.arange(-180.0, 180.0, 45.0)), np.deg2rad([-90.0, -30.0, 0.0, 10.0]))
+    rotations = rotation_from_yaw_pitch_roll(yaws.ravel(), pitches.ravel(), np.zeros(yaws.size))  # exact zeros too
+    positions = rng.uniform(-3, 3, (len(rotations), 3))
+    points = np.concatenate([rng.uniform(-30, 30, (400, 3)), positions[:3]])  # and points at a lens
+    local = camera_frame_points(positions, rotations, points)
+    expected = np.einsum("cji,cpj->cpi", rotations, points[None] - positions[:, None])
+    np.testing.assert_array_equal(local, expected)
+    assert np.array_equal(np.signbit(local), np.signbit(expected))  # the zeros' signs as well
+
+
+@pytest.mark.parametrize("kind", ["pinhole", "fisheye", "mixed"])
+def test_in_frustum_in_blocks_is_in_view_of_all(kind, monkeypatch):
+    """Blocks of cameras, and a fisheye batch's own path, give the plain in_view of all cameras at once."""
+    import rigopt.camera as camera
+
+    rng = np.random.default_rng(9)
+    n = 37
+    fisheye = CameraModel.of_lens(FISHEYE_190)
+    pinholes = CameraModel.from_fov(rng.uniform(40, 170, n), np.tile([1280, 720], (n, 1)))
+    fisheyes = CameraModel(*(np.full(n, float(getattr(fisheye, a))) for a in ("width", "height", "fx", "fy", "cx",
+                                                                                "cy")), "fisheye",
+                           np.tile(fisheye.coefficients, (n, 1)) + rng.uniform(0, 0.01, (n, 5)) * [1, 0, 0, 0, 0])
+    model = {"pinhole": pinholes, "fisheye": fisheyes,
+             "mixed": CameraModel(*(np.where(np.arange(n) % 2 == 0, getattr(pinholes, a), getattr(fisheyes, a))
+                                    for a in ("width", "height", "fx", "fy", "cx", "cy")),
+                                  np.where(np.arange(n) % 2 == 0, "none", "fisheye"),
+                                  np.where((np.arange(n) % 2 == 0)[:, None], 0.0, fisheyes.coefficients))}[kind]
+    positions = rng.uniform(-2, 2, (n, 3))
+    rotations = rotation_from_yaw_pitch_roll(rng.uniform(-3, 3, n), rng.uniform(-1.5, 0.5, n), np.zeros(n))
+    points = rng.uniform(-20, 20, (300, 3))
+    monkeypatch.setattr(camera, "FRUSTUM_BLOCK_ENTRIES", 5 * len(points))  # blocks of five cameras
+    blocked = in_frustum(model, positions, rotations, points, 25.0)
+    local = np.einsum("cji,cpj->cpi", rotations, points[None] - positions[:, None])
+    # the general path, as in_view runs it for any batch that is not all fisheyes
+    angle, u, v = model._distorted_view(local) if np.any(model.distorted) else (None, None, None)
+    if kind == "pinhole":
+        expected = model.in_view(local, 25.0)
+    else:
+        real = ((angle < model.valid_angles[:, None]) & (0 <= u) & (u <= model.width[:, None]) & (0 <= v)
+                & (v <= model.height[:, None]))
+        expected = np.where(model.distorted[:, None], real, model.in_view(local, 25.0)) if kind == "mixed" else real
+        expected &= np.einsum("...i,...i->...", local, local) <= 25.0**2
+    np.testing.assert_array_equal(blocked, expected)
+    assert 0.05 < blocked.mean() < 0.95
+
+
+def test_take_is_the_cameras_it_names():
+    model = CameraModel.from_fov([60.0, 90.0, 120.0], [[1280, 720]] * 3)
+    model.valid_angles  # derived before: carried over
+    part = model.take(slice(1, 3))
+    assert part.shape == (2,) and part.fx.tolist() == model.fx[1:].tolist()
+    assert part.valid_angles.tolist() == model.valid_angles[1:].tolist()
+    assert model.take(np.array([2, 0])).hfov.tolist() == pytest.approx([120.0, 60.0])

@@ -2,8 +2,8 @@
 
 Layers, lowest first; parts in one layer are independent of each other:
 
-    errors  ->  resources, geometry, output, quiet  ->  camera, raycast  ->  rig  ->  metrics | vehicle  ->  mounting
-    ->  coverage  ->  design | bench  ->  baselines  ->  report  ->  cli
+    errors  ->  resources, geometry, output, quiet, background  ->  camera, raycast  ->  rig  ->  metrics | vehicle  ->  mounting
+    ->  coverage  ->  design  ->  validation  ->  report  ->  cli
 
 Every ``import rigopt...`` counts, including imports inside functions (lazy imports are still
 dependencies), relative imports (``from ..cli import app``) and ``importlib.import_module("rigopt...")`` with a
@@ -28,14 +28,14 @@ PACKAGE = Path(__file__).resolve().parents[1] / "rigopt"
 
 LAYERS = (
     {"errors"},
-    {"resources", "geometry", "output", "quiet"},
+    {"resources", "geometry", "output", "quiet", "background"},
     {"camera", "raycast"},
     {"rig"},
     {"metrics", "vehicle"},
     {"mounting"},
     {"coverage"},
-    {"design", "bench"},
-    {"baselines"},
+    {"design"},
+    {"validation"},
     {"report"},
     {"cli"},
 )
@@ -106,9 +106,9 @@ def test_the_checker_sees_lazy_imports_and_skips_type_checking_ones():
 
 def test_the_checker_resolves_relative_and_dynamic_imports():
     tree = ast.parse("from ..cli import app\nfrom . import lifting\nfrom .rigcd import rigcd\nimport importlib\n"
-                     "importlib.import_module('rigopt.baselines.lss')\n")
+                     "importlib.import_module('rigopt.validation.detectors.lss')\n")
     assert runtime_imports(tree, ("rigopt", "metrics")) == [
-        (1, "rigopt.cli"), (2, "rigopt.metrics"), (3, "rigopt.metrics.rigcd"), (5, "rigopt.baselines.lss")]
+        (1, "rigopt.cli"), (2, "rigopt.metrics"), (3, "rigopt.metrics.rigcd"), (5, "rigopt.validation.detectors.lss")]
 
 
 def test_an_injected_relative_upward_import_fails_the_contract(tmp_path):
@@ -130,6 +130,33 @@ def test_no_module_imports_upward_or_sideways(path):
     own = path.relative_to(PACKAGE).with_suffix("").parts[0]
     wrong = upward_imports(path)
     assert not wrong, f"{path.relative_to(PACKAGE)} ({own}, layer {LEVEL[own]}) imports upward or sideways: {wrong}"
+
+
+#: The validation wing's own parts, lowest first: the synthetic benchmark (numpy), the detectors (torch), a
+#: design's validation.
+WING = ("synthetic", "detectors", "designs")
+
+
+def wing_part(module: str) -> str | None:
+    """'rigopt.validation.detectors.lss' -> 'detectors'; None outside the wing or for the wing's ``__init__``."""
+    parts = module.split(".")
+    return parts[2] if len(parts) > 2 and parts[:2] == ["rigopt", "validation"] else None
+
+
+@pytest.mark.parametrize("path", sorted((PACKAGE / "validation").rglob("*.py")), ids=lambda p: str(p.relative_to(PACKAGE)))
+def test_the_validation_wing_imports_only_downward_inside(path):
+    own = wing_part(".".join((*package_of(path), *([path.stem] if path.stem != "__init__" else []))))
+    if own is None:
+        return
+    wrong = [f"line {line}: {module}" for line, module in runtime_imports(ast.parse(path.read_text()), package_of(path))
+             if wing_part(module) is not None and WING.index(wing_part(module)) > WING.index(own)]
+    assert not wrong, f"{path.relative_to(PACKAGE)} ({own}) imports a higher part of the validation wing: {wrong}"
+
+
+def test_the_wing_check_sees_an_upward_import():
+    tree = ast.parse("from rigopt.validation.detectors.lss import LSSDetector\n")
+    found = runtime_imports(tree, ("rigopt", "validation", "synthetic"))
+    assert [WING.index(wing_part(m)) > WING.index("synthetic") for _, m in found] == [True]
 
 
 def test_the_package_never_imports_studies_benchmarks_or_tests():
@@ -160,9 +187,31 @@ def test_studies_and_benchmarks_import_only_modules_that_exist(folder):
     assert not missing, f"imports of rigopt modules that do not exist: {missing}"
 
 
+def test_benchmarks_import_only_oracles_that_exist():
+    """benchmarks/ reach the tests' oracles (tests/oracles/) by putting tests/ on sys.path."""
+    oracles = PACKAGE.parent / "tests" / "oracles"
+    used, missing = set(), []
+    for path in sorted((PACKAGE.parent / "benchmarks").rglob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom) and (node.module or "").startswith("oracles."):
+                used.add(node.module)
+                if not (oracles / f"{node.module.split('.', 1)[1]}.py").is_file():
+                    missing.append(f"{path.name} line {node.lineno}: {node.module}")
+    assert used >= {"oracles.metrics", "oracles.raycast"} and not missing, missing
+
+
 def test_the_core_imports_no_torch():
     code = ("import sys; import rigopt.design.designer, rigopt.coverage.regulations, rigopt.metrics.calibration, "
             "rigopt.cli; print('torch' in sys.modules)")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "False"
+
+
+def test_the_synthetic_benchmark_and_the_detector_settings_import_no_torch():
+    code = ("import sys; import rigopt.validation.synthetic.generate, rigopt.validation.synthetic.evaluation; "
+            "from rigopt.validation.detectors.config import model_config; model_config('petr', 'tiny'); "
+            "print('torch' in sys.modules)")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert done.returncode == 0, done.stderr
     assert done.stdout.strip() == "False"

@@ -1,5 +1,5 @@
-"""Ray casting: embree and trimesh's triangle intersector agree with each other and with a brute-force
-Möller–Trumbore intersection written here; segments and first hits by hand on a box.
+"""Ray casting: embree and trimesh's triangle intersector agree with each other and with the brute-force
+Möller–Trumbore oracle (tests/oracles/raycast.py); segments and first hits by hand on a box.
 
 The box is the coverage tests' box car as a plain trimesh box: x in [-2, 2], y in [-1, 1], z in [0.3, 1.5] m.
 """
@@ -10,8 +10,9 @@ import numpy as np
 import pytest
 import trimesh
 
+from oracles.raycast import first_hit_distance_bruteforce
 from rigopt.errors import RigoptError
-from rigopt.raycast import first_hit_distance, first_hits, has_embree, inside, ray_caster, segments_clear
+from rigopt.raycast import RayCaster, has_embree
 from rigopt.vehicle.library import load_vehicle
 
 needs_embree = pytest.mark.skipif(not has_embree(), reason="embreex is not installed")
@@ -58,8 +59,8 @@ def test_embree_and_triangle_first_hit_agree(which, box_vehicle, etron):
     rng = np.random.default_rng(12)
     low, high = vehicle_volume(vehicle, np.array([4.0, 4.0, 1.5]))
     origins, directions = random_rays(rng, 500, low, high, *vehicle.mesh.bounds)
-    embree = first_hit_distance(vehicle.mesh, origins, directions, backend="embree")
-    triangle = first_hit_distance(vehicle.mesh, origins, directions, backend="triangle")
+    embree = RayCaster(vehicle.mesh, "embree").first_hit_distance(origins, directions)
+    triangle = RayCaster(vehicle.mesh, "triangle").first_hit_distance(origins, directions)
     np.testing.assert_array_equal(np.isinf(embree), np.isinf(triangle))
     assert np.isfinite(triangle).sum() > 200
     hit = np.isfinite(triangle)
@@ -68,16 +69,12 @@ def test_embree_and_triangle_first_hit_agree(which, box_vehicle, etron):
 
 @pytest.mark.parametrize("backend", ["embree!", "pyembree", "", "Triangle"])
 def test_unknown_backend_raises(box_vehicle, backend):
-    with pytest.raises(RigoptError):
-        ray_caster(box_vehicle.mesh, backend)
-    with pytest.raises(RigoptError):
-        first_hit_distance(box_vehicle.mesh, [[5.0, 0, 0.9]], [[-1.0, 0, 0]], backend=backend)
-    with pytest.raises(RigoptError):
-        segments_clear(box_vehicle.mesh, [[5.0, 0, 0.9]], [[-5.0, 0, 0.9]], backend=backend)
+    with pytest.raises(RigoptError, match="unknown ray backend"):
+        RayCaster(box_vehicle.mesh, backend)
 
 
 def test_no_rays_gives_no_distances(box_vehicle):
-    assert first_hit_distance(box_vehicle.mesh, np.zeros((0, 3)), np.zeros((0, 3))).shape == (0,)
+    assert RayCaster(box_vehicle.mesh).first_hit_distance(np.zeros((0, 3)), np.zeros((0, 3))).shape == (0,)
 
 
 @pytest.mark.parametrize("backend", ["auto", "triangle"])
@@ -91,7 +88,8 @@ def test_segments_clear(box_vehicle, backend):
         [5.0, 0.0, 0.9],   # the second one reversed: blocked
         [0.0, 0.0, 1.6],   # from above, stops 0.1 m over the roof: clear
     ])
-    assert segments_clear(box_vehicle.mesh, starts, ends, backend).tolist() == [True, False, False, True, False, True]
+    clear = RayCaster(box_vehicle.mesh, backend).segments_clear(starts, ends)
+    assert clear.tolist() == [True, False, False, True, False, True]
 
 
 
@@ -100,7 +98,7 @@ def test_segments_clear(box_vehicle, backend):
 def test_first_hits_by_hand(box_vehicle, backend):
     origins = np.array([[5.0, 0, 0.9], [5.0, 0, 0.9], [0.0, 0.5, 3.0]])
     directions = np.array([[-1.0, 0, 0], [1.0, 0, 0], [0.0, 0, -1.0]])
-    hits = first_hits(box_vehicle.mesh, origins, directions, backend)
+    hits = RayCaster(box_vehicle.mesh, backend).first_hits(origins, directions)
     np.testing.assert_allclose(hits.distance, [3.0, np.inf, 1.5], atol=1e-9)
     np.testing.assert_allclose(hits.location[[0, 2]], [[2.0, 0, 0.9], [0.0, 0.5, 1.5]], atol=1e-9)
     assert np.isnan(hits.location[1]).all() and hits.face[1] == -1
@@ -113,7 +111,7 @@ def test_first_hits_lie_on_their_rays_and_faces(box_vehicle, backend):
     rng = np.random.default_rng(7)
     origins, directions = random_rays(rng, 300, *vehicle_volume(box_vehicle, np.array([4.0, 4.0, 1.5])),
                                       *vehicle_volume(box_vehicle, 0.5))
-    hits = first_hits(box_vehicle.mesh, origins, directions, backend)
+    hits = RayCaster(box_vehicle.mesh, backend).first_hits(origins, directions)
     hit = hits.face >= 0
     assert 50 < hit.sum() < 300
     np.testing.assert_array_equal(np.isfinite(hits.distance), hit)
@@ -121,34 +119,20 @@ def test_first_hits_lie_on_their_rays_and_faces(box_vehicle, backend):
     plane = box_vehicle.mesh.face_normals[hits.face[hit]]
     on_plane = np.einsum("ij,ij->i", plane, hits.location[hit] - box_vehicle.mesh.triangles[hits.face[hit], 0])
     np.testing.assert_allclose(on_plane, 0.0, atol=1e-6)
-    np.testing.assert_array_equal(first_hit_distance(box_vehicle.mesh, origins, directions, backend), hits.distance)
+    np.testing.assert_array_equal(RayCaster(box_vehicle.mesh, backend).first_hit_distance(origins, directions),
+                                  hits.distance)
 
 
 
 @pytest.mark.parametrize("backend", ["auto", "triangle"])
 def test_inside_by_hand(box_vehicle, backend):
     points = np.array([[0.0, 0, 0.9], [1.9, 0.9, 1.4], [2.1, 0, 0.9], [0, 0, 0.2], [0, 0, 1.6], [0, -1.1, 0.9]])
-    assert inside(box_vehicle.mesh, points, backend).tolist() == [True, True, False, False, False, False]
-    assert inside(box_vehicle.mesh, np.zeros((0, 3)), backend).shape == (0,)
+    caster = RayCaster(box_vehicle.mesh, backend)
+    assert caster.inside(points).tolist() == [True, True, False, False, False, False]
+    assert caster.inside(np.zeros((0, 3))).shape == (0,)
 
 
 # --- brute force ---------------------------------------------------------------------------------------------
-
-def moller_trumbore(triangles, origin, direction, eps=1e-12):
-    """Distance along one unit ray to the nearest of ``triangles`` (t, 3, 3) it crosses (two-sided); inf if none."""
-    v0, v1, v2 = triangles[:, 0], triangles[:, 1], triangles[:, 2]
-    e1, e2 = v1 - v0, v2 - v0
-    p = np.cross(direction, e2)
-    det = np.einsum("ij,ij->i", e1, p)
-    ok = np.abs(det) > eps
-    inv = np.where(ok, 1.0 / np.where(ok, det, 1.0), 0.0)
-    s = origin - v0
-    u = np.einsum("ij,ij->i", s, p) * inv
-    q = np.cross(s, e1)
-    v = (q @ direction) * inv
-    t = np.einsum("ij,ij->i", e2, q) * inv
-    hit = ok & (u >= 0) & (v >= 0) & (u + v <= 1) & (t > eps)
-    return float(t[hit].min()) if hit.any() else np.inf
 
 
 @pytest.mark.parametrize("backend", ["auto", "triangle"])
@@ -160,18 +144,44 @@ def test_first_hit_equals_brute_force(box_vehicle, backend):
     outside = ~mesh.contains(origins)
     origins, directions = origins[outside][:200], directions[outside][:200]
     assert len(origins) == 200
-    triangles = np.asarray(mesh.triangles, dtype=float)
-    expected = np.array([moller_trumbore(triangles, o, d) for o, d in zip(origins, directions)])
+    expected = first_hit_distance_bruteforce(mesh.triangles, origins, directions)
     assert 50 < np.isfinite(expected).sum() < 190  # both hits and misses
-    got = first_hit_distance(mesh, origins, directions, backend)
+    got = RayCaster(mesh, backend).first_hit_distance(origins, directions)
     np.testing.assert_array_equal(np.isinf(got), np.isinf(expected))
     hit = np.isfinite(expected)
     np.testing.assert_allclose(got[hit], expected[hit], rtol=0, atol=1e-6)
 
 
 def test_brute_force_reference_by_hand(box_vehicle):
-    """The reference itself: a ray along -x from (5, 0, 0.9) meets the front face x = 2 at 3 m."""
-    triangles = np.asarray(box_vehicle.mesh.triangles, dtype=float)
-    assert moller_trumbore(triangles, np.array([5.0, 0, 0.9]), np.array([-1.0, 0, 0])) == pytest.approx(3.0)
-    assert moller_trumbore(triangles, np.array([5.0, 0, 0.9]), np.array([1.0, 0, 0])) == np.inf
-    assert moller_trumbore(triangles, np.array([0.0, 0, 3.0]), np.array([0.0, 0, -1.0])) == pytest.approx(1.5)
+    """The reference itself: a ray along -x from (5, 0, 0.9) meets the front face x = 2 at 3 m; along +x it
+    meets nothing; down from (0, 0, 3) it meets the roof z = 1.5 at 1.5 m."""
+    got = first_hit_distance_bruteforce(box_vehicle.mesh.triangles, [[5.0, 0, 0.9], [5.0, 0, 0.9], [0.0, 0, 3.0]],
+                                        [[-1.0, 0, 0], [1.0, 0, 0], [0.0, 0, -1.0]], chunk=2)
+    assert got[0] == pytest.approx(3.0) and got[1] == np.inf and got[2] == pytest.approx(1.5)
+
+
+# --- the vehicle's own caster ------------------------------------------------------------------------------------
+
+def test_a_vehicle_owns_one_caster(etron):
+    caster = etron.ray_caster
+    assert caster is etron.ray_caster and caster.mesh is etron.mesh  # built once, on the vehicle's body
+    assert etron.caster("auto") is caster and etron.caster(caster.backend) is caster
+    other = etron.caster("triangle")
+    assert other.backend == "triangle" and other.mesh is etron.mesh
+    if caster.backend == "embree":
+        assert other is not caster
+
+
+def test_the_vehicle_caster_answers_as_a_fresh_one(etron):
+    rng = np.random.default_rng(3)
+    origins, directions = random_rays(rng, 300, *vehicle_volume(etron, np.array([3.0, 3.0, 1.0])), *etron.mesh.bounds)
+    np.testing.assert_array_equal(etron.ray_caster.first_hit_distance(origins, directions),
+                                  RayCaster(etron.mesh).first_hit_distance(origins, directions))
+
+
+def test_no_cache_at_module_level():
+    """Derived data belongs to its owner (the vehicle): the ray-casting module keeps no cache keyed by mesh."""
+    import rigopt.raycast as raycast
+
+    cached = [name for name, value in vars(raycast).items() if hasattr(value, "cache_info")]
+    assert cached == []

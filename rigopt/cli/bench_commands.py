@@ -54,9 +54,9 @@ def generate_command(
     """Render the same scenes under every rig and write images and nuScenes tables (resumable)."""
     from rich.progress import Progress
 
-    from rigopt.bench.generate import ego_mesh_lookup, generate_split
-    from rigopt.bench.render import render_rig
-    from rigopt.bench.scenes import split_scenes
+    from rigopt.validation.synthetic.generate import ego_mesh_lookup, generate_split
+    from rigopt.validation.synthetic.render import render_rig
+    from rigopt.validation.synthetic.scenes import split_scenes
     from rigopt.rig.library import load_rig
 
     from rigopt.output import check_out_folder
@@ -100,7 +100,7 @@ def show_command(
     out: Path = typer.Option(..., "--out", help="Picture to write: .png (or .pdf, .svg, .jpg)."),
 ):
     """Tile a sample's camera images with its projected boxes, and a bird's-eye view of the boxes."""
-    from rigopt.bench.dataset import read_dataset
+    from rigopt.validation.synthetic.dataset import read_dataset
     from rigopt.output import atomic_file, check_out_file, existing_folder
     from rigopt.report.bench_figures import write_sample_figure
 

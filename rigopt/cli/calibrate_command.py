@@ -29,11 +29,11 @@ def calibrate_command(
     seed: Optional[int] = typer.Option(None, min=0, help="Seed of the bootstrap (default 0)."),
     rigs: Optional[List[Path]] = typer.Option(None, "--rigs", help="Folder of the rig files (<rig>.json, in it or "
                                                                    "below it) the results were measured with, for "
-                                                                   "rigs not in the library (e.g. baselines/rigs: "
+                                                                   "rigs not in the library (e.g. measurements/rigs: "
                                                                    "its real/ holds the real datasets' rigs); may "
                                                                    "be given several times, the first holding a "
                                                                    "rig wins."),
-    solver: str = typer.Option("lbfgsb", help="Whose beta is reported: lbfgsb (the benchmark's) or qp (cvxpy)."),
+    solver: str = typer.Option("lbfgsb", help="Whose beta is reported: lbfgsb (the benchmark's) or qp (the exact optimum, scipy's NNLS)."),
     metric: str = typer.Option("rigcd", "--metric", help=METRIC_HELP),
     test_on: Optional[Path] = typer.Option(None, "--test-on",
                                            help="Other measured transfer (e.g. the real benchmark's results) on "

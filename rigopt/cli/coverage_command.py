@@ -74,7 +74,8 @@ def coverage_command(
     """Coverage of a rig around its vehicle: rings at 2-50 m, bird's-eye counts, near-field blind zone, per camera."""
     from rigopt.coverage.measures import compare_coverage, coverage_report
     from rigopt.coverage.regulations import parse_require, region_coverage
-    from rigopt.report.coverage_figures import comparison_dict, regions_dict, report_dict
+    from rigopt.report.coverage_figures import comparison_dict, report_dict
+    from rigopt.report.coverage_tables import regions_dict
 
     from rigopt.output import check_out_folder
 
@@ -167,7 +168,7 @@ def _print_tables(data: dict, other: dict | None) -> None:
                   f"{100 * bev['overlap2_frac_within_20m']:.1f} % by >= 2 cameras, at most {bev['max_count']}")
 
     if data.get("regions"):
-        from rigopt.report.coverage_figures import camera_field_rows
+        from rigopt.report.coverage_tables import camera_field_rows
 
         print_table("regulation fields (--require): required points seen by >= 1 camera, the unseen ground beside it; "
                     "weighted: each point by its criticality (docs/regulations.md); covered = all of them",

@@ -117,6 +117,10 @@ def design_command(
     asymmetric: bool = typer.Option(False, "--asymmetric",
                                     help="Place cameras freely; by default a mirror-symmetric vehicle gets cameras "
                                          "in mirrored pairs and on its centreline."),
+    free_perception: bool = typer.Option(False, "--free-perception",
+                                         help="Place the perception cameras freely (the reference's own layout, "
+                                              "which a mirrored body may not offer) while the near-field cameras "
+                                              "keep their mirrored pairs."),
     match_height: Optional[float] = typer.Option(None, "--match-height", min=0.0, callback=finite(),
                                                  help="Pose tolerance (m): each perception camera within this "
                                                       "height of its matched reference camera, or as near as the "
@@ -157,6 +161,7 @@ def design_command(
     """Design a rig on VEHICLE that minimises the calibrated RigCD to REF while covering what REF covers."""
     from rich.console import Console
 
+    from rigopt.background import INLINE, Background
     from rigopt.coverage.regulations import parse_require
     from rigopt.design.designer import design_rig
     from rigopt.design.problem import benchmark_rigs
@@ -164,7 +169,7 @@ def design_command(
     from rigopt.metrics.calibration import load_weights
     from rigopt.output import atomic_folder, check_out_folder, published
     from rigopt.report.design_html import NEXT_STEPS
-    from rigopt.report.design_report import design_dict, write_design_outputs
+    from rigopt.report.design_report import write_design_report
     from rigopt.vehicle.library import load_vehicle
 
     if out is not None:
@@ -186,75 +191,85 @@ def design_command(
         pitches_deg=pitches, yaw_step_deg=yaw_step, spacing=spacing,
         min_coverage=min_coverage, min_overlap=min_overlap, max_nodes=max_nodes, accept_gap=accept_gap,
         rules=mount_rules(min_height, no_trailer), symmetric=False if asymmetric else None, cost_weight=cost_weight,
+        perception_symmetric=not free_perception,
         require=require, near_field=not pareto if near_field is None else near_field,
         match_height_m=match_height, match_pitch_deg=match_pitch, match_yaw_deg=match_yaw, match_fov_deg=match_fov,
         perception_range_m=perception_range)
-    references = [_reference(name.strip(), ref_vehicle) for name in ref.split(",") if name.strip()]
-    if not references:
-        raise RigoptError("--ref needs at least one rig")
-    target, calibration = load_vehicle(vehicle), load_weights(weights, metric)
-    if require is not None:
-        parse_require(require, target)  # a bad --require is an error before any work
-    note_fallback(calibration)
-    label = "+".join(r.rig.name for r in references)
-    out = check_out_folder(out or Path(f"design-{target.name}-{label}"), force=force)
-    status = Console(stderr=True)
-    if pareto and near_field:
-        raise RigoptError("--pareto sweeps one camera set; leave out --near-field or add --single-set "
-                          "(or leave out --pareto)")
-    if pareto:
-        _pareto(target, references, calibration, settings, out, force, as_json, status)
-        return
-    with status.status(f"designing a rig on {target.name} from {label}") as spinner:
-        result = design_rig(target, references, calibration, settings, compare_with=benchmark_rigs(target),
-                            progress=lambda message: spinner.update(message) or status.print(f"  {message}"))
-    with atomic_folder(out, force=force) as work:
-        files = published(write_design_outputs(result, work), work, out)
-    summary = design_dict(result, files[0])
-    if as_json:
-        print_json(summary)
-        return
-    rows, flagged, uninformative = [], [], []
-    for name, entry in (("design", {**summary, "meets_coverage_requirements": True}),
-                        ("naive transfer", summary["comparisons"]["naive_transfer"]),
-                        *((f"benchmark {s['name']}", s) for s in summary["comparisons"]["benchmark_rigs"])):
-        if entry:
-            interval = "-" if entry["interval"] is None else "[{:.2f}, {:.2f}]".format(*entry["interval"])
-            if entry.get("interval_informative") is False:  # spans the range a drop can take: no finding
-                interval, uninformative = "uninformative", uninformative + [name]
-            rows.append([name, entry["predicted_drop"], interval, entry["rigcd"], entry["n_cameras"],
-                         entry["coverage"], "yes" if entry["meets_coverage_requirements"] else "no",
-                         "yes" if entry["extrapolation"] else "-"])
-            flagged += [name] if entry["extrapolation"] else []
-    print_table(f"{label} -> {target.name} ({calibration.metric}, {weights} weights); reference coverage "
-                f"{summary['reference_coverage']:.3f}", ["rig", "predicted drop", "interval",
-                                                           f"{calibration.metric} ({weights} weights)", "cameras",
-                                                           "coverage", "meets coverage", "extrapolates"], rows)
-    if uninformative:
-        from rigopt.metrics.prediction import UNINFORMATIVE_TEXT
+    # a worker process beside this one (with a second core): the near-field stage and the pictures go there
+    background = INLINE if pareto else Background(later_imports=("rigopt.report.vehicle_figures",
+                                                                 "rigopt.report.coverage_figures"))
+    try:
+        references = [_reference(name.strip(), ref_vehicle) for name in ref.split(",") if name.strip()]
+        if not references:
+            raise RigoptError("--ref needs at least one rig")
+        target, calibration = load_vehicle(vehicle), load_weights(weights, metric)
+        if require is not None:
+            parse_require(require, target)  # a bad --require is an error before any work
+        note_fallback(calibration)
+        label = "+".join(r.rig.name for r in references)
+        out = check_out_folder(out or Path(f"design-{target.name}-{label}"), force=force)
+        status = Console(stderr=True)
+        if pareto and near_field:
+            raise RigoptError("--pareto sweeps one camera set; leave out --near-field or add --single-set "
+                              "(or leave out --pareto)")
+        if pareto:
+            _pareto(target, references, calibration, settings, out, force, as_json, status)
+            return
+        with status.status(f"designing a rig on {target.name} from {label}") as spinner:
+            result = design_rig(target, references, calibration, settings, compare_with=benchmark_rigs(target),
+                                progress=lambda message: spinner.update(message) or status.print(f"  {message}"),
+                                background=background)
+        with atomic_folder(out, force=force) as work:
+            files, summary = write_design_report(result, work, background)
+            files = published(files, work, out)
+        background.close()  # its work is done
+        summary = {**summary, "rig_file": str(files[0])}  # as written: the report names it relative to its folder
+        if as_json:
+            print_json(summary)
+            return
+        rows, flagged, uninformative = [], [], []
+        for name, entry in (("design", {**summary, "meets_coverage_requirements": True}),
+                            ("naive transfer", summary["comparisons"]["naive_transfer"]),
+                            *((f"benchmark {s['name']}", s) for s in summary["comparisons"]["benchmark_rigs"])):
+            if entry:
+                interval = "-" if entry["interval"] is None else "[{:.2f}, {:.2f}]".format(*entry["interval"])
+                if entry.get("interval_informative") is False:  # spans the range a drop can take: no finding
+                    interval, uninformative = "uninformative", uninformative + [name]
+                rows.append([name, entry["predicted_drop"], interval, entry["rigcd"], entry["n_cameras"],
+                             entry["coverage"], "yes" if entry["meets_coverage_requirements"] else "no",
+                             "yes" if entry["extrapolation"] else "-"])
+                flagged += [name] if entry["extrapolation"] else []
+        print_table(f"{label} -> {target.name} ({calibration.metric}, {weights} weights); reference coverage "
+                    f"{summary['reference_coverage']:.3f}", ["rig", "predicted drop", "interval",
+                                                               f"{calibration.metric} ({weights} weights)", "cameras",
+                                                               "coverage", "meets coverage", "extrapolates"], rows)
+        if uninformative:
+            from rigopt.metrics.prediction import UNINFORMATIVE_TEXT
 
-        print(f"rigopt: note: {', '.join(uninformative)}: {UNINFORMATIVE_TEXT}; the predicted drops are point "
-              "estimates only (report.json keeps the numbers)", file=sys.stderr)
-    if flagged:
-        print(f"rigopt: note: {', '.join(flagged)}: beyond the calibration pairs (see report.json 'extrapolation'); "
-              "their predicted drops are less certain than the intervals say", file=sys.stderr)
-    solver = summary["solver"]
-    print(f"{summary['symmetry']['describe']}", file=sys.stderr)
-    if summary["regions_fallback"]:
-        print(f"rigopt: note: {summary['regions_fallback']}", file=sys.stderr)
-    for region in summary["regions"]:
-        state = "required" if summary["regions_required"] else "reported"
-        print(f"field {region['key']} ({state}): {region['covered_frac']:.1%} of its points seen, unseen area "
-              f"{region['unseen_area_m2']:.1f} m²", file=sys.stderr)
-    print(f"MILP {solver['milp_status']} (gap {solver['milp_gap']:.2e}) on {solver['offered_to_milp']} of "
-          f"{solver['candidates']} candidates; refinement {solver['refine_status']}; {solver['seconds']:.1f} s",
-          file=sys.stderr)
-    for line in summary["notes"]:
-        print(line)
-    print(f"wrote {', '.join(str(f) for f in files)}")
-    print_next(f"open {out / 'report.html'} (the design for a packaging review: cameras, fields, 3D view)",
-               *(f"in {out}: {command} ({why})" for command, why in NEXT_STEPS))
+            print(f"rigopt: note: {', '.join(uninformative)}: {UNINFORMATIVE_TEXT}; the predicted drops are point "
+                  "estimates only (report.json keeps the numbers)", file=sys.stderr)
+        if flagged:
+            print(f"rigopt: note: {', '.join(flagged)}: beyond the calibration pairs (see report.json 'extrapolation'); "
+                  "their predicted drops are less certain than the intervals say", file=sys.stderr)
+        solver = summary["solver"]
+        print(f"{summary['symmetry']['describe']}", file=sys.stderr)
+        if summary["regions_fallback"]:
+            print(f"rigopt: note: {summary['regions_fallback']}", file=sys.stderr)
+        for region in summary["regions"]:
+            state = "required" if summary["regions_required"] else "reported"
+            print(f"field {region['key']} ({state}): {region['covered_frac']:.1%} of its points seen, unseen area "
+                  f"{region['unseen_area_m2']:.1f} m²", file=sys.stderr)
+        print(f"MILP {solver['milp_status']} (gap {solver['milp_gap']:.2e}) on {solver['offered_to_milp']} of "
+              f"{solver['candidates']} candidates; refinement {solver['refine_status']}; {solver['seconds']:.1f} s",
+              file=sys.stderr)
+        for line in summary["notes"]:
+            print(line)
+        print(f"wrote {', '.join(str(f) for f in files)}")
+        print_next(f"open {out / 'report.html'} (the design for a packaging review: cameras, fields, 3D view)",
+                   *(f"in {out}: {command} ({why})" for command, why in NEXT_STEPS))
 
+    finally:
+        background.close()
 
 def _reference(name: str, vehicle: Optional[str]):
     """A --ref rig on its vehicle (``vehicle`` when given), origin converted (noted), cameras inside refused."""

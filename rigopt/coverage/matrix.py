@@ -58,7 +58,7 @@ def coverage_matrix(vehicle: Vehicle, positions, rotations, fovs=None, image_siz
             image_sizes = np.tile(DEFAULT_IMAGE_SIZE, (len(positions), 1))
         model = CameraModel.from_fov(fovs, image_sizes)
     points, distance, height, sector, azimuth = sector_points(vehicle.footprint, settings)
-    sees = visible_by(vehicle.mesh, model, positions, rotations, points, settings.max_range, settings.backend)
+    sees = visible_by(vehicle.caster(settings.backend), model, positions, rotations, points, settings.max_range)
     return CoverageMatrix(sees, distance, height, sector, azimuth, points)
 
 

@@ -21,7 +21,6 @@ import numpy as np
 
 from rigopt.vehicle.footprint import Footprint
 from rigopt.errors import RigoptError
-from rigopt.raycast import first_hit_distance
 from rigopt.camera import CameraModel, Lens
 from rigopt.coverage.visibility import DEFAULT_MAX_RANGE, visible_by
 from rigopt.rig.model import Rig
@@ -123,18 +122,21 @@ class CoverageReport:
 
 @dataclass(frozen=True)
 class RingReport:
-    """The rings alone of ``rig`` on ``vehicle`` (what a ring plot needs, without the bird's-eye map, the
-    blind zone and the per-camera facts of a full ``CoverageReport``)."""
+    """The rings alone of ``rig`` on ``vehicle`` (what a ring plot and the regulation fields' picture need,
+    without the bird's-eye map, the blind zone and the per-camera facts of a full ``CoverageReport``); the
+    ``footprint`` and the ``cameras_inside`` the body as in a ``CoverageReport``."""
 
     rig: str
     vehicle: str
     settings: CoverageSettings
     rings: tuple[RingCoverage, ...]
+    footprint: Footprint
+    cameras_inside: tuple[str, ...]
 
 
 def _seen(vehicle: Vehicle, rig: Rig, points: np.ndarray, settings: CoverageSettings) -> np.ndarray:
-    return visible_by(vehicle.mesh, CameraModel.of_cameras(rig.cameras), rig.positions, rig.rotations, points,
-                      settings.max_range, settings.backend)
+    return visible_by(vehicle.caster(settings.backend), CameraModel.of_cameras(rig.cameras), rig.positions,
+                      rig.rotations, points, settings.max_range)
 
 
 def ring_coverage(vehicle: Vehicle, rig: Rig, settings: CoverageSettings, footprint: Footprint):
@@ -185,32 +187,37 @@ def camera_coverage(vehicle: Vehicle, rig: Rig, settings: CoverageSettings, foot
     out = []
     for k, camera in enumerate(rig.cameras):
         rays = CameraModel.of_camera(camera).grid_rays(settings.image_grid) @ camera.rotation.T
-        hits = first_hit_distance(vehicle.mesh, np.repeat(camera.position[None], len(rays), axis=0), rays,
-                                  settings.backend)
+        hits = vehicle.caster(settings.backend).first_hit_distance(
+            np.repeat(camera.position[None], len(rays), axis=0), rays)
         overlap = {other.id: float((ring[k] & ring[j]).sum() * degrees)
                    for j, other in enumerate(rig.cameras) if j != k and (ring[k] & ring[j]).any()}
         out.append(CameraCoverage(camera.id, float(np.mean(hits <= settings.max_range)), overlap, camera.lens_model))
     return tuple(out)
 
 
+def cameras_inside(rig: Rig, vehicle: Vehicle) -> tuple[str, ...]:
+    """The ids of ``rig``'s cameras inside ``vehicle``'s body."""
+    inside = vehicle.surface(rig.positions).distance < 0
+    return tuple(c.id for c, flag in zip(rig.cameras, inside) if flag)
+
+
 def coverage_report(rig: Rig, vehicle: Vehicle, settings: CoverageSettings = CoverageSettings()) -> CoverageReport:
     """All coverage measures of ``rig`` on ``vehicle``; cameras inside the body are listed and still used."""
     footprint = vehicle.footprint
-    inside = vehicle.surface(rig.positions).distance < 0
     return CoverageReport(
         rig.name, vehicle.name, settings, footprint,
         ring_coverage(vehicle, rig, settings, footprint),
         bev_map(vehicle, rig, settings, footprint),
         blind_zone(vehicle, rig, settings, footprint),
         camera_coverage(vehicle, rig, settings, footprint),
-        tuple(c.id for c, flag in zip(rig.cameras, inside) if flag),
+        cameras_inside(rig, vehicle),
     )
 
 
 def ring_report(rig: Rig, vehicle: Vehicle, settings: CoverageSettings = CoverageSettings()) -> RingReport:
     """The rings of ``rig`` on ``vehicle``, as in ``coverage_report`` and at a fraction of its cost."""
-    return RingReport(rig.name, vehicle.name, settings,
-                      ring_coverage(vehicle, rig, settings, vehicle.footprint))
+    return RingReport(rig.name, vehicle.name, settings, ring_coverage(vehicle, rig, settings, vehicle.footprint),
+                      vehicle.footprint, cameras_inside(rig, vehicle))
 
 
 @dataclass(frozen=True)

@@ -44,7 +44,6 @@ import numpy as np
 
 from rigopt.camera import CameraModel
 from rigopt.vehicle.footprint import Footprint
-from rigopt.raycast import first_hit_distance, segments_clear
 from rigopt.rig.model import Camera, Rig
 from rigopt.vehicle.model import Vehicle
 from rigopt.vehicle.placement import to_vehicle_centre
@@ -200,8 +199,8 @@ def _seen(camera: Camera, model: CameraModel, vehicle: Vehicle, points, backend:
     inside = model.in_view(local)
     clear = np.zeros(len(points), dtype=bool)
     if inside.any():
-        clear[inside] = segments_clear(vehicle.mesh, np.repeat(camera.position[None], int(inside.sum()), axis=0),
-                                       points[inside], backend)
+        clear[inside] = vehicle.caster(backend).segments_clear(
+            np.repeat(camera.position[None], int(inside.sum()), axis=0), points[inside])
     return inside & clear
 
 
@@ -281,7 +280,7 @@ def nearest_visible_ground(camera: Camera, vehicle: Vehicle, footprint: Footprin
     if len(rays) == 0:
         return None, None
     along = height / -rays[:, 2]  # m along each ray to the ground
-    body = first_hit_distance(vehicle.mesh, np.repeat(camera.position[None], len(rays), axis=0), rays, backend)
+    body = vehicle.caster(backend).first_hit_distance(np.repeat(camera.position[None], len(rays), axis=0), rays)
     seen = body >= along
     if not seen.any():
         return None, None
@@ -295,7 +294,7 @@ def blocked_fraction(camera: Camera, vehicle: Vehicle, grid=BLOCKED_GRID, backen
     """The share of the image the body blocks: rays through the centres of ``grid`` (columns, rows) image cells
     that meet the body mesh, in [0, 1]."""
     rays = CameraModel.of_camera(camera).grid_rays(grid) @ camera.rotation.T
-    hits = first_hit_distance(vehicle.mesh, np.repeat(camera.position[None], len(rays), axis=0), rays, backend)
+    hits = vehicle.caster(backend).first_hit_distance(np.repeat(camera.position[None], len(rays), axis=0), rays)
     return float(np.mean(np.isfinite(hits)))
 
 

@@ -529,8 +529,8 @@ def region_coverage(rig: Rig, vehicle: Vehicle, presets, spacing: float = 0.1, b
         needed = required_mask(vehicle, points, lifted)
         by_camera = np.zeros((len(rig.cameras), len(points)), dtype=bool)
         if needed.any():
-            by_camera[:, needed] = visible_by(vehicle.mesh, model, rig.positions, rig.rotations, points[needed],
-                                              max_range, backend)
+            by_camera[:, needed] = visible_by(vehicle.caster(backend), model, rig.positions, rig.rotations,
+                                              points[needed], max_range)
         count = by_camera.sum(axis=0)
         seen = (count > 0) | ~needed
         per_height = len(ground)

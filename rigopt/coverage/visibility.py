@@ -5,40 +5,43 @@ the optical axis), the camera model has it in view (:meth:`rigopt.camera.CameraM
 benchmark's pinhole ``d_x > 0``, ``|d_y| <= d_x tan(hfov / 2)``, ``|d_z| <= d_x tan(vfov / 2)``; for a
 distorted lens, its projection inside the image within the lens's valid angle), ``|d| <= max_range``, and
 the segment from the lens to p meets no body triangle. Segments are tested by
-:func:`rigopt.raycast.segments_clear` (embree or trimesh's triangle intersector, ``backend``).
+:meth:`rigopt.raycast.RayCaster.segments_clear` (a vehicle's is ``vehicle.caster(backend)``), each (lens
+position, point) segment once however many cameras at that position see the point.
 """
 
 from __future__ import annotations
 
 import numpy as np
-import trimesh
 
 from rigopt.camera import CameraModel, in_frustum
-from rigopt.raycast import segments_clear
+from rigopt.raycast import RayCaster
 
 #: Metres beyond which a camera sees nothing, unless the settings say otherwise.
 DEFAULT_MAX_RANGE = 80.0
 
 
-def visible(mesh: trimesh.Trimesh, positions, rotations, fovs, image_sizes, points,
-            max_range: float = DEFAULT_MAX_RANGE, backend: str = "auto") -> np.ndarray:
-    """(c, p) bool: point p seen by pinhole camera c: in its frustum and not hidden by the body ``mesh``.
+def visible(caster: RayCaster, positions, rotations, fovs, image_sizes, points,
+            max_range: float = DEFAULT_MAX_RANGE) -> np.ndarray:
+    """(c, p) bool: point p seen by pinhole camera c: in its frustum and not hidden by the body (the mesh of
+    ``caster``).
 
     positions : (c, 3) m; rotations : (c, 3, 3) R_vehicle_cam; fovs : (c,) deg; image_sizes : (c, 2) px;
     points : (p, 3) m, vehicle frame; max_range : m.
     """
-    return visible_by(mesh, CameraModel.from_fov(fovs, image_sizes), positions, rotations, points, max_range,
-                      backend)
+    return visible_by(caster, CameraModel.from_fov(fovs, image_sizes), positions, rotations, points, max_range)
 
 
-def visible_by(mesh: trimesh.Trimesh, model: CameraModel, positions, rotations, points,
-               max_range: float = DEFAULT_MAX_RANGE, backend: str = "auto") -> np.ndarray:
+def visible_by(caster: RayCaster, model: CameraModel, positions, rotations, points,
+               max_range: float = DEFAULT_MAX_RANGE) -> np.ndarray:
     """(c, p) bool: as :func:`visible`, for cameras of any lens: ``model`` a CameraModel of batch shape (c,)
-    (e.g. ``CameraModel.of_cameras(rig.cameras)``)."""
+    (e.g. ``CameraModel.of_cameras(rig.cameras)``). Cameras at one position (a mount's orientations and lenses)
+    share their segments: each (position, point) pair in some frustum is cast once."""
     seen = in_frustum(model, positions, rotations, points, max_range)
     cam, point = np.nonzero(seen)
     if len(cam):
-        clear = segments_clear(mesh, np.asarray(positions, dtype=float)[cam], np.asarray(points, dtype=float)[point],
-                               backend)
+        positions, points = np.asarray(positions, dtype=float), np.asarray(points, dtype=float)
+        origins, origin_of = np.unique(positions, axis=0, return_inverse=True)
+        pairs, pair_of = np.unique(origin_of.reshape(-1)[cam] * len(points) + point, return_inverse=True)
+        clear = caster.segments_clear(origins[pairs // len(points)], points[pairs % len(points)])[pair_of]
         seen[cam[~clear], point[~clear]] = False
     return seen

@@ -24,6 +24,7 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 from scipy.spatial import cKDTree
 
+from rigopt.background import INLINE, Background
 from rigopt.camera import CameraModel
 from rigopt.design.naming import mount_name, unique
 from rigopt.mounting.practice import mounting_costs
@@ -35,7 +36,7 @@ from rigopt.design.problem import ReferenceRig
 from rigopt.design.refine import (RefineProblem, duty_points, free_radii, frustum_margins, project_to_surface,
                                   refine)
 from rigopt.coverage.regulations import default_presets, region_coverage
-from rigopt.design.near_field import NEAR_FIELD_SPACING, design_near_field
+from rigopt.design.near_field import NEAR_FIELD_SPACING, NearFieldChoice, choose_near_field, with_near_field
 from rigopt.design.requirements import (DENSE_SPACING, Requirements, design_requirements, explain_uncoverable,
                                        field_labels, required_presets)
 from rigopt.design.result import Comparisons, DesignResult, MilpStage, RefinementReport, RigSummary
@@ -138,8 +139,8 @@ def prepare(vehicle: Vehicle, references: Sequence[Rig], calibration: Calibratio
 def _pool_sees(vehicle: Vehicle, candidates: CandidateSet, pool: np.ndarray, points: np.ndarray,
                settings: DesignSettings) -> np.ndarray:
     """(p, q) bool: which of ``points`` (q, 3) m each pool candidate sees."""
-    return visible_by(vehicle.mesh, candidates.model(pool), candidates.positions[pool], candidates.rotations[pool],
-                      points, settings.coverage.max_range, settings.coverage.backend)
+    return visible_by(vehicle.caster(settings.coverage.backend), candidates.model(pool), candidates.positions[pool],
+                      candidates.rotations[pool], points, settings.coverage.max_range)
 
 
 def with_points(prepared: Prepared, vehicle: Vehicle, points: np.ndarray, settings: DesignSettings) -> Prepared:
@@ -210,10 +211,12 @@ def select_valid(prepared: Prepared, vehicle: Vehicle, calibration: Calibration,
 
 def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRig], calibration: Calibration,
                settings: DesignSettings = DesignSettings(), compare_with: Sequence[Rig] = (),
-               progress: Callable[[str], None] = no_progress) -> DesignResult:
+               progress: Callable[[str], None] = no_progress, background: Background = INLINE) -> DesignResult:
     """Design a rig on ``vehicle`` for a detector trained on the reference (one rig, or a fleet of rigs, each
     on its own vehicle; see the module docstring), judged beside the naive transfer and ``compare_with``
-    (e.g. ``problem.benchmark_rigs(vehicle)``)."""
+    (e.g. ``problem.benchmark_rigs(vehicle)``). With a ``background`` worker the near-field stage (which needs
+    nothing of the perception cameras until they share housings) runs there while the perception cameras are
+    designed and refined here, and the naive transfer refined: the same design."""
     start = time.perf_counter()
     references = (references,) if isinstance(references, ReferenceRig) else tuple(references)
     if not references:
@@ -227,15 +230,20 @@ def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRi
     reference = rigs[0]
     progress(f"coverage requirements from {', '.join(r.name for r in rigs)} and the required fields")
     near_field_presets, user_require = (), settings.require
+    near_field_job = None
     if settings.near_field:  # the fields are the near-field cameras' job, not the perception cameras'
         near_field_presets = required_presets(vehicle, settings) if settings.require != "none" else ()
         settings = replace(settings, require="none")
+        if background.parallel:  # for the symmetry the first attempt asks for: checked when it is taken
+            near_field_job = background.submit(near_field_stage_choice, vehicle, near_field_presets, settings,
+                                               user_require)
     requirements = design_requirements(references, vehicle, settings)
     # What the design must have, and what it gives up, in this order, when nothing meets it: mirrored pairs
     # (unless asked for or refused) and the category's fields (unless named).
-    auto_symmetry = settings.symmetric is None and settings.is_symmetric_on(vehicle)
+    auto_symmetry = settings.symmetric is None and settings.perception_mirrored_on(vehicle)
     auto_fields = settings.require is None and bool(requirements.presets)
-    attempts = [(settings.is_symmetric_on(vehicle), True)] + [(False, True)] * auto_symmetry
+    near_field_mirrored = settings.is_symmetric_on(vehicle)
+    attempts = [(settings.perception_mirrored_on(vehicle), True)] + [(False, True)] * auto_symmetry
     attempts += [(s, False) for s, _ in attempts] if auto_fields else []
     prepared_for, reasons = {}, []
     for k, (symmetric, with_fields) in enumerate(attempts):
@@ -257,10 +265,13 @@ def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRi
     settings, requirements = tried, needs
     symmetry_fallback = (f"no symmetric design meets the requirements ({reasons[0]}); designed without symmetry"
                          if auto_symmetry and not symmetric else None)
+    near_field_mirrored &= symmetry_fallback is None
     fields_fallback = (f"no design sees all of the vehicle category's fields "
                        f"{', '.join(p.key for p in requirements.presets)} ({reasons[-1]}); they are reported, not "
                        "required" if auto_fields and not with_fields else None)
 
+    refines = settings.refine and len(rigs) == 1 and calibration.lifting is None
+    naive = naive_transfer(vehicle, reference, prepared.candidates, settings)
     progress("validating the design: mount checks, coverage, RigCD")
     matched = np.sort(milp.selection.matched[milp.selection.matched >= 0])  # the rig's cameras come in this order
     gaps = tolerance_gaps(milp.rig.positions[:len(matched)], milp.rig.rotations[:len(matched)],
@@ -277,7 +288,6 @@ def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRi
     refinement = RefinementReport(  # the continuous stage's objective has RigCD's terms only
         f"off ({calibration.metric}: the continuous stage weighs RigCD's terms only)" if calibration.lifting is not None
         else "off" if len(rigs) == 1 else "off (fleet design)")
-    refines = settings.refine and len(rigs) == 1 and calibration.lifting is None
     if refines:
         progress("continuous refinement (casadi + IPOPT)")
         refinement = _refined(design, vehicle, reference, calibration, requirements, prepared.spacing, settings)
@@ -288,11 +298,16 @@ def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRi
                                  status=f"rejected: moves {', '.join(outside)} out of {tolerance_text(settings)}")
         if refinement.accepted:
             design = refinement.refined
+    naive_refinement = "off"
+    if naive is not None and refines:  # before the near-field stage: meanwhile a background worker finishes it
+        progress("refining the naive transfer as the design")
+        naive, naive_refinement = refine_comparison(naive, vehicle, reference, calibration, requirements,
+                                                    prepared.spacing, settings)
     stage = None
     if settings.near_field:
-        stage, near_field_presets, fields_fallback = _near_field_stage(vehicle, design.rig, near_field_presets,
-                                                                       prepared.spacing, settings, user_require,
-                                                                       progress)
+        stage, near_field_presets, fields_fallback = _near_field_stage(
+            vehicle, design.rig, near_field_presets, prepared.spacing, replace(settings, symmetric=near_field_mirrored),
+            user_require, progress, near_field_job)
         design = summarise(stage.rig, vehicle, rigs, calibration, requirements, settings,
                            check_rig(stage.rig, vehicle, settings.rules))
         requirements = replace(requirements, presets=near_field_presets)
@@ -302,12 +317,6 @@ def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRi
 
     reference_coverage = rig_coverage_matrix(reference, references[0].vehicle,
                                              settings.coverage).sees.any(axis=0).mean()
-    naive = naive_transfer(vehicle, reference, prepared.candidates, settings)
-    naive_refinement = "off"
-    if naive is not None and refines:
-        progress("refining the naive transfer as the design")
-        naive, naive_refinement = refine_comparison(naive, vehicle, reference, calibration, requirements,
-                                                    prepared.spacing, settings)
     comparisons = Comparisons(
         summarise(naive, vehicle, rigs, calibration, requirements, settings) if naive else None,
         tuple(summarise(rig, vehicle, rigs, calibration, requirements, settings) for rig in compare_with),
@@ -315,37 +324,58 @@ def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRi
     return DesignResult(design, milp, refinement, comparisons, float(reference_coverage), vehicle, references,
                         calibration, settings, time.perf_counter() - start, symmetry_fallback, regions,
                         fields_fallback, stage,
-                        tuple((reference.cameras[k].id, float(widen[k])) for k in np.flatnonzero(widen > 1.0)))
+                        tuple((reference.cameras[k].id, float(widen[k])) for k in np.flatnonzero(widen > 1.0)),
+                        settings.near_field and near_field_mirrored)
 
 
-def _near_field_stage(vehicle: Vehicle, perception: Rig, presets: tuple, spacing: float, settings: DesignSettings,
-                      user_require: str | None, progress) -> tuple:
-    """The near-field stage of a two-role design: (NearFieldDesign, the presets its cameras see, the fallback note
-    or None). The category's fields (``user_require`` None) that no near-field cameras see are dropped with a
-    note, the near ring still designed; named fields are strict."""
-    progress("near-field cameras for the fields and the near ring")
+def near_field_stage_choice(vehicle: Vehicle, presets: tuple, settings: DesignSettings, user_require: str | None,
+                            spacing: float | None = None) -> tuple[NearFieldChoice, tuple, str | None, bool,
+                                                                   tuple[str, ...]]:
+    """The near-field stage's choice (:func:`rigopt.design.near_field.choose_near_field`) for a design under
+    ``settings``: (the choice, the presets its cameras see, the fallback note or None, whether it was designed
+    in mirrored pairs, its progress messages). The category's fields (``user_require`` None) that no near-field
+    cameras see are dropped with a note, the near ring still designed; named fields are strict. ``spacing``
+    (m): the design's mount spacing (default: the settings', else sized to the vehicle); the stage's is at most
+    NEAR_FIELD_SPACING. A module-level function of picklable values: it may run in a background worker."""
+    messages: list[str] = []
+    spacing = spacing or settings.spacing or default_spacing(vehicle, settings)
     symmetric = settings.is_symmetric_on(vehicle)
 
-    def stage_for(required):
-        return design_near_field(vehicle, perception, required, min(spacing, NEAR_FIELD_SPACING), symmetric,
-                                 settings.rules, zones=settings.zones, max_nodes=settings.max_nodes,
-                                 lifted=settings.rules.practice.lifted, progress=progress)
+    def choice_for(required):
+        return choose_near_field(vehicle, required, min(spacing, NEAR_FIELD_SPACING), symmetric, settings.rules,
+                                 zones=settings.zones, max_nodes=settings.max_nodes,
+                                 lifted=settings.rules.practice.lifted, progress=messages.append)
 
     fallback = None
     try:
-        stage = stage_for(presets)
+        choice = choice_for(presets)
     except DesignInfeasible as error:
         if user_require is not None or not presets:
             raise
         fallback = (f"no near-field cameras see all of the vehicle category's fields "
                     f"{', '.join(p.key for p in presets)} ({error}); they are reported, not required")
-        progress(fallback)
-        stage, presets = stage_for(()), ()
-    if stage.status == "node_limit" and not settings.accept_gap:
+        messages.append(fallback)
+        choice, presets = choice_for(()), ()
+    return choice, presets, fallback, symmetric, tuple(messages)
+
+
+def _near_field_stage(vehicle: Vehicle, perception: Rig, presets: tuple, spacing: float, settings: DesignSettings,
+                      user_require: str | None, progress, job=None) -> tuple:
+    """The near-field stage of a two-role design: (NearFieldDesign, the presets its cameras see, the fallback note
+    or None); see :func:`near_field_stage_choice`. ``job``: that choice computed ahead (in a background worker),
+    taken when it was designed with the symmetry of ``settings``."""
+    progress("near-field cameras for the fields and the near ring")
+    outcome = job.result() if job is not None else None
+    if outcome is None or outcome[3] != settings.is_symmetric_on(vehicle):
+        outcome = near_field_stage_choice(vehicle, presets, settings, user_require, spacing)
+    choice, presets, fallback, _, messages = outcome
+    for message in messages:
+        progress(message)
+    if choice.status == "node_limit" and not settings.accept_gap:
         raise RigoptError(f"the near-field MILP stopped at its work limit of {settings.max_nodes} branch-and-bound "
-                          f"nodes {stage.gap:.1%} from proven best; raise --max-nodes (e.g. --max-nodes "
+                          f"nodes {choice.gap:.1%} from proven best; raise --max-nodes (e.g. --max-nodes "
                           f"{4 * settings.max_nodes}), or take the best found within it with --accept-gap")
-    return stage, presets, fallback
+    return with_near_field(perception, choice), presets, fallback
 
 
 #: Cameras beyond the reference's count a design with required fields may use by default (near-field cameras).

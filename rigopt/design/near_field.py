@@ -51,7 +51,7 @@ from rigopt.mounting.practice import mounting_costs
 from rigopt.mounting.rules import MountRules
 from rigopt.mounting.shapes import NEAR_FIELD_CLEAR_CONE_DEG
 from rigopt.quiet import HIGHS_OPTIONS, quiet_highs
-from rigopt.rig.model import Rig
+from rigopt.rig.model import Camera, Rig
 from rigopt.vehicle.model import Vehicle
 
 #: The default near-field camera: horizontal FOV (deg) and image size (px) of an equidistant fisheye.
@@ -192,11 +192,26 @@ def select_near_field(sees: np.ndarray, mount: np.ndarray, mount_points: np.ndar
     return np.flatnonzero(x.value > 0.5), status, _gap(problem)
 
 
-def design_near_field(vehicle: Vehicle, perception: Rig, presets: tuple[RegionPreset, ...], spacing: float,
-                      symmetric: bool, rules: MountRules = MountRules(), catalogue=None, zones=None,
-                      max_nodes: int = DEFAULT_MAX_NODES, lifted=(), progress=lambda message: None) -> NearFieldDesign:
-    """The near-field cameras of a design whose perception cameras are ``perception`` (on ``vehicle``): they
-    see every field of ``presets`` densely and the near ring, the fewest and cheapest."""
+@dataclass(frozen=True)
+class NearFieldChoice:
+    """The near-field cameras chosen on a vehicle, before they join a rig: ``cameras`` (role near_field, named
+    CAM_NEAR_FIELD_k), and the stage's facts as :class:`NearFieldDesign` gives them."""
+
+    cameras: tuple[Camera, ...]
+    n_candidates: int
+    n_points: int
+    status: str
+    gap: float
+    seconds: float
+    rounds: int
+    ring_unseeable: tuple[str, ...] = ()
+
+
+def choose_near_field(vehicle: Vehicle, presets: tuple[RegionPreset, ...], spacing: float, symmetric: bool,
+                      rules: MountRules = MountRules(), catalogue=None, zones=None, max_nodes: int = DEFAULT_MAX_NODES,
+                      lifted=(), progress=lambda message: None) -> NearFieldChoice:
+    """The near-field cameras of ``vehicle`` that see every field of ``presets`` densely and the near ring, the
+    fewest and cheapest (mount points ``spacing`` m apart); nothing here depends on the perception cameras."""
     start = time.perf_counter()
     candidates = near_field_candidates(vehicle, spacing, symmetric, rules, catalogue, zones)
     index = np.arange(len(candidates))
@@ -207,7 +222,7 @@ def design_near_field(vehicle: Vehicle, perception: Rig, presets: tuple[RegionPr
     # The near ring is seen as far as the body allows: its points no candidate sees are reported, not asked;
     # a field point no candidate sees is an error (select_near_field names it).
     def seen_by_candidates(required: NearFieldPoints) -> np.ndarray:
-        return visible_by(vehicle.mesh, model, candidates.positions[index], candidates.rotations[index],
+        return visible_by(vehicle.ray_caster, model, candidates.positions[index], candidates.rotations[index],
                           required.points, NEAR_FIELD_RANGE)
 
     sees = seen_by_candidates(points)
@@ -229,7 +244,7 @@ def design_near_field(vehicle: Vehicle, perception: Rig, presets: tuple[RegionPr
         if dense:
             chosen_model = candidates.model(picked)
             for preset, field in zip(presets, dense):
-                seen = visible_by(vehicle.mesh, chosen_model, candidates.positions[picked],
+                seen = visible_by(vehicle.ray_caster, chosen_model, candidates.positions[picked],
                                   candidates.rotations[picked], field, NEAR_FIELD_RANGE).any(axis=0)
                 unseen.append((preset.key, field[~seen]))
         missing = sum(len(u) for _, u in unseen)
@@ -241,10 +256,18 @@ def design_near_field(vehicle: Vehicle, perception: Rig, presets: tuple[RegionPr
     if missing:
         raise DesignInfeasible(f"after {DENSE_ROUNDS} rounds the near-field cameras still miss {missing} dense field "
                                "point(s); allow more zones or a finer --spacing")
-    cameras = [dataclasses.replace(candidates.camera(k, f"CAM_NEAR_FIELD_{n + 1}"), role="near_field")
-               for n, k in enumerate(picked)]
+    cameras = tuple(dataclasses.replace(candidates.camera(k, f"CAM_NEAR_FIELD_{n + 1}"), role="near_field")
+                    for n, k in enumerate(picked))
+    return NearFieldChoice(cameras, len(index), len(points.points), status, gap, time.perf_counter() - start, round_,
+                           ring_unseeable)
+
+
+def with_near_field(perception: Rig, choice: NearFieldChoice) -> NearFieldDesign:
+    """``perception``'s cameras followed by the ``choice``'s; a fisheye at a perception camera's mount (within
+    CLASH_DISTANCE) shares its housing: the two are one camera module."""
+    cameras = list(choice.cameras)
     perception_cameras = list(perception.cameras)
-    if len(perception) and len(cameras):  # a fisheye at a perception camera's mount shares its housing: one module
+    if len(perception) and len(cameras):
         distance, nearest = cKDTree(perception.positions).query(np.array([c.position for c in cameras]))
         for n, (d, p) in enumerate(zip(distance, nearest)):
             if d < CLASH_DISTANCE:
@@ -252,5 +275,15 @@ def design_near_field(vehicle: Vehicle, perception: Rig, presets: tuple[RegionPr
                 perception_cameras[p] = dataclasses.replace(perception_cameras[p], module=module)
                 cameras[n] = dataclasses.replace(cameras[n], module=module)
     rig = Rig(perception.name, perception.vehicle, tuple(perception_cameras) + tuple(cameras), perception.origin)
-    return NearFieldDesign(rig, len(index), len(points.points), status, gap, time.perf_counter() - start, round_,
-                           ring_unseeable)
+    return NearFieldDesign(rig, choice.n_candidates, choice.n_points, choice.status, choice.gap, choice.seconds,
+                           choice.rounds, choice.ring_unseeable)
+
+
+def design_near_field(vehicle: Vehicle, perception: Rig, presets: tuple[RegionPreset, ...], spacing: float,
+                      symmetric: bool, rules: MountRules = MountRules(), catalogue=None, zones=None,
+                      max_nodes: int = DEFAULT_MAX_NODES, lifted=(), progress=lambda message: None) -> NearFieldDesign:
+    """The near-field cameras of a design whose perception cameras are ``perception`` (on ``vehicle``): they
+    see every field of ``presets`` densely and the near ring, the fewest and cheapest
+    (:func:`choose_near_field`, then :func:`with_near_field`)."""
+    return with_near_field(perception, choose_near_field(vehicle, presets, spacing, symmetric, rules, catalogue,
+                                                         zones, max_nodes, lifted, progress))

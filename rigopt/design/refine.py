@@ -21,7 +21,7 @@ import numpy as np
 from rigopt.camera import CameraModel, camera_frame_points, pinhole_half_tangents
 from rigopt.mounting.rules import MountRules
 from rigopt.mounting.shapes import surface_frame
-from rigopt.geometry import rotation_from_yaw_pitch_roll
+from rigopt.geometry import rotation_from_yaw_pitch_roll, symbolic_rotation_angle, symbolic_rotation_from_yaw_pitch
 from rigopt.rig.model import Camera, Rig
 from rigopt.vehicle.model import Vehicle
 from rigopt.vehicle.symmetry import mirror_points
@@ -82,12 +82,6 @@ class RefineOutcome:
     rig: Rig | None
 
 
-def _rotation(ca, yaw, pitch):
-    """Symbolic Rz(yaw) @ Ry(-pitch) (roll 0), the ISO camera convention."""
-    cy, sy, cp, sp = ca.cos(yaw), ca.sin(yaw), ca.cos(pitch), ca.sin(pitch)
-    return ca.vertcat(ca.horzcat(cy * cp, -sy, -cy * sp), ca.horzcat(sy * cp, cy, -sy * sp), ca.horzcat(sp, 0, cp))
-
-
 def refine(problem: RefineProblem, max_iter: int = 200) -> RefineOutcome:
     """Solve the continuous problem from the MILP design; see the module docstring."""
     import casadi as ca
@@ -108,15 +102,13 @@ def refine(problem: RefineProblem, max_iter: int = 200) -> RefineOutcome:
     for k, camera in enumerate(design.cameras):
         frame = ca.DM(surface_frame(problem.normals[k], camera.forward))
         position = ca.DM(camera.position) + frame[:, 0] * u[k] + frame[:, 1] * v[k]
-        rotation = _rotation(ca, yaw[k], pitch[k])
+        rotation = symbolic_rotation_from_yaw_pitch(ca, yaw[k], pitch[k])
         lens = fov[k] if fov is not None and camera.lens is None else camera.fov
         r = problem.matched[k]
         if r >= 0:
             target = reference.cameras[r]
             offset = position - ca.DM(target.position)
-            m = ca.mtimes(ca.DM(target.rotation.T), rotation)
-            skew = m - m.T
-            angle = ca.atan2(ca.sqrt(ca.sumsqr(skew) / 8 + SMOOTHING), (ca.trace(m) - 1) / 2)
+            angle = symbolic_rotation_angle(ca, ca.mtimes(ca.DM(target.rotation.T), rotation), SMOOTHING)
             cost += lt * ca.sqrt(ca.sumsqr(offset) + SMOOTHING) + lr * angle + lf * ca.sqrt((lens - target.fov) ** 2
                                                                                            + SMOOTHING)
         tangents = (pinhole_half_tangents(lens, *camera.image_size, tan=ca.tan) if camera.lens is None

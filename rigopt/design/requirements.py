@@ -54,8 +54,8 @@ class Requirements:
 
     def counts_matrix(self, rig: Rig, vehicle: Vehicle, settings: DesignSettings) -> np.ndarray:
         """(k, q) bool: which points each camera of ``rig`` on ``vehicle`` sees (occlusion-aware)."""
-        return visible_by(vehicle.mesh, CameraModel.of_cameras(rig.cameras), rig.positions, rig.rotations,
-                          self.points, settings.coverage.max_range, settings.coverage.backend)
+        return visible_by(vehicle.caster(settings.coverage.backend), CameraModel.of_cameras(rig.cameras),
+                          rig.positions, rig.rotations, self.points, settings.coverage.max_range)
 
     def counts(self, rig: Rig, vehicle: Vehicle, settings: DesignSettings) -> np.ndarray:
         """(q,) int: how many cameras of ``rig`` on ``vehicle`` see each point."""

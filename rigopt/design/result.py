@@ -121,3 +121,6 @@ class DesignResult:
     tolerance_widened: tuple[tuple[str, float], ...] = ()
     """(reference camera id, factor): the reference cameras no mount keeps within the pose tolerance, with the
     factor their tolerance was widened by (inf: matched without it)."""
+    near_field_mirrored: bool = False
+    """Whether the near-field cameras were placed in mirrored pairs (with the perception cameras or, under
+    ``perception_symmetric=False``, without them)."""

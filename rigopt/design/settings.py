@@ -244,6 +244,10 @@ class DesignSettings:
     symmetric: bool | None = None
     """Cameras in mirrored pairs across y = 0 or on the centreline: None on a mirror-symmetric vehicle
     (:mod:`rigopt.vehicle.symmetry`), True always, False never (``--asymmetric``)."""
+    perception_symmetric: bool = True
+    """False: the perception cameras are placed freely while the near-field cameras keep their mirrored pairs
+    (``--free-perception``): the reference's own layout, which a mirrored body may not offer at the nearest pose
+    (a low rear camera beside a fire truck's tailboard)."""
     match_height_m: float | None = None
     """Pose tolerance of the perception cameras (``--match-height``): each may be matched only to a reference
     camera whose height above the ground is within this many metres of its own (None: any). A lifting
@@ -275,6 +279,10 @@ class DesignSettings:
     def is_symmetric_on(self, vehicle) -> bool:
         """Whether a design on ``vehicle`` places its cameras in mirrored pairs."""
         return vehicle.symmetry.symmetric if self.symmetric is None else bool(self.symmetric)
+
+    def perception_mirrored_on(self, vehicle) -> bool:
+        """Whether a design on ``vehicle`` places its perception cameras in mirrored pairs."""
+        return self.is_symmetric_on(vehicle) and (self.perception_symmetric or not self.near_field)
 
     def __post_init__(self):
         object.__setattr__(self, "lenses", catalogue_of(self.lenses))

@@ -1,9 +1,11 @@
 """Calibrated RigCD: fit non-negative weights that turn rig-pair features into predicted mAP drops.
 
 Features of a pair (A, B) are the unit-weight RigCD components ``x = (t, r, f, count)`` (m, rad, deg, -).
-The model ``delta_hat = beta . x`` with ``beta >= 0`` is fitted by least squares twice: with L-BFGS-B
-from ``beta0 = (0.5, 0.5, 0.5, 0.5)`` (the benchmark's method) and as a convex QP with cvxpy + HiGHS
-(Clarabel where HiGHS fails), whose optimum certifies the first (they must agree). The fit is reported as
+The model ``delta_hat = beta . x`` with ``beta >= 0`` is a non-negative least squares, fitted twice
+(:func:`fit_both`): with L-BFGS-B from ``beta0 = (0.5, 0.5, 0.5, 0.5)`` (the benchmark's method, kept to
+reproduce its published weights) and exactly with scipy's NNLS (Lawson-Hanson active set: the optimum of the
+convex QP, exact zeros, named ``qp`` in the reports), which certifies the first (they must agree). The fit is
+reported as
 
     avg = (beta_t + beta_r + beta_f) / 3,  K = avg + beta_count,  alpha = avg / K,  lambda_x = beta_x / avg
     delta_hat = K (alpha (lt x_t + lr x_r + lf x_f) + (1 - alpha) x_count)
@@ -188,11 +190,42 @@ def pair_features(rigs: Sequence[Rig], train: Sequence[str], test: Sequence[str]
 
 
 @dataclass(frozen=True)
+class NonnegFit:
+    """``min sum (beta . x - delta)^2`` subject to ``beta >= 0`` on n pairs, solved both ways and compared.
+
+    ``beta_qp`` (k,) float: the exact optimum (:func:`fit_nnls`; ``qp``, the convex QP's optimum, in the
+    reports); ``beta_lbfgsb`` (k,) float: L-BFGS-B from BETA0 (:func:`fit_lbfgsb`, the benchmark's method);
+    their objectives (sums of squared residuals); ``agrees``: objectives within AGREEMENT_OBJECTIVE_RTOL
+    (relative) and betas within AGREEMENT_BETA_ATOL.
+    """
+
+    beta_qp: np.ndarray
+    beta_lbfgsb: np.ndarray
+    objective_qp: float
+    objective_lbfgsb: float
+    agrees: bool
+    n: int
+
+    @property
+    def objectives_agree(self) -> bool:
+        """The two objectives agree (relative AGREEMENT_OBJECTIVE_RTOL), whether or not the betas do: betas
+        that differ at equal objectives mean a non-unique optimum (e.g. a feature that is 0 on every pair)."""
+        return _objectives_agree(self.objective_lbfgsb, self.objective_qp)
+
+    def beta(self, solver: str) -> np.ndarray:
+        """(k,) float: the betas of ``solver`` (one of FIT_SOLVERS)."""
+        if solver not in FIT_SOLVERS:
+            raise RigoptError(f"unknown fit solver {solver!r}; use one of {', '.join(FIT_SOLVERS)}")
+        return self.beta_qp if solver == "qp" else self.beta_lbfgsb
+
+
+@dataclass(frozen=True)
 class CalibrationFit:
     """The two fits of one calibration set and the reported weights.
 
     ``calibration`` uses ``beta_lbfgsb`` or ``beta_qp`` as chosen by ``solver``; ``qp_agrees`` tells
-    whether both optima agree within AGREEMENT_OBJECTIVE_RTOL / AGREEMENT_BETA_ATOL. ``n`` pairs.
+    whether both optima agree within AGREEMENT_OBJECTIVE_RTOL / AGREEMENT_BETA_ATOL (:class:`NonnegFit`).
+    ``n`` pairs.
     """
 
     calibration: Calibration
@@ -210,9 +243,22 @@ def _objective(beta, features, delta) -> float:
     return float(residual @ residual)
 
 
+def _objectives_agree(objective_a, objective_b) -> bool:
+    return bool(abs(objective_a - objective_b) <= AGREEMENT_OBJECTIVE_RTOL * max(objective_b, 1e-12))
+
+
+def _checked(features, delta, what: str) -> tuple[np.ndarray, np.ndarray]:
+    features, delta = np.asarray(features, dtype=float), np.asarray(delta, dtype=float)
+    if features.ndim != 2 or features.shape[0] != len(delta) or len(delta) == 0:
+        raise DataError(f"{what} needs features (P, k) and delta (P,) with P >= 1, got {features.shape} and "
+                        f"{delta.shape}")
+    return features, delta
+
+
 def fit_lbfgsb(features: np.ndarray, delta: np.ndarray) -> np.ndarray:
     """beta >= 0 minimising sum (beta . x - delta)^2 by L-BFGS-B from BETA0 (0.5 for every feature);
-    features (P, k) (k = 4 for RigCD), delta (P,)."""
+    features (P, k) (k = 4 for RigCD), delta (P,). The benchmark's method: it reproduces the published weights
+    (a weight that no pair informs stays at its start 0.5); :func:`fit_nnls` is the exact optimum."""
     from scipy.optimize import minimize
 
     def value_and_gradient(beta):
@@ -225,59 +271,41 @@ def fit_lbfgsb(features: np.ndarray, delta: np.ndarray) -> np.ndarray:
     return result.x
 
 
-def fit_qp(features: np.ndarray, delta: np.ndarray) -> np.ndarray:
-    """The same least squares with beta >= 0 as a convex QP: cvxpy + HiGHS (active set: exact zeros), or
-    Clarabel (interior point) where HiGHS fails, as its QP solver does on some well-posed problems."""
-    import cvxpy as cp
-
-    from rigopt.quiet import HIGHS_OPTIONS, quiet_highs
-
-    quiet_highs()
-    beta = cp.Variable(features.shape[1], nonneg=True)
-    problem = cp.Problem(cp.Minimize(cp.sum_squares(features @ beta - delta)))
-    for solver, options in ((cp.HIGHS, HIGHS_OPTIONS), (cp.CLARABEL, {})):
-        try:
-            problem.solve(solver=solver, **options)
-        except cp.error.SolverError:
-            continue
-        if problem.status == cp.OPTIMAL:
-            return np.maximum(beta.value, 0.0)
-    raise RigoptError(f"the calibration QP did not solve to optimality (status {problem.status})")
-
-
-def fit_exact(features: np.ndarray, delta: np.ndarray) -> np.ndarray:
+def fit_nnls(features: np.ndarray, delta: np.ndarray) -> np.ndarray:
     """(k,) float: the exact optimum of the same least squares with beta >= 0, by scipy's active-set
-    non-negative least squares (Lawson-Hanson) on features (P, k), delta (P,). Its optimum is the QP's
-    (:func:`fit_qp`) without a modelling layer; a weight that no pair informs (a feature that is 0 on every
-    pair) is 0, where L-BFGS-B leaves it at its start 0.5. The leave-one-rig-out refits of the prediction
-    interval use it (``protocol.fold_calibration``); the reported weights keep the benchmark's L-BFGS-B."""
+    non-negative least squares (Lawson-Hanson) on features (P, k), delta (P,): the convex QP's optimum, with
+    exact zeros; a weight that no pair informs (a feature that is 0 on every pair) is 0. The certified side of
+    every fit (:func:`fit_both`) and the leave-one-rig-out refits of the prediction interval
+    (``protocol.fold_calibration``)."""
     from scipy.optimize import nnls
 
-    features, delta = np.asarray(features, dtype=float), np.asarray(delta, dtype=float)
-    if features.ndim != 2 or features.shape[0] != len(delta) or len(delta) == 0:
-        raise DataError(f"fit_exact needs features (P, k) and delta (P,) with P >= 1, got {features.shape} and "
-                        f"{delta.shape}")
+    features, delta = _checked(features, delta, "fit_nnls")
     beta, _ = nnls(features, delta, maxiter=50 * features.shape[1])
     return beta
 
 
+def fit_both(features, delta) -> NonnegFit:
+    """Fit delta (P,) on features (P, k) both ways (:func:`fit_nnls`, :func:`fit_lbfgsb`) and compare."""
+    features, delta = _checked(features, delta, "a calibration fit")
+    beta_q, beta_l = fit_nnls(features, delta), np.asarray(fit_lbfgsb(features, delta), dtype=float)
+    obj_q, obj_l = _objective(beta_q, features, delta), _objective(beta_l, features, delta)
+    agrees = _objectives_agree(obj_l, obj_q) and bool(np.max(np.abs(beta_l - beta_q)) <= AGREEMENT_BETA_ATOL)
+    return NonnegFit(beta_q, beta_l, obj_q, obj_l, agrees, len(delta))
+
+
 def fit_calibration(features: np.ndarray, delta: np.ndarray, name: str, solver: str = "lbfgsb") -> CalibrationFit:
-    """Fit beta both ways, check they agree, and reparameterise the ``solver``'s one.
+    """Fit beta both ways (:func:`fit_both`), check they agree, and reparameterise the ``solver``'s one.
 
     features : (P, 4) float unit-weight features; delta : (P,) float relative drops.
     """
     if solver not in FIT_SOLVERS:
         raise RigoptError(f"unknown fit solver {solver!r}; use one of {', '.join(FIT_SOLVERS)}")
-    features, delta = np.asarray(features, dtype=float), np.asarray(delta, dtype=float)
     if len(delta) == 0:
         raise DataError(f"no calibration pairs for {name!r}: check the control rigs and the results")
-    beta_l, beta_q = fit_lbfgsb(features, delta), fit_qp(features, delta)
-    obj_l, obj_q = _objective(beta_l, features, delta), _objective(beta_q, features, delta)
-    agrees = bool(abs(obj_l - obj_q) <= AGREEMENT_OBJECTIVE_RTOL * max(obj_q, 1e-12)
-                  and np.max(np.abs(beta_l - beta_q)) <= AGREEMENT_BETA_ATOL)
-    chosen = beta_l if solver == "lbfgsb" else beta_q
-    return CalibrationFit(reparameterise(chosen, name), solver, tuple(map(float, beta_l)), tuple(map(float, beta_q)),
-                          obj_l, obj_q, agrees, len(delta))
+    fits = fit_both(features, delta)
+    return CalibrationFit(reparameterise(fits.beta(solver), name), solver, tuple(map(float, fits.beta_lbfgsb)),
+                          tuple(map(float, fits.beta_qp)), fits.objective_lbfgsb, fits.objective_qp, fits.agrees,
+                          fits.n)
 
 
 # --- Weights files: shipped calibrations and the user's own JSON ---------------------------------------

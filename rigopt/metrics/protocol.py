@@ -19,7 +19,7 @@ import numpy as np
 
 from rigopt.errors import DataError, RigoptError
 from rigopt.metrics.calibration import (LIFTING_METRICS, UNIT_LAMBDAS, Calibration, CalibrationFit, check_metric,
-                                       fit_calibration, fit_exact, pair_features, reparameterise)
+                                       fit_calibration, fit_nnls, pair_features, reparameterise)
 from rigopt.metrics.matched_fit import fit_rematched
 from rigopt.metrics.prediction import (IntervalReport, LinkChoice, choose_link, domain_of, interval_report,
                                        rig_folds)
@@ -270,12 +270,12 @@ def _interval_heldout(pairs: PairPredictions, calibration: Calibration,
 
 def fold_calibration(x: np.ndarray, delta: np.ndarray, name: str) -> Calibration:
     """The linear weights of one leave-one-rig-out fold: the exact non-negative least squares optimum
-    (:func:`rigopt.metrics.calibration.fit_exact`) on the fold's pairs, x (n, 4), delta (n,), reparameterised
+    (:func:`rigopt.metrics.calibration.fit_nnls`) on the fold's pairs, x (n, 4), delta (n,), reparameterised
     as every fit is (the fallback included), whatever solver the reported weights use. L-BFGS-B from 0.5 would
     leave a weight that the fold's pairs cannot inform at its start value (beta_f when R1-f, the one control rig
     with another FOV, is left out: every remaining pair has f = 0) and so predict the left-out rig's pairs from a
     weight no data chose; the exact optimum sets it to 0."""
-    return reparameterise(fit_exact(x, delta), name)
+    return reparameterise(fit_nnls(x, delta), name)
 
 
 def _with_link(fit: CalibrationFit, features: np.ndarray, mask: np.ndarray, drops: TransferDrops,

@@ -13,14 +13,21 @@ function the designer's MILP uses. Rotations are compared through unit quaternio
 (:func:`rigopt.geometry.quaternion_angle`): the same geodesic angle as the definition's arccos of a trace,
 but exact near 0 and pi, so RigCD(A, A) is exactly 0.
 
-Speed (``benchmarks/rigcd_speed.py``): pairs are grouped by camera counts; each group's costs are one array
-expression over (G, N_A, N_B) and only the exact assignment (scipy's ``linear_sum_assignment``, the
-reference's solver, so the same choice among tied matchings) runs per pair.
+Speed (``benchmarks/rigcd_speed.py``): pairs are grouped by camera counts and each group (in chunks of at most
+CHUNK pairs) is gathered straight from the rigs' cached column blocks into one (8, N, G) array; its costs are
+one array expression per component over (N_A, N_B, G), written into reused buffers (:func:`group_costs`, the
+same operations as :func:`column_costs`, so the same bits); only the exact assignment runs per pair. The
+assignment is scipy's ``linear_sum_assignment`` on the wide orientation of each cost matrix (what scipy
+itself solves for a tall one), so every pairing, ties included, is scipy's. A lockstep
+shortest-augmenting-path solver over all pairs at once in numpy reproduced scipy's pairings bit for bit but
+took about 5x the per-pair loop's time (about 15 augmenting steps per 6-10-camera pair, each a dozen array
+operations; docs/benchmarks.md), so the per-pair solve stays.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from operator import attrgetter, itemgetter
 from typing import Sequence
 
 import numpy as np
@@ -32,6 +39,7 @@ from rigopt.rig.model import FOV, POSITION, QUATERNION, Rig, camera_columns
 
 DEFAULT_ALPHA = 0.9
 DEFAULT_LAMBDAS = (1.0, 1.0, 1.0)
+_SECOND = itemgetter(1)  # the column indices of linear_sum_assignment's (rows, cols)
 
 
 def camera_costs(positions_a, rotations_a, fovs_a, positions_b, rotations_b, fovs_b):
@@ -44,7 +52,6 @@ def camera_costs(positions_a, rotations_a, fovs_a, positions_b, rotations_b, fov
     a = camera_columns(positions_a, rotations_a, fovs_a)[..., :, None]  # (8, ..., Na, 1)
     b = camera_columns(positions_b, rotations_b, fovs_b)[..., None, :]  # (8, ..., 1, Nb)
     return column_costs(a, b)
-
 
 
 def column_costs(a, b):
@@ -122,7 +129,9 @@ class RigBatch:
 
     columns : (8, C) float, the C cameras of all rigs as :func:`rigopt.rig.model.camera_columns` (position m,
     unit quaternion, FOV deg); counts : (n,) int cameras per rig, each >= 1; rig k owns columns
-    ``offsets[k] : offsets[k] + counts[k]``.
+    ``offsets[k] : offsets[k] + counts[k]``. A batch built by :meth:`from_rigs` keeps the rigs' own (8, N_k)
+    blocks and concatenates them only when ``columns`` is read: the core gathers each camera-count group
+    straight from the blocks.
     """
 
     def __init__(self, columns, counts):
@@ -130,23 +139,39 @@ class RigBatch:
         if self.counts.ndim != 1 or len(self.counts) == 0 or np.any(self.counts < 1):
             raise RigoptError("a rig batch needs at least one rig and at least one camera per rig")
         self.offsets = np.cumsum(self.counts) - self.counts
-        self.columns = np.ascontiguousarray(columns, dtype=float)
-        if self.columns.shape != (8, int(self.counts.sum())):
-            raise RigoptError(f"rig batch columns must be (8, {int(self.counts.sum())}), got {self.columns.shape}")
+        self._blocks = None
+        self._columns = np.ascontiguousarray(columns, dtype=float)
+        if self._columns.shape != (8, int(self.counts.sum())):
+            raise RigoptError(f"rig batch columns must be (8, {int(self.counts.sum())}), got {self._columns.shape}")
 
     @classmethod
     def from_rigs(cls, rigs: Sequence[Rig]) -> "RigBatch":
         """The batch of ``rigs``, in order (each rig's columns are built once and cached on the rig)."""
         if len(rigs) == 0:
             raise RigoptError("no rigs given; pass at least one rig")
-        return cls(np.concatenate([rig.columns for rig in rigs], axis=1), [len(rig.cameras) for rig in rigs])
+        batch = cls.__new__(cls)  # the blocks are the rigs' own checked columns: nothing to validate or copy
+        batch._blocks = list(map(attrgetter("columns"), rigs))
+        batch._columns = None
+        batch.counts = np.fromiter(map(len, map(attrgetter("cameras"), rigs)), dtype=int, count=len(rigs))
+        batch.offsets = np.cumsum(batch.counts) - batch.counts
+        return batch
+
+    @property
+    def columns(self) -> np.ndarray:
+        """(8, C) float: every camera of the batch, rig after rig."""
+        if self._columns is None:
+            self._columns = np.concatenate(self._blocks, axis=1)
+        return self._columns
 
     def __len__(self) -> int:
         return len(self.counts)
 
     def gather(self, index: np.ndarray, n: int) -> np.ndarray:
-        """Columns of the cameras of rigs ``index`` (G,), all with ``n`` cameras: (8, n, G) float, the rigs
-        on the last axis (long, contiguous inner loops for the pairwise costs)."""
+        """Columns of the cameras of rigs ``index`` (G,), all with ``n`` cameras: (8, n, G) float, contiguous,
+        the rigs on the last axis (long, contiguous inner loops for the pairwise costs)."""
+        if self._blocks is not None:
+            stacked = np.array(list(map(self._blocks.__getitem__, index.tolist())))  # (G, 8, n)
+            return np.ascontiguousarray(stacked.transpose(1, 2, 0))
         return self.columns[:, self.offsets[index] + np.arange(n)[:, None]]
 
 
@@ -160,12 +185,84 @@ def check_same_origin(*groups) -> None:
     groups : sequences of Rig (a prebuilt RigBatch carries no origins and is skipped). Convert first with
     :func:`rigopt.vehicle.placement.common_frame`, which knows the vehicles.
     """
-    origins = {rig.origin for group in groups if not isinstance(group, RigBatch) for rig in group}
+    rigs = [group for group in groups if not isinstance(group, RigBatch)]
+    # Rigs mostly share one origin object: compare values only when there are several objects.
+    if len(set().union(*(map(id, map(attrgetter("origin"), group)) for group in rigs))) < 2:
+        return
+    origins = {rig.origin for group in rigs for rig in group}
     if len(origins) > 1:
         named = sorted(o.describe() for o in origins)
         raise RigoptError(f"the rigs measure camera positions from different origins ({', '.join(named)}); RigCD "
                           "would mix reference points: convert them to one frame first "
                           "(rigopt.vehicle.placement.common_frame, or --vehicle on the command line)")
+
+
+def _sum_of_squares_into(out, square, combine, a, b):
+    """out = sum_k combine(a[k], b[k]) ** 2, added in index order as :func:`rigopt.geometry.sum_of_squares`
+    (so the same bits); a, b : (k, ...) broadcastable float; out, square : buffers of the broadcast shape."""
+    combine(a[0], b[0], out=out)
+    np.multiply(out, out, out=out)
+    for k in range(1, len(a)):
+        combine(a[k], b[k], out=square)
+        np.multiply(square, square, out=square)
+        out += square
+    return out
+
+
+def group_costs(a, b, lambdas):
+    """Costs of every camera of each rig of a group against every camera of its partner.
+
+    a : (8, Na, G), b : (8, Nb, G) float camera columns (:meth:`RigBatch.gather`); lambdas (lt, lr, lf).
+    Returns (t m, r rad, f deg, cost), each (Na, Nb, G) float, ``cost = lt t + lr r + lf f``: the same
+    operations as :func:`column_costs` and :func:`rigopt.geometry.quaternion_angle`, element by element, so
+    the same bits, computed into buffers one component at a time (no (4, Na, Nb, G) temporaries).
+    """
+    lt, lr, lf = lambdas
+    a, b = a[:, :, None, :], b[:, None, :, :]
+    shape = (a.shape[1], b.shape[2], a.shape[3])
+    t, r, f, cost, work, square = (np.empty(shape) for _ in range(6))
+    np.sqrt(_sum_of_squares_into(t, square, np.subtract, a[POSITION], b[POSITION]), out=t)
+    d2 = _sum_of_squares_into(cost, square, np.subtract, a[QUATERNION], b[QUATERNION])
+    s2 = _sum_of_squares_into(f, square, np.add, a[QUATERNION], b[QUATERNION])
+    np.sqrt(np.minimum(d2, s2, out=work), out=work)
+    np.sqrt(np.maximum(d2, s2, out=square), out=square)
+    np.multiply(np.arctan2(work, square, out=r), 4.0, out=r)
+    np.abs(np.subtract(a[FOV], b[FOV], out=f), out=f)
+    # lt t + lr r + lf f, added in that order; x 1 is exact, so the default weights skip the products
+    np.add(t if lt == 1.0 else np.multiply(t, lt, out=cost), r if lr == 1.0 else np.multiply(r, lr, out=work),
+           out=cost)
+    cost += f if lf == 1.0 else np.multiply(f, lf, out=work)
+    return t, r, f, cost
+
+
+def assign_group(cost):
+    """Minimum-cost matchings of a group: scipy's ``linear_sum_assignment`` per pair, exactly as one call on
+    each (Na, Nb) matrix would answer.
+
+    cost : (Na, Nb, G) float. Returns (rows, cols), each (G, M) int with M = min(Na, Nb): camera indices in A
+    and in B of the matched pairs, sorted by the A index (scipy's order). A tall matrix (Na > Nb) is solved
+    as its transpose, which is what scipy does inside, and the pairs are then sorted by A as scipy sorts them.
+    """
+    na, nb, g = cost.shape
+    if na <= nb:
+        wide = np.ascontiguousarray(cost.transpose(2, 0, 1))  # (G, Na, Nb)
+        cols = np.concatenate(list(map(_SECOND, map(linear_sum_assignment, wide)))).reshape(g, na)
+        return np.tile(np.arange(na), (g, 1)), cols
+    wide = np.ascontiguousarray(cost.transpose(2, 1, 0))  # (G, Nb, Na): B's cameras as rows
+    matched_a = np.concatenate(list(map(_SECOND, map(linear_sum_assignment, wide)))).reshape(g, nb)
+    cols = np.argsort(matched_a, axis=1)
+    return np.take_along_axis(matched_a, cols, axis=1), cols
+
+
+#: Most pairs whose costs are computed in one step (their buffers, 6 x N_A x N_B x this many floats, stay in cache).
+CHUNK = 512
+
+
+def _chunk_bounds(start: int, end: int):
+    """(start, end) of consecutive runs of at most CHUNK items covering start:end, near-equal in size."""
+    pieces = -(-(end - start) // CHUNK)
+    cuts = start + (np.arange(pieces + 1) * (end - start)) // pieces
+    return zip(cuts[:-1].tolist(), cuts[1:].tolist())
 
 
 def match_pairs(pack_a: RigBatch, index_a, pack_b: RigBatch, index_b, alpha: float, lambdas,
@@ -179,6 +276,7 @@ def match_pairs(pack_a: RigBatch, index_a, pack_b: RigBatch, index_b, alpha: flo
     (rows (M,), cols (M,)) int camera indices per pair, else None.
     """
     lt, lr, lf = lambdas
+    index_a, index_b = np.asarray(index_a), np.asarray(index_b)
     n_pairs = len(index_a)
     out = {key: np.zeros(n_pairs) for key in ("t", "r", "f")}
     na_all, nb_all = pack_a.counts[index_a], pack_b.counts[index_b]
@@ -186,16 +284,16 @@ def match_pairs(pack_a: RigBatch, index_a, pack_b: RigBatch, index_b, alpha: flo
     key = na_all * (int(nb_all.max()) + 1) + nb_all  # one int per (N_A, N_B)
     order = np.argsort(key, kind="stable")
     starts = np.flatnonzero(np.r_[True, np.diff(key[order]) != 0])
-    for group in np.split(order, starts[1:]):
+    ends = np.r_[starts[1:], len(order)]
+    # Groups of one (N_A, N_B), cut into chunks whose buffers stay in cache (and memory bounded).
+    chunks = [order[s:e] for start, end in zip(starts, ends) for s, e in _chunk_bounds(start, end)]
+    for group in chunks:
         na, nb = int(na_all[group[0]]), int(nb_all[group[0]])
-        ia, ib = index_a[group], index_b[group]
-        a, b = pack_a.gather(ia, na)[:, :, None, :], pack_b.gather(ib, nb)[:, None, :, :]
-        t, r, f = column_costs(a, b)  # each (na, nb, G)
-        cost = np.ascontiguousarray(np.moveaxis(lt * t + lr * r + lf * f, -1, 0))  # (G, na, nb)
-        rows, cols = np.moveaxis(np.array([linear_sum_assignment(c) for c in cost]), 1, 0)  # each (G, M)
-        take = np.arange(len(group))[:, None]
+        t, r, f, cost = group_costs(pack_a.gather(index_a[group], na), pack_b.gather(index_b[group], nb), lambdas)
+        rows, cols = assign_group(cost)  # each (G, M)
+        flat = (rows * nb + cols) * len(group) + np.arange(len(group))[:, None]  # into (Na, Nb, G)
         for key, values in (("t", t), ("r", r), ("f", f)):
-            out[key][group] = values[rows, cols, take].mean(axis=1)
+            out[key][group] = values.ravel().take(flat).mean(axis=1)
         if keep_assignment:
             for g, p in enumerate(group):
                 assignments[p] = (rows[g], cols[g])

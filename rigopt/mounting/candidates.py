@@ -20,7 +20,6 @@ from rigopt.mounting.features import segments_hit_swings, trailer_swings
 from rigopt.mounting.practice import keep_out_boxes, segments_hit_boxes
 from rigopt.mounting.rules import MountRules
 from rigopt.mounting.sampling import DEFAULT_SPACING, sample_zone_points
-from rigopt.raycast import first_hit_distance
 from rigopt.rig.model import DEFAULT_IMAGE_SIZE
 from rigopt.vehicle.model import Vehicle
 
@@ -65,7 +64,7 @@ def clear_directions(vehicle: Vehicle, points, yaws, pitches, lens: float | Lens
     n, shape = len(points), rays.shape[:3]
     origins = points[:, None, None, None, :] + rules.near * rays[None]  # (n, k, m, r, 3)
     directions = np.broadcast_to(rays[None], origins.shape)
-    distance = first_hit_distance(vehicle.mesh, origins.reshape(-1, 3), directions.reshape(-1, 3))
+    distance = vehicle.ray_caster.first_hit_distance(origins.reshape(-1, 3), directions.reshape(-1, 3))
     hit = distance <= rules.frustum_range - rules.near
     # keep-outs that block views, e.g. a coupled trailer
     blockers = keep_out_boxes(vehicle, rules.practice.lifted, occluding_only=True) if rules.practice.enabled else []
@@ -106,5 +105,5 @@ def body_fraction(vehicle: Vehicle, positions, rotations, model: CameraModel, gr
     rays = model.grid_rays(grid)  # (n, g, 3) camera body frame
     directions = np.einsum("nij,ngj->ngi", np.asarray(rotations, dtype=float), rays)
     origins = np.asarray(positions, dtype=float)[:, None, :] + 0.02 * directions
-    distance = first_hit_distance(vehicle.mesh, origins.reshape(-1, 3), directions.reshape(-1, 3))
+    distance = vehicle.ray_caster.first_hit_distance(origins.reshape(-1, 3), directions.reshape(-1, 3))
     return (distance.reshape(directions.shape[:2]) <= BODY_RANGE_M).mean(axis=1)

@@ -37,7 +37,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from rigopt import raycast
 from rigopt.mounting.features import trailer_swings
 from rigopt.mounting.practice import DEFAULT_HOUSING, MountPractice, duplicates, keep_out_boxes, practice_problems
 from rigopt.mounting.shapes import collides, frustum_object, housing_object, surface_frame
@@ -110,7 +109,7 @@ def raised_mounts(vehicle: Vehicle, positions) -> list[RaisedMount | None]:
     positions = np.atleast_2d(positions)
     found: list[RaisedMount | None] = [None] * len(positions)
     for zone in (z for z in vehicle.zones if z.raised):
-        hits = raycast.first_hits(vehicle.mesh, positions, np.broadcast_to(-zone.normal, positions.shape))
+        hits = vehicle.ray_caster.first_hits(positions, np.broadcast_to(-zone.normal, positions.shape))
         normals = vehicle.mesh.face_normals[np.maximum(hits.face, 0)]
         ok = (hits.distance <= zone.raised_max) & (hits.face >= 0)
         for k in np.flatnonzero(ok):

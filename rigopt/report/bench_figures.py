@@ -7,8 +7,8 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from rigopt.bench.dataset import TrainingSample
-from rigopt.bench.scene_model import CLASSES, Boxes
+from rigopt.validation.synthetic.dataset import TrainingSample
+from rigopt.validation.synthetic.scene_model import CLASSES, Boxes
 
 #: Edges of a box over the corner order of ``ego_corners`` (bottom four, then top four).
 _EDGES = [(0, 1), (1, 2), (2, 3), (3, 0), (4, 5), (5, 6), (6, 7), (7, 4), (0, 4), (1, 5), (2, 6), (3, 7)]

@@ -17,10 +17,8 @@ from rigopt.coverage.measures import CoverageComparison, CoverageReport
 from rigopt.report.coverage_figures import (
     bev_figure,
     blind_figure,
-    camera_field_rows,
     comparison_dict,
     figure_png,
-    regions_dict,
     regions_figure,
     report_dict,
     rings_figure,
@@ -29,6 +27,7 @@ from rigopt.report.coverage_figures import (
     write_regions_figure,
     write_rings_figure,
 )
+from rigopt.report.coverage_tables import camera_field_rows, regions_dict
 from rigopt.report.html_page import escape, image, num, page, pct, table
 from rigopt.report.json_values import json_ready
 from rigopt.rig.model import Rig

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from rigopt.background import INLINE, Background
 from rigopt.design.result import DesignResult, RigSummary
 from rigopt.report.json_values import json_ready
 from rigopt.rig.model import Rig
@@ -113,10 +114,13 @@ def symmetry_dict(result: DesignResult) -> dict:
     """The design's mirror symmetry: whether it was asked for, the vehicle's, and the pairs it has."""
     symmetry = rig_symmetry(result.design.rig)
     asked = result.settings.is_symmetric_on(result.vehicle)
+    free_perception = result.near_field_mirrored and not asked
     describe = (symmetry.describe() if asked else result.symmetry_fallback
-                or f"symmetry not required ({symmetry.describe()})")
+                or (f"perception cameras placed freely, near-field cameras in mirrored pairs ({symmetry.describe()})"
+                    if free_perception else f"symmetry not required ({symmetry.describe()})"))
     return {"required": asked, "vehicle": result.vehicle.symmetry.describe(), **symmetry.to_dict(),
-            "fallback": result.symmetry_fallback, "describe": describe}
+            "near_field_mirrored": result.near_field_mirrored, "fallback": result.symmetry_fallback,
+            "describe": describe}
 
 
 def design_dict(result: DesignResult, rig_file: Path | None) -> dict:
@@ -124,7 +128,7 @@ def design_dict(result: DesignResult, rig_file: Path | None) -> dict:
     ``frame`` (ISO 8855 from the ground below the rear axle's centre, :func:`frame_dict`): the cameras'
     poses and the ``packaging`` sheets (:func:`packaging_rows`); CARLA's frame is only the rig file's."""
     from rigopt.metrics.rigcd import rigcd
-    from rigopt.report.coverage_figures import regions_dict
+    from rigopt.report.coverage_tables import regions_dict
 
     design, milp, comparisons = result.design, result.milp, result.comparisons
     reference = result.references[0].rig
@@ -202,41 +206,59 @@ def comparison_notes(summary: dict) -> list[str]:
             + ("; --require none designs without the fields" if fields else "")]
 
 
-def write_design_outputs(result: DesignResult, out_dir) -> list[Path]:
-    """Write rig.json (benchmark format), report.json, the pictures (with the regulation fields over the
-    near-field blind zones, fields.png) and report.html (with the interactive 3D view of the design on its
-    vehicle, the fields on the ground and the reference rig in grey when it sits on the same vehicle) into
-    ``out_dir``. The reports name the rig file relative to their folder (``rig.json``), so that a report
-    holds no machine path and stays valid where the folder is moved.
-    """
-    from rigopt.coverage.measures import coverage_report, ring_report
+def write_design_pictures(vehicle, reference, design: Rig, naive: Rig | None, regions, out_dir) -> dict[str, Path]:
+    """The design's pictures in ``out_dir``: design.png, reference.png (``reference``, a ReferenceRig, on its own
+    vehicle), naive_transfer.png (``naive``, when there is one), coverage.png (the design's rings beside the
+    reference's) and, with ``regions`` (RegionCoverage), fields.png (the regulation fields over the near-field
+    blind zones). Returns {picture name: path}. A module-level function of picklable values: it may run in a
+    background worker."""
+    from rigopt.coverage.measures import ring_report
     from rigopt.report.coverage_figures import write_regions_figure, write_rings_figure
-    from rigopt.report.design_html import write_design_html
-    from rigopt.report.scene_3d import scene_html
     from rigopt.report.vehicle_figures import write_vehicle_figure
 
     out_dir = Path(out_dir)
+    pictures = {"design": write_vehicle_figure(vehicle, out_dir / "design.png", design),
+                "reference": write_vehicle_figure(reference.vehicle, out_dir / "reference.png", reference.rig)}
+    if naive is not None:
+        pictures["naive_transfer"] = write_vehicle_figure(vehicle, out_dir / "naive_transfer.png", naive)
+    design_coverage = ring_report(design, vehicle)
+    reference_coverage = ring_report(reference.rig, reference.vehicle)
+    pictures["coverage"] = write_rings_figure(design_coverage, out_dir / "coverage.png", compare=reference_coverage)
+    if regions:
+        pictures["fields"] = write_regions_figure(regions, design_coverage, out_dir / "fields.png", design)
+    return pictures
+
+
+def write_design_report(result: DesignResult, out_dir, background: Background = INLINE) -> tuple[list[Path], dict]:
+    """Write rig.json (benchmark format), report.json, the pictures (:func:`write_design_pictures`, in the
+    ``background`` worker when there is one, while the report and the 3D view are written here) and report.html
+    (with the interactive 3D view of the design on its vehicle, the fields on the ground and the reference rig in
+    grey when it sits on the same vehicle) into ``out_dir``. Returns (the files, the report's :func:`design_dict`).
+    The reports name the rig file relative to their folder (``rig.json``), so that a report holds no machine
+    path and stays valid where the folder is moved.
+    """
+    from rigopt.report.design_html import write_design_html
+    from rigopt.report.scene_3d import scene_html
+
+    out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
+    vehicle, naive = result.vehicle, result.comparisons.naive_transfer
+    pictures = background.submit(write_design_pictures, vehicle, result.references[0], result.design.rig,
+                                 naive.rig if naive is not None else None, result.regions, out_dir)
     rig_file = write_rig(result.design.rig, out_dir / "rig.json")
     summary = design_dict(result, Path(rig_file.name))  # named relative to the report's folder: no machine paths
     report = out_dir / "report.json"
     report.write_text(json.dumps(json_ready(summary), indent=2) + "\n")
-    vehicle, reference = result.vehicle, result.references[0]
-    pictures = {"design": write_vehicle_figure(vehicle, out_dir / "design.png", result.design.rig),
-                "reference": write_vehicle_figure(reference.vehicle, out_dir / "reference.png", reference.rig)}
-    if result.comparisons.naive_transfer is not None:
-        pictures["naive_transfer"] = write_vehicle_figure(vehicle, out_dir / "naive_transfer.png",
-                                                          result.comparisons.naive_transfer.rig)
-    design_coverage = ring_report(result.design.rig, vehicle)
-    reference_coverage = ring_report(reference.rig, reference.vehicle)
-    pictures["coverage"] = write_rings_figure(design_coverage, out_dir / "coverage.png", compare=reference_coverage)
-    if result.regions:
-        pictures["fields"] = write_regions_figure(result.regions, coverage_report(result.design.rig, vehicle),
-                                                  out_dir / "fields.png", result.design.rig)
     compared = next((r.rig for r in result.references if r.vehicle.name == vehicle.name), None)
     outlines = [(r.key, np.asarray(r.polygon.exterior.coords)[:, :2]) for r in result.regions
                 if r.polygon.geom_type == "Polygon"]
     scene = scene_html(vehicle, result.design.rig, compare=compared, lifted=result.settings.rules.practice.lifted,
                        regions=outlines, datum="rear_axle")
-    page = write_design_html(summary, out_dir, pictures, scene, compared.name if compared is not None else None)
-    return [rig_file, report, *pictures.values(), page]
+    drawn = pictures.result()
+    page = write_design_html(summary, out_dir, drawn, scene, compared.name if compared is not None else None)
+    return [rig_file, report, *drawn.values(), page], summary
+
+
+def write_design_outputs(result: DesignResult, out_dir, background: Background = INLINE) -> list[Path]:
+    """The files of :func:`write_design_report`."""
+    return write_design_report(result, out_dir, background)[0]

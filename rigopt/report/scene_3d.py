@@ -457,7 +457,7 @@ def scene_figure(vehicle: Vehicle, rig: Rig | None = None, *, regions: Sequence[
     The view opens framed on the vehicle (:func:`framed_scene`), the legend beside the scene."""
     import plotly.graph_objects as go
 
-    from rigopt.report.vehicle_figures import zone_colours
+    from rigopt.report.palette import zone_colours
 
     if not frustum_range > 0:
         raise RigoptError(f"the frustum range must be positive (m), got {frustum_range}")

@@ -10,20 +10,13 @@ from matplotlib.figure import Figure
 
 from rigopt.camera import vertical_fov
 from rigopt.geometry import clip_polygon
+from rigopt.report.palette import zone_colours
 from rigopt.rig.model import Rig
 from rigopt.vehicle.model import Vehicle
 
 #: Length (m) of the frustum wedges drawn for cameras.
 FRUSTUM_DRAW_LENGTH = 1.2
 _BODY_GREY = (0.78, 0.78, 0.80)
-
-
-def zone_colours(vehicle: Vehicle) -> dict[str, tuple]:
-    """The RGBA colour of each zone name (tab20, names sorted)."""
-    from matplotlib import colormaps
-
-    palette = colormaps["tab20"]
-    return {name: palette(k % 20) for k, name in enumerate(sorted({z.name for z in vehicle.zones}))}
 
 
 def _clip_to_box(polygon: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarray:

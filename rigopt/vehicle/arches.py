@@ -16,9 +16,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import trimesh
 
-from rigopt import raycast
+from rigopt.raycast import RayCaster
 
 #: Angular step (degrees) of the rays that trace an arch.
 ARCH_STEP_DEG = 5.0
@@ -81,8 +80,8 @@ def wheel_name(axles, centre) -> str:
     return f"x {centre[0]:.2f} m-{side} wheel"
 
 
-def trace_arches(mesh: trimesh.Trimesh, wheels, axles) -> tuple[WheelArch, ...]:
-    """Each wheel's arch on ``mesh``: ``wheels`` as (centre (3,), radius, width) m, ``axles`` x m front first."""
+def trace_arches(caster: RayCaster, wheels, axles) -> tuple[WheelArch, ...]:
+    """Each wheel's arch on the mesh of ``caster`` (the body's ray caster): ``wheels`` as (centre (3,), radius, width) m, ``axles`` x m front first."""
     angles = np.deg2rad(np.arange(-90.0, 90.0 + 1e-9, ARCH_STEP_DEG))
     directions = np.stack([np.sin(angles), np.zeros_like(angles), np.cos(angles)], axis=1)
     arches = []
@@ -91,7 +90,7 @@ def trace_arches(mesh: trimesh.Trimesh, wheels, axles) -> tuple[WheelArch, ...]:
         plane_y = float(centre[1] + side * (width / 2.0 - SECTION_INSET_M))
         axle = np.array([centre[0], plane_y, centre[2]])
         starts = axle + directions * (radius + 0.01)
-        hits = raycast.first_hits(mesh, starts, directions)
+        hits = caster.first_hits(starts, directions)
         found = (hits.face >= 0) & (hits.distance <= ARCH_REACH_M)
         edge = np.where(found, radius + 0.01 + hits.distance, np.inf)
         arches.append(WheelArch(wheel_name(axles, centre), np.asarray(centre, dtype=float), float(radius),

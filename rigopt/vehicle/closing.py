@@ -47,7 +47,7 @@ import trimesh
 from scipy import ndimage
 from scipy.spatial import cKDTree
 
-from rigopt import raycast
+from rigopt.raycast import RayCaster
 from rigopt.errors import DataError
 from rigopt.vehicle.voxel_grid import Grid, hit_votes, inside_votes, marching_tetrahedra
 
@@ -306,7 +306,8 @@ def closing_errors(original: trimesh.Trimesh, closed: trimesh.Trimesh, buried_st
     samples, face = trimesh.sample.sample_surface(original, count, seed=seed)
     normal = original.face_normals[face]
     step = max(buried_step, 1e-3)
-    buried = raycast.inside(closed, samples + step * normal) & raycast.inside(closed, samples - step * normal)
+    caster = RayCaster(closed)
+    buried = caster.inside(samples + step * normal) & caster.inside(samples - step * normal)
     samples = samples[~buried]
     if len(samples) == 0:
         return np.zeros(0), np.zeros((0, 3)), 1.0

@@ -8,7 +8,7 @@ from functools import cached_property
 import numpy as np
 import trimesh
 
-from rigopt import raycast
+from rigopt.raycast import RayCaster, resolve_backend
 from rigopt.vehicle.arches import WheelArch, trace_arches
 from rigopt.vehicle.build import build_mesh
 from rigopt.vehicle.footprint import Footprint
@@ -27,6 +27,61 @@ def infer_category(size) -> str:
     it is longer than HEAVY_LENGTH or taller than HEAVY_HEIGHT, else M1."""
     length, _, height = (float(v) for v in size)
     return "N3" if length > HEAVY_LENGTH or height > HEAVY_HEIGHT else "M1"
+
+
+def subdivide_to_size(vertices, faces, max_edge: float, max_iter: int = 10) -> tuple[np.ndarray, np.ndarray]:
+    """``trimesh.remesh.subdivide_to_size`` (every edge longer than ``max_edge`` m bisected at one shared midpoint,
+    until none is), the same vertices (j, 3) float and faces (q, 3) int in the same order, faster: each round
+    looks only at the faces the last round made (a face with no long edge is final, and its place in trimesh's
+    order is fixed: after the faces finished before it) and sorts only the long edges. vertices (n, 3) float m,
+    faces (m, 3) int."""
+    vertices = np.array(vertices, dtype=np.float64, copy=True)
+    active = np.array(faces, dtype=np.int64, copy=True)
+    done = []
+    for i in range(max_iter + 1):
+        corners = vertices[active]  # (f, 3, 3); edge k runs from corner k to corner k + 1 (either way: same length)
+        lengths = ((corners - corners[:, [1, 2, 0]]) ** 2).sum(axis=2) ** 0.5
+        long_edge = lengths > max_edge
+        if not long_edge.any():
+            break
+        if i >= max_iter:
+            raise ValueError("max_iter exceeded!")
+        # trimesh numbers the midpoints in the order of its edge keys (b << 32 | a for a sorted edge (a, b))
+        edges = np.sort(np.stack([active, active[:, [1, 2, 0]]], axis=2)[long_edge], axis=1)
+        unique, first, inverse = np.unique((edges[:, 1] << 32) | edges[:, 0], return_index=True, return_inverse=True)
+        face_mid = np.full(active.shape, -1, dtype=np.int64)
+        face_mid[long_edge] = inverse.reshape(-1) + len(vertices)
+        vertices = np.vstack((vertices, vertices[edges[first]].mean(axis=1)))
+        split = face_mid >= 0
+        count = split.sum(axis=1)
+        done.append(active[count == 0])
+        # the splits as trimesh makes them: one long edge, two, three
+        one = count == 1
+        j = np.argmax(split[one], axis=1)
+        r = np.arange(len(j))
+        f1, mid1 = active[one], face_mid[one]
+        a, b, c = f1[r, j], f1[r, (j + 1) % 3], f1[r, (j + 2) % 3]
+        p = mid1[r, j]
+        faces_one = np.column_stack((a, p, c, p, b, c)).reshape((-1, 3))
+        two = count == 2
+        j = (np.argmin(split[two], axis=1) + 1) % 3
+        r = np.arange(len(j))
+        f2, mid2 = active[two], face_mid[two]
+        a, b, c = f2[r, j], f2[r, (j + 1) % 3], f2[r, (j + 2) % 3]
+        p, q = mid2[r, j], mid2[r, (j + 1) % 3]
+        use_aq = (((vertices[a, :3] - vertices[q, :3]) ** 2).sum(axis=1)
+                  <= ((vertices[p, :3] - vertices[c, :3]) ** 2).sum(axis=1))[:, None]
+        corner = np.column_stack((p, b, q))
+        quad_a = np.where(use_aq, np.column_stack((a, p, q)), np.column_stack((a, p, c)))
+        quad_b = np.where(use_aq, np.column_stack((a, q, c)), np.column_stack((p, q, c)))
+        faces_two = np.vstack((corner, quad_a, quad_b))
+        three = count == 3
+        f3, mid3 = active[three], face_mid[three]
+        v0, v1, v2 = f3.T
+        m0, m1, m2 = mid3.T
+        faces_three = np.column_stack((v0, m0, m2, m0, v1, m1, m2, m1, v2, m0, m1, m2)).reshape((-1, 3))
+        active = np.vstack((faces_one, faces_two, faces_three)).astype(np.int64)
+    return vertices, np.vstack(done + [active])
 
 
 @dataclass(frozen=True)
@@ -50,7 +105,9 @@ class Zone:
     def contains(self, points, normals) -> np.ndarray:
         """(n,) bool: surface points (n, 3) m with outward normals (n, 3) inside the zone."""
         points, normals = np.atleast_2d(points), np.atleast_2d(normals)
-        inside = np.all((points >= self.min) & (points <= self.max), axis=1)
+        inside = (points[:, 0] >= self.min[0]) & (points[:, 0] <= self.max[0])
+        for axis in (1, 2):
+            inside &= (points[:, axis] >= self.min[axis]) & (points[:, axis] <= self.max[axis])
         return inside & (normals @ self.normal >= np.cos(np.deg2rad(self.cone_deg)) - 1e-12)
 
 
@@ -88,6 +145,15 @@ class Vehicle:
     def from_spec(cls, spec: VehicleSpec) -> "Vehicle":
         return cls(spec, build_mesh(spec))
 
+    def __getstate__(self) -> dict:
+        """A pickled vehicle (to a worker process) is its spec and its mesh's vertices and faces: its derived data,
+        and the mesh's own caches (a spatial index does not survive pickling), are built again where needed."""
+        return {"spec": self.spec, "vertices": np.asarray(self.mesh.vertices), "faces": np.asarray(self.mesh.faces)}
+
+    def __setstate__(self, state: dict) -> None:
+        object.__setattr__(self, "spec", state["spec"])
+        object.__setattr__(self, "mesh", trimesh.Trimesh(state["vertices"], state["faces"], process=False))
+
     @property
     def name(self) -> str:
         return self.spec.name
@@ -110,14 +176,15 @@ class Vehicle:
     def fine_mesh(self) -> trimesh.Trimesh:
         """The body subdivided to edges of at most ZONE_QUERY_EDGE m: zone membership is decided per face
         (centre and normal), so large flat faces of the built mesh are split first."""
-        vertices, faces = trimesh.remesh.subdivide_to_size(self.mesh.vertices, self.mesh.faces, ZONE_QUERY_EDGE)
+        vertices, faces = subdivide_to_size(self.mesh.vertices, self.mesh.faces, ZONE_QUERY_EDGE)
         return trimesh.Trimesh(vertices, faces, process=False)
 
     @cached_property
     def fine_face_zones(self) -> np.ndarray:
         """(F,) object: the zone name of each face of ``fine_mesh`` (first matching zone), None outside all."""
         fine = self.fine_mesh
-        return np.array(self.zone_names(fine.triangles_center, fine.face_normals), dtype=object)
+        names = np.array([z.name for z in self.zones] + [None], dtype=object)
+        return names[self.zone_indices(fine.triangles_center, fine.face_normals)]
 
     @cached_property
     def axles(self) -> tuple[float, ...]:
@@ -145,7 +212,7 @@ class Vehicle:
     @cached_property
     def wheel_arches(self) -> tuple[WheelArch, ...]:
         """Each wheel's arch traced on the mesh (:mod:`rigopt.vehicle.arches`), in the order of ``wheels``."""
-        return trace_arches(self.mesh, self.wheels, self.axles)
+        return trace_arches(self.ray_caster, self.wheels, self.axles)
 
     @property
     def legal_width(self) -> float:
@@ -169,6 +236,18 @@ class Vehicle:
     def symmetry(self) -> MirrorSymmetry:
         """How mirror-symmetric the body is across y = 0 (:mod:`rigopt.vehicle.symmetry`)."""
         return mirror_symmetry(self.mesh)
+
+    @cached_property
+    def ray_caster(self) -> RayCaster:
+        """The body's ray caster (:class:`rigopt.raycast.RayCaster`, the "auto" backend), built once."""
+        return RayCaster(self.mesh)
+
+    def caster(self, backend: str = "auto") -> RayCaster:
+        """The body's ray caster for ``backend``: :attr:`ray_caster` when the backend is the one "auto" picks,
+        else a caster of its own (built each call: another backend is for comparing backends)."""
+        if resolve_backend(backend) == self.ray_caster.backend:
+            return self.ray_caster
+        return RayCaster(self.mesh, backend)
 
     @cached_property
     def footprint(self) -> Footprint:
@@ -195,15 +274,26 @@ class Vehicle:
         """Nearest surface of ``points`` (n, 3) m; the sign of the distance comes from containment."""
         points = np.atleast_2d(np.asarray(points, dtype=float))
         foot, unsigned, face = trimesh.proximity.closest_point(self.mesh, points)
-        inside = raycast.inside(self.mesh, points)
+        inside = self.ray_caster.inside(points)
         normal = self.mesh.face_normals[face]
         return SurfaceQuery(foot, np.where(inside, -unsigned, unsigned), normal, face)
 
+    def zone_indices(self, points, normals) -> np.ndarray:
+        """(n,) int: the index in ``zones`` of the first zone containing each surface point (n, 3) with normal
+        (n, 3); -1 where none does."""
+        points, normals = np.atleast_2d(points), np.atleast_2d(normals)
+        order = np.argsort(points[:, 0], kind="stable")  # sorted by x, each zone tests the slice in its x range
+        points, normals = points[order], normals[order]
+        index = np.full(len(points), -1)
+        for k, zone in reversed(list(enumerate(self.zones))):  # the first zone is written last
+            near = slice(np.searchsorted(points[:, 0], zone.min[0], "left"),
+                         np.searchsorted(points[:, 0], zone.max[0], "right"))
+            index[near][zone.contains(points[near], normals[near])] = k
+        unsorted = np.empty_like(index)
+        unsorted[order] = index
+        return unsorted
+
     def zone_names(self, points, normals) -> list[str | None]:
         """Name of the first zone containing each surface point (n, 3) with normal (n, 3); None if none."""
-        points, normals = np.atleast_2d(points), np.atleast_2d(normals)
-        names: list[str | None] = [None] * len(points)
-        for zone in self.zones:
-            for k in np.flatnonzero(zone.contains(points, normals)):
-                names[k] = names[k] or zone.name
-        return names
+        names = [z.name for z in self.zones] + [None]
+        return [names[k] for k in self.zone_indices(points, normals)]

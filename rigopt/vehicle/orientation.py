@@ -36,6 +36,7 @@ import numpy as np
 import trimesh
 
 from rigopt.errors import DataError, RigoptError
+from rigopt.geometry import rot_z
 
 AXES = {"+x": (1, 0, 0), "-x": (-1, 0, 0), "+y": (0, 1, 0), "-y": (0, -1, 0), "+z": (0, 0, 1), "-z": (0, 0, -1)}
 #: Road-vehicle limits (m): length, width (without mirrors), height.
@@ -302,8 +303,9 @@ def _opposite(axis: str) -> str:
 
 def _turned(mesh: trimesh.Trimesh, quarter_turns: int) -> trimesh.Trimesh:
     """The mesh turned about z by ``quarter_turns`` x 90 degrees so that its +y axis becomes +x."""
-    turned = mesh.copy()
-    turned.apply_transform(trimesh.transformations.rotation_matrix(-np.pi / 2 * quarter_turns, [0, 0, 1]))
+    turned, transform = mesh.copy(), np.eye(4)
+    transform[:3, :3] = rot_z(-np.pi / 2 * quarter_turns)
+    turned.apply_transform(transform)
     return turned
 
 

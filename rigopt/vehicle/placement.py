@@ -245,7 +245,7 @@ def _unknown_result_rig(name: str, folders: tuple, library: list[str]) -> Unknow
         return UnknownNameError(
             f"the results name rig {name!r}, which rigopt does not know: it is no library rig ({library}); give "
             f"--rigs FOLDER, the folder of the rig files the results were measured with ({name}.json in it or below "
-            "it; e.g. --rigs baselines/rigs, whose real/ holds the real datasets' rigs)")
+            "it; e.g. --rigs measurements/rigs, whose real/ holds the real datasets' rigs)")
     shown = " ".join(f"--rigs {folder}" for folder in folders)
     return UnknownNameError(
         f"the results name rig {name!r}, which rigopt does not know: there is no {name}.json in or below {shown}, "

@@ -218,17 +218,23 @@ def _write_inward_rig(path: Path) -> None:
 def _write_posed_meshes(mesh, tmp: Path) -> None:
     """The tt's mesh in centimetres, turned by 90 degrees, facing backwards and with y up (for vehicle add)."""
     import numpy as np
-    import trimesh
+
+    from rigopt.geometry import rot_x, rot_z
 
     def write(name, matrix):
         posed = mesh.copy()
         posed.apply_transform(matrix)
         posed.export(tmp / name)
 
+    def turn(rotation):
+        transform = np.eye(4)
+        transform[:3, :3] = rotation
+        return transform
+
     write("car_cm.stl", np.diag([100.0, 100.0, 100.0, 1.0]))
-    write("car_turned.stl", trimesh.transformations.rotation_matrix(np.pi / 2, [0, 0, 1]))
-    write("car_backwards.stl", trimesh.transformations.rotation_matrix(np.pi, [0, 0, 1]))
-    write("car_y_up.stl", trimesh.transformations.rotation_matrix(-np.pi / 2, [1, 0, 0]))
+    write("car_turned.stl", turn(rot_z(np.pi / 2)))
+    write("car_backwards.stl", turn(rot_z(np.pi)))
+    write("car_y_up.stl", turn(rot_x(-np.pi / 2)))
 
 
 T = "{tmp}"
@@ -591,9 +597,9 @@ CASES: list[tuple[str, list[str], str]] = [
      "is a folder; give the name of the file"),
     ("calibrate --rigs missing", [*CAL, SHIPPED, "--rigs", f"{T}/no_rigs"], "--rigs"),
     ("calibrate --rigs a file", [*CAL, SHIPPED, "--rigs", f"{T}/file.txt"], "is a file; give the folder holding"),
-    ("calibrate results naming a rig outside the library", [*CAL, "{repo}/baselines/transfer"],
+    ("calibrate results naming a rig outside the library", [*CAL, "{repo}/measurements/transfer"],
      "give --rigs FOLDER"),
-    ("calibrate --rigs without the results' rig", [*CAL, "{repo}/baselines/transfer", "--rigs", f"{T}/emptydir"],
+    ("calibrate --rigs without the results' rig", [*CAL, "{repo}/measurements/transfer", "--rigs", f"{T}/emptydir"],
      "add --rigs"),
     ("calibrate --results one model's JSON", [*CAL, f"{T}/results_no_diagonal/M/trained_on_R1.json"],
      "is a JSON file"),

@@ -48,7 +48,7 @@ file itself`, a file given for a folder `X is a file; give the folder holding ..
 says `no such ...`. A missing `--data` folder is said as such, not as a missing trained model. `calibrate
 --rigs` takes several folders (the first holding `<rig>.json`, in it or below it, wins); a rig the results name
 that is in none of them nor in the library is refused before any work, naming `--rigs` as the fix (`--rigs
-baselines/rigs` finds the real datasets' rigs in `baselines/rigs/real/`). Image sizes (`--image-size`,
+measurements/rigs` finds the real datasets' rigs in `measurements/rigs/real/`). Image sizes (`--image-size`,
 `bench generate --size`) are whole pixels, 1 to 20000 a side, through one parser (`rigopt/cli/parsing.py`).
 
 A run killed outright (SIGKILL, power loss) cannot remove its temporary sibling `.NAME.partial-PID`: the next

@@ -19,8 +19,8 @@ from scipy.stats import rankdata
 
 from plus_terms import RigProfile, term_matrices
 from rigopt.errors import RigoptError
-from rigopt.metrics.calibration import UNIT_LAMBDAS, fit_lbfgsb, fit_qp
-from rigopt.metrics.matched_fit import SOLVERS, fit_rematched
+from rigopt.metrics.calibration import UNIT_LAMBDAS, fit_lbfgsb, fit_nnls
+from rigopt.metrics.matched_fit import fit_rematched
 from rigopt.rig.model import Rig
 from rigopt.vehicle.model import Vehicle
 
@@ -51,6 +51,8 @@ VARIANTS: dict[str, tuple[str, ...]] = {
 BASELINE = "V0"
 REMATCH = "V6"
 PRIMARY_SOLVER = "qp"
+#: Both solvers, the primary first (the order of the tables' columns).
+SOLVERS = ("qp", "lbfgsb")
 
 
 # --- Frames and origin moves ---------------------------------------------------------------------------------
@@ -210,7 +212,7 @@ def heldout_pairs(study: Study, draws=None) -> tuple[np.ndarray, np.ndarray]:
 def solve(x, delta, solver: str) -> np.ndarray:
     """(k,) beta >= 0 of least squares of delta (n,) on x (n, k), by ``solver`` alone."""
     if solver == "qp":
-        return fit_qp(x, delta)
+        return fit_nnls(x, delta)
     if solver == "lbfgsb":
         return np.asarray(fit_lbfgsb(x, delta), dtype=float)
     raise RigoptError(f"unknown solver {solver!r}; use one of {', '.join(SOLVERS)}")

@@ -61,7 +61,6 @@ import numpy as np
 from rigopt.camera import CameraModel, focal_from_fov
 from rigopt.coverage.matrix import rig_coverage_matrix
 from rigopt.coverage.measures import CoverageSettings
-from rigopt.raycast import first_hit_distance
 from rigopt.errors import RigoptError
 from rigopt.geometry import rotation_angle
 from rigopt.metrics.calibration import FEATURE_DECIMALS
@@ -183,7 +182,7 @@ def self_occlusion_fractions(rig: Rig, vehicle: Vehicle, coverage: CoverageSetti
         origins.append(np.repeat(camera.position[None], len(r), axis=0))
         owner.append(np.full(len(r), k))
     owner = np.concatenate(owner)
-    hits = first_hit_distance(vehicle.mesh, np.concatenate(origins), np.concatenate(rays), coverage.backend)
+    hits = vehicle.caster(coverage.backend).first_hit_distance(np.concatenate(origins), np.concatenate(rays))
     blocked = np.bincount(owner, weights=(hits <= coverage.max_range).astype(float), minlength=len(rig.cameras))
     return blocked / np.bincount(owner, minlength=len(rig.cameras))
 

@@ -6,7 +6,7 @@ and a leave-one-rig-out figure on the fitting data. The pre-registration (``prer
 list and this fitting; the file is committed before any test rig is measured.
 
 **Fitting data** (never a test rig): the pairs of the synthetic LSS-style transfer matrix
-(``baselines/transfer/lss``, 20 rigs) among the 13 rigs that are not test rigs (R1, R1-c10, R1-c6, R1-f, R1-r,
+(``measurements/transfer/lss``, 20 rigs) among the 13 rigs that are not test rigs (R1, R1-c10, R1-c6, R1-f, R1-r,
 R1-t, R2, R3, R7, nuscenes, argoverse2, waymo, ddad: 169 pairs, diagonal included), and the real benchmark's
 control pairs (``../shared/pccr/results``: the six control rigs, 36 pairs for each of the four detectors, 144).
 Every pair weighs the same. Terms come from :func:`rigopt.metrics.lifting.lifting_terms` (RigCD's unit-weight
@@ -34,8 +34,8 @@ from rigopt.vehicle.placement import benchmark_rig_lookup
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
-SYNTHETIC = ROOT / "baselines" / "transfer"
-SYNTHETIC_RIGS = ROOT / "baselines" / "rigs"
+SYNTHETIC = ROOT / "measurements" / "transfer"
+SYNTHETIC_RIGS = ROOT / "measurements" / "rigs"
 BENCHMARK = ROOT.parent / "shared" / "pccr" / "results"
 OUT = HERE / "candidates.json"
 

@@ -3,7 +3,7 @@
     python studies/validation/measure.py [--cache DIR] [--workers 2] [--device cpu] [--only NAME ...]
 
 Each rig of ``rigs/index.csv``, in its order, is measured as ``rigopt validate RIG --ref R1 --model lss`` does
-without ``--data`` (``rigopt.baselines.shipped.measure``: R1's 16 test scenes rendered under the rig into the
+without ``--data`` (``rigopt.validation.detectors.shipped.measure``: R1's 16 test scenes rendered under the rig into the
 cache, the shipped models of every seed scored on them). One row per (rig, seed) goes to
 ``results/measured.csv`` as soon as a rig is done, its whole entry to ``results/measured.jsonl``; a rerun skips
 the rigs already there. The log is ``results/measure.log``.
@@ -38,7 +38,7 @@ def main(argv=None) -> int:
     parser.add_argument("--device", default="cpu")
     parser.add_argument("--only", nargs="*", default=None, help="measure only these rigs")
     args = parser.parse_args(argv)
-    from rigopt.baselines.shipped import measure, shipped_detector, without_resamples
+    from rigopt.validation.detectors.shipped import measure, shipped_detector, without_resamples
     from rigopt.rig.library import load_rig
 
     detector = shipped_detector("lss", "R1")

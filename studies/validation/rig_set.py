@@ -23,9 +23,9 @@ on its own side (a camera on the centreline moves to the left). Where the body e
 at 1.39 m), the camera stands on a mast over the outline 5 cm below the body's top. Roll is 0. These rigs
 probe the detector (height, pitch, lens, count, plan position) and are not meant to pass ``rigopt check``.
 
-**The other rigs**: the committed designs from R1 (``baselines/rigs/``: firetruck with and without the
+**The other rigs**: the committed designs from R1 (``measurements/rigs/``: firetruck with and without the
 regulation fields, hgv; the tt design from ``studies/designs/results/tt_from_R1``), the naive and the
-height-matched transfers of R1 to each vehicle (``rigopt.baselines.validation.comparison_rigs``, the naive one
+height-matched transfers of R1 to each vehicle (``rigopt.validation.designs.comparison_rigs``, the naive one
 refined under the joint calibration), and the benchmark's hand-designed rigs of each vehicle (R6; R9; R4, R5,
 R8).
 """
@@ -150,14 +150,14 @@ def factorial_rig(vehicle_name: str, outline: Outline, reference: Rig, levels) -
 
 def other_rigs() -> list[tuple[str, str, Rig]]:
     """(vehicle, kind, rig) of the designs, the naive and height-matched transfers and the hand rigs."""
-    from rigopt.baselines.validation import comparison_rigs
+    from rigopt.validation.designs import comparison_rigs
     from rigopt.metrics.calibration import load_weights
 
     joint = load_weights("joint")
     reference = load_rig("R1")
-    designs = {"firetruck": [ROOT / "baselines/rigs/firetruck_from_R1.json",
-                             ROOT / "baselines/rigs/firetruck_from_R1_no_fields.json"],
-               "hgv": [ROOT / "baselines/rigs/hgv_from_R1.json"],
+    designs = {"firetruck": [ROOT / "measurements/rigs/firetruck_from_R1.json",
+                             ROOT / "measurements/rigs/firetruck_from_R1_no_fields.json"],
+               "hgv": [ROOT / "measurements/rigs/hgv_from_R1.json"],
                "tt": [ROOT / "studies/designs/results/tt_from_R1/rig.json"]}
     out = []
     for vehicle, paths in designs.items():

@@ -10,7 +10,7 @@
 
 With ``--train`` each seed is trained (or resumed) first, as ``rigopt bench train --data DIR --rig R1 --model
 lss --epochs 8 --seed K --runs DIR/runs-epochs8-seedK``; then the runs are packed into ``detectors/lss-R1/``
-(float16 weights, the card with each model's own mAP on R1's test split: ``rigopt.baselines.shipped.pack``).
+(float16 weights, the card with each model's own mAP on R1's test split: ``rigopt.validation.detectors.shipped.pack``).
 """
 
 from __future__ import annotations
@@ -35,9 +35,9 @@ def main(argv=None) -> int:
     parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])
     parser.add_argument("--train", action="store_true")
     args = parser.parse_args(argv)
-    from rigopt.baselines.config import model_config
-    from rigopt.baselines.models import load_checkpoint
-    from rigopt.baselines.shipped import pack
+    from rigopt.validation.detectors.config import model_config
+    from rigopt.validation.detectors.models import load_checkpoint
+    from rigopt.validation.detectors.shipped import pack
 
     for seed in args.seeds:
         if args.train:

@@ -3,7 +3,7 @@
     python studies/validation/swaps.py [--vehicles firetruck hgv] [--cache DIR] [--workers 2]
 
 Pre-registered in ``designs/preregistration_swaps.md``. For each vehicle: the height-matched transfer of R1
-(validate's yardstick, ``rigopt.baselines.validation.comparison_rigs``) and, for each R1 camera, that copy with
+(validate's yardstick, ``rigopt.validation.designs.comparison_rigs``) and, for each R1 camera, that copy with
 the camera replaced by the direction design's camera matched to the same R1 camera (pose and lens from
 ``designs/<vehicle>_from_R1_direction/report.json``). All measured as ``rigopt validate`` does without
 ``--data`` (renderings cached, so a rerun resumes), the copy and its swaps scored on the same scene resamples;
@@ -26,7 +26,7 @@ DESIGNS = HERE / "designs"
 
 def swap_rigs(vehicle_name: str):
     """(height-matched copy, [(R1 camera id, the copy with that camera swapped), ...])."""
-    from rigopt.baselines.validation import comparison_rigs, load_design
+    from rigopt.validation.designs import comparison_rigs, load_design
     from rigopt.rig.library import load_rig
 
     folder = DESIGNS / f"{vehicle_name}_from_R1_direction"
@@ -49,7 +49,7 @@ def main(argv=None) -> int:
     parser.add_argument("--cache", type=Path, default=None, help="renderings (default: rigopt validate's cache)")
     parser.add_argument("--workers", type=int, default=2)
     args = parser.parse_args(argv)
-    from rigopt.baselines.shipped import measure, paired_differences, shipped_detector, without_resamples
+    from rigopt.validation.detectors.shipped import measure, paired_differences, shipped_detector, without_resamples
 
     detector = shipped_detector("lss", "R1")
     for vehicle_name in args.vehicles:

@@ -14,7 +14,7 @@ from rigopt.rig.library import load_rig
 from rigopt.rig.pccr_format import write_rig
 from rigopt.vehicle.placement import benchmark_rig_lookup
 
-REAL_RIGS = Path(__file__).resolve().parents[2] / "baselines" / "rigs"
+REAL_RIGS = Path(__file__).resolve().parents[2] / "measurements" / "rigs"
 
 
 def test_rigs_are_found_below_the_folder_shallowest_first(tmp_path):

@@ -15,8 +15,8 @@ import pytest
 from typer.testing import CliRunner
 
 from in_process import run_rigopt
+from oracles.metrics import rigcd_reference
 from rigopt.cli.app import app
-from rigopt.metrics.reference import rigcd_reference
 from rigopt.metrics.rigcd import rigcd_matrix
 from rigopt.rig.library import load_rig
 

@@ -4,7 +4,7 @@ exit path of bad input (a library error, a usage error, an interrupt-free OS err
 
 The commands start together (a module fixture) and run side by side; the design runs on the small tt with
 few candidates. ``bench evaluate --json`` and ``validate --json`` need a trained detector: they are checked
-the same way in tests/baselines/test_commands.py.
+the same way in tests/validation/detectors/test_commands.py.
 """
 
 from __future__ import annotations

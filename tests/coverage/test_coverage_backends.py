@@ -9,7 +9,7 @@ import pytest
 from rigopt.camera import CameraModel, in_frustum
 from rigopt.coverage.visibility import visible
 from rigopt.geometry import quaternion_to_matrix
-from rigopt.raycast import has_embree
+from rigopt.raycast import RayCaster, has_embree
 from rigopt.vehicle.library import load_vehicle
 
 needs_embree = pytest.mark.skipif(not has_embree(), reason="embreex is not installed")
@@ -42,8 +42,8 @@ def test_embree_and_triangle_visibility_agree(which, box_vehicle, etron):
     low, high = vehicle_volume(vehicle, np.array([3.0, 3.0, 1.0]))
     cameras = random_cameras(rng, 12, low, high)
     points = rng.uniform(low, high, (400, 3))
-    embree = visible(vehicle.mesh, *cameras, points, backend="embree")
-    triangle = visible(vehicle.mesh, *cameras, points, backend="triangle")
+    embree = visible(RayCaster(vehicle.mesh, "embree"), *cameras, points)
+    triangle = visible(RayCaster(vehicle.mesh, "triangle"), *cameras, points)
     # The comparison means something: the body hides some points that are in a frustum.
     positions, rotations, fovs, sizes = cameras
     assert (in_frustum(CameraModel.from_fov(fovs, sizes), positions, rotations, points) & ~triangle).sum() > 50

@@ -56,8 +56,8 @@ def test_rows_are_per_camera_visibility(box_vehicle, box_footprint, small_settin
     assert np.array_equal(matrix.points, points)
     # One camera at a time, through `visible`.
     for k in range(len(candidates[0])):
-        row = visible(box_vehicle.mesh, *(a[k:k + 1] for a in candidates), points,
-                      small_settings.max_range, small_settings.backend)[0]
+        row = visible(box_vehicle.caster(small_settings.backend), *(a[k:k + 1] for a in candidates), points,
+                      small_settings.max_range)[0]
         np.testing.assert_array_equal(matrix.sees[k], row)
     # Not vacuous: some candidates see much, some little, and the body hides part of the near ring.
     per_row = matrix.sees.sum(axis=1)

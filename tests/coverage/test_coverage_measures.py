@@ -9,7 +9,7 @@ import math
 import numpy as np
 import pytest
 
-from rigopt.coverage.measures import camera_coverage, compare_coverage, coverage_report, ring_coverage
+from rigopt.coverage.measures import camera_coverage, compare_coverage, coverage_report, ring_coverage, ring_report
 
 VHALF_DEG = math.degrees(math.atan(0.5625))  # half the vertical FOV of a 90 deg, 1280 x 720 pinhole
 
@@ -99,6 +99,19 @@ def test_cameras_inside_are_listed_and_see_nothing(box_vehicle, small_settings, 
     front = coverage_report(rig(outer), box_vehicle, small_settings)
     for a, b in zip(report.rings, front.rings):
         np.testing.assert_array_equal(a.counts, b.counts)
+
+
+def test_a_ring_report_is_the_full_reports_rings(box_vehicle, small_settings, camera, rig):
+    """What the design report draws from a ring report (rings, footprint, cameras inside) is the full report's."""
+    both = rig(camera((0, 0, 0.9), id="INSIDE"), camera((2.05, 0, 1.0), id="FRONT"))
+    full, rings = coverage_report(both, box_vehicle, small_settings), ring_report(both, box_vehicle, small_settings)
+    assert rings.cameras_inside == full.cameras_inside == ("INSIDE",)
+    assert rings.footprint is full.footprint
+    assert [(r.distance_m, r.height_m, r.covered_frac) for r in rings.rings] == \
+        [(r.distance_m, r.height_m, r.covered_frac) for r in full.rings]
+    for a, b in zip(rings.rings, full.rings):
+        np.testing.assert_array_equal(a.counts, b.counts)
+
 
 
 # --- self-occlusion ------------------------------------------------------------------------------------------

@@ -52,7 +52,7 @@ def test_occlusion_never_adds_coverage(box_vehicle, rig, seed):
     points = np.random.default_rng(seed).uniform([-8, -6, -1], [8, 6, 4], (200, 3))
     sizes = np.array([c.image_size for c in rig.cameras])
     frustum = in_frustum(CameraModel.from_fov(rig.fovs, sizes), rig.positions, rig.rotations, points, DEFAULT_MAX_RANGE)
-    seen = visible(box_vehicle.mesh, rig.positions, rig.rotations, rig.fovs, sizes, points)
+    seen = visible(box_vehicle.ray_caster, rig.positions, rig.rotations, rig.fovs, sizes, points)
     assert seen.shape == frustum.shape == (len(rig), 200)
     assert not np.any(seen & ~frustum)
 
@@ -66,5 +66,5 @@ def test_occlusion_check_is_not_vacuous(box_vehicle):
     points = rng.uniform([-8, -6, -1], [8, 6, 4], (300, 3))
     sizes = np.tile([1280, 720], (30, 1))
     frustum = in_frustum(CameraModel.from_fov(np.full(30, 90.0), sizes), positions, rotations, points, DEFAULT_MAX_RANGE)
-    seen = visible(box_vehicle.mesh, positions, rotations, np.full(30, 90.0), sizes, points)
+    seen = visible(box_vehicle.ray_caster, positions, rotations, np.full(30, 90.0), sizes, points)
     assert (frustum & ~seen).sum() > 50 and seen.sum() > 100

@@ -10,7 +10,7 @@ import pytest
 
 from rigopt.camera import CameraModel, in_frustum
 from rigopt.coverage.visibility import visible
-from rigopt.raycast import segments_clear
+from rigopt.raycast import RayCaster
 from rigopt.geometry import rotation_from_yaw_pitch_roll
 
 SIZE = np.array([[1280, 720]])
@@ -32,21 +32,21 @@ def test_camera_facing_the_box(box_vehicle, backend):
     # Both faces are inside the frustum (|y| <= 0.95 < depth, |z - 0.9| <= 0.55 < 0.5625 * depth) ...
     assert in_frustum(CameraModel.from_fov([90.0], SIZE), CAMERA[None], LOOK_BACK, np.concatenate([near, far])).all()
     # ... the near face (the points lie on the surface) is seen, the far face is behind the body.
-    assert visible(box_vehicle.mesh, CAMERA[None], LOOK_BACK, [90.0], SIZE, near, backend=backend).all()
-    assert not visible(box_vehicle.mesh, CAMERA[None], LOOK_BACK, [90.0], SIZE, far, backend=backend).any()
+    assert visible(box_vehicle.caster(backend), CAMERA[None], LOOK_BACK, [90.0], SIZE, near).all()
+    assert not visible(box_vehicle.caster(backend), CAMERA[None], LOOK_BACK, [90.0], SIZE, far).any()
     # Points behind the box, and points between the camera and the box.
     behind = face_points(-3.0)
     between = face_points(3.0)
-    assert not visible(box_vehicle.mesh, CAMERA[None], LOOK_BACK, [90.0], SIZE, behind, backend=backend).any()
-    assert visible(box_vehicle.mesh, CAMERA[None], LOOK_BACK, [90.0], SIZE, between, backend=backend).all()
+    assert not visible(box_vehicle.caster(backend), CAMERA[None], LOOK_BACK, [90.0], SIZE, behind).any()
+    assert visible(box_vehicle.caster(backend), CAMERA[None], LOOK_BACK, [90.0], SIZE, between).all()
 
 
 @pytest.mark.parametrize("backend", ["auto", "triangle"])
 def test_points_a_centimetre_off_the_surface(box_vehicle, backend):
     # 1 cm inside the front face: hidden by it; 1 cm in front of it: seen.
     inside, outside = face_points(2.0 - 0.01), face_points(2.0 + 0.01)
-    seen = visible(box_vehicle.mesh, CAMERA[None], LOOK_BACK, [90.0], SIZE, np.concatenate([inside, outside]),
-                   backend=backend)[0]
+    seen = visible(box_vehicle.caster(backend), CAMERA[None], LOOK_BACK, [90.0], SIZE,
+                   np.concatenate([inside, outside]))[0]
     assert seen.tolist() == [False] * len(inside) + [True] * len(outside)
 
 
@@ -90,9 +90,43 @@ def test_point_just_behind_an_edge(box_vehicle, case, backend):
     hidden, seen = offset_targets(camera, edge, target, normal)
     for point in (hidden, seen):
         assert distance_point_to_line(edge, camera, point) == pytest.approx(0.01, rel=1e-9)
-    mesh = box_vehicle.mesh
-    assert segments_clear(mesh, [camera, camera], [hidden, seen], backend).tolist() == [False, True]
+    caster = RayCaster(box_vehicle.mesh, backend)
+    assert caster.segments_clear([camera, camera], [hidden, seen]).tolist() == [False, True]
     rotation = rotation_from_yaw_pitch_roll(np.deg2rad(yaw), np.deg2rad(pitch), 0.0)[None]
     points = np.array([hidden, seen])
     assert in_frustum(CameraModel.from_fov([90.0], SIZE), camera[None], rotation, points).all()
-    assert visible(mesh, camera[None], rotation, [90.0], SIZE, points, backend=backend)[0].tolist() == [False, True]
+    assert visible(caster, camera[None], rotation, [90.0], SIZE, points)[0].tolist() == [False, True]
+
+
+# --- cameras sharing a position share their segments --------------------------------------------------------------
+
+class CountingCaster:
+    """A RayCaster that records how many segments it was asked about."""
+
+    def __init__(self, caster):
+        self.caster, self.segments = caster, 0
+
+    def segments_clear(self, starts, ends):
+        self.segments += len(np.atleast_2d(starts))
+        return self.caster.segments_clear(starts, ends)
+
+
+def test_cameras_at_one_position_cast_each_segment_once(box_vehicle):
+    # Two mount positions, four yaws each (90 deg pinholes): each camera's row equals the row it gets alone, and
+    # a (position, point) segment is cast once however many cameras there see the point.
+    positions = np.repeat([[3.0, 0.0, 0.9], [0.0, 2.0, 0.9]], 4, axis=0)
+    yaws = np.tile(np.deg2rad([0.0, 90.0, 180.0, -90.0]) + 0.3, 2)
+    rotations = rotation_from_yaw_pitch_roll(yaws, np.zeros(8), np.zeros(8))
+    rng = np.random.default_rng(4)
+    points = rng.uniform([-6.0, -5.0, 0.0], [6.0, 5.0, 2.0], (300, 3))
+    fovs, sizes = np.full(8, 120.0), np.tile(SIZE, (8, 1))
+    counting = CountingCaster(box_vehicle.ray_caster)
+    seen = visible(counting, positions, rotations, fovs, sizes, points)
+    for k in range(8):
+        alone = visible(box_vehicle.ray_caster, positions[k:k + 1], rotations[k:k + 1], fovs[k:k + 1], sizes[k:k + 1],
+                        points)[0]
+        np.testing.assert_array_equal(seen[k], alone)
+    in_view = in_frustum(CameraModel.from_fov(fovs, sizes), positions, rotations, points, 80.0)
+    assert counting.segments == in_view[:4].any(axis=0).sum() + in_view[4:].any(axis=0).sum()
+    assert counting.segments < in_view.sum()  # the frustums overlap: fewer casts than (camera, point) pairs
+    assert (in_view & ~seen).any()  # and the body hides some

@@ -256,7 +256,7 @@ def test_a_field_with_no_required_point_has_no_camera_share(tmp_path_factory, bo
 
 
 def test_the_camera_field_table_lists_every_camera_and_the_totals(box_vehicle, camera, rig):
-    from rigopt.report.coverage_figures import camera_field_rows, regions_dict
+    from rigopt.report.coverage_tables import camera_field_rows, regions_dict
 
     cameras = rig(camera([-2.03, 0.0, 1.45], yaw_deg=180.0, pitch_deg=-50.0, fov=150.0, id="REAR"),
                   camera([2.03, 0.0, 1.0], fov=120.0, id="FRONT"))

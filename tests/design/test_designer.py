@@ -438,3 +438,53 @@ def test_naive_transfer_past_a_trailer_takes_the_nearest_yaw_a_mount_allows():
     rear = naive.cameras[[c.id for c in reference.cameras].index("CAM_BUMPER_BACK")]
     assert abs(np.angle(np.exp(1j * (np.arctan2(rear.forward[1], rear.forward[0]) - np.pi)))) == pytest.approx(
         allowed[candidates.fovs == rear.fov].min(), abs=1e-6)
+
+
+# --- the near-field stage in a background worker ------------------------------------------------------------------
+
+def camera_values(rig: Rig) -> list:
+    return [(c.id, c.role, c.module, c.zone, c.position.tolist(), c.rotation.tolist(), c.fov) for c in rig.cameras]
+
+
+@pytest.mark.parametrize("zones", [("front",), None], ids=["fields-dropped", "fields-seen"])
+def test_a_design_with_a_background_worker_is_the_inline_design(box_car, zones):
+    """The near-field stage and the naive transfer's refinement run in a worker process give the design they give
+    inline: the same cameras to the bit, the same fallback note and the same progress messages in the same order."""
+    from rigopt.background import Background
+
+    settings = DesignSettings(lenses=(100.0, 120.0), yaw_step_deg=30.0, pitches_deg=(-20.0, 0.0), near_field=True,
+                              zones=zones)
+    said_inline, said_beside = [], []
+    inline = design_rig(box_car, front_reference(box_car), load_weights("joint"), settings,
+                        progress=said_inline.append)
+    with Background(workers=True) as background:
+        assert background.parallel
+        beside = design_rig(box_car, front_reference(box_car), load_weights("joint"), settings,
+                            progress=said_beside.append, background=background)
+    assert camera_values(beside.design.rig) == camera_values(inline.design.rig)
+    assert beside.design.rig.near_field_count == inline.design.rig.near_field_count >= 1
+    assert beside.fields_fallback == inline.fields_fallback and said_beside == said_inline
+    assert (beside.near_field.status, beside.near_field.n_points) == (inline.near_field.status,
+                                                                       inline.near_field.n_points)
+    naive, naive_beside = inline.comparisons.naive_transfer, beside.comparisons.naive_transfer
+    assert camera_values(naive_beside.rig) == camera_values(naive.rig)
+    assert beside.comparisons.naive_refinement == inline.comparisons.naive_refinement != "off"
+
+
+def test_a_near_field_choice_for_another_symmetry_is_made_again(box_car):
+    """A choice computed ahead for the first attempt's symmetry is not taken by a design that fell back to
+    another: the stage is designed again for the symmetry it has."""
+    from rigopt.design import designer
+    from rigopt.design.near_field import NearFieldChoice
+
+    settings = DesignSettings(lenses=(100.0,), yaw_step_deg=30.0, pitches_deg=(0.0,), refine=False, near_field=True,
+                              zones=("front",), require="none", symmetric=False)
+    stale = NearFieldChoice((), 0, 0, "stale", 0.0, 0.0, 1)
+    job = SimpleNamespace(result=lambda: (stale, (), None, True, ("stale message",)))
+    said = []
+    stage, _, _ = designer._near_field_stage(box_car, front_reference(box_car).rig, (), None, settings, "none",
+                                             said.append, job)
+    assert stage.status != "stale" and "stale message" not in said
+    fresh, _, _ = designer._near_field_stage(box_car, front_reference(box_car).rig, (), None, settings, "none",
+                                             lambda message: None)
+    assert camera_values(stage.rig) == camera_values(fresh.rig)

@@ -59,7 +59,7 @@ def test_the_tt_sees_its_rear_field_and_near_ring_with_few_fisheyes():
     dense = np.concatenate([p.points(tt, 0.1) for p in presets])
     model = CameraModel.of_cameras(rig.cameras)
     for pts in (points, dense[required_mask(tt, dense)]):
-        seen = visible_by(tt.mesh, model, rig.positions, rig.rotations, pts, near_field.NEAR_FIELD_RANGE)
+        seen = visible_by(tt.ray_caster, model, rig.positions, rig.rotations, pts, near_field.NEAR_FIELD_RANGE)
         assert seen.any(axis=0).all()
     backwards = [c for c in rig.cameras if c.forward[0] < -0.7]
     assert 1 <= len(backwards) <= 2
@@ -87,8 +87,33 @@ def test_a_two_role_design_leaves_the_fields_to_its_fisheyes():
     nf = Rig("nf", tt.blueprint, tuple(fisheyes))
     dense = np.concatenate([p.points(tt, 0.1) for p in parse_require("default", tt)])
     dense = dense[required_mask(tt, dense)]
-    seen = visible_by(tt.mesh, CameraModel.of_cameras(nf.cameras), nf.positions, nf.rotations, dense,
+    seen = visible_by(tt.ray_caster, CameraModel.of_cameras(nf.cameras), nf.positions, nf.rotations, dense,
                       near_field.NEAR_FIELD_RANGE)
     assert seen.any(axis=0).all()
     expected = predict_transfer(load_rig("R1"), [perception], load_weights("joint"))[0].predicted_drop
     assert result.design.prediction.predicted_drop == pytest.approx(expected)
+
+
+@pytest.mark.slow
+def test_free_perception_cameras_beside_mirrored_fisheyes():
+    """perception_symmetric=False on the fire truck with the nearest-pose tolerance: the perception cameras take
+    R1's layout (its rear camera low on a rear corner, the centre below 1.15 m being the tailboard's), the
+    near-field fisheyes stay in mirrored pairs."""
+    from rigopt.design.designer import design_rig
+    from rigopt.design.problem import ReferenceRig
+    from rigopt.design.settings import DesignSettings
+    from rigopt.metrics.calibration import load_weights
+    from rigopt.report.design_report import symmetry_dict
+    from rigopt.vehicle.symmetry import rig_symmetry
+
+    truck = load_vehicle("firetruck")
+    settings = DesignSettings(perception_symmetric=False, match_height_m=0.05, match_pitch_deg=0.0,
+                              match_yaw_deg=5.0, match_fov_deg=0.0, perception_range_m=20.0)
+    result = design_rig(truck, ReferenceRig.on_own_vehicle(load_rig("R1")), load_weights("joint"), settings)
+    rig = result.design.rig
+    fisheyes = Rig("nf", truck.blueprint, tuple(c for c in rig.cameras if c.role == "near_field"))
+    rearward = [c for c in rig.perception().cameras if c.forward[0] < -0.99]
+    assert len(rearward) == 1 and abs(rearward[0].position[1]) > 1.0 and rearward[0].position[2] < 0.85
+    assert result.near_field_mirrored and rig_symmetry(fisheyes).symmetric
+    assert not rig_symmetry(rig.perception()).symmetric
+    assert symmetry_dict(result)["describe"].startswith("perception cameras placed freely")

@@ -1,5 +1,5 @@
 """docs/your_rig_and_vehicle.md runs as written: every ``$ rigopt ...`` line of its console blocks, in order, from a
-folder that holds the checkout's ``examples`` and ``baselines`` (the files the walk-through ships with), and
+folder that holds the checkout's ``examples`` and ``measurements`` (the files the walk-through ships with), and
 every output line the page shows is what the command printed (timings and the vehicles folder aside)."""
 
 from __future__ import annotations
@@ -38,7 +38,7 @@ def normalised(text: str, home: Path) -> str:
 def test_the_walkthrough_runs_as_written(tmp_path):
     steps = console_steps(PAGE.read_text())
     assert len(steps) >= 8
-    for shipped in ("examples", "baselines"):
+    for shipped in ("examples", "measurements"):
         (tmp_path / shipped).symlink_to(REPO / shipped)
     home = tmp_path / "home"
     for args, shown in steps:

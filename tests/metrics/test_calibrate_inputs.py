@@ -18,7 +18,7 @@ from rigopt.rig.pccr_format import write_rig
 from rigopt.vehicle.placement import benchmark_rig_lookup
 
 REPO = Path(__file__).resolve().parents[2]
-BASELINE_RIGS = REPO / "baselines" / "rigs"
+BASELINE_RIGS = REPO / "measurements" / "rigs"
 RIGS = ["R1", "R1-r", "R1-t", "R1-f", "R1-c6", "R1-c10", "nuscenes"]
 
 
@@ -62,9 +62,9 @@ def test_rigs_must_be_an_existing_folder(results, tmp_path, make, fragment):
 
 
 def test_the_real_rigs_are_found_below_baselines_rigs():
-    """``--rigs baselines/rigs`` finds the real datasets' rigs in its real/ subfolder: every rig of the committed
+    """``--rigs measurements/rigs`` finds the real datasets' rigs in its real/ subfolder: every rig of the committed
     transfer matrix resolves."""
-    table = read_transfer(REPO / "baselines" / "transfer")
+    table = read_transfer(REPO / "measurements" / "transfer")
     lookup = benchmark_rig_lookup(BASELINE_RIGS)
     names = set(table.train.tolist() + table.test.tolist())
     assert {"argoverse2", "nuscenes", "waymo", "ddad"} <= names

@@ -21,8 +21,8 @@ from in_process import run_rigopt
 
 REPO = Path(__file__).resolve().parents[2]
 REAL = REPO / "metrics" / "pccr_transfer.csv"
-SYNTHETIC = REPO / "baselines" / "v1" / "transfer"
-SYNTHETIC_RIGS = REPO / "baselines" / "rigs"
+SYNTHETIC = REPO / "measurements" / "v1" / "transfer"
+SYNTHETIC_RIGS = REPO / "measurements" / "rigs"
 RESAMPLES = 50
 
 

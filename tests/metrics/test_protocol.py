@@ -1,7 +1,7 @@
 """The benchmark's calibration protocol on the real data, re-derived here from the CSV and reference RigCD.
 
 Independent pieces: the CSV is parsed with ``csv``, drops computed by hand, features of every rig pair
-computed with :func:`rigopt.metrics.reference.rigcd_reference` (plain loops, unit weights), and rho with
+computed with ``oracles.metrics.rigcd_reference`` (tests/oracles: plain loops, unit weights), and rho with
 ``scipy.stats.spearmanr``.
 """
 
@@ -14,9 +14,9 @@ import numpy as np
 import pytest
 from scipy.stats import rankdata, spearmanr
 
+from oracles.metrics import rigcd_reference
 from rigopt.errors import DataError
 from rigopt.metrics.protocol import calibrate
-from rigopt.metrics.reference import rigcd_reference
 from rigopt.metrics.transfer import TransferTable, read_transfer
 from rigopt.rig.library import load_rig
 

@@ -8,9 +8,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from oracles.metrics import rigcd_reference
 from rigopt.metrics.calibration import load_weights, reparameterise
 from rigopt.metrics.ranking import predict_transfer, rank_candidates
-from rigopt.metrics.reference import rigcd_reference
 from rigopt.rig.library import load_rig
 
 CANDIDATES = ("R6", "R4", "R1-f", "R9", "R1-c6", "R2")

@@ -20,8 +20,8 @@ from hypothesis import example, given, settings
 from hypothesis import strategies as st
 from scipy.optimize import linear_sum_assignment
 
+from oracles.metrics import rigcd_reference, rotation_distance_reference
 from rigopt.errors import RigoptError
-from rigopt.metrics.reference import rigcd_reference, rotation_distance_reference
 from rigopt.metrics.rigcd import camera_costs, rigcd, rigcd_matrix, rigcd_pairs
 from rigopt.rig.library import library_rig, rig_names
 from rigopt.rig.model import Camera, Rig

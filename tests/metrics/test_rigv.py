@@ -9,8 +9,8 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from oracles.metrics import rigv_reference
 from rigopt.errors import RigoptError
-from rigopt.metrics.reference import rigv_reference
 from rigopt.metrics.rigv import DMAX_EPSILON, rigv
 from rigopt.rig.library import library_rig, rig_names
 from rigopt.rig.model import Camera, Rig

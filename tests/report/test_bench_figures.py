@@ -16,7 +16,7 @@ from matplotlib import colormaps
 from PIL import Image
 from typer.testing import CliRunner
 
-from rigopt.bench.dataset import read_dataset
+from rigopt.validation.synthetic.dataset import read_dataset
 from rigopt.cli.app import app
 from rigopt.report.bench_figures import project, write_sample_figure
 
@@ -25,9 +25,9 @@ DPI = 110  # write_sample_figure's
 
 @pytest.fixture(scope="module")
 def bench_data(tmp_path_factory):
-    from rigopt.bench.generate import generate_split
-    from rigopt.bench.render import render_rig
-    from rigopt.bench.scenes import split_scenes
+    from rigopt.validation.synthetic.generate import generate_split
+    from rigopt.validation.synthetic.render import render_rig
+    from rigopt.validation.synthetic.scenes import split_scenes
     from rigopt.rig.library import load_rig
 
     out = tmp_path_factory.mktemp("bench_show")

@@ -1,4 +1,4 @@
-"""studies/baselines/gpu_matrix.py end to end on the CPU at toy size: it renders, trains (in processes it can
+"""studies/detectors/gpu_matrix.py end to end on the CPU at toy size: it renders, trains (in processes it can
 stop), tests by test rig and packs; the rows are the benchmark's results layout and the archive holds them.
 The packed weights, tested elsewhere (--models-from), give the same rows."""
 
@@ -14,7 +14,7 @@ import pytest
 
 pytest.importorskip("torch")
 
-SCRIPT = Path(__file__).resolve().parents[2] / "studies" / "baselines" / "gpu_matrix.py"
+SCRIPT = Path(__file__).resolve().parents[2] / "studies" / "detectors" / "gpu_matrix.py"
 
 
 def one_pass(tmp_path, name: str, *extra: str) -> subprocess.CompletedProcess:

@@ -179,8 +179,8 @@ def test_removing_a_camera_changes_exactly_the_points_only_it_saw(box, vehicles)
 
     # independently: per-camera visibility of the sector points from the coverage module
     points = sector_points(Footprint.of_mesh(box.mesh), COARSE)[0]
-    sees = visible(box.mesh, full.positions, full.rotations, full.fovs,
-                   np.array([c.image_size for c in full.cameras]), points, COARSE.max_range, COARSE.backend)
+    sees = visible(box.caster(COARSE.backend), full.positions, full.rotations, full.fovs,
+                   np.array([c.image_size for c in full.cameras]), points, COARSE.max_range)
     count = sees.sum(axis=0)
     only_fl = np.mean(sees[0] & (count == 1))
     fl_in_pair = np.mean(sees[0] & (count == 2))  # >= 2 before, < 2 after
@@ -210,7 +210,7 @@ def test_each_rig_is_measured_on_its_own_vehicle(tmp_path, box):
     states = []
     for vehicle, r in ((box, short), (long_box, long)):
         points = sector_points(vehicle.footprint, ring10.coverage)[0]
-        sees = visible(vehicle.mesh, r.positions, r.rotations, r.fovs, np.array([c.image_size for c in r.cameras]),
+        sees = visible(vehicle.ray_caster, r.positions, r.rotations, r.fovs, np.array([c.image_size for c in r.cameras]),
                        points, ring10.coverage.max_range)
         assert sees.any(axis=0).all()
         states.append(sees.sum(axis=0) >= 2)

@@ -19,7 +19,7 @@ from rigopt.vehicle.library import find_spec, load_vehicle
 from rigopt.vehicle.model import Vehicle
 from rigopt.vehicle.spec import read_spec, spec_from_dict
 
-REAL = Path(__file__).resolve().parents[2] / "baselines" / "rigs" / "real"
+REAL = Path(__file__).resolve().parents[2] / "measurements" / "rigs" / "real"
 INCH = 0.0254
 
 
@@ -42,7 +42,7 @@ PUBLISHED = {
 #: The mounting zone of each car's sensor platform, rack or dome.
 RACK_ZONE = {"renault_zoe": "sensor_platform", "ford_fusion_hybrid": "roof_rack",
              "chrysler_pacifica_hybrid": "roof_dome"}
-#: Dataset rigs (source folder under baselines/rigs/real, import format) and the car each lands on.
+#: Dataset rigs (source folder under measurements/rigs/real, import format) and the car each lands on.
 DATASETS = {"nuscenes": ("nuscenes", "renault_zoe"), "argoverse2": ("argoverse2", "ford_fusion_hybrid"),
             "waymo": ("waymo", "chrysler_pacifica_hybrid")}
 
@@ -124,7 +124,7 @@ def test_a_title_is_optional_text():
 
 @pytest.fixture(scope="module")
 def imported(tmp_path_factory) -> dict[str, Path]:
-    """Each dataset's rig imported from its source folder as baselines/rigs/real/README.md does, but without
+    """Each dataset's rig imported from its source folder as measurements/rigs/real/README.md does, but without
     --vehicle (so on the vehicle name the importer writes)."""
     out = tmp_path_factory.mktemp("imported")
     paths = {}

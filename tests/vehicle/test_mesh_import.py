@@ -217,11 +217,11 @@ def test_closing_keeps_the_size(closed_sim_car):
 
 
 def test_closing_fills_the_body_without_a_floor(closed_sim_car):
-    from rigopt import raycast
+    from rigopt.raycast import RayCaster
 
     closed, _ = closed_sim_car
-    inside = raycast.inside(closed, [[0.0, 0.0, 0.5], [0.0, 0.0, 1.2], [1.45, 0.78, 0.33]])
-    below = raycast.inside(closed, [[0.0, 0.0, 0.15], [0.0, 0.0, 2.0]])  # under the floorless body, above the roof
+    inside = RayCaster(closed).inside([[0.0, 0.0, 0.5], [0.0, 0.0, 1.2], [1.45, 0.78, 0.33]])
+    below = RayCaster(closed).inside([[0.0, 0.0, 0.15], [0.0, 0.0, 2.0]])  # under the floorless body, above the roof
     assert inside.all() and not below.any()
 
 
@@ -237,10 +237,10 @@ def test_a_single_sided_sheet_is_kept_as_a_thin_slab():
     awning.apply_translation([0, 0, 2.2])  # a single-sided sheet: no volume of its own
     closed, report = close_mesh(trimesh.util.concatenate([sim_car_mesh(), awning.subdivide()]), "awning.obj")
     assert report.thin > 0.1 and report.p95_error < 0.03
-    from rigopt import raycast
+    from rigopt.raycast import RayCaster
 
-    assert raycast.inside(closed, [[0.0, 0.0, 2.2]]).all()  # the sheet is a slab now
-    assert not raycast.inside(closed, [[0.0, 0.0, 2.2 + 2 * report.pitch]]).any()
+    assert RayCaster(closed).inside([[0.0, 0.0, 2.2]]).all()  # the sheet is a slab now
+    assert not RayCaster(closed).inside([[0.0, 0.0, 2.2 + 2 * report.pitch]]).any()
 
 
 def test_a_mesh_turned_inside_out_is_refused_with_the_step_that_fixes_it():

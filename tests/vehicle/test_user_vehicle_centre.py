@@ -16,7 +16,7 @@ from in_process import run_rigopt
 pytestmark = pytest.mark.usefixtures("rigopt_home")
 
 REPO = Path(__file__).resolve().parents[2]
-NUSCENES = REPO / "baselines" / "rigs" / "real" / "nuscenes.json"  # measured from the rear axle
+NUSCENES = REPO / "measurements" / "rigs" / "real" / "nuscenes.json"  # measured from the rear axle
 SHIFT = (1.3, 0.2, 0.0)
 #: Cameras on the hugging car (CARLA frame: y right), from its box centre.
 RIG = {"cameras": [

@@ -55,3 +55,23 @@ def test_clip_to_box_keeps_the_part_inside():
     inside = _clip_to_box(triangle, np.array([0.0, 0.0, -1.0]), np.array([1.0, 1.0, 1.0]))
     assert _area(inside) == pytest.approx(1.0)  # the unit square lies wholly below the hypotenuse x + y = 2
     assert len(_clip_to_box(triangle, np.array([3.0, 3.0, -1.0]), np.array([4.0, 4.0, 1.0]))) < 3
+
+
+def test_the_zone_palette_is_matplotlibs_tab20():
+    """The zones' colours come without matplotlib (the 3D view needs no plotting library): still its tab20."""
+    from matplotlib import colormaps
+
+    from rigopt.report.palette import TAB20
+
+    palette = colormaps["tab20"]
+    assert [tuple(palette(k)) for k in range(20)] == [(*rgb, 1.0) for rgb in TAB20]
+
+
+def test_no_plotting_library_for_the_reports_tables_and_3d_view():
+    import subprocess
+    import sys
+
+    code = ("import sys, rigopt.report.design_report, rigopt.report.scene_3d, rigopt.report.design_html, "
+            "rigopt.report.coverage_tables; print('matplotlib' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "False"

@@ -76,3 +76,58 @@ def test_fine_mesh_edges_are_short(box_car):
 
 def test_fine_mesh_keeps_the_surface(box_car):
     assert box_car.fine_mesh.area == pytest.approx(box_car.mesh.area, rel=1e-9)
+
+
+# --- the fine mesh and its zones, against trimesh and the plain per-zone loop ------------------------------------
+
+@pytest.mark.parametrize("max_edge", [0.05, 0.3, 0.7])
+def test_subdivision_is_trimeshs(box_car, max_edge):
+    """The fine mesh is trimesh's subdivide_to_size, vertex for vertex and face for face (its faces' order
+    decides the zone samples), also where one face gets one, two or three of its edges split in a round."""
+    import trimesh
+
+    from rigopt.vehicle.model import subdivide_to_size
+
+    sheared = box_car.mesh.vertices * [1.0, 1.0, 1.0] + box_car.mesh.vertices[:, [1]] * [0.37, 0.0, 0.11]
+    for vertices in (box_car.mesh.vertices, sheared):
+        expected = trimesh.remesh.subdivide_to_size(vertices, box_car.mesh.faces, max_edge)
+        got = subdivide_to_size(vertices, box_car.mesh.faces, max_edge)
+        np.testing.assert_array_equal(got[0], expected[0])
+        np.testing.assert_array_equal(got[1], expected[1])
+        edges = got[0][got[1]] - got[0][got[1][:, [1, 2, 0]]]
+        assert np.linalg.norm(edges, axis=2).max() <= max_edge
+        assert len(got[1]) > 4 * len(box_car.mesh.faces)  # it did subdivide
+
+
+def test_subdivision_stops_at_max_iter(box_car):
+    from rigopt.vehicle.model import subdivide_to_size
+
+    with pytest.raises(ValueError, match="max_iter"):
+        subdivide_to_size(box_car.mesh.vertices, box_car.mesh.faces, 0.05, max_iter=2)
+
+
+def test_fine_face_zones_are_the_first_zone_of_each_face(box_car):
+    fine = box_car.fine_mesh
+    expected = [None] * len(fine.faces)
+    for zone in box_car.zones:  # the definition: the first zone whose box and cone hold the face's centre and normal
+        for k in np.flatnonzero(zone.contains(fine.triangles_center, fine.face_normals)):
+            expected[k] = expected[k] or zone.name
+    assert box_car.fine_face_zones.tolist() == expected
+    assert len({name for name in expected if name}) >= 2 and None in expected
+
+
+def test_a_pickled_vehicle_is_its_spec_and_mesh(box_car):
+    """To a worker process a vehicle travels as its spec and mesh (no caches: a mesh's spatial index does not
+    survive pickling) and answers there as here."""
+    import pickle
+
+    box_car.fine_face_zones, box_car.ray_caster  # derived data built here first
+    copy = pickle.loads(pickle.dumps(box_car))
+    assert copy.name == box_car.name and [z.name for z in copy.zones] == [z.name for z in box_car.zones]
+    assert "fine_mesh" not in copy.__dict__ and "ray_caster" not in copy.__dict__
+    np.testing.assert_array_equal(copy.mesh.vertices, box_car.mesh.vertices)
+    np.testing.assert_array_equal(copy.mesh.faces, box_car.mesh.faces)
+    np.testing.assert_array_equal(copy.mesh.face_normals, box_car.mesh.face_normals)
+    points = [[2.03, 0.1, 1.0], [1.9, 0.1, 1.0], [0.5, -0.95, 0.8]]
+    np.testing.assert_array_equal(copy.surface(points).distance, box_car.surface(points).distance)
+    assert copy.fine_face_zones.tolist() == box_car.fine_face_zones.tolist()

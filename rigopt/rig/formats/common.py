@@ -5,7 +5,8 @@ Frames
 rigopt's vehicle frame is ISO 8855 (x forward, y left, z up, metres); a camera's body frame has x along the
 optical axis, y left, z up; the optical frame (OpenCV, ROS ``*_optical_frame``) has z along the axis, x right,
 y down. ``R_CAM_OPTICAL`` maps optical directions into the body frame, so a file's ``R_ego_optical`` gives
-rigopt's ``R_vehicle_cam = R_ego_optical @ R_CAM_OPTICAL.T`` (:func:`body_rotation`).
+rigopt's ``R_vehicle_cam = R_ego_optical @ R_CAM_OPTICAL.T`` (:func:`rigopt.geometry.body_from_optical`; the frames
+and every rotation are rigopt.geometry's).
 
 Pixels
 ------
@@ -25,7 +26,7 @@ import numpy as np
 
 from rigopt.camera import Lens
 from rigopt.errors import RigFileError, RigoptError, not_utf8
-from rigopt.geometry import R_CAM_OPTICAL, quaternion_to_matrix
+from rigopt.geometry import body_from_optical, nearest_rotation, quaternion_to_matrix
 from rigopt.output import existing_file
 from rigopt.rig.model import Camera, Rig, RigOrigin
 
@@ -131,24 +132,13 @@ def rotation_matrix(values, where: str) -> np.ndarray:
     r = numbers(values, (3, 3), where)
     if np.max(np.abs(r @ r.T - np.eye(3))) > 1e-3 or np.linalg.det(r) < 0:
         raise RigFileError(f"{where}: not a rotation (orthonormal with determinant +1)")
-    u, _, vt = np.linalg.svd(r)
-    return u @ vt
+    return nearest_rotation(r)
 
 
 def optical_quaternion_rotation(q: np.ndarray) -> np.ndarray:
     """rigopt's ``R_vehicle_cam`` (3, 3) of a camera whose optical frame's orientation in the ego frame is the
     (w, x, y, z) unit quaternion ``q`` (nuScenes, Argoverse 1 and 2, DGP)."""
-    return body_rotation(quaternion_to_matrix(q))
-
-
-def body_rotation(r_ego_optical: np.ndarray) -> np.ndarray:
-    """rigopt's ``R_vehicle_cam`` of a camera whose optical frame maps into the vehicle frame by ``r_ego_optical``."""
-    return np.asarray(r_ego_optical, dtype=float) @ R_CAM_OPTICAL.T
-
-
-def optical_rotation(camera: Camera) -> np.ndarray:
-    """``R_vehicle_optical`` (3, 3) of a rigopt camera."""
-    return camera.rotation @ R_CAM_OPTICAL
+    return body_from_optical(quaternion_to_matrix(q))
 
 
 def make_lens(where: str, width, height, fx, fy, cx, cy, distortion="none", coefficients=()) -> Lens:

@@ -30,10 +30,10 @@ import numpy as np
 
 from rigopt.camera import intrinsic_matrix
 from rigopt.errors import RigFileError
-from rigopt.geometry import matrix_to_quaternion
+from rigopt.geometry import matrix_to_quaternion, optical_from_body
 from rigopt.output import existing_folder
 from rigopt.rig.formats.common import (Exported, Imported, choose_calibration, make_camera, make_lens, make_rig,
-                                       numbers, optical_quaternion_rotation, optical_rotation, origin_note, read_json,
+                                       numbers, optical_quaternion_rotation, origin_note, read_json,
                                        same_cameras, unit_quaternion, warn_not_carried, warn_origin)
 from rigopt.rig.model import Camera, Rig, RigOrigin
 
@@ -346,7 +346,7 @@ def _tables(rig: Rig, image_size) -> tuple[list, list, list]:
             "token": nuscenes_token("calibrated_sensor", camera.id),
             "sensor_token": sensor_token,
             "translation": [float(v) + 0.0 for v in camera.position],  # + 0.0 drops -0.0
-            "rotation": [float(v) for v in matrix_to_quaternion(optical_rotation(camera))],
+            "rotation": [float(v) for v in matrix_to_quaternion(optical_from_body(camera.rotation))],
             "camera_intrinsic": k,
         })
     return sensors, records, []

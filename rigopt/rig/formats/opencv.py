@@ -30,9 +30,9 @@ from pathlib import Path
 import numpy as np
 
 from rigopt.errors import RigFileError
-from rigopt.geometry import R_CAM_OPTICAL
-from rigopt.rig.formats.common import (Exported, Imported, body_rotation, make_camera, make_lens, make_rig, numbers,
-                                       optical_rotation, origin_note, read_text, rotation_matrix, warn_not_carried,
+from rigopt.geometry import R_CAM_OPTICAL, body_from_optical, optical_from_body
+from rigopt.rig.formats.common import (Exported, Imported, make_camera, make_lens, make_rig, numbers,
+                                       origin_note, read_text, rotation_matrix, warn_not_carried,
                                        warn_origin, whole_number)
 from rigopt.rig.model import Rig, RigOrigin
 
@@ -71,7 +71,7 @@ def read_camchain(path, name: str | None = None, vehicle: str = "opencv", origin
         camera_id = block.get("camera_name", key)
         if not isinstance(camera_id, str) or not camera_id:
             raise RigFileError(f"{where} camera_name must be a non-empty string, got {camera_id!r}")
-        cameras.append(make_camera(where, camera_id, t_body_optical[:3, 3], body_rotation(t_body_optical[:3, :3]), lens))
+        cameras.append(make_camera(where, camera_id, t_body_optical[:3, 3], body_from_optical(t_body_optical[:3, :3]), lens))
         previous = t_body_optical
         k += 1
     origin = origin or RigOrigin()
@@ -168,7 +168,7 @@ def export_camchain(rig: Rig) -> tuple[str, list[str]]:
     for k, camera in enumerate(rig.cameras):
         lens = camera.lens_model
         t_body_optical = np.eye(4)
-        t_body_optical[:3, :3] = optical_rotation(camera)
+        t_body_optical[:3, :3] = optical_from_body(camera.rotation)
         t_body_optical[:3, 3] = camera.position
         model = {"none": "none", "radtan": "radtan", "fisheye": "equidistant"}[lens.distortion]
         coefficients = list(lens.coefficients)

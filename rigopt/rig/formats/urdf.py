@@ -39,7 +39,7 @@ from pathlib import Path
 import numpy as np
 
 from rigopt.errors import RigFileError, RigoptError
-from rigopt.geometry import R_CAM_OPTICAL, rotation_from_rpy, rpy_from_rotation
+from rigopt.geometry import body_from_optical, rotation_from_rpy, rpy_from_rotation
 from rigopt.rig.formats.common import (Exported, Imported, format_number, make_camera, make_lens, make_rig, numbers,
                                        origin_note, read_text, warn_not_carried, warn_origin, whole_number)
 from rigopt.rig.model import Rig, RigOrigin
@@ -128,7 +128,7 @@ def read_urdf(path, name: str | None = None, vehicle: str = "urdf", origin: RigO
         pose = _pose_of(link, parent_of)
         camera_id = link
         if link.endswith(OPTICAL_SUFFIX):  # the sensor sits on the optical frame: back to the body frame
-            pose[:3, :3] = pose[:3, :3] @ R_CAM_OPTICAL.T
+            pose[:3, :3] = body_from_optical(pose[:3, :3])
             camera_id = link[: -len(OPTICAL_SUFFIX)]
         lens = _lens(sensor.find("camera"), where)
         cameras.append(make_camera(where, camera_id, pose[:3, 3], pose[:3, :3], lens))

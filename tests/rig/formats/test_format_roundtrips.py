@@ -106,8 +106,8 @@ def test_lossy_exports_say_what_they_drop(tmp_path):
 
 
 def test_carla_export_renders_like_the_original(tmp_path):
-    from rigopt.bench.render import render_rig
-    from rigopt.bench.scenes import split_scenes
+    from rigopt.validation.synthetic.render import render_rig
+    from rigopt.validation.synthetic.scenes import split_scenes
 
     r1 = load_rig("R1")
     back, _ = round_trip(tmp_path, r1, "carla")

@@ -1,5 +1,5 @@
-"""The dataset rigs of baselines/rigs/real: each committed rig file is what ``rigopt import`` makes of its source
-folder (the commands of baselines/rigs/real/README.md), so neither can drift from the other; and the rigs
+"""The dataset rigs of measurements/rigs/real: each committed rig file is what ``rigopt import`` makes of its source
+folder (the commands of measurements/rigs/real/README.md), so neither can drift from the other; and the rigs
 hold the datasets' documented camera sets and image sizes."""
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ from in_process import run_rigopt
 
 from rigopt.rig.pccr_format import read_rig
 
-REAL = Path(__file__).resolve().parents[3] / "baselines" / "rigs" / "real"
+REAL = Path(__file__).resolve().parents[3] / "measurements" / "rigs" / "real"
 
 #: dataset: (the import command's arguments after ``rigopt import``, {camera: (width, height)} as documented)
 IMPORTS = {

@@ -1,0 +1,156 @@
+"""Validating a designed rig: does a reference-trained detector lose on it what RigCD predicts?
+
+The test split of the reference rig is rendered again, the same scenes and image size, under the design,
+the benchmark's hand-designed rigs for the design's vehicle and the naive transfer of the reference
+(each reference camera moved to the nearest valid mount facing its way). The detector trained on the
+reference is evaluated on each; the measured relative drop (mAP(ref -> ref) - mAP(ref -> rig)) /
+mAP(ref -> ref) stands beside the drop that the calibrated RigCD predicts. The test scenes are resampled
+whole (paired across rigs: frames of one scene see nearly the same objects, so the scene is the unit) for a
+95 % interval of each drop and of the design's drop minus each other rig's: the noise of the test scenes,
+not of training.
+
+mAP is the fixed-set score (every rig is scored against the same objects, so a blind zone costs what
+it misses); the visible-only mAP and its drop (``mAP_visible``, ``measured_drop_visible``) stand beside
+it, so that the loss from coverage (the gap between the two) and from viewpoint can be told apart.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from rigopt.validation.detectors.data import RigSplit, split_root
+from rigopt.validation.synthetic.evaluation import interval, relative_drops, resampled_maps, sample_blocks
+from rigopt.validation.detectors.protocol import TEST_SPLIT, match_on_rigs, run_folder
+from rigopt.errors import DataError, RigFileError
+from rigopt.metrics.calibration import Calibration
+from rigopt.metrics.reliability import DEFAULT_BOOTSTRAP, DEFAULT_SEED, finite_or_none
+from rigopt.rig.library import load_rig
+from rigopt.rig.model import Rig
+
+
+
+def load_design(path) -> Rig:
+    """A rig from a rig file, a design report (``report.json`` beside its ``rig.json``) or a library rig's name;
+    a file named rig.json or report.json takes its folder's name (e.g. ``firetruck_from_R1``)."""
+    from rigopt.rig.library import rig_names
+
+    path = Path(path)
+    if not path.exists() and str(path) in rig_names():
+        return load_rig(str(path))
+    if not path.is_file():
+        raise RigFileError(f"{path}: no such design file; pass a rig file or the report.json of rigopt design")
+    rig_path = path
+    if path.name == "report.json":
+        rig_path = path.with_name("rig.json")
+        if not rig_path.is_file():
+            try:
+                rig_path = path.parent / json.loads(path.read_text())["rig_file"]  # relative to the report
+            except (json.JSONDecodeError, UnicodeDecodeError, KeyError, TypeError):
+                raise RigFileError(f"{path}: a report without rig_file and no rig.json beside it") from None
+    rig = load_rig(rig_path)
+    if rig_path.stem in ("rig", "report"):
+        rig = dataclasses.replace(rig, name=rig_path.parent.resolve().name)
+    return rig
+
+
+def comparison_rigs(design: Rig, reference: Rig, calibration: Calibration | None = None) -> list[tuple[str, Rig]]:
+    """(role, rig): the design, the library's hand-designed rigs for its vehicle, the naive transfer (with the
+    ``calibration``, refined as a design is: ``designer.refine_comparison``, the same continuous stage,
+    keeping what it sees of the reference's coverage, so that the comparison credits the design's objective
+    and not its extra refinement) and the height-matched transfer (each camera at the mount nearest its
+    height: does matching heights alone explain the design's gain?)."""
+    from rigopt.design.designer import default_spacing, mount_candidates, naive_transfer, refine_comparison
+    from rigopt.design.problem import ReferenceRig, benchmark_rigs
+    from rigopt.design.requirements import design_requirements
+    from rigopt.design.settings import DesignSettings
+    from rigopt.vehicle.library import load_vehicle
+
+    vehicle = load_vehicle(design.vehicle)
+    settings = DesignSettings(symmetric=False, require="none")
+    rigs = [("design", design)] + [("hand-designed", rig) for rig in benchmark_rigs(vehicle)]
+    candidates = mount_candidates(vehicle, settings)
+    naive = naive_transfer(vehicle, reference, candidates, settings)
+    if naive is not None and calibration is not None:
+        requirements = design_requirements([ReferenceRig.on_own_vehicle(reference)], vehicle, settings)
+        naive, _ = refine_comparison(naive, vehicle, reference, calibration, requirements,
+                                     default_spacing(vehicle, settings), settings)
+    if naive is not None:
+        rigs.append(("naive transfer", naive))
+    height_matched = naive_transfer(vehicle, reference, candidates, settings, match="height")
+    if height_matched is not None:
+        rigs.append(("height-matched transfer", height_matched))
+    return rigs
+
+
+def validate_design(design: Rig, reference: str, family: str, data, calibration: Calibration, runs=None,
+                    device: str = "cpu", progress: Callable[[str], None] = lambda message: None,
+                    resamples: int = DEFAULT_BOOTSTRAP, seed: int = DEFAULT_SEED) -> dict:
+    """Measured and predicted drops of the reference-trained ``family`` detector on the design and its
+    comparison rigs. Renders missing test splits into ``data``; returns a JSON-ready dict.
+
+    Each measured drop has a 95 % interval from resampling whole test scenes (the same draw for every rig);
+    ``bootstrap.measured_drops`` keeps each rig's resampled drops (the same draws, in the same order, for
+    every validation of this test split and seed); ``design_minus`` holds the design's drop minus each other rig's,
+    with its paired interval (below 0: the design loses less).
+    """
+    from rigopt.validation.synthetic.generate import ego_mesh_lookup, generate_split, split_layout
+    from rigopt.validation.synthetic.render import render_rig
+    from rigopt.metrics.ranking import predict_transfer
+
+    reference_rig = load_rig(reference)
+    runs = Path(runs) if runs is not None else Path(data) / "runs"
+    checkpoint = run_folder(runs, family, reference_rig.name) / "checkpoint.pt"
+    if not checkpoint.is_file():
+        raise DataError(f"{checkpoint}: no {family} model trained on {reference_rig.name}; train it first with "
+                        f"rigopt bench train --data {data} --rig {reference_rig.name} --model {family}")
+    scenes, size = split_layout(split_root(data, reference_rig.name, TEST_SPLIT))
+    rigs = comparison_rigs(design, reference_rig, calibration)
+    names = [rig.name for _, rig in rigs]
+    if len(set(names)) != len(names) or reference_rig.name in names:
+        raise DataError(f"rig names must differ from each other and from the reference: {names}")
+    progress(f"rendering the {len(scenes)}-scene test split under {', '.join(names)} (finished ones are kept)")
+    generate_split([rig for _, rig in rigs], scenes, data, size, render_rig, ego_mesh_lookup(progress))
+
+    progress(f"evaluating the {family} model trained on {reference_rig.name}")
+    test_rigs = [reference_rig.name, *names]
+    matched = match_on_rigs(checkpoint, data, test_rigs, device, family)
+    maps = np.array([matched[name].evaluation().map for name in test_rigs])
+    maps_visible = np.array([matched[name].evaluation(visible_only=True).map for name in test_rigs])
+    blocks = sample_blocks(RigSplit(data, reference_rig.name, TEST_SPLIT).samples)
+    progress(f"bootstrapping the drops over the {len(blocks)} test scenes")
+    runs_matched = [matched[name] for name in test_rigs]
+    resampled = resampled_maps(runs_matched, blocks, resamples, seed)
+    resampled_visible = resampled_maps(runs_matched, blocks, resamples, seed, visible_only=True)
+    drops, resampled_drops = relative_drops(maps), relative_drops(resampled)
+    drops_visible, resampled_drops_visible = relative_drops(maps_visible), relative_drops(resampled_visible)
+    predictions = predict_transfer(reference_rig, [rig for _, rig in rigs], calibration)
+    entries = []
+    for k, ((role, rig), prediction) in enumerate(zip(rigs, predictions), start=1):
+        predicted = prediction.to_dict()
+        entries.append({"role": role, "rig": rig.name, "n_cameras": len(rig), "mAP": finite_or_none(maps[k]),
+                        "mAP_visible": finite_or_none(maps_visible[k]),
+                        "measured_drop": finite_or_none(drops[k]), "measured_drop_ci": interval(resampled_drops[:, k]),
+                        "measured_drop_visible": finite_or_none(drops_visible[k]),
+                        "measured_drop_visible_ci": interval(resampled_drops_visible[:, k]),
+                        "predicted_drop": prediction.predicted_drop,
+                        "predicted_interval": predicted["interval"],
+                        "interval_informative": predicted["interval_informative"],
+                        "extrapolation": predicted["extrapolation"],
+                        "rigcd": prediction.rigcd})
+    design_minus = [{"rig": names[k - 1], "role": rigs[k - 1][0], "difference": finite_or_none(drops[1] - drops[k]),
+                     "ci": interval(resampled_drops[:, 1] - resampled_drops[:, k])} for k in range(2, len(test_rigs))]
+    return {"reference": reference_rig.name, "model": family, "checkpoint": str(checkpoint),
+            "metric": calibration.metric, "weights": calibration.name, "reference_mAP": finite_or_none(maps[0]),
+            "reference_mAP_visible": finite_or_none(maps_visible[0]),
+            "test_scenes": len(scenes), "image_size": list(size), "rigs": entries,
+            "design_minus": design_minus,
+            "bootstrap": {"resamples": resamples, "seed": seed, "unit": "scene", "blocks": len(blocks),
+                          "measured_drops": {name: [round(float(v), 4) if np.isfinite(v) else None for v in column]
+                                             for name, column in zip(names, resampled_drops[:, 1:].T)}}}
+
+

@@ -1,0 +1,230 @@
+"""Shipped detectors (rigopt/validation/detectors/shipped.py) and ``rigopt validate`` without ``--data``, on tiny models:
+packing, the cache, agreement with the --data path, the command's output and its errors."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import os
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+from console import run_console
+
+torch = pytest.importorskip("torch")
+
+from rigopt.validation.detectors import shipped  # noqa: E402
+from rigopt.cli import INPUT_ERROR, run  # noqa: E402
+from rigopt.rig.library import load_rig  # noqa: E402
+
+SIZE, FRAMES = (64, 36), 4
+
+
+@pytest.fixture(scope="module")
+def packed(tmp_path_factory):
+    """(data, detectors root): R1's test split (one scene of 4 frames, ego body rendered) and tiny lss models of
+    seeds 0 and 1 fitted to it (60 steps on its one batch, so that their own mAP is above 0), packed into
+    <root>/lss-R1."""
+    from rigopt.validation.detectors.config import model_config
+    from rigopt.validation.detectors.data import RigSplit
+    from rigopt.validation.detectors.training import train
+    from rigopt.validation.synthetic.generate import ego_mesh_lookup, generate_split
+    from rigopt.validation.synthetic.render import render_rig
+    from rigopt.validation.synthetic.scenes import split_scenes
+
+    base = tmp_path_factory.mktemp("shipped")
+    data = base / "data"
+    generate_split([load_rig("R1")], split_scenes("test", 1, FRAMES), data, SIZE, render_rig, ego_mesh_lookup())
+    config = model_config("lss", "tiny", lr=1e-2, weight_decay=0.0, batch_size=FRAMES, epochs=60)
+    runs = {seed: base / f"run{seed}" for seed in (0, 1)}
+    for seed, folder in runs.items():
+        train(RigSplit(data, "R1", "test"), config, folder, seed=seed)
+    root = base / "detectors"
+    shipped.pack(runs, data, root / "lss-R1", {"preset": "tiny", "epochs": 60}, {"split": "test", "scenes": 1},
+                 resamples=200)
+    return data, root
+
+
+@pytest.fixture
+def use_packed(packed, monkeypatch):
+    monkeypatch.setenv("RIGOPT_DETECTORS", str(packed[1]))
+    return packed
+
+
+def test_pack_writes_half_weights_and_a_card_with_the_packed_models_own_scores(use_packed):
+    from rigopt.validation.detectors.protocol import evaluate_on
+
+    data, _ = use_packed
+    detector = shipped.shipped_detector("lss", "R1")
+    assert shipped.shipped_names() == ["lss-R1"] and detector.seeds == [0, 1]
+    state = torch.load(detector.checkpoint(0), weights_only=True)
+    assert "optimizer" not in state and all(v.dtype == torch.float16 for v in state["model"].values()
+                                            if v.is_floating_point())
+    card = detector.card
+    assert card["test_data"] == {"split": "test", "scenes": 1, "frames": FRAMES, "seed_offset": 0,
+                                 "image_size": list(SIZE), "samples": FRAMES}
+    for seed in (0, 1):
+        own = evaluate_on(detector.checkpoint(seed), data, "R1", family="lss")
+        assert card["seeds"][str(seed)]["mAP"] == pytest.approx(own["mAP"], abs=1e-12)
+        assert np.load(detector.folder / "bootstrap.npz")[f"seed{seed}_mAP_visible"].shape == (200,)
+    assert card["size_bytes"] == detector.size_bytes() > 0
+
+
+def test_the_reference_measured_against_itself_loses_nothing_and_a_rerun_renders_nothing(use_packed, tmp_path):
+    detector = shipped.shipped_detector("lss", "R1")
+    messages = []
+    first = shipped.measure([load_rig("R1")], detector, tmp_path / "cache", progress=messages.append)[0]
+    for seed in ("0", "1"):
+        assert first["seeds"][seed]["drop"] == pytest.approx(0, abs=1e-12)
+        assert first["seeds"][seed]["drop_ci"] == pytest.approx([0, 0], abs=1e-12)
+    assert first["drop"] == pytest.approx(0, abs=1e-12)
+    messages.clear()
+    again = shipped.measure([load_rig("R1")], detector, tmp_path / "cache", progress=messages.append)[0]
+    assert any("done before, skipped" in m for m in messages) and not any("rendered" in m for m in messages)
+    assert shipped.without_resamples(again) == shipped.without_resamples(first)
+    for seed, entry in first["seeds"].items():
+        assert np.array_equal(entry["resampled_drops"], again["seeds"][seed]["resampled_drops"])
+
+
+def test_scoring_the_seeds_in_two_processes_gives_what_one_gives(use_packed, tmp_path):
+    detector = shipped.shipped_detector("lss", "R1")
+    rig = load_rig("R5")
+    messages = []
+    parallel = shipped.measure([rig], detector, tmp_path / "cache", workers=2, progress=messages.append)[0]
+    assert any("in 2 processes" in m for m in messages)
+    serial = shipped.measure([rig], detector, tmp_path / "cache", workers=1)[0]
+    assert shipped.without_resamples(parallel) == shipped.without_resamples(serial) and parallel["drop"] > 0
+
+
+def test_a_rig_scores_as_the_data_path_scores_it(use_packed, tmp_path):
+    """The cache path and ``--data``'s (render the rig beside the reference, evaluate the checkpoint) agree."""
+    from rigopt.validation.detectors.protocol import evaluate_on_rigs
+    from rigopt.validation.synthetic.generate import ego_mesh_lookup, generate_split, split_layout
+    from rigopt.validation.synthetic.render import render_rig
+
+    data, _ = use_packed
+    detector = shipped.shipped_detector("lss", "R1")
+    rig = load_rig("R5")
+    measured = shipped.measure([rig], detector, tmp_path / "cache")[0]
+    copy = tmp_path / "data"
+    shutil.copytree(data / "R1", copy / "R1")
+    scenes, size = split_layout(copy / "R1" / "test")
+    generate_split([rig], scenes, copy, size, render_rig, ego_mesh_lookup())
+    for seed in (0, 1):
+        metrics = evaluate_on_rigs(detector.checkpoint(seed), copy, ["R1", "R5"], family="lss")
+        own, other = metrics["R1"]["mAP"], metrics["R5"]["mAP"]
+        assert measured["seeds"][str(seed)]["mAP"] == pytest.approx(other, abs=1e-12)
+        assert measured["seeds"][str(seed)]["drop"] == pytest.approx((own - other) / own, abs=1e-12)
+
+
+def test_the_cache_key_follows_the_geometry_not_the_name():
+    r1 = load_rig("R1")
+    renamed = dataclasses.replace(r1, name="another")
+    moved = dataclasses.replace(r1, cameras=(dataclasses.replace(
+        r1.cameras[0], position=r1.cameras[0].position + np.array([0.001, 0, 0])), *r1.cameras[1:]))
+    assert shipped.rig_key(renamed) == shipped.rig_key(r1) != shipped.rig_key(moved)
+    assert shipped.cache_name(dataclasses.replace(r1, name="a b/c")).startswith("a_b_c-")
+
+
+def test_validate_without_data_through_the_console_script(packed, tmp_path):
+    """The installed script in a real process: stdout is JSON only."""
+    _, root = packed
+    env = {**os.environ, "RIGOPT_DETECTORS": str(root), "RIGOPT_HOME": str(tmp_path / "home")}
+    process = run_console("validate", "R5", "--ref", "R1", "--model", "lss", "--json", "--workers", "1", env=env,
+                          timeout=600)
+    assert process.returncode == 0, process.stderr
+    result = json.loads(process.stdout)
+    assert result["models"] == "shipped" and result["seeds"] == [0, 1]
+    entry = result["rigs"][0]
+    assert entry["rig"] == "R5" and entry["role"] == "rig" and set(entry["seeds"]) == {"0", "1"}
+    assert entry["drop"] == pytest.approx(np.mean([s["drop"] for s in entry["seeds"].values()]))
+    assert entry["predicted_drop"] is not None
+    assert Path(entry["cache"]).parent == tmp_path / "home" / "cache" / "validate"
+
+
+@pytest.mark.parametrize("args, message", [
+    (["validate", "R5", "--ref", "R5", "--model", "lss"], "rigopt ships no lss models trained on R5 (shipped: lss-R1)"),
+    (["validate", "R5", "--ref", "R1", "--model", "lss", "--runs", "{tmp}"], "--runs names trained runs of a --data"),
+    (["validate", "R5", "--ref", "R1", "--model", "lss", "--data", "{tmp}", "--compare"], "--compare is for the shipped"),
+    (["validate", "R5", "--ref", "R1", "--model", "lss", "--cache", "{file}"], "--cache"),
+])
+def test_bad_input_exits_2_with_one_line(use_packed, tmp_path, capsys, args, message):
+    (tmp_path / "file").write_text("x")
+    capsys.readouterr()
+    code = run([a.format(tmp=tmp_path, file=tmp_path / "file") for a in args])
+    stderr = capsys.readouterr().err
+    assert code == INPUT_ERROR, stderr
+    lines = stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("rigopt: error: ") and message in lines[0]
+
+
+def test_near_field_cameras_are_not_fed_to_the_detector(use_packed, tmp_path, capsys):
+    """A rig with near_field cameras is measured on its perception cameras, and whole for the record."""
+    from rigopt.rig.pccr_format import write_rig
+
+    r5 = load_rig("R5")
+    mixed = dataclasses.replace(r5, name="mixed", cameras=(dataclasses.replace(r5.cameras[0], role="near_field"),
+                                                           *r5.cameras[1:]))
+    path = write_rig(mixed, tmp_path / "mixed.json")
+    capsys.readouterr()
+    code = run(["validate", str(path), "--ref", "R1", "--model", "lss", "--json", "--workers", "1",
+                "--cache", str(tmp_path / "cache")])
+    captured = capsys.readouterr()
+    assert code == 0, captured.err
+    entries = json.loads(captured.out)["rigs"]
+    assert [(e["role"], e["n_cameras"]) for e in entries] == [("perception cameras", 3), ("whole rig", 4)]
+    assert "1 near_field camera(s) are not fed to the detector" in captured.err
+
+
+def test_a_rig_with_near_field_fisheyes_is_measured_on_its_perception_cameras_only(use_packed, tmp_path, capsys):
+    """The shipped models take pinhole images: a design's fisheyes are named, the whole rig is not measured."""
+    from rigopt.design.near_field import fisheye_190
+    from rigopt.rig.pccr_format import write_rig
+
+    r5 = load_rig("R5")
+    fisheye = dataclasses.replace(r5.cameras[0], id="FISHEYE", role="near_field", lens=fisheye_190().lens,
+                                  fov=fisheye_190().fov, image_size=(fisheye_190().lens.width, fisheye_190().lens.height))
+    path = write_rig(dataclasses.replace(r5, name="with_fisheye", cameras=(*r5.cameras, fisheye)), tmp_path / "f.json")
+    capsys.readouterr()
+    code = run(["validate", str(path), "--ref", "R1", "--model", "lss", "--json", "--workers", "1",
+                "--cache", str(tmp_path / "cache")])
+    captured = capsys.readouterr()
+    assert code == 0, captured.err
+    assert [(e["role"], e["n_cameras"]) for e in json.loads(captured.out)["rigs"]] == [("perception cameras", 4)]
+    assert "not measured whole" in captured.err and "FISHEYE" in captured.err
+
+
+def test_the_table_says_when_the_prediction_interval_is_uninformative(use_packed, tmp_path, capsys):
+    """The joint calibration's interval spans the whole range: the cell and a note say so, JSON keeps it."""
+    capsys.readouterr()
+    code = run(["validate", "R5", "--ref", "R1", "--model", "lss", "--workers", "1", "--cache", str(tmp_path / "c")])
+    captured = capsys.readouterr()
+    assert code == 0, captured.err
+    assert "uninformative" in captured.out and "interval uninformative (wider than the range" in captured.err
+    code = run(["validate", "R5", "--ref", "R1", "--model", "lss", "--workers", "1", "--cache", str(tmp_path / "c"),
+                "--json"])
+    entry = json.loads(capsys.readouterr().out)["rigs"][0]
+    assert entry["interval_informative"] is False and len(entry["predicted_interval"]) == 2
+
+
+def test_compare_pairs_the_rig_with_each_yardstick_on_the_same_scene_resamples(use_packed, tmp_path, capsys):
+    from rigopt.rig.pccr_format import write_rig
+
+    path = write_rig(dataclasses.replace(load_rig("R5"), name="mine"), tmp_path / "mine.json")
+    capsys.readouterr()
+    code = run(["validate", str(path), "--ref", "R1", "--model", "lss", "--json", "--workers", "1", "--compare",
+                "--cache", str(tmp_path / "cache")])
+    captured = capsys.readouterr()
+    assert code == 0, captured.err
+    result = json.loads(captured.out)
+    first, others = result["rigs"][0], result["rigs"][1:]
+    assert [p["rig"] for p in result["paired"]] == [o["rig"] for o in others] and others
+    for paired, other in zip(result["paired"], others):
+        for seed, entry in paired["seeds"].items():
+            assert entry["difference"] == pytest.approx(first["seeds"][seed]["drop"] - other["seeds"][seed]["drop"],
+                                                         abs=1e-12)
+            assert entry["ci"][0] <= entry["ci"][1]
+        assert paired["difference"] == pytest.approx(np.mean([s["difference"] for s in paired["seeds"].values()]))
+    assert all("resampled_drops" not in s for r in result["rigs"] for s in r["seeds"].values())
