@@ -13,7 +13,7 @@ from rigopt.cli.app import (FORCE_HELP, MIN_HEIGHT_HELP, NO_TRAILER_HELP, app, f
 from rigopt.cli.metric_commands import METRIC_HELP
 from rigopt.cli.parsing import parse_image_size
 from rigopt.design.defaults import BENCHMARK_IMAGE_SIZE as DEFAULT_IMAGE_SIZE
-from rigopt.design.defaults import DEFAULT_LENSES, DEFAULT_MAX_NODES, DEFAULT_PITCHES_DEG, DEFAULT_YAW_STEP_DEG
+from rigopt.design.defaults import DEFAULT_LENSES, DEFAULT_MAX_NODES, DEFAULT_PITCHES_DEG, DEFAULT_YAW_STEP_DEG, POSES
 from rigopt.errors import RigoptError
 
 if TYPE_CHECKING:
@@ -117,10 +117,19 @@ def design_command(
     asymmetric: bool = typer.Option(False, "--asymmetric",
                                     help="Place cameras freely; by default a mirror-symmetric vehicle gets cameras "
                                          "in mirrored pairs and on its centreline."),
-    free_perception: bool = typer.Option(False, "--free-perception",
-                                         help="Place the perception cameras freely (the reference's own layout, "
-                                              "which a mirrored body may not offer) while the near-field cameras "
-                                              "keep their mirrored pairs."),
+    pose: str = typer.Option("nearest", "--pose",
+                             help="The perception cameras' pose in a two-role design: nearest (each at the nearest "
+                                  "pose the body allows to its matched reference camera's: 0.05 m of height, its "
+                                  "pitch, 5 deg of yaw, its lens; the reference's coverage kept from 20 m; placed "
+                                  "freely beside mirrored near-field cameras; measured in "
+                                  "studies/validation/designs) or free (no tolerance, every ring, mirrored pairs: "
+                                  "the earlier default). --match-*, --perception-range and --free-perception "
+                                  "override it; one camera set (--single-set, --pareto) is always free."),
+    free_perception: Optional[bool] = typer.Option(None, "--free-perception/--mirrored-perception",
+                                                   help="Place the perception cameras freely (the reference's own "
+                                                        "layout, which a mirrored body may not offer) while the "
+                                                        "near-field cameras keep their mirrored pairs; default: as "
+                                                        "--pose says."),
     match_height: Optional[float] = typer.Option(None, "--match-height", min=0.0, callback=finite(),
                                                  help="Pose tolerance (m): each perception camera within this "
                                                       "height of its matched reference camera, or as near as the "
@@ -137,10 +146,11 @@ def design_command(
                                               help="Lens tolerance (deg): each perception camera's horizontal FOV "
                                                    "within this of its matched reference camera's (0: the "
                                                    "reference's lens)."),
-    perception_range: float = typer.Option(0.0, "--perception-range", min=0.0, callback=finite(),
+    perception_range: Optional[float] = typer.Option(None, "--perception-range", min=0.0, callback=finite(),
                                            help="With near-field cameras: the perception cameras keep the "
                                                 "reference's coverage only on the rings at least this far (m) from "
-                                                "the body (rings at 2, 5, 10, 20 m; 0: all of them)."),
+                                                "the body (rings at 2, 5, 10, 20 m; 0: all of them; default: as "
+                                                "--pose says, 20 for nearest)."),
     near_field: Optional[bool] = typer.Option(None, "--near-field/--single-set",
                                               help="Two camera roles (the default): perception cameras designed "
                                                    "for the reference alone, then near-field fisheyes (190 deg) "
@@ -185,16 +195,21 @@ def design_command(
     pitches = parse_numbers(pitch, "--pitch")
     if not all(-90 <= p <= 90 for p in pitches):
         raise RigoptError(f"--pitch angles must be within [-90, 90] degrees (> 0 up), got {pitch!r}")
+    two_roles = not pareto if near_field is None else near_field
+    if pose.lower() not in POSES:
+        raise RigoptError(f"--pose must be one of {', '.join(POSES)}, got {pose!r}")
+    given = {"match_height_m": match_height, "match_pitch_deg": match_pitch, "match_yaw_deg": match_yaw,
+             "match_fov_deg": match_fov, "perception_range_m": perception_range,
+             "perception_symmetric": None if free_perception is None else not free_perception}
+    defaults = POSES[pose.lower() if two_roles else "free"]
+    pose_settings = {k: defaults[k] if v is None else v for k, v in given.items()}
     settings = DesignSettings(
         cameras=parse_camera_count(cameras), lenses=lenses, fov_range=fov_range,
         zones=tuple(z.strip() for z in zones.split(",")) if zones else None,
         pitches_deg=pitches, yaw_step_deg=yaw_step, spacing=spacing,
         min_coverage=min_coverage, min_overlap=min_overlap, max_nodes=max_nodes, accept_gap=accept_gap,
         rules=mount_rules(min_height, no_trailer), symmetric=False if asymmetric else None, cost_weight=cost_weight,
-        perception_symmetric=not free_perception,
-        require=require, near_field=not pareto if near_field is None else near_field,
-        match_height_m=match_height, match_pitch_deg=match_pitch, match_yaw_deg=match_yaw, match_fov_deg=match_fov,
-        perception_range_m=perception_range)
+        require=require, near_field=two_roles, **pose_settings)
     # a worker process beside this one (with a second core): the near-field stage and the pictures go there
     background = INLINE if pareto else Background(later_imports=("rigopt.report.vehicle_figures",
                                                                  "rigopt.report.coverage_figures"))

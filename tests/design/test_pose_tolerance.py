@@ -181,3 +181,25 @@ def test_the_command_takes_the_tolerance_and_reports_it(tmp_path):
     assert bad.returncode == 2 and "--match-height" in bad.stderr
     bad = run_rigopt("design", "--vehicle", "tt", "--ref", "R1", "--perception-range", "-3")
     assert bad.returncode == 2 and "--perception-range" in bad.stderr
+
+
+def test_the_command_defaults_to_the_nearest_pose_and_pose_free_restores_the_earlier_default(tmp_path):
+    common = ("design", "--vehicle", "tt", "--ref", "R1", "--yaw-step", "30", "--require", "none", "--json")
+    import json
+
+    nearest = run_rigopt(*common, "--out", tmp_path / "n")
+    assert nearest.returncode == 0, nearest.stderr
+    summary = json.loads(nearest.stdout)
+    tolerance = {k: summary["pose_tolerance"][k] for k in ("height_m", "pitch_deg", "yaw_deg", "fov_deg")}
+    assert tolerance == {"height_m": 0.05, "pitch_deg": 0.0, "yaw_deg": 5.0, "fov_deg": 0.0}
+    assert summary["perception_range_m"] == 20.0
+    free = json.loads(run_rigopt(*common, "--pose", "free", "--out", tmp_path / "f").stdout)
+    assert free["pose_tolerance"]["height_m"] is None and free["perception_range_m"] == 0.0
+    given = json.loads(run_rigopt(*common, "--match-height", "0.2", "--perception-range", "10",
+                                  "--out", tmp_path / "g").stdout)
+    assert given["pose_tolerance"]["height_m"] == 0.2 and given["pose_tolerance"]["yaw_deg"] == 5.0
+    assert given["perception_range_m"] == 10.0
+    single = json.loads(run_rigopt(*common, "--single-set", "--out", tmp_path / "s").stdout)
+    assert single["pose_tolerance"]["height_m"] is None  # one camera set is always free
+    bad = run_rigopt(*common, "--pose", "wide", "--out", tmp_path / "b")
+    assert bad.returncode == 2 and "--pose" in bad.stderr
