@@ -74,7 +74,7 @@ def test_unknown_metric_is_a_one_line_error():
 def test_design_with_rigcd_plus_minimises_and_reports_rigcd_plus(tmp_path):
     out = tmp_path / "design"
     summary = invoke_json("design", "--vehicle", "tt", "--ref", "R5", "--metric", "rigcd+", "--yaw-step", "30",
-                          "--pitch", "0", "--fov", "90,120", "--json", "--out", str(out))
+                          "--pitch", "0", "--fov", "90,120", "--pose", "free", "--json", "--out", str(out))
     plus = load_weights("joint", "rigcd+")
     assert summary["metric"] == "rigcd+" and summary["weights"] == "joint"
     assert summary["predicted_drop"] == pytest.approx(float(plus.link(plus.K * summary["rigcd"])), rel=1e-9)

@@ -112,7 +112,9 @@ def test_json_values_are_plausible(design_run):
     assert summary["regions_required"] and summary["regions_fallback"] is None
     assert [r["key"] for r in summary["regions"]] == ["r151", "r159", "r158"]
     assert all(r["covered"] and r["covered_frac"] == 1.0 for r in summary["regions"])
-    assert summary["symmetry"]["required"] and summary["symmetry"]["symmetric"]
+    # the default pose: perception cameras placed freely (R1's layout), the near-field fisheyes in mirrored pairs
+    assert not summary["symmetry"]["required"] and summary["symmetry"]["near_field_mirrored"]
+    assert summary["pose_tolerance"]["height_m"] == 0.05 and summary["perception_range_m"] == 20.0
     assert 0.0 < summary["coverage"] <= 1.0 and 0.0 < summary["reference_coverage"] <= 1.0
     assert summary["rigcd"] > 0 and summary["predicted_drop"] > 0
     assert summary["solver"]["milp_status"] == "optimal"

@@ -92,7 +92,7 @@ def test_batch_depths_are_the_renderers_depth_in_metres(tiny_data):
     from rigopt.validation.synthetic.scenes import split_scenes
     from rigopt.rig.library import load_rig
 
-    from tests.baselines.conftest import TINY_FRAMES
+    from tests.validation.detectors.conftest import TINY_FRAMES
 
     split = RigSplit(tiny_data, "R5", "train")
     assert split.has_depth
