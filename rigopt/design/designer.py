@@ -106,8 +106,6 @@ class Prepared:
     sees_pool: np.ndarray
     spacing: float
     mount_cost: np.ndarray
-    gaps: tuple[np.ndarray, ...]
-    """Per reference, (n, R_k) float: each candidate's :func:`pose_gaps` to each reference camera."""
 
 
 def prepare(vehicle: Vehicle, references: Sequence[Rig], calibration: Calibration, settings: DesignSettings,
@@ -132,8 +130,7 @@ def prepare(vehicle: Vehicle, references: Sequence[Rig], calibration: Calibratio
     progress(f"coverage of {len(points)} requirement points by {len(pool)} of {len(candidates)} candidates")
     sees_pool = _pool_sees(vehicle, candidates, pool, points, settings)
     per_mount = mounting_costs(vehicle, candidates.mount_zones, candidates.mount_points)
-    return Prepared(tuple(references), candidates, costs, points, pool, sees_pool, spacing, per_mount[candidates.mount],
-                    gaps)
+    return Prepared(tuple(references), candidates, costs, points, pool, sees_pool, spacing, per_mount[candidates.mount])
 
 
 def _pool_sees(vehicle: Vehicle, candidates: CandidateSet, pool: np.ndarray, points: np.ndarray,
