@@ -1,5 +1,6 @@
 """Commands that write folders or files leave either nothing or the previous complete output when a writer
-fails part-way (a full disk, a bug, Ctrl-C), and refuse an existing output folder without --force."""
+fails part-way (a full disk, a bug, Ctrl-C), and refuse an existing output folder without --force. The cases
+that write a whole coverage report run with ``-m slow``."""
 
 from __future__ import annotations
 
@@ -43,7 +44,7 @@ def r1_report():
     return coverage_report(rig, load_vehicle(rig.vehicle))
 
 
-@pytest.fixture(autouse=True)
+@pytest.fixture
 def known_report(r1_report, monkeypatch):
     monkeypatch.setattr("rigopt.coverage.measures.coverage_report", lambda rig, vehicle: r1_report)
 
@@ -60,7 +61,7 @@ def coverage_out(tmp_path_factory, r1_report):
 
 
 @pytest.fixture
-def previous_coverage(coverage_out, tmp_path):
+def previous_coverage(coverage_out, tmp_path, known_report):
     import shutil
 
     out = tmp_path / "out"
@@ -68,6 +69,7 @@ def previous_coverage(coverage_out, tmp_path):
     return out
 
 
+@pytest.mark.slow
 def test_an_existing_folder_is_refused_without_force(previous_coverage):
     before = snapshot(previous_coverage)
     result = invoke("coverage", "R1", "--out", previous_coverage)
@@ -75,6 +77,7 @@ def test_an_existing_folder_is_refused_without_force(previous_coverage):
     assert snapshot(previous_coverage) == before
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("error", [OSError(errno.ENOSPC, "No space left on device"), RuntimeError("a bug"),
                                    KeyboardInterrupt()])
 def test_a_failing_writer_keeps_the_previous_output(previous_coverage, monkeypatch, error):
@@ -86,7 +89,8 @@ def test_a_failing_writer_keeps_the_previous_output(previous_coverage, monkeypat
     assert [p.name for p in previous_coverage.parent.iterdir()] == ["out"]  # no temporary sibling left
 
 
-def test_a_failing_writer_leaves_no_folder(tmp_path, monkeypatch):
+@pytest.mark.slow
+def test_a_failing_writer_leaves_no_folder(tmp_path, monkeypatch, known_report):
     monkeypatch.setattr("rigopt.report.coverage_html.write_html_report",
                         fail_with(OSError(errno.ENOSPC, "No space left on device")))
     result = invoke("coverage", "R1", "--out", tmp_path / "new")
@@ -95,6 +99,7 @@ def test_a_failing_writer_leaves_no_folder(tmp_path, monkeypatch):
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.slow
 def test_force_replaces_the_folder_whole(previous_coverage):
     (previous_coverage / "stale.txt").write_text("from an older run")
     result = invoke("coverage", "R1", "--out", previous_coverage, "--force")

@@ -15,6 +15,7 @@ from pathlib import Path
 
 import pytest
 
+from marks import cases
 from rigopt.cli import INPUT_ERROR, INTERRUPTED, run
 
 REPO = Path(__file__).resolve().parents[2]
@@ -53,7 +54,12 @@ def test_the_docs_table_lists_every_class():
     assert set(documented()) == set(CASES)
 
 
-@pytest.mark.parametrize("name", list(CASES))
+#: The cases that need a design or a coverage report before their error (2-5 s each).
+SLOW = {"design --pareto with no feasible point", "design --min-height above every mount point",
+        "coverage of a rig that sees only its body", "coverage unknown --compare"}
+
+
+@pytest.mark.parametrize("name", cases(CASES, SLOW))
 def test_bad_input(scratch, name, capsys, monkeypatch):
     tmp, env = scratch
     for key, value in env.items():

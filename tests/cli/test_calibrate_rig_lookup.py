@@ -8,6 +8,7 @@ import json
 from pathlib import Path
 
 import numpy as np
+import pytest
 from console import run_console
 
 from rigopt.rig.library import load_rig
@@ -40,6 +41,7 @@ def test_a_rear_axle_rig_is_moved_to_the_vehicle_centre_once(tmp_path):
     assert lookup("nuscenes") is centred and len(notes) == 1 and "rear axle" in notes[0]
 
 
+@pytest.mark.slow
 def test_calibrate_on_results_with_a_dataset_rig(tmp_path):
     """Synthetic results naming R1, its variants and nuScenes' rig: calibrate reads nuScenes' rig from --rigs,
     converts it with a note on stderr, and prints JSON only on stdout."""

@@ -262,11 +262,13 @@ def calibrate_out(tmp_path_factory):
     return out
 
 
+@pytest.mark.slow
 def test_calibrate_out_writes_the_report(calibrate_out, calibrate_report):
     report = json.loads((calibrate_out / "calibration.json").read_text())
     assert report == calibrate_report  # same data, same seed, same bootstrap
 
 
+@pytest.mark.slow
 def test_calibrate_out_writes_the_pairs_table(calibrate_out):
     lines = (calibrate_out / "pairs.csv").read_text().splitlines()
     assert len(lines) == 1 + 2 * 4 * 196  # header, every model's own fit, then the joint fit
@@ -276,6 +278,7 @@ def test_calibrate_out_writes_the_pairs_table(calibrate_out):
     assert fits.count("joint") == 4 * 196
 
 
+@pytest.mark.slow
 def test_calibrate_out_writes_weights_that_load_back(calibrate_out):
     from rigopt.metrics.calibration import load_weights
 
@@ -286,6 +289,7 @@ def test_calibrate_out_writes_weights_that_load_back(calibrate_out):
                                                                     abs=1e-9)
 
 
+@pytest.mark.slow
 def test_calibrate_out_writes_png_figures(calibrate_out):
     pngs = sorted(calibrate_out.glob("*.png"))
     assert len(pngs) >= 2

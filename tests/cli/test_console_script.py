@@ -3,7 +3,8 @@ JSON (a banner a C library prints, such as HiGHS's "Running HiGHS ...", fails th
 exit path of bad input (a library error, a usage error, an interrupt-free OS error) prints one line.
 
 The commands start together (a module fixture) and run side by side; the design runs on the small tt with
-few candidates. ``bench evaluate --json`` and ``validate --json`` need a trained detector: they are checked
+few candidates. The commands that run a design or write a report folder run with ``-m slow``, and so does
+Ctrl-C in the MILP (Ctrl-C while mount candidates are sampled is in the default run). ``bench evaluate --json`` and ``validate --json`` need a trained detector: they are checked
 the same way in tests/validation/detectors/test_commands.py.
 """
 
@@ -16,6 +17,7 @@ from pathlib import Path
 
 import pytest
 from console import console_script
+from marks import cases
 
 REPO = Path(__file__).resolve().parents[2]
 SHIPPED_CSV = REPO / "metrics" / "pccr_transfer.csv"
@@ -27,12 +29,16 @@ JSON_COMMANDS = {
     "rigv": (["rigv", "R1", "R5", "--json"], {0}),
     "rigcd": (["rigcd", "R1", "R5", "--weights", "joint", "--json"], {0}),
     "rank": (["rank", "R5", "R6", "--ref", "R1", "--json"], {0}),
-    "calibrate --out": (["calibrate", "--results", str(SHIPPED_CSV), "--bootstrap", "5", "--json", "--out",
-                         "{tmp}/calibration"], {0}),
     "check": (["check", "R1", "--json"], {0, 1}),  # exit 1 is an invalid rig, still JSON
     "vehicles": (["vehicles", "--json"], {0}),
-    "coverage --out": (["coverage", "R1", "--json", "--out", "{tmp}/coverage"], {0}),
+}
+
+#: The commands that run a design or write a report folder (7-15 s each): run with -m slow.
+WHOLE_COMMANDS = {
     "design": (["design", *SMALL_DESIGN, "--cameras", "6", "--json", "--out", "{tmp}/design"], {0}),
+    "calibrate --out": (["calibrate", "--results", str(SHIPPED_CSV), "--bootstrap", "5", "--json", "--out",
+                         "{tmp}/calibration"], {0}),
+    "coverage --out": (["coverage", "R1", "--json", "--out", "{tmp}/coverage"], {0}),
     "design --pareto": (["design", *SMALL_DESIGN, "--cameras", "6-7", "--pareto", "--json", "--out",
                          "{tmp}/pareto"], {0}),
 }
@@ -52,11 +58,9 @@ def _default_sigint():
     signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
-@pytest.fixture(scope="module")
-def json_runs(tmp_path_factory):
-    """Every JSON_COMMANDS case run to its end: name -> (exit code, stdout, stderr)."""
-    tmp = tmp_path_factory.mktemp("console_script")
-    processes = {name: start(args, tmp) for name, (args, _) in JSON_COMMANDS.items()}
+def run_together(commands, tmp: Path) -> dict:
+    """Every case of ``commands`` started together and run to its end: name -> (exit code, stdout, stderr)."""
+    processes = {name: start(args, tmp) for name, (args, _) in commands.items()}
     results = {}
     try:
         for name, process in processes.items():
@@ -70,17 +74,38 @@ def json_runs(tmp_path_factory):
     return results
 
 
-@pytest.mark.parametrize("name", list(JSON_COMMANDS))
-def test_json_stdout_parses(json_runs, name):
-    code, stdout, stderr = json_runs[name]
-    assert code in JSON_COMMANDS[name][1], stderr
+@pytest.fixture(scope="module")
+def json_runs(tmp_path_factory):
+    return run_together(JSON_COMMANDS, tmp_path_factory.mktemp("console_script"))
+
+
+@pytest.fixture(scope="module")
+def whole_runs(tmp_path_factory):
+    return run_together(WHOLE_COMMANDS, tmp_path_factory.mktemp("console_script_whole"))
+
+
+def json_parses(runs, commands, name):
+    code, stdout, stderr = runs[name]
+    assert code in commands[name][1], stderr
     json.loads(stdout)  # fails on any banner or progress line before or after the JSON
 
 
-def test_no_solver_banner_on_either_stream(json_runs):
+@pytest.mark.parametrize("name", list(JSON_COMMANDS))
+def test_json_stdout_parses(json_runs, name):
+    json_parses(json_runs, JSON_COMMANDS, name)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", list(WHOLE_COMMANDS))
+def test_json_stdout_of_whole_commands_parses(whole_runs, name):
+    json_parses(whole_runs, WHOLE_COMMANDS, name)
+
+
+@pytest.mark.slow
+def test_no_solver_banner_on_either_stream(whole_runs):
     """The design runs HiGHS, which prints a licence banner at the C level on a process's first solver object:
     it reaches neither stream (rigopt.solvers.quiet_highs), and no library log line does either."""
-    code, stdout, stderr = json_runs["design"]
+    code, stdout, stderr = whole_runs["design"]
     assert code == 0, stderr
     assert "HiGHS" not in stdout and "HiGHS" not in stderr
     assert "samples!" not in stderr  # trimesh's "only got N/M samples!" log line
@@ -110,7 +135,7 @@ def test_help_goes_to_stdout(tmp_path):
     assert "design" in stdout and "calibrate" in stdout
 
 
-@pytest.mark.parametrize("after_line", ["sampling mount candidates", "MILP:"])
+@pytest.mark.parametrize("after_line", cases(["sampling mount candidates", "MILP:"], slow={"MILP:"}))
 def test_ctrl_c_during_a_design_ends_cleanly(tmp_path, after_line):
     """Ctrl-C at two stages of a design (native ray casting; the MILP): exit 130, one 'interrupted' line, no
     traceback or interpreter abort, and no output folder or partial sibling left behind."""

@@ -45,6 +45,7 @@ def test_rank_with_rigcd_plus_uses_the_rigcd_plus_weights():
         {p["rig"]: p["predicted_drop"] for p in ranked}, rel=1e-6)
 
 
+@pytest.mark.slow
 def test_calibrate_with_rigcd_plus_writes_rigcd_plus_weights(tmp_path):
     from rigopt.resources import data_dir
 
@@ -71,6 +72,7 @@ def test_unknown_metric_is_a_one_line_error():
     assert "rigcd2" in result.stderr and "rigcd+" in result.stderr
 
 
+@pytest.mark.slow
 def test_design_with_rigcd_plus_minimises_and_reports_rigcd_plus(tmp_path):
     out = tmp_path / "design"
     summary = invoke_json("design", "--vehicle", "tt", "--ref", "R5", "--metric", "rigcd+", "--yaw-step", "30",

@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
+import pytest
 from in_process import run_rigopt
 
 from rigopt.geometry import rot_z
@@ -13,6 +14,7 @@ from rigopt.rig.model import Rig
 from rigopt.rig.pccr_format import write_rig
 
 
+@pytest.mark.slow
 def test_a_rig_that_sees_only_its_own_body_is_an_error_naming_the_check(tmp_path):
     """R1's cameras turned to face the way they came, into the etron's body: coverage 0 % is no answer."""
     r1 = load_rig("R1")

@@ -268,6 +268,7 @@ def test_the_camera_field_table_lists_every_camera_and_the_totals(box_vehicle, c
     assert rows[3][2] == f"{100 * regions[1]['covered_frac']:.1f} %"
 
 
+@pytest.mark.slow
 def test_the_report_folder_draws_a_two_sided_field_piece_by_piece(box_vehicle, camera, rig, small_settings, tmp_path):
     from rigopt.coverage.measures import coverage_report
     from rigopt.report.coverage_html import write_coverage_folder

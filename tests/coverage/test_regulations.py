@@ -286,6 +286,7 @@ def cli_rig(tmp_path_factory):
     return root / "home", write_rig(Rig("rearonly", "vehicle.test.regcar", (rear,)), root / "rear.json")
 
 
+@pytest.mark.slow
 def test_coverage_require_adds_the_fields_to_json_tables_and_folder(cli_rig, tmp_path):
     home, rig_file = cli_rig
     env = {"RIGOPT_HOME": str(home)}

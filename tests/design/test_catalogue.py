@@ -69,6 +69,7 @@ def test_a_catalogue_camera_becomes_a_rig_camera_with_its_lens():
     assert DesignSettings(lenses=(radtan, 60.0)).fovs == (radtan.fov, 60.0)
 
 
+@pytest.mark.slow
 def test_a_design_from_a_catalogue_keeps_each_cameras_lens(tmp_path):
     (tmp_path / "cameras.toml").write_text(TOML)
     out = tmp_path / "design"

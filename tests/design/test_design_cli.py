@@ -1,19 +1,19 @@
 """``rigopt design``: the JSON summary and the rig file of one real run (firetruck from R1, module-scoped),
-and bad input, which exits 2 with one ``rigopt: error:`` line and no traceback (real processes running
-``rigopt.cli.main``, the console script's entry point, started together to keep the run short).
+and bad input, which exits 2 with one ``rigopt: error:`` line and no traceback (run in-process through the
+console script's error handling; tests/cli/test_console_script.py checks that path in real processes). The real
+run is a whole design: its tests run with ``-m slow``.
 """
 
 from __future__ import annotations
 
 import json
 import os
-import subprocess
-import sys
 
 import numpy as np
 import pytest
 from typer.testing import CliRunner
 
+from in_process import run_rigopt
 from rigopt.cli.app import app
 from rigopt.metrics.calibration import load_weights
 from rigopt.metrics.rigcd import rigcd
@@ -32,23 +32,7 @@ BAD_INPUT = {
 
 
 @pytest.fixture(scope="module")
-def bad_processes(tmp_path_factory):
-    """Every BAD_INPUT case started as its own process (they run while the real design runs)."""
-    cwd = tmp_path_factory.mktemp("design_cli_errors")
-    processes = {
-        case: subprocess.Popen([sys.executable, "-c", "from rigopt.cli import main; main()", "design", *args],
-                               cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-        for case, (args, _) in BAD_INPUT.items()
-    }
-    yield processes, cwd
-    for process in processes.values():
-        if process.poll() is None:
-            process.kill()
-            process.communicate()
-
-
-@pytest.fixture(scope="module")
-def design_run(tmp_path_factory, bad_processes):
+def design_run(tmp_path_factory):
     """``rigopt design --vehicle firetruck --ref R1 --json --out OUT`` in a tmp working directory."""
     cwd = tmp_path_factory.mktemp("design_cli")
     out = cwd / "OUT"
@@ -63,13 +47,14 @@ def design_run(tmp_path_factory, bad_processes):
 
 
 @pytest.fixture(scope="module")
-def bad_runs(bad_processes):
-    """{case: (exit code, stdout, stderr)} of the BAD_INPUT processes, and "cwd": their working directory."""
-    processes, cwd = bad_processes
+def bad_runs(tmp_path_factory):
+    """{case: (exit code, stdout, stderr)} of the BAD_INPUT cases run in-process through the console script's
+    error handling, and "cwd": their working directory."""
+    cwd = tmp_path_factory.mktemp("design_cli_errors")
     runs = {}
-    for case, process in processes.items():
-        stdout, stderr = process.communicate(timeout=180)
-        runs[case] = (process.returncode, stdout, stderr)
+    for case, (args, _) in BAD_INPUT.items():
+        outcome = run_rigopt("design", *args, cwd=cwd)
+        runs[case] = (outcome.returncode, outcome.stdout, outcome.stderr)
     runs["cwd"] = cwd
     return runs
 
@@ -77,6 +62,7 @@ def bad_runs(bad_processes):
 # --- the JSON summary ---------------------------------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_json_has_the_documented_keys(design_run):
     summary, _, _ = design_run
     assert {"rig_file", "predicted_drop", "rigcd", "n_cameras", "coverage", "reference_coverage", "solver",
@@ -88,6 +74,7 @@ def test_json_has_the_documented_keys(design_run):
     assert {"interval", "linear_drop", "extrapolation", "fallback"} <= summary.keys()
 
 
+@pytest.mark.slow
 def test_each_predicted_drop_has_its_interval_and_the_far_benchmark_rig_is_flagged(design_run):
     from rigopt.metrics.calibration import load_weights
 
@@ -102,6 +89,7 @@ def test_each_predicted_drop_has_its_interval_and_the_far_benchmark_rig_is_flagg
     assert r6["name"] == "R6" and "t" in [term["term"] for term in r6["extrapolation"]["terms"]]
 
 
+@pytest.mark.slow
 def test_json_values_are_plausible(design_run):
     summary, _, _ = design_run
     # two roles by default: R1's 8 perception cameras and the near-field fisheyes that see the firetruck's fields
@@ -123,6 +111,7 @@ def test_json_values_are_plausible(design_run):
     assert isinstance(summary["solver"]["refine_status"], str) and summary["solver"]["refine_status"]
 
 
+@pytest.mark.slow
 def test_benchmark_comparison_is_r6_and_the_design_predicts_less_drop(design_run):
     summary, _, _ = design_run
     benchmark = summary["comparisons"]["benchmark_rig"]
@@ -130,12 +119,14 @@ def test_benchmark_comparison_is_r6_and_the_design_predicts_less_drop(design_run
     assert summary["predicted_drop"] < benchmark["predicted_drop"]
 
 
+@pytest.mark.slow
 def test_rig_file_is_in_the_out_folder(design_run):
     summary, out, _ = design_run
     assert os.path.samefile(summary["rig_file"], out / "rig.json")
     assert json.loads((out / "report.json").read_text())["rig_file"] == "rig.json"  # no machine path in the file
 
 
+@pytest.mark.slow
 def test_rig_file_loads_for_the_firetruck(design_run):
     summary, out, _ = design_run
     rig = load_rig(out / "rig.json")
@@ -144,6 +135,7 @@ def test_rig_file_loads_for_the_firetruck(design_run):
     assert json.loads((out / "rig.json").read_text())["vehicle_type"] == "vehicle.carlamotors.firetruck"
 
 
+@pytest.mark.slow
 def test_rig_file_has_the_reported_rigcd(design_run):
     summary, out, _ = design_run
     joint = load_weights("joint")
@@ -151,6 +143,7 @@ def test_rig_file_has_the_reported_rigcd(design_run):
     assert value == pytest.approx(summary["rigcd"], abs=1e-5)
 
 
+@pytest.mark.slow
 def test_report_json_repeats_the_summary(design_run):
     summary, out, _ = design_run
     report = json.loads((out / "report.json").read_text())
@@ -158,6 +151,7 @@ def test_report_json_repeats_the_summary(design_run):
     assert report["n_cameras"] == summary["n_cameras"]
 
 
+@pytest.mark.slow
 def test_report_html_holds_the_3d_view_offline(design_run):
     import re
 
@@ -172,6 +166,7 @@ def test_report_html_holds_the_3d_view_offline(design_run):
     assert '"name":"keep-out: locker_doors_front (roll-up locker doors)"' in data
 
 
+@pytest.mark.slow
 def test_nothing_is_written_outside_the_out_folder(design_run):
     _, out, cwd = design_run
     assert [p.name for p in cwd.iterdir()] == [out.name]
@@ -196,6 +191,7 @@ def test_bad_input_writes_no_design_folder(bad_runs):
     assert list(bad_runs["cwd"].iterdir()) == []
 
 
+@pytest.mark.slow
 def test_each_camera_reports_its_pose_from_the_rear_axle_and_the_reference_camera_it_matches(design_run):
     from rigopt.rig.library import load_rig
 

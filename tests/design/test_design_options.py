@@ -54,6 +54,7 @@ def _node_limited_problem():
     return cost, sees, np.ones(30, dtype=int), np.arange(40)
 
 
+@pytest.mark.slow
 def test_the_milp_stops_at_its_node_limit_the_same_way_every_time():
     """A work limit, not a clock: the same gap and selection on every run, at any machine load."""
     cost, sees, required, mount = _node_limited_problem()

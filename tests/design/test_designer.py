@@ -76,19 +76,23 @@ def weighted_rigcd(run, rig) -> float:
 # --- the firetruck design from R1 ---------------------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_every_design_camera_passes_the_mount_checks(firetruck):
     check = check_rig(firetruck.design.rig, firetruck.vehicle)
     assert check.valid, [(c.id, c.problems) for c in check.cameras if not c.valid]
 
 
+@pytest.mark.slow
 def test_design_is_for_the_target_vehicle(firetruck):
     assert firetruck.design.rig.vehicle == "vehicle.carlamotors.firetruck"
 
 
+@pytest.mark.slow
 def test_design_meets_the_coverage_requirements(firetruck):
     assert firetruck.design.meets_requirements
 
 
+@pytest.mark.slow
 def test_recomputed_coverage_meets_the_requirements_at_every_sector_point(firetruck):
     needed = requirements(firetruck.reference, firetruck.result.references[0].vehicle, firetruck.settings)
     assert needed.sum() > 0  # R1 sees most of the rings: the requirement is not empty
@@ -97,12 +101,14 @@ def test_recomputed_coverage_meets_the_requirements_at_every_sector_point(firetr
     assert np.all(counts >= needed), np.flatnonzero(counts < needed)
 
 
+@pytest.mark.slow
 def test_design_predicts_a_smaller_drop_than_the_benchmark_rig_r6(firetruck):
     r6 = [s for s in firetruck.result.comparisons.rigs if s.rig.name == "R6"]
     assert len(r6) == 1
     assert firetruck.design.prediction.predicted_drop < r6[0].prediction.predicted_drop
 
 
+@pytest.mark.slow
 def test_design_rigcd_is_the_calibrated_rigcd_to_the_reference(firetruck):
     # the distance compares the perception cameras: the near-field ones are not fed to the detector
     rig = firetruck.design.rig
@@ -110,11 +116,13 @@ def test_design_rigcd_is_the_calibrated_rigcd_to_the_reference(firetruck):
     assert abs(firetruck.design.prediction.rigcd - weighted_rigcd(firetruck, rig.perception())) <= 1e-9
 
 
+@pytest.mark.slow
 def test_milp_objective_is_the_rigcd_of_the_rig_it_chose(firetruck):
     """The MILP's matching is an optimal one: its objective equals RigCD (optimal assignment) of its rig."""
     assert abs(firetruck.result.milp.selection.objective - weighted_rigcd(firetruck, firetruck.milp_rig)) <= 1e-6
 
 
+@pytest.mark.slow
 def test_design_rigcd_equals_the_milp_objective_unless_refined(firetruck):
     objective, value = firetruck.result.milp.selection.objective, firetruck.design.prediction.rigcd
     refinement = firetruck.result.refinement
@@ -134,6 +142,7 @@ def same_poses(a: Rig, b: Rig) -> bool:
         and all(np.array_equal(p.rotation, q.rotation) for p, q in zip(a.cameras, b.cameras))
 
 
+@pytest.mark.slow
 def test_milp_solved_to_optimality(firetruck):
     milp = firetruck.result.milp
     assert milp.status == milp.selection.status == "optimal"
@@ -142,6 +151,7 @@ def test_milp_solved_to_optimality(firetruck):
     assert milp.check.valid and milp.repairs >= 0
 
 
+@pytest.mark.slow
 def test_design_has_the_references_perception_camera_count_and_near_field_cameras_beside(firetruck):
     # two roles by default: R1's 8 perception cameras, the near-field fisheyes for the firetruck's fields
     rig = firetruck.design.rig
@@ -150,6 +160,7 @@ def test_design_has_the_references_perception_camera_count_and_near_field_camera
     assert all(c.lens is not None and c.lens.distortion == "fisheye" for c in rig.cameras if c.role == "near_field")
 
 
+@pytest.mark.slow
 def test_design_cameras_are_named_after_where_they_are_mounted_and_look(firetruck):
     from rigopt.design.naming import look_of
 
@@ -160,6 +171,7 @@ def test_design_cameras_are_named_after_where_they_are_mounted_and_look(firetruc
         assert f"_TO_{look_of(camera.forward)}" in camera.id
 
 
+@pytest.mark.slow
 def test_naive_transfer_has_one_camera_per_reference_camera(firetruck):
     naive = firetruck.result.comparisons.naive_transfer
     assert naive is not None
@@ -167,12 +179,14 @@ def test_naive_transfer_has_one_camera_per_reference_camera(firetruck):
     assert [c.id for c in naive.rig.cameras] == [c.id for c in firetruck.reference.cameras]
 
 
+@pytest.mark.slow
 def test_naive_transfer_keeps_each_reference_lens_on_the_catalogue(firetruck):
     lenses = np.asarray(firetruck.settings.fovs)
     for moved, original in zip(firetruck.result.comparisons.naive_transfer.rig.cameras, firetruck.reference.cameras):
         assert moved.fov == lenses[np.argmin(np.abs(lenses - original.fov))]
 
 
+@pytest.mark.slow
 def test_height_matched_transfer_keeps_each_camera_nearest_its_height(firetruck):
     from rigopt.design.designer import HEIGHT_STEP, mount_candidates, naive_transfer
 
@@ -193,6 +207,7 @@ def test_height_matched_transfer_keeps_each_camera_nearest_its_height(firetruck)
         assert np.degrees(turn) <= settings.yaw_step_deg / 2 + 1e-6
 
 
+@pytest.mark.slow
 def test_design_cameras_come_in_mirrored_pairs_or_sit_on_the_centreline(firetruck):
     for rig in (firetruck.milp_rig, firetruck.design.rig):
         symmetry = rig_symmetry(rig)
@@ -211,12 +226,14 @@ def test_design_cameras_come_in_mirrored_pairs_or_sit_on_the_centreline(firetruc
             assert abs(by_id[name].position[1]) <= 1e-9
 
 
+@pytest.mark.slow
 def test_design_mounts_only_where_practice_allows(firetruck):
     rig = firetruck.design.rig
     assert np.all(rig.positions[:, 2] >= 0.5)
     assert not any(practice_problems(firetruck.vehicle, rig.positions, MountPractice()))
 
 
+@pytest.mark.slow
 def test_design_sees_the_near_field_at_least_as_well_as_r6(firetruck):
     r6 = next(s.rig for s in firetruck.result.comparisons.rigs if s.rig.name == "R6")
     ours, theirs = (coverage_report(rig, firetruck.vehicle) for rig in (firetruck.design.rig, r6))
@@ -225,11 +242,13 @@ def test_design_sees_the_near_field_at_least_as_well_as_r6(firetruck):
     assert ours.blind.area_m2 <= theirs.blind.area_m2
 
 
+@pytest.mark.slow
 def test_design_predicts_at_most_seven_tenths_of_r6s_linear_drop(firetruck):
     r6 = next(s for s in firetruck.result.comparisons.rigs if s.rig.name == "R6")
     assert firetruck.design.prediction.linear_drop <= 0.7 * r6.prediction.linear_drop
 
 
+@pytest.mark.slow
 def test_an_asymmetric_design_is_no_worse_in_rigcd_than_the_symmetric_one(firetruck):
     # the symmetric MILP's feasible set is a subset of the free one's (on the free candidate set's superset of
     # mount points); here only the MILP stage is compared
@@ -239,6 +258,7 @@ def test_an_asymmetric_design_is_no_worse_in_rigcd_than_the_symmetric_one(firetr
     assert free.milp.selection.objective <= firetruck.result.milp.selection.objective + 1e-9
 
 
+@pytest.mark.slow
 def test_benchmark_rigs_are_the_library_rigs_of_the_target_vehicle(firetruck):
     names = [s.rig.name for s in firetruck.result.comparisons.rigs]
     assert "R6" in names
@@ -247,6 +267,7 @@ def test_benchmark_rigs_are_the_library_rigs_of_the_target_vehicle(firetruck):
         s.prediction.predicted_drop for s in firetruck.result.comparisons.rigs)
 
 
+@pytest.mark.slow
 def test_the_result_carries_its_inputs(firetruck):
     result = firetruck.result
     assert isinstance(result, DesignResult)
@@ -339,6 +360,7 @@ def test_a_required_field_is_seen_at_every_dense_point(box_car, box_car_with_fro
     assert len(result.design.rig) <= len(load_rig("R1")) + FIELD_EXTRA_CAMERAS  # near-field cameras beyond the count
 
 
+@pytest.mark.slow
 def test_the_categorys_fields_are_required_and_seen_by_default(firetruck):
     assert [r.key for r in firetruck.result.regions] == ["r151", "r159", "r158"]  # N3 defaults
     assert firetruck.result.settings.require is None and firetruck.result.fields_fallback is None
@@ -368,6 +390,7 @@ def test_fields_no_design_sees_are_dropped_with_a_note_and_reported(box_car, nea
         assert result.near_field.ring_unseeable and result.near_field.status == "optimal"
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("near_field", [False, True], ids=["one-set", "two-role"])
 def test_a_design_whose_fields_were_dropped_is_the_design_without_fields(box_car, near_field):
     settings = DesignSettings(lenses=(100.0, 120.0), yaw_step_deg=30.0, pitches_deg=(-20.0, 0.0), near_field=near_field,
@@ -386,6 +409,7 @@ def test_an_unseeable_field_point_is_named_with_the_field(box_car):
         design_rig(box_car, r1_on_its_vehicle(), load_weights("joint"), settings)
 
 
+@pytest.mark.slow
 def test_a_camera_may_slide_only_as_far_as_its_disc_stays_mountable(firetruck):
     from rigopt.design.refine import free_radii
     from rigopt.mounting.practice import MountPractice, on_wheels
@@ -404,6 +428,7 @@ def test_a_camera_may_slide_only_as_far_as_its_disc_stays_mountable(firetruck):
     assert near_wheel.any() and np.all(radii[near_wheel] < reach)
 
 
+@pytest.mark.slow
 def test_the_naive_transfer_is_refined_as_the_design_is(firetruck):
     from rigopt.design.designer import mount_candidates, naive_transfer
 
@@ -421,6 +446,7 @@ def test_the_naive_transfer_is_refined_as_the_design_is(firetruck):
         assert after == pytest.approx(before, abs=1e-12)
 
 
+@pytest.mark.slow
 def test_naive_transfer_past_a_trailer_takes_the_nearest_yaw_a_mount_allows():
     """No mount on the hgv may look straight back (the trailer): R1's rear camera takes the nearest yaw."""
     from rigopt.design.designer import mount_candidates, naive_transfer
@@ -446,6 +472,7 @@ def camera_values(rig: Rig) -> list:
     return [(c.id, c.role, c.module, c.zone, c.position.tolist(), c.rotation.tolist(), c.fov) for c in rig.cameras]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("zones", [("front",), None], ids=["fields-dropped", "fields-seen"])
 def test_a_design_with_a_background_worker_is_the_inline_design(box_car, zones):
     """The near-field stage and the naive transfer's refinement run in a worker process give the design they give

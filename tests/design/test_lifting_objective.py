@@ -17,6 +17,8 @@ from rigopt.rig.library import load_rig
 from rigopt.vehicle.model import Vehicle
 from rigopt.vehicle.spec import read_spec
 
+pytestmark = pytest.mark.slow  # two whole designs (about 20 s)
+
 #: Weights of the kind the validation study fits: height, tilt and the depth prior dominate, yaw and plan are free.
 WEIGHTS = {"f": 0.015, "count": 0.3, "t_vert": 0.1, "r_yaw": 0.08, "r_tilt": 6.0, "dpm": 0.7}
 SETTINGS = DesignSettings(lenses=(90.0, 120.0), yaw_step_deg=30.0, pitches_deg=(-10.0, 0.0), near_field=False,

@@ -73,6 +73,7 @@ def sweep(tmp_path_factory):
     return json.loads(result.stdout), out
 
 
+@pytest.mark.slow
 def test_every_count_and_level_is_one_point_with_the_documented_keys(sweep):
     points, _ = sweep
     assert [(p["n_cameras"], p["level"]) for p in points] == [(n, level) for level in LEVELS for n in (1, 2, 3)]
@@ -81,6 +82,7 @@ def test_every_count_and_level_is_one_point_with_the_documented_keys(sweep):
         assert isinstance(p["feasible"], bool) and isinstance(p["frontier"], bool)
 
 
+@pytest.mark.slow
 def test_feasible_points_have_values_and_infeasible_ones_a_reason(sweep):
     points, _ = sweep
     feasible = [p for p in points if p["feasible"]]
@@ -96,6 +98,7 @@ def test_feasible_points_have_values_and_infeasible_ones_a_reason(sweep):
     assert not any(p["feasible"] for p in points if p["n_cameras"] == 1)
 
 
+@pytest.mark.slow
 def test_the_frontier_is_exactly_the_non_dominated_feasible_points(sweep):
     points, _ = sweep
     feasible = [p for p in points if p["feasible"]]
@@ -105,6 +108,7 @@ def test_the_frontier_is_exactly_the_non_dominated_feasible_points(sweep):
         assert p["frontier"] == (not any(dominates(q, p) for q in feasible)), p
 
 
+@pytest.mark.slow
 def test_the_table_and_the_picture_are_written(sweep):
     points, out = sweep
     assert sorted(f.name for f in out.iterdir()) == ["pareto.csv", "pareto.png"]

@@ -109,6 +109,7 @@ def test_a_negative_or_infinite_tolerance_is_refused():
         DesignSettings(match_fov_deg=float("nan"))
 
 
+@pytest.mark.slow
 def test_a_design_within_the_tolerance_keeps_every_matched_camera_inside_it(box_car):
     reference = ReferenceRig.on_own_vehicle(load_rig("R1"))
     settings = DesignSettings(lenses=(90.0, 120.0), yaw_step_deg=30.0, pitches_deg=(-10.0, 0.0), near_field=False,
@@ -148,6 +149,7 @@ def test_beyond_the_tolerance_a_camera_pays_per_tolerance():
     assert widen.tolist() == pytest.approx([3.0, 2.0, 1.0])
 
 
+@pytest.mark.slow
 def test_a_reference_camera_no_mount_allows_keeps_the_nearest_pose(box_car):
     # R1 looks level and only -10 deg is offered: no camera can keep 2 deg of pitch, so each camera keeps the
     # nearest pitch there is, 5 tolerances away, as every candidate does: the design is the one without it
@@ -166,6 +168,7 @@ def test_a_reference_camera_no_mount_allows_keeps_the_nearest_pose(box_car):
     assert lifted.milp.selection.objective == pytest.approx(free.milp.selection.objective, abs=1e-9)
 
 
+@pytest.mark.slow
 def test_the_command_takes_the_tolerance_and_reports_it(tmp_path):
     result = run_rigopt("design", "--vehicle", "tt", "--ref", "R1", "--match-height", "0.2", "--match-pitch", "0",
                         "--match-fov", "30", "--single-set", "--require", "none", "--yaw-step", "30", "--out", tmp_path / "d", "--json")
@@ -183,6 +186,7 @@ def test_the_command_takes_the_tolerance_and_reports_it(tmp_path):
     assert bad.returncode == 2 and "--perception-range" in bad.stderr
 
 
+@pytest.mark.slow
 def test_the_command_defaults_to_the_nearest_pose_and_pose_free_restores_the_earlier_default(tmp_path):
     common = ("design", "--vehicle", "tt", "--ref", "R1", "--yaw-step", "30", "--require", "none", "--json")
     import json

@@ -40,6 +40,7 @@ def test_a_calibration_judged_on_its_own_data_gives_the_joint_figures(real_study
         assert ours.bounded_heldout.mae == pytest.approx(theirs.bounded_heldout.mae, abs=1e-12)
 
 
+@pytest.mark.slow
 def test_the_transferred_rho_is_spearman_of_the_prediction_on_the_held_out_pairs(real_study):
     table = read_transfer(REAL)
     other = calibrate(table, resamples=RESAMPLES).models[0].fit.calibration  # BEVDet's fit, judged on every model
@@ -74,6 +75,7 @@ def test_the_rho_gain_over_an_own_fit_is_the_difference_of_their_held_out_rhos(r
     assert transfer.gains["BEVDet"]["own_per_detector"] == (0.0, 0.0, 0.0)  # the same fit on the same pairs
 
 
+@pytest.mark.slow
 def test_calibrate_test_on_reports_the_synthetic_fit_beside_the_benchmarks_own():
     outcome = run_rigopt("calibrate", "--results", str(SYNTHETIC), "--rigs", str(SYNTHETIC_RIGS),
                          "--test-on", str(REAL), "--bootstrap", "50", "--json")
@@ -106,6 +108,7 @@ def test_null_transfer_keeps_the_pairs_and_own_maps_and_draws_chance_drops():
     assert not np.allclose(null_transfer(table, np.random.default_rng(4)).map, chance.map)
 
 
+@pytest.mark.slow
 def test_null_yardstick_is_the_transferred_rho_of_fits_on_chance_copies(real_study):
     """One chance copy of the synthetic table, fitted and judged by hand, gives the yardstick's first value;
     the summary's share counts the null rhos that reach a figure."""
@@ -123,6 +126,7 @@ def test_null_yardstick_is_the_transferred_rho_of_fits_on_chance_copies(real_stu
     assert summary["A"]["share_reaching"] == 0.5 and summary["A"]["median"] == pytest.approx(0.25)
 
 
+@pytest.mark.slow
 def test_calibrate_null_reports_the_yardstick_and_needs_test_on():
     outcome = run_rigopt("calibrate", "--results", str(SYNTHETIC), "--rigs", str(SYNTHETIC_RIGS),
                          "--test-on", str(REAL), "--bootstrap", "0", "--null", "1", "--json")
@@ -136,6 +140,7 @@ def test_calibrate_null_reports_the_yardstick_and_needs_test_on():
     assert refused.returncode == 2 and refused.stderr.count("rigopt: error:") == 1 and "--test-on" in refused.stderr
 
 
+@pytest.mark.slow
 def test_control_all_fits_on_every_pair_and_the_target_keeps_the_benchmarks_control_rigs():
     """--control all: the synthetic fit uses every pair of --results (none held out there), while --test-on's
     held-out pairs stay those outside the benchmark's control rigs unless --test-control names others."""
@@ -160,6 +165,7 @@ def test_control_all_fits_on_every_pair_and_the_target_keeps_the_benchmarks_cont
         assert entry["heldout"]["n"] > default["test_on"]["models"][model]["heldout"]["n"]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("metric", ["rigcd", "rigcd+"])
 def test_the_shipped_sim_calibration_beats_the_benchmarks_joint_on_the_real_held_out_pairs(metric):
     """sim-lss was fitted on synthetic pairs alone (none of the real held-out rigs R2-R9): on the real

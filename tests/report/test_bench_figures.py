@@ -52,6 +52,7 @@ def class_colour_pixels(image: np.ndarray, classes, tolerance: float = 25.0) -> 
     return near
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("rig, cameras, size_inches", [("R5", 4, (4 * 4 + 5, 2.6 * 1 + 1)),
                                                       ("R1", 8, (4 * 4 + 5, 2.6 * 2 + 1))])
 def test_the_picture_has_the_size_of_its_tiles(bench_data, tmp_path, rig, cameras, size_inches):

@@ -29,6 +29,7 @@ def study():
     return calibrate(table, control_rigs=CONTROL, resamples=20)
 
 
+@pytest.mark.slow
 def test_writes_every_figure_as_png(study, tmp_path):
     out = tmp_path / "figs"
     written = write_calibration_figures(study, out)

@@ -27,6 +27,7 @@ def one_pass(tmp_path, name: str, *extra: str) -> subprocess.CompletedProcess:
                            "--results", str(folder / "results"), *extra], capture_output=True, text=True, timeout=600)
 
 
+@pytest.mark.slow
 def test_one_pass_on_two_rigs(tmp_path):
     done = one_pass(tmp_path, "lease")
     transfer, results, pack = (tmp_path / "lease" / name for name in ("transfer", "results", "pack"))

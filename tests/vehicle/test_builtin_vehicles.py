@@ -73,6 +73,7 @@ def test_size_within_three_percent_of_the_carla_box(name):
     np.testing.assert_allclose(vehicle.size, required_size(name), rtol=0.03)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", sorted(BUILT_IN))
 def test_every_zone_selects_surface(name):
     vehicle = load_vehicle(name)

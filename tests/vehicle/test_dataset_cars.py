@@ -168,6 +168,7 @@ def test_rigcd_of_r1_and_an_imported_nuscenes_rig_needs_no_vehicle_and_names_the
     assert data["rigcd"] > 0
 
 
+@pytest.mark.slow
 def test_coverage_says_which_car_it_used(imported):
     done = run_rigopt("coverage", imported["waymo"], "--json")
     assert done.returncode == 0, done.stderr

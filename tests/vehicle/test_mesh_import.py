@@ -202,6 +202,7 @@ def closed_sim_car():
     return close_mesh(sim_car_mesh(), "sim.obj")
 
 
+@pytest.mark.slow
 def test_open_multi_part_mesh_is_closed_and_its_error_reported(closed_sim_car):
     closed, report = closed_sim_car
     assert closed.is_watertight and closed.is_winding_consistent and closed.volume > 0
@@ -231,6 +232,7 @@ def test_closed_parts_are_joined_exactly():
     assert closed.is_watertight
 
 
+@pytest.mark.slow
 def test_a_single_sided_sheet_is_kept_as_a_thin_slab():
     awning = trimesh.creation.box([4.0, 1.8, 0.01])
     awning = trimesh.Trimesh(awning.vertices, awning.faces[awning.face_normals[:, 2] > 0.5], process=False)
@@ -264,6 +266,7 @@ def test_closing_is_refused_with_the_finer_pitch_that_fixes_it():
 # --- wheels -----------------------------------------------------------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_wheels_are_found_on_the_raw_car(tmp_path):
     path = tmp_path / "car.obj"
     write_obj(path, forward="-y", scale=0.01)

@@ -126,6 +126,7 @@ def test_coverage_and_design_refuse_a_rig_on_an_unknown_vehicle_before_any_work(
         assert not (tmp_path / "d").exists()
 
 
+@pytest.mark.slow
 def test_vehicle_show_draws_a_rear_axle_rig_where_its_centre_form_is(etron, tmp_path):
     """One placement everywhere: ``vehicle show --rig`` of R1 measured from the rear axle draws the same picture as
     R1 itself (the rear-axle form used to be drawn 1.43 m forward on the etron)."""

@@ -17,6 +17,7 @@ import trimesh
 
 import sim_car
 from in_process import run_rigopt
+from marks import cases
 
 pytestmark = pytest.mark.usefixtures("rigopt_home")
 
@@ -103,7 +104,9 @@ def _cases():
 CASES = _cases()
 
 
-@pytest.mark.parametrize("case", list(CASES))
+@pytest.mark.parametrize("case", cases(CASES, slow={"thin_fire_truck_dae_cm", "truck_floating_open",
+                                                    "car_cm_facing_minus_y", "hatch_scale_0.06_backwards",
+                                                    "hatch_scale_0.1_y_up"}))
 def test_every_raw_mesh_is_added_by_following_the_hints(case, tmp_path, rigopt_home):
     write, size, axles, radius = CASES[case]
     path = write(tmp_path)
@@ -163,6 +166,7 @@ def test_a_dae_files_declared_unit_is_applied_with_a_note(tmp_path):
     assert declared_unit(plain) is None
 
 
+@pytest.mark.slow
 def test_a_floating_mesh_is_stood_on_its_tyres_with_a_note(tmp_path, rigopt_home):
     path = write_mesh(tmp_path / "truck.obj", sim_car.dual_truck_parts(), lift=1.3)
     outcome = run_rigopt("vehicle", "add", "truck", "--mesh", path, env={"RIGOPT_HOME": str(rigopt_home)})
@@ -188,6 +192,7 @@ def test_a_floating_mesh_without_tyres_is_told_to_add_ground(box_car, tmp_path, 
     assert load_vehicle("box").mesh.bounds[0, 2] == pytest.approx(0.0, abs=1e-4)
 
 
+@pytest.mark.slow
 def test_the_thin_truck_gets_keep_outs_over_its_ladder_and_light_bar(tmp_path, rigopt_home):
     path = write_mesh(tmp_path / "fire.obj", sim_car.thin_fire_truck_parts())
     outcome = run_rigopt("vehicle", "add", "fire", "--mesh", path, env={"RIGOPT_HOME": str(rigopt_home)})

@@ -64,6 +64,7 @@ def test_rig_symmetry_finds_pairs_centreline_cameras_and_the_unpaired():
     assert not rig_symmetry(narrower).symmetric
 
 
+@pytest.mark.slow
 def test_symmetric_mount_points_pair_up_across_the_centre_plane(firetruck):
     points, normals, names, mirror = sample_symmetric_zone_points(firetruck, 0.4)
     assert np.array_equal(mirror[mirror], np.arange(len(mirror)))
@@ -75,6 +76,7 @@ def test_symmetric_mount_points_pair_up_across_the_centre_plane(firetruck):
     assert np.abs(reflected[:, 1] - points[:, 1]).max() <= 0.07  # the firetruck's own asymmetry, 6 cm
 
 
+@pytest.mark.slow
 def test_symmetric_candidates_are_closed_under_their_mirror(firetruck):
     settings = DesignSettings(lenses=(65.0, 90.0), pitches_deg=(-10.0, 0.0))
     candidates = build_candidates(firetruck, settings.lenses, 0.5, np.arange(-180.0, 180.0, 30.0),

@@ -56,6 +56,7 @@ def two_hatches(tmp_path, rigopt_home):
     return tmp_path, env
 
 
+@pytest.mark.slow
 def test_the_vehicle_is_centred_on_its_footprint_box_on_the_ground(two_hatches):
     from rigopt.vehicle.library import load_vehicle
 
@@ -69,6 +70,7 @@ def test_the_vehicle_is_centred_on_its_footprint_box_on_the_ground(two_hatches):
     np.testing.assert_allclose(load_vehicle("moved").rear_axle, [sim_car.HUG_AXLES[1], 0, 0], atol=0.01)
 
 
+@pytest.mark.slow
 def test_rigcd_to_a_rear_axle_rig_is_the_same(two_hatches):
     _, env = two_hatches
     results = [run_rigopt("rigcd", "R1", NUSCENES, "--vehicle", name, "--json", env=env) for name in ("hatch", "moved")]
@@ -78,6 +80,7 @@ def test_rigcd_to_a_rear_axle_rig_is_the_same(two_hatches):
     assert first["rigcd"] > 0
 
 
+@pytest.mark.slow
 def test_coverage_and_check_are_the_same(two_hatches):
     tmp, env = two_hatches
     for command in (["coverage"], ["check"]):

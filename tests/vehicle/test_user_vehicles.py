@@ -132,6 +132,7 @@ def test_lifted_mesh_raises(box_car, export):
         add_user_vehicle("lifted", export(lifted, "lifted.stl"))
 
 
+@pytest.mark.slow
 def test_open_mesh_is_closed(box_car, export):
     fine = box_car.fine_mesh
     keep = fine.triangles_center[:, 0] < 2.0 - 1e-6  # the whole front face is missing

@@ -61,6 +61,7 @@ def test_train_writes_a_checkpoint_and_a_log_and_a_rerun_does_nothing(trained):
     assert (run / "checkpoint.pt").stat().st_mtime_ns == before
 
 
+@pytest.mark.slow
 def test_evaluate_prints_the_metrics_of_the_checkpoint_on_another_rig(trained):
     """--json through the installed console script (stdout JSON only, whatever torch prints); the table in-process."""
     process = console_script("bench", "evaluate", "--data", trained, "--rig", "R5", "--model", "lss",
@@ -104,6 +105,7 @@ def test_calibrate_reads_a_results_folder_the_protocol_writes(tmp_path):
     assert fit["weights"]["K"] > 0
 
 
+@pytest.mark.slow
 def test_validate_renders_the_design_and_reports_measured_beside_predicted(trained):
     """Through the installed console script: its stdout is JSON only, whatever torch or a C library prints."""
     design = REPO / "measurements" / "rigs" / "firetruck_from_R1.json"

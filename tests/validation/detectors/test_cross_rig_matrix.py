@@ -96,6 +96,7 @@ def test_transfer_reader_reads_the_results_folder_back(matrix):
     assert table.own_map() == {("lss", r): expected[r, r] for r in RIGS}
 
 
+@pytest.mark.slow
 def test_matrix_in_worker_processes_gives_the_same_results(matrix, tiny_data, tmp_path):
     """Two worker processes: the trainings run in parallel, then each test rig is its own job; the numbers are
     those of the matrix run in order (same seeds, same checkpoints' steps)."""
@@ -154,6 +155,7 @@ def test_matrix_settings_are_checked(tiny_data, tmp_path):
     assert configured(model_config("lss", "tiny"), None) == model_config("lss", "tiny")
 
 
+@pytest.mark.slow
 def test_matrix_on_ray(tiny_data, tmp_path):
     """The same matrix with each training rig as a task of a local Ray instance."""
     ray = pytest.importorskip("ray")

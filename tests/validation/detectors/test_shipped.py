@@ -53,6 +53,7 @@ def use_packed(packed, monkeypatch):
     return packed
 
 
+@pytest.mark.slow
 def test_pack_writes_half_weights_and_a_card_with_the_packed_models_own_scores(use_packed):
     from rigopt.validation.detectors.protocol import evaluate_on
 
@@ -72,6 +73,7 @@ def test_pack_writes_half_weights_and_a_card_with_the_packed_models_own_scores(u
     assert card["size_bytes"] == detector.size_bytes() > 0
 
 
+@pytest.mark.slow
 def test_the_reference_measured_against_itself_loses_nothing_and_a_rerun_renders_nothing(use_packed, tmp_path):
     detector = shipped.shipped_detector("lss", "R1")
     messages = []
@@ -88,6 +90,7 @@ def test_the_reference_measured_against_itself_loses_nothing_and_a_rerun_renders
         assert np.array_equal(entry["resampled_drops"], again["seeds"][seed]["resampled_drops"])
 
 
+@pytest.mark.slow
 def test_scoring_the_seeds_in_two_processes_gives_what_one_gives(use_packed, tmp_path):
     detector = shipped.shipped_detector("lss", "R1")
     rig = load_rig("R5")
@@ -98,6 +101,7 @@ def test_scoring_the_seeds_in_two_processes_gives_what_one_gives(use_packed, tmp
     assert shipped.without_resamples(parallel) == shipped.without_resamples(serial) and parallel["drop"] > 0
 
 
+@pytest.mark.slow
 def test_a_rig_scores_as_the_data_path_scores_it(use_packed, tmp_path):
     """The cache path and ``--data``'s (render the rig beside the reference, evaluate the checkpoint) agree."""
     from rigopt.validation.detectors.protocol import evaluate_on_rigs
@@ -128,6 +132,7 @@ def test_the_cache_key_follows_the_geometry_not_the_name():
     assert shipped.cache_name(dataclasses.replace(r1, name="a b/c")).startswith("a_b_c-")
 
 
+@pytest.mark.slow
 def test_validate_without_data_through_the_console_script(packed, tmp_path):
     """The installed script in a real process: stdout is JSON only."""
     _, root = packed
@@ -150,6 +155,7 @@ def test_validate_without_data_through_the_console_script(packed, tmp_path):
     (["validate", "R5", "--ref", "R1", "--model", "lss", "--data", "{tmp}", "--compare"], "--compare is for the shipped"),
     (["validate", "R5", "--ref", "R1", "--model", "lss", "--cache", "{file}"], "--cache"),
 ])
+@pytest.mark.slow
 def test_bad_input_exits_2_with_one_line(use_packed, tmp_path, capsys, args, message):
     (tmp_path / "file").write_text("x")
     capsys.readouterr()
@@ -160,6 +166,7 @@ def test_bad_input_exits_2_with_one_line(use_packed, tmp_path, capsys, args, mes
     assert len(lines) == 1 and lines[0].startswith("rigopt: error: ") and message in lines[0]
 
 
+@pytest.mark.slow
 def test_near_field_cameras_are_not_fed_to_the_detector(use_packed, tmp_path, capsys):
     """A rig with near_field cameras is measured on its perception cameras, and whole for the record."""
     from rigopt.rig.pccr_format import write_rig
@@ -178,6 +185,7 @@ def test_near_field_cameras_are_not_fed_to_the_detector(use_packed, tmp_path, ca
     assert "1 near_field camera(s) are not fed to the detector" in captured.err
 
 
+@pytest.mark.slow
 def test_a_rig_with_near_field_fisheyes_is_measured_on_its_perception_cameras_only(use_packed, tmp_path, capsys):
     """The shipped models take pinhole images: a design's fisheyes are named, the whole rig is not measured."""
     from rigopt.design.near_field import fisheye_190
@@ -196,6 +204,7 @@ def test_a_rig_with_near_field_fisheyes_is_measured_on_its_perception_cameras_on
     assert "not measured whole" in captured.err and "FISHEYE" in captured.err
 
 
+@pytest.mark.slow
 def test_the_table_says_when_the_prediction_interval_is_uninformative(use_packed, tmp_path, capsys):
     """The joint calibration's interval spans the whole range: the cell and a note say so, JSON keeps it."""
     capsys.readouterr()
@@ -209,6 +218,7 @@ def test_the_table_says_when_the_prediction_interval_is_uninformative(use_packed
     assert entry["interval_informative"] is False and len(entry["predicted_interval"]) == 2
 
 
+@pytest.mark.slow
 def test_compare_pairs_the_rig_with_each_yardstick_on_the_same_scene_resamples(use_packed, tmp_path, capsys):
     from rigopt.rig.pccr_format import write_rig
 

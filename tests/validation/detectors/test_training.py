@@ -57,6 +57,7 @@ def lss_run(tiny_data, tmp_path_factory):
 # ---------------------------------------------------------------- learning
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("family", ["lss", "petr"])
 def test_training_overfits_a_tiny_set(r5_train, tmp_path, family):
     """60 steps on the same 4 samples (one batch) cut the loss to well under half."""

@@ -7,9 +7,12 @@ import pkgutil
 import subprocess
 import sys
 
+import pytest
+
 import rigopt.validation.synthetic
 
 
+@pytest.mark.slow
 def test_no_bench_module_imports_the_baselines_or_torch():
     modules = sorted(f"rigopt.validation.synthetic.{m.name}" for m in pkgutil.iter_modules(rigopt.validation.synthetic.__path__))
     assert "rigopt.validation.synthetic.evaluation" in modules

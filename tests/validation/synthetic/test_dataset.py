@@ -162,6 +162,7 @@ def test_a_rear_axle_rig_is_rendered_from_its_vehicle_centre(tmp_path, scene, al
         np.testing.assert_allclose(written[camera.id], camera.position, atol=1e-9)
 
 
+@pytest.mark.slow
 def test_generation_on_ray_writes_what_generation_here_writes(tmp_path):
     """`rigopt bench generate --ray local`: each (rig, scene) pair a task of a local Ray instance (with the
     command's own ego-mesh lookup and console), the same tables, images and depth maps as rendering here."""
