@@ -84,7 +84,7 @@ def fisheye_190() -> CatalogueCamera:
     width, height = FISHEYE_IMAGE_SIZE
     focal = (width / 2) / np.radians(FISHEYE_HFOV_DEG / 2)
     lens = Lens(width, height, focal, focal, width / 2, height / 2, "fisheye", (0.0, 0.0, 0.0, 0.0))
-    return CatalogueCamera.of_lens(f"fisheye {FISHEYE_HFOV_DEG:g} deg {width}x{height} (equidistant)", lens)
+    return CatalogueCamera(f"fisheye {FISHEYE_HFOV_DEG:g} deg {width}x{height} (equidistant)", lens)
 
 
 @dataclass(frozen=True)

@@ -14,13 +14,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rigopt.benchmark import BENCHMARK_IMAGE_SIZE
 from rigopt.camera import CameraModel, Lens
 from rigopt.geometry import rotation_from_yaw_pitch_roll
 from rigopt.mounting.features import segments_hit_swings, trailer_swings
 from rigopt.mounting.practice import keep_out_boxes, segments_hit_boxes
 from rigopt.mounting.rules import MountRules
 from rigopt.mounting.sampling import DEFAULT_SPACING, sample_zone_points
-from rigopt.rig.model import DEFAULT_IMAGE_SIZE
 from rigopt.vehicle.model import Vehicle
 
 DEFAULT_YAWS_DEG = tuple(range(-180, 180, 10))
@@ -45,7 +45,7 @@ class MountCandidates:
     fov: float
 
 
-def probe_directions(lens: float | Lens, rules: MountRules = MountRules(), image_size=DEFAULT_IMAGE_SIZE) -> np.ndarray:
+def probe_directions(lens: float | Lens, rules: MountRules = MountRules(), image_size=BENCHMARK_IMAGE_SIZE) -> np.ndarray:
     """(9, 3) unit rays in the camera body frame: centre, edge midpoints and corners of the checked frustum of
     ``lens`` (a Lens, or a pinhole's horizontal FOV in deg at ``image_size``)."""
     if isinstance(lens, Lens):
