@@ -52,7 +52,7 @@ capped at ``MAX_FRUSTUM_HALF_ANGLE_DEG`` so that it stays a convex solid.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property
 from typing import TYPE_CHECKING, Sequence
 
@@ -263,6 +263,7 @@ class Lens:
     stated_hfov : float or None, deg: the horizontal FOV the lens was stated with (the FOV a benchmark pinhole
     was built from, :meth:`pinhole`; a rig file's ``fov``), within :data:`FOV_TOLERANCE_DEG` of the one its
     intrinsics give; :attr:`hfov` returns it to the bit. None: :attr:`hfov` is derived from the intrinsics.
+    Lenses are equal when their geometry is (size, intrinsics, distortion), whatever FOV they were stated with.
     """
 
     width: int
@@ -273,7 +274,7 @@ class Lens:
     cy: float
     distortion: str = "none"
     coefficients: tuple[float, ...] = ()
-    stated_hfov: float | None = None
+    stated_hfov: float | None = field(default=None, compare=False)
 
     def __post_init__(self):
         for name in ("width", "height"):

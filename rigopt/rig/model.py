@@ -106,9 +106,10 @@ class Camera:
         if not isinstance(self.lens, Lens):
             raise RigFileError(f"{what} lens must be a rigopt.camera.Lens (Camera.pinhole builds the benchmark's "
                                f"pinhole from a FOV), got {type(self.lens).__name__}")
-        if self.lens.is_ideal_pinhole and (self.lens.stated_hfov is None
-                                           or self.lens != _pinhole(self.lens.hfov, self.lens.image_size)):
-            object.__setattr__(self, "lens", _pinhole(self.lens.hfov, self.lens.image_size))
+        if self.lens.is_ideal_pinhole:
+            pinhole = _pinhole(self.lens.hfov, self.lens.image_size)
+            if self.lens != pinhole or self.lens.stated_hfov != pinhole.stated_hfov:
+                object.__setattr__(self, "lens", pinhole)
 
     @classmethod
     def pinhole(cls, id: str, position, rotation, fov: float, image_size=BENCHMARK_IMAGE_SIZE,
@@ -182,6 +183,10 @@ def _check_name(value, what: str) -> None:
 
 
 def _same_lens(a: Lens, b: Lens, atol: float) -> bool:
+    """Lenses alike within ``atol`` (px): two benchmark pinholes by their image sizes (their FOVs, compared by
+    :meth:`Camera.same_as`, give the rest); other lenses by every intrinsic and coefficient."""
+    if a.is_ideal_pinhole and b.is_ideal_pinhole:
+        return a.image_size == b.image_size
     return (a.image_size == b.image_size and a.distortion == b.distortion
             and np.allclose([a.fx, a.fy, a.cx, a.cy, *a.coefficients], [b.fx, b.fy, b.cx, b.cy, *b.coefficients],
                             atol=atol, rtol=0))

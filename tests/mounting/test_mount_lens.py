@@ -33,7 +33,7 @@ def test_a_wider_lens_is_clear_in_fewer_directions(box_car):
 
 
 def test_a_fisheye_camera_is_checked_with_a_convex_frustum(box_car):
-    camera = Camera.with_lens("FISH", [2.04, 0.0, 1.0], np.eye(3), FISHEYE, zone="front")
+    camera = Camera("FISH", [2.04, 0.0, 1.0], np.eye(3), FISHEYE, zone="front")
     vertices = frustum_vertices(camera, MountRules())
     assert vertices.shape == (8, 3) and np.all(vertices[:, 0] > camera.position[0])
     check = check_rig(Rig("fish", box_car.blueprint, (camera,)), box_car)
