@@ -147,7 +147,7 @@ def test_design_has_the_references_perception_camera_count_and_near_field_camera
     rig = firetruck.design.rig
     assert len(rig.perception()) == len(firetruck.reference) == len(firetruck.milp_rig)
     assert rig.near_field_count >= 1
-    assert all(c.lens is not None and c.lens.distortion == "fisheye" for c in rig.cameras if c.role == "near_field")
+    assert all(c.lens.distortion == "fisheye" for c in rig.cameras if c.role == "near_field")
 
 
 def test_design_cameras_are_named_after_where_they_are_mounted_and_look(firetruck):
