@@ -132,7 +132,7 @@ def near_field_candidates(vehicle: Vehicle, spacing: float, symmetric: bool, rul
     """The near-field candidates on ``vehicle``'s mount points (see the module docstring)."""
     yaws = np.arange(-180.0, 180.0, NEAR_FIELD_YAW_STEP)
     return build_candidates(vehicle, catalogue or (fisheye_190(),), spacing, yaws, NEAR_FIELD_PITCHES_DEG, zones,
-                            rules, MAX_BODY_FRACTION, symmetric, clear_lens=CLEAR_CONE_DEG)
+                            rules, MAX_BODY_FRACTION, symmetric, clear_lens=Lens.pinhole(CLEAR_CONE_DEG))
 
 
 @dataclass(frozen=True)
