@@ -263,7 +263,8 @@ class Lens:
     stated_hfov : float or None, deg: the horizontal FOV the lens was stated with (the FOV a benchmark pinhole
     was built from, :meth:`pinhole`; a rig file's ``fov``), within :data:`FOV_TOLERANCE_DEG` of the one its
     intrinsics give; :attr:`hfov` returns it to the bit. None: :attr:`hfov` is derived from the intrinsics.
-    Lenses are equal when their geometry is (size, intrinsics, distortion), whatever FOV they were stated with.
+    Lenses are equal when their geometry is (size, intrinsics, distortion), whatever FOV they were stated with
+    (nor is it in their repr, so messages name a lens by its geometry).
     """
 
     width: int
@@ -274,7 +275,7 @@ class Lens:
     cy: float
     distortion: str = "none"
     coefficients: tuple[float, ...] = ()
-    stated_hfov: float | None = field(default=None, compare=False)
+    stated_hfov: float | None = field(default=None, compare=False, repr=False)
 
     def __post_init__(self):
         for name in ("width", "height"):

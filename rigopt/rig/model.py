@@ -125,7 +125,11 @@ class Camera:
         if len(size) != 2 or not all(isinstance(v, (int, np.integer)) and not isinstance(v, bool) and v > 0
                                      for v in size):
             raise RigFileError(f"{what} image_size must be two positive integers (width, height), got {image_size!r}")
-        return cls(id, position, rotation, _pinhole(float(fov), (int(size[0]), int(size[1]))), zone, module, role)
+        try:
+            lens = _pinhole(float(fov), (int(size[0]), int(size[1])))
+        except RigFileError as error:  # a FOV so narrow that the focal length overflows
+            raise RigFileError(f"{what} fov {fov!r} deg has no pinhole: {error}") from None
+        return cls(id, position, rotation, lens, zone, module, role)
 
     @property
     def fov(self) -> float:
