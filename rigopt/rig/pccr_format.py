@@ -15,7 +15,9 @@ ignored. rigopt adds optional keys, written only when they differ from the bench
   (``"near_field"``; absent: ``"perception"``, so files written before roles are all perception), and for a real lens
   ``"intrinsics": {"fx": .., "fy": .., "cx": .., "cy": ..}`` (px) with
   ``"distortion": {"model": "radtan" | "fisheye", "coefficients": [...]}`` (OpenCV order: k1, k2, p1, p2,
-  k3; fisheye k1..k4). With intrinsics, ``fov`` is the lens's derived horizontal FOV (checked on reading).
+  k3; fisheye k1..k4). With intrinsics, ``fov`` is the lens's derived horizontal FOV (checked on reading
+  and kept as the lens's stated FOV, :attr:`rigopt.camera.Lens.stated_hfov`); a benchmark pinhole is written
+  without them, as its ``fov`` alone.
 - per rig: ``"origin": "rear_axle"`` or ``{"custom": [x, y, z]}`` (metres, CARLA frame) when the positions
   are not measured from the benchmark's vehicle centre.
 """
