@@ -10,6 +10,7 @@ import argparse
 import tempfile
 import time
 
+from rigopt.benchmark import BENCHMARK_IMAGE_SIZE, SYNTHETIC_IMAGE_SIZE
 from rigopt.validation.synthetic.generate import generate_split
 from rigopt.validation.synthetic.render import render_rig
 from rigopt.validation.synthetic.scenes import generate_scene, split_seeds
@@ -26,7 +27,7 @@ def main() -> None:
     mesh = load_vehicle(rig.vehicle).mesh
     scene = generate_scene(split_seeds("train", 1)[0], "train")
     print(f"scene: {len(scene.boxes_at(0))} boxes in frame 0; rig {rig.name}, {len(rig)} cameras")
-    for size, frames in (((160, 90), 10), ((1280, 720), 1)):
+    for size, frames in ((SYNTHETIC_IMAGE_SIZE, 10), (BENCHMARK_IMAGE_SIZE, 1)):
         render_rig(scene, 0, rig, mesh, size)  # warm caches (road regions, ray intersector)
         start = time.perf_counter()
         for k in range(frames):
@@ -38,7 +39,7 @@ def main() -> None:
     scenes = [generate_scene(s, "train") for s in split_seeds("train", args.scenes)]
     with tempfile.TemporaryDirectory() as out:
         start = time.perf_counter()
-        generate_split([rig], scenes, out, (160, 90), render_rig, lambda r: mesh)
+        generate_split([rig], scenes, out, SYNTHETIC_IMAGE_SIZE, render_rig, lambda r: mesh)
         seconds = time.perf_counter() - start
     per_scene = seconds / len(scenes)
     print(f"generate {len(scenes)} training scenes x {len(scene.frames)} samples x {len(rig)} cameras at 160x90 "

@@ -13,6 +13,7 @@ import time
 
 import torch
 
+from rigopt.benchmark import SYNTHETIC_IMAGE_SIZE
 from rigopt.validation.detectors.config import model_config
 from rigopt.validation.detectors.families import DETECTORS
 from rigopt.validation.detectors.data import Batch, BoxTargets
@@ -23,7 +24,7 @@ from rigopt.rig.library import load_rig
 CONTROL_RIGS = 6
 
 
-def synthetic_batch(rig_name: str, batch_size: int, size=(160, 90), boxes: int = 40, seed: int = 0) -> Batch:
+def synthetic_batch(rig_name: str, batch_size: int, size=SYNTHETIC_IMAGE_SIZE, boxes: int = 40, seed: int = 0) -> Batch:
     """A batch shaped like ``rig_name``'s data: random images, the rig's real calibration, random boxes."""
     import numpy as np
 

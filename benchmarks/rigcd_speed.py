@@ -38,7 +38,8 @@ def random_rig(rng: np.random.Generator, name: str) -> Rig:
     """A rig of 6-10 cameras, positions within +-3 m, uniform random rotations, FOVs 60-120 deg."""
     n = int(rng.integers(6, 11))
     rotations = quaternion_to_matrix(rng.normal(size=(n, 4)))
-    cameras = [Camera(f"C{k}", rng.uniform(-3, 3, 3), rotations[k], float(rng.uniform(60, 120))) for k in range(n)]
+    cameras = [Camera.pinhole(f"C{k}", rng.uniform(-3, 3, 3), rotations[k], float(rng.uniform(60, 120)))
+               for k in range(n)]
     return Rig(name, "random", tuple(cameras))
 
 

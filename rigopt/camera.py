@@ -31,8 +31,9 @@ through the left and right (top and bottom) edge midpoints, through the axis.
 
 :class:`CameraModel` holds a batch of lenses (every field an array of one batch shape, ``()`` for one camera
 or ``(c,)`` for c cameras, the distortion model and coefficients included); its methods broadcast over that
-batch. :meth:`CameraModel.of_cameras` builds it from rig cameras' lenses (a camera without one is the
-benchmark's centred square-pixel pinhole of its FOV and image size, :meth:`CameraModel.from_fov`). The maths
+batch. :meth:`CameraModel.of_cameras` builds it from rig cameras' lenses (every camera has one; the
+benchmark's centred square-pixel pinholes, :meth:`Lens.pinhole`, by :meth:`CameraModel.from_fov` from their
+stated FOVs and image sizes). The maths
 of the distortion models is in one place, :func:`undistorted_directions` and :func:`distorted_coordinates`,
 used by both classes. Pinhole cameras take the exact edge-tangent formulas everywhere (bit-identical to
 before distortion existed); distorted ones take their projection: a point is in view when it projects
@@ -42,7 +43,7 @@ capped at ``MAX_FRUSTUM_HALF_ANGLE_DEG`` so that it stays a convex solid.
 
 >>> round(float(focal_from_fov(60.0, 320)), 3)
 277.128
->>> model = CameraModel.from_fov(90.0, (1280, 720))
+>>> model = CameraModel.from_fov(90.0, BENCHMARK_IMAGE_SIZE)
 >>> [round(float(t), 4) for t in model.half_tangents()]
 [1.0, 0.5625]
 >>> model.project(np.array([[10.0, -10.0, 0.0]])).tolist()  # 45 deg right: the image's right edge
@@ -51,12 +52,13 @@ capped at ``MAX_FRUSTUM_HALF_ANGLE_DEG`` so that it stays a convex solid.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property
 from typing import TYPE_CHECKING, Sequence
 
 import numpy as np
 
+from rigopt.benchmark import BENCHMARK_IMAGE_SIZE
 from rigopt.errors import RigoptError
 
 if TYPE_CHECKING:
@@ -64,6 +66,9 @@ if TYPE_CHECKING:
 
 #: Depths (m) below this count as this when margins divide by a point's depth.
 MIN_DEPTH = 1e-9
+
+#: How far (deg) a lens's stated horizontal FOV (a rig file's ``fov``) may be from the one its intrinsics give.
+FOV_TOLERANCE_DEG = 1e-6
 
 
 def focal_from_fov(fov_deg, width_px):
@@ -254,6 +259,12 @@ class Lens:
     Distorted normalised coordinates map to pixels through ``K``: u = fx x_d + cx, v = fy y_d + cy. The
     fisheye model takes the angle theta of a ray from the optical axis and puts it at radius theta_d(theta)
     in the normalised image, so it covers lenses wider than 180 degrees.
+
+    stated_hfov : float or None, deg: the horizontal FOV the lens was stated with (the FOV a benchmark pinhole
+    was built from, :meth:`pinhole`; a rig file's ``fov``), within :data:`FOV_TOLERANCE_DEG` of the one its
+    intrinsics give; :attr:`hfov` returns it to the bit. None: :attr:`hfov` is derived from the intrinsics.
+    Lenses are equal when their geometry is (size, intrinsics, distortion), whatever FOV they were stated with
+    (nor is it in their repr, so messages name a lens by its geometry).
     """
 
     width: int
@@ -264,6 +275,7 @@ class Lens:
     cy: float
     distortion: str = "none"
     coefficients: tuple[float, ...] = ()
+    stated_hfov: float | None = field(default=None, compare=False, repr=False)
 
     def __post_init__(self):
         for name in ("width", "height"):
@@ -303,13 +315,25 @@ class Lens:
                 raise RigoptError(f"lens {self}: its image corners lie beyond what the {self.distortion} distortion "
                                   "reaches before it folds back, so some pixels have no ray; check the distortion "
                                   "coefficients and focal lengths")
+        if self.stated_hfov is not None:
+            stated = self.stated_hfov
+            if isinstance(stated, (bool, str)) or not isinstance(stated, (int, float, np.number)) \
+                    or not np.isfinite(stated):
+                raise RigoptError(f"a lens's stated horizontal FOV must be a finite number of degrees, got {stated!r}")
+            derived = float(np.rad2deg(edges[0] + edges[1]))  # derived_hfov, from the edges at hand
+            if not abs(float(stated) - derived) <= FOV_TOLERANCE_DEG:
+                raise RigoptError(f"a lens's stated horizontal FOV {float(stated):g} deg disagrees with its "
+                                  f"intrinsics' {derived:.6f} deg (tolerance {FOV_TOLERANCE_DEG:g} deg)")
+            object.__setattr__(self, "stated_hfov", float(stated))
 
     @classmethod
-    def pinhole(cls, hfov_deg: float, image_size=(1280, 720)) -> "Lens":
-        """The benchmark's camera: a centred square-pixel pinhole of horizontal FOV ``hfov_deg`` in (0, 180)."""
+    def pinhole(cls, hfov_deg: float, image_size=BENCHMARK_IMAGE_SIZE) -> "Lens":
+        """The benchmark's camera: a centred square-pixel pinhole of horizontal FOV ``hfov_deg`` (deg) in (0, 180)
+        at ``image_size`` (width, height) px. Its :attr:`hfov` is ``hfov_deg`` itself, to the bit."""
         width, height = image_size
         model = CameraModel.from_fov(hfov_deg, (width, height))
-        return cls(int(width), int(height), float(model.fx), float(model.fy), float(model.cx), float(model.cy))
+        return cls(int(width), int(height), float(model.fx), float(model.fy), float(model.cx), float(model.cy),
+                   stated_hfov=float(hfov_deg))
 
     @property
     def image_size(self) -> tuple[int, int]:
@@ -365,12 +389,17 @@ class Lens:
         return tuple(float(a) for a in np.arctan2(np.hypot(rays[:, 0], rays[:, 1]), rays[:, 2]))
 
     @property
-    def hfov(self) -> float:
-        """Horizontal FOV in degrees: the angle from the ray through the left edge to the ray through the
-        right edge (through the optical axis, so it may exceed 180 for a fisheye). For the benchmark's pinhole
-        it is the FOV the lens was built from."""
+    def derived_hfov(self) -> float:
+        """Horizontal FOV in degrees from the intrinsics: the angle from the ray through the left edge to the ray
+        through the right edge (through the optical axis, so it may exceed 180 for a fisheye)."""
         left, right, _, _ = self.edge_angles()
         return float(np.rad2deg(left + right))
+
+    @property
+    def hfov(self) -> float:
+        """Horizontal FOV in degrees: :attr:`stated_hfov` when the lens was stated with one (the benchmark's
+        pinhole: the FOV it was built from, exactly), else :attr:`derived_hfov`."""
+        return self.stated_hfov if self.stated_hfov is not None else self.derived_hfov
 
     @property
     def vfov(self) -> float:
@@ -380,10 +409,10 @@ class Lens:
 
     def summary(self) -> dict:
         """The lens as plain JSON values, for reports: size and intrinsics (px), distortion model and
-        coefficients, and the derived ``hfov_deg`` and ``vfov_deg``."""
+        coefficients, and the ``hfov_deg`` and ``vfov_deg`` derived from the intrinsics."""
         return {"width": self.width, "height": self.height, "fx": self.fx, "fy": self.fy, "cx": self.cx,
                 "cy": self.cy, "distortion": self.distortion, "coefficients": list(self.coefficients),
-                "hfov_deg": self.hfov, "vfov_deg": self.vfov}
+                "hfov_deg": self.derived_hfov, "vfov_deg": self.vfov}
 
     def label(self) -> str:
         """One line for tables, e.g. ``1280x720 fx 640 pinhole 90.0x58.7 deg``."""
@@ -414,6 +443,12 @@ def _read_only(values) -> np.ndarray:
     array = np.array(values, dtype=float)
     array.flags.writeable = False
     return array
+
+
+def _is_stated_pinhole(lens: Lens) -> bool:
+    """True for the benchmark's pinhole of a stated FOV (:meth:`Lens.pinhole`), whose model :meth:`CameraModel.from_fov`
+    builds from that FOV."""
+    return lens.stated_hfov is not None and lens.is_ideal_pinhole
 
 
 #: Half-angles (deg) of the checked view frustum (:meth:`CameraModel.frustum_corners`, probe rays) are capped
@@ -517,18 +552,19 @@ class CameraModel:
 
     @classmethod
     def of_cameras(cls, cameras: Sequence["Camera"]) -> "CameraModel":
-        """The models of rig cameras (batch shape (c,)) from each camera's :attr:`~rigopt.rig.model.Camera.lens_model`:
-        its real lens, or the benchmark's pinhole of its FOV and image size. The one place that reads a camera's
-        lens, so real lenses reach coverage, mount checks, refinement and the renderer."""
-        if all(c.lens is None for c in cameras):  # benchmark pinholes: the same values, without building lenses
-            return cls.from_fov([c.fov for c in cameras], [c.image_size for c in cameras])
-        return cls.of_lenses([c.lens_model for c in cameras])
+        """The models of rig cameras (batch shape (c,)) from each camera's :attr:`~rigopt.rig.model.Camera.lens`.
+        The one place that reads a rig camera's lens, so real lenses reach coverage, mount checks, refinement and
+        the renderer. Benchmark pinholes (each lens stated by its FOV, :meth:`Lens.pinhole`) are built from their
+        FOVs and image sizes in one :meth:`from_fov`."""
+        if all(_is_stated_pinhole(c.lens) for c in cameras):
+            return cls.from_fov([c.lens.hfov for c in cameras], [c.lens.image_size for c in cameras])
+        return cls.of_lenses([c.lens for c in cameras])
 
     @classmethod
     def of_camera(cls, camera: "Camera") -> "CameraModel":
         """The model of one rig camera (batch shape ())."""
-        if camera.lens is None:
-            return cls.from_fov(camera.fov, camera.image_size)
+        if _is_stated_pinhole(camera.lens):
+            return cls.from_fov(camera.lens.hfov, camera.lens.image_size)
         return cls.of_lens(camera.lens)
 
     def lens(self, index=()) -> Lens:

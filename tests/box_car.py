@@ -64,5 +64,5 @@ def front_and_left_rig(blueprint: str, name: str = "boxrig"):
     from rigopt.rig.model import Camera, Rig
 
     left = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
-    return Rig(name, blueprint, (Camera("CAM_FRONT", np.array([2.04, 0.0, 1.0]), np.eye(3), 100.0),
-                                 Camera("CAM_LEFT", np.array([0.0, 0.94, 1.0]), left, 90.0)))
+    return Rig(name, blueprint, (Camera.pinhole("CAM_FRONT", np.array([2.04, 0.0, 1.0]), np.eye(3), 100.0),
+                                 Camera.pinhole("CAM_LEFT", np.array([0.0, 0.94, 1.0]), left, 90.0)))

@@ -68,14 +68,14 @@ def fovs():
 
 def cameras(camera_id: str = "CAM"):
     """One Camera with a random pose and FOV."""
-    return st.builds(Camera, st.just(camera_id), positions(), rotations(), fovs())
+    return st.builds(Camera.pinhole, st.just(camera_id), positions(), rotations(), fovs())
 
 
 def rigs(min_cameras: int = 1, max_cameras: int = MAX_CAMERAS, name: str = "random"):
     """A Rig of min_cameras..max_cameras random cameras with ids CAM_0, CAM_1, ..."""
     poses = st.lists(st.tuples(positions(), rotations(), fovs()), min_size=min_cameras, max_size=max_cameras)
     return poses.map(
-        lambda cams: Rig(name, "vehicle.test", tuple(Camera(f"CAM_{k}", *c) for k, c in enumerate(cams)))
+        lambda cams: Rig(name, "vehicle.test", tuple(Camera.pinhole(f"CAM_{k}", *c) for k, c in enumerate(cams)))
     )
 
 

@@ -137,8 +137,8 @@ def test_model_intrinsic_matrix_is_the_function():
 
 
 def test_of_cameras_reads_each_cameras_lens():
-    cameras = [Camera("A", np.zeros(3), np.eye(3), 90.0, (1280, 720)),
-               Camera("B", np.zeros(3), np.eye(3), 60.0, (800, 600))]
+    cameras = [Camera.pinhole("A", np.zeros(3), np.eye(3), 90.0, (1280, 720)),
+               Camera.pinhole("B", np.zeros(3), np.eye(3), 60.0, (800, 600))]
     model = CameraModel.of_cameras(cameras)
     assert model.shape == (2,)
     np.testing.assert_allclose(model.hfov, [90.0, 60.0], rtol=1e-12)

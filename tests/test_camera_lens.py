@@ -85,7 +85,7 @@ def test_barrel_distortion_widens_the_fov_beyond_the_pinholes():
 def test_a_surround_view_fisheye_sees_about_200_degrees():
     assert 190.0 < FISHEYE.hfov < 205.0
     assert FISHEYE.vfov < FISHEYE.hfov
-    camera = Camera.with_lens("FISH", np.zeros(3), np.eye(3), FISHEYE)
+    camera = Camera("FISH", np.zeros(3), np.eye(3), FISHEYE)
     assert camera.fov == pytest.approx(FISHEYE.hfov) and camera.lens == FISHEYE
     assert float(CameraModel.of_camera(camera).hfov) == pytest.approx(FISHEYE.hfov, rel=1e-12)
 

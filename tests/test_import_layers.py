@@ -2,7 +2,7 @@
 
 Layers, lowest first; parts in one layer are independent of each other:
 
-    errors  ->  resources, geometry, output, quiet, background  ->  camera, raycast  ->  rig  ->  metrics | vehicle  ->  mounting
+    errors  ->  resources, geometry, output, quiet, background, benchmark  ->  camera, raycast  ->  rig  ->  metrics | vehicle  ->  mounting
     ->  coverage  ->  design  ->  validation  ->  report  ->  cli
 
 Every ``import rigopt...`` counts, including imports inside functions (lazy imports are still
@@ -28,7 +28,7 @@ PACKAGE = Path(__file__).resolve().parents[1] / "rigopt"
 
 LAYERS = (
     {"errors"},
-    {"resources", "geometry", "output", "quiet", "background"},
+    {"resources", "geometry", "output", "quiet", "background", "benchmark"},
     {"camera", "raycast"},
     {"rig"},
     {"metrics", "vehicle"},

@@ -7,6 +7,7 @@ from typing import List, Optional
 
 import typer
 
+from rigopt.benchmark import SYNTHETIC_IMAGE_SIZE
 from rigopt.cli.app import PICTURE_SUFFIXES, app, console, print_next, status_console
 from rigopt.errors import RigoptError
 
@@ -42,7 +43,7 @@ def generate_command(
     scenes: int = typer.Option(2, min=1, help="Number of scenes."),
     out: Path = typer.Option(..., "--out", help="Output folder: <out>/<rig>/<split>/ per rig (resumable: a rerun "
                                                 "renders only the scenes not finished)."),
-    size: str = typer.Option("160x90", help=f"Image size WIDTHxHEIGHT in pixels (at most {MAX_SIDE} a side)."),
+    size: str = typer.Option(f"{SYNTHETIC_IMAGE_SIZE[0]}x{SYNTHETIC_IMAGE_SIZE[1]}", help=f"Image size WIDTHxHEIGHT in pixels (at most {MAX_SIDE} a side)."),
     frames: int = typer.Option(40, min=1, help="Samples per scene (2 Hz)."),
     seed: int = typer.Option(0, min=0, help="Seed offset of the scenes (0 or more)."),
     ray: Optional[str] = typer.Option(None, "--ray", help="Render each (rig, scene) pair as a task on the Ray cluster "

@@ -12,8 +12,8 @@ from rigopt.cli.app import (FORCE_HELP, MIN_HEIGHT_HELP, NO_TRAILER_HELP, app, f
                             note_fallback, print_json, print_next, print_table)
 from rigopt.cli.metric_commands import METRIC_HELP
 from rigopt.cli.parsing import parse_image_size
-from rigopt.design.defaults import BENCHMARK_IMAGE_SIZE as DEFAULT_IMAGE_SIZE
-from rigopt.design.defaults import DEFAULT_LENSES, DEFAULT_MAX_NODES, DEFAULT_PITCHES_DEG, DEFAULT_YAW_STEP_DEG, POSES
+from rigopt.benchmark import BENCHMARK_IMAGE_SIZE
+from rigopt.design.defaults import DEFAULT_FOVS, DEFAULT_MAX_NODES, DEFAULT_PITCHES_DEG, DEFAULT_YAW_STEP_DEG, POSES
 from rigopt.errors import RigoptError
 
 if TYPE_CHECKING:
@@ -53,10 +53,10 @@ def parse_camera_count(text: Optional[str]) -> tuple[int, int] | None:
     return counts
 
 
-def parse_lenses(text: str) -> tuple[tuple[float, ...], tuple[float, float] | None]:
-    """A lens catalogue ``"60,65,70"``, or a continuous range ``"60-120"`` (its lenses by the library's rule,
-    ``design.settings.range_lenses``). Returns (lenses, range or None)."""
-    from rigopt.design.settings import lens_catalogue, range_lenses
+def parse_fovs(text: str) -> tuple[tuple[float, ...], tuple[float, float] | None]:
+    """The catalogue's FOVs (deg) ``"60,65,70"``, or a continuous range ``"60-120"`` (its FOVs by the library's
+    rule, ``design.settings.range_fovs``). Returns (FOVs, range or None)."""
+    from rigopt.design.settings import fov_catalogue, range_fovs
 
     if "-" in text.strip()[1:] and "," not in text:
         low_text, _, high_text = text.partition("-")
@@ -64,10 +64,10 @@ def parse_lenses(text: str) -> tuple[tuple[float, ...], tuple[float, float] | No
     else:
         catalogue, fov_range = parse_numbers(text, "--fov"), None
     try:
-        lenses = range_lenses(*fov_range) if fov_range else lens_catalogue(catalogue)
+        fovs = range_fovs(*fov_range) if fov_range else fov_catalogue(catalogue)
     except RigoptError:
         raise RigoptError(f"--fov must be lenses or a range (low-high) within (0, 180) degrees, got {text!r}") from None
-    return lenses, fov_range
+    return fovs, fov_range
 
 
 @app.command("design")
@@ -78,10 +78,10 @@ def design_command(
     weights: str = typer.Option("joint", help="Calibrated weights: BEVDet, BEVFusion, Fast-BEV, PETR, joint, or a file."),
     metric: str = typer.Option("rigcd", "--metric", help=METRIC_HELP),
     cameras: Optional[str] = typer.Option(None, help="Camera count or range (e.g. 6-10); default: the reference's."),
-    fov: str = typer.Option(numbers_text(DEFAULT_LENSES), help="Lens catalogue: horizontal FOVs in degrees of "
+    fov: str = typer.Option(numbers_text(DEFAULT_FOVS), help="Lens catalogue: horizontal FOVs in degrees of "
                                                                 "pinholes at --image-size, or a continuous range "
                                                                 "such as 60-120."),
-    image_size: str = typer.Option(f"{DEFAULT_IMAGE_SIZE[0]}x{DEFAULT_IMAGE_SIZE[1]}", "--image-size",
+    image_size: str = typer.Option(f"{BENCHMARK_IMAGE_SIZE[0]}x{BENCHMARK_IMAGE_SIZE[1]}", "--image-size",
                                    help="Image size WIDTHxHEIGHT (px) of the --fov pinholes."),
     cameras_file: Optional[Path] = typer.Option(None, "--cameras-file",
                                                 help="Camera catalogue file (TOML or JSON): real cameras with "
@@ -184,10 +184,10 @@ def design_command(
 
     if out is not None:
         check_out_folder(out, force=force)
-    fovs, fov_range = parse_lenses(fov)
+    fovs, fov_range = parse_fovs(fov)
     size = parse_image_size(image_size)
     if cameras_file is not None:
-        if fov_range is not None or fov != numbers_text(DEFAULT_LENSES) or size != DEFAULT_IMAGE_SIZE:
+        if fov_range is not None or fov != numbers_text(DEFAULT_FOVS) or size != BENCHMARK_IMAGE_SIZE:
             raise RigoptError("--cameras-file gives the whole catalogue: leave out --fov and --image-size")
         lenses = read_catalogue(cameras_file)
     else:

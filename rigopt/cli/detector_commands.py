@@ -296,7 +296,7 @@ def _validate_shipped(rig, ref: str, family: str, calibration, weights: str, dev
     rigs = [("rig", rig)]
     if rig.near_field_count:  # the detector is fed the perception cameras; the whole rig is kept for the record
         rigs = [("perception cameras", rig.perception())]
-        fisheyes = [c.id for c in rig.cameras if c.lens_model.distortion == "fisheye" or c.fov >= 180.0]
+        fisheyes = [c.id for c in rig.cameras if c.lens.distortion == "fisheye" or c.fov >= 180.0]
         if fisheyes:  # a pinhole detector cannot take them: the whole rig has no measured drop to record
             whole = (f"; not measured whole: {len(fisheyes)} of its cameras are fisheyes "
                      f"({', '.join(fisheyes[:3])}{', ...' if len(fisheyes) > 3 else ''}) and the shipped "

@@ -113,7 +113,7 @@ def _finish_import(imported, out: Path, as_json: bool, source: str) -> None:
 
 
 def _camera_row(camera) -> dict:
-    lens = camera.lens_model
+    lens = camera.lens
     return {"id": camera.id, "image_size": list(camera.image_size), "hfov": lens.hfov, "vfov": lens.vfov,
             "distortion": lens.distortion, "position": [float(v) for v in camera.position]}
 

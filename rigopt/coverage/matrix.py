@@ -14,9 +14,10 @@ import numpy as np
 
 from rigopt.vehicle.footprint import Footprint
 from rigopt.coverage.measures import CoverageSettings
+from rigopt.benchmark import BENCHMARK_IMAGE_SIZE
 from rigopt.camera import CameraModel
 from rigopt.coverage.visibility import visible_by
-from rigopt.rig.model import DEFAULT_IMAGE_SIZE, Rig
+from rigopt.rig.model import Rig
 from rigopt.vehicle.model import Vehicle
 
 
@@ -55,7 +56,7 @@ def coverage_matrix(vehicle: Vehicle, positions, rotations, fovs=None, image_siz
     positions = np.atleast_2d(np.asarray(positions, dtype=float))
     if model is None:
         if image_sizes is None:
-            image_sizes = np.tile(DEFAULT_IMAGE_SIZE, (len(positions), 1))
+            image_sizes = np.tile(BENCHMARK_IMAGE_SIZE, (len(positions), 1))
         model = CameraModel.from_fov(fovs, image_sizes)
     points, distance, height, sector, azimuth = sector_points(vehicle.footprint, settings)
     sees = visible_by(vehicle.caster(settings.backend), model, positions, rotations, points, settings.max_range)

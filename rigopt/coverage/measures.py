@@ -191,7 +191,7 @@ def camera_coverage(vehicle: Vehicle, rig: Rig, settings: CoverageSettings, foot
             np.repeat(camera.position[None], len(rays), axis=0), rays)
         overlap = {other.id: float((ring[k] & ring[j]).sum() * degrees)
                    for j, other in enumerate(rig.cameras) if j != k and (ring[k] & ring[j]).any()}
-        out.append(CameraCoverage(camera.id, float(np.mean(hits <= settings.max_range)), overlap, camera.lens_model))
+        out.append(CameraCoverage(camera.id, float(np.mean(hits <= settings.max_range)), overlap, camera.lens))
     return tuple(out)
 
 

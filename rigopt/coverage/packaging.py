@@ -230,7 +230,7 @@ def ground_resolution(camera: Camera, vehicle: Vehicle, distance: float, backend
 def person_directions(camera: Camera) -> dict[str, np.ndarray]:
     """Vehicle-frame unit rays (3,) by place (PERSON_PLACES): through the first and last pixel columns'
     centres on the principal point's row, and the optical axis."""
-    lens = camera.lens_model
+    lens = camera.lens
     pixels = np.array([[0.5, lens.cy], [lens.cx, lens.cy], [lens.width - 0.5, lens.cy]])
     rays = CameraModel.of_camera(camera).pixel_rays(pixels) @ camera.rotation.T
     return dict(zip(PERSON_PLACES, rays))

@@ -83,8 +83,8 @@ def build_candidates(vehicle: Vehicle, lenses, spacing: float, yaws_deg, pitches
     the order of their FOVs (cameras of equal FOV in the given order); max_body_fraction : drop candidates
     whose image shows more of the ego body than this share (:func:`mounting.candidates.body_fraction`);
     symmetric : mount points in mirrored pairs (:func:`rigopt.mounting.sampling.sample_symmetric_zone_points`)
-    and only candidates whose mirror image is a candidate too (``CandidateSet.mirror``); clear_lens : the lens
-    (or pinhole FOV, deg) whose checked frustum must be clear of the body, None for each catalogue camera's own
+    and only candidates whose mirror image is a candidate too (``CandidateSet.mirror``); clear_lens : the Lens
+    whose checked frustum must be clear of the body, None for each catalogue camera's own
     (a surround-view fisheye sees its own body at its edges: its central cone is checked instead)."""
     unique = list(dict.fromkeys(catalogue_of(lenses)))
     catalogue = tuple(sorted(unique, key=lambda c: c.fov))

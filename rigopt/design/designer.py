@@ -84,11 +84,11 @@ def _coverage_pool(candidates: CandidateSet, references: list[Rig], settings: De
     step = max(1, len(points) // settings.coverage_mounts)
     order = np.lexsort((points[:, 1], points[:, 0]))
     chosen_mounts = set(order[::step].tolist())
-    lenses = {float(f) for rig in references for f in np.round(rig.fovs, 6)} | {float(candidates.fovs.max())}
+    fovs = {float(f) for rig in references for f in np.round(rig.fovs, 6)} | {float(candidates.fovs.max())}
     mounts = np.isin(candidates.mount, list(chosen_mounts))
     if candidates.mirror is not None:  # every centreline camera too: the few that face straight ahead or back
         mounts |= candidates.mirror == np.arange(len(candidates))
-    mask = mounts & np.isin(np.round(candidates.fovs, 6), list(lenses))
+    mask = mounts & np.isin(np.round(candidates.fovs, 6), list(fovs))
     return candidates.mirror_closed(np.flatnonzero(mask))
 
 
@@ -726,12 +726,12 @@ def naive_transfer(vehicle: Vehicle, reference: Rig, candidates: CandidateSet, s
     """
     cameras = []
     used: set[int] = set()
-    lenses = np.unique(candidates.fovs)
+    fovs = np.unique(candidates.fovs)
     for camera in reference.cameras:
         yaw = np.arctan2(camera.forward[1], camera.forward[0])
         pitch = np.arcsin(np.clip(camera.forward[2], -1.0, 1.0))
-        lens = lenses[np.argmin(np.abs(lenses - camera.fov))]
-        yaw_gap = np.where(candidates.fovs == lens, np.abs(np.angle(np.exp(1j * (candidates.yaws - yaw)))), np.inf)
+        fov = fovs[np.argmin(np.abs(fovs - camera.fov))]
+        yaw_gap = np.where(candidates.fovs == fov, np.abs(np.angle(np.exp(1j * (candidates.yaws - yaw)))), np.inf)
         yaw_gap = np.maximum(yaw_gap, np.deg2rad(settings.yaw_step_deg) / 2)  # the grid's nearest yaws are all "same"
         same_way = yaw_gap <= yaw_gap.min(initial=np.inf) + 1e-9
         pitch_gap = np.abs(candidates.pitches - pitch)

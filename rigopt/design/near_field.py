@@ -84,7 +84,7 @@ def fisheye_190() -> CatalogueCamera:
     width, height = FISHEYE_IMAGE_SIZE
     focal = (width / 2) / np.radians(FISHEYE_HFOV_DEG / 2)
     lens = Lens(width, height, focal, focal, width / 2, height / 2, "fisheye", (0.0, 0.0, 0.0, 0.0))
-    return CatalogueCamera.of_lens(f"fisheye {FISHEYE_HFOV_DEG:g} deg {width}x{height} (equidistant)", lens)
+    return CatalogueCamera(f"fisheye {FISHEYE_HFOV_DEG:g} deg {width}x{height} (equidistant)", lens)
 
 
 @dataclass(frozen=True)
@@ -132,7 +132,7 @@ def near_field_candidates(vehicle: Vehicle, spacing: float, symmetric: bool, rul
     """The near-field candidates on ``vehicle``'s mount points (see the module docstring)."""
     yaws = np.arange(-180.0, 180.0, NEAR_FIELD_YAW_STEP)
     return build_candidates(vehicle, catalogue or (fisheye_190(),), spacing, yaws, NEAR_FIELD_PITCHES_DEG, zones,
-                            rules, MAX_BODY_FRACTION, symmetric, clear_lens=CLEAR_CONE_DEG)
+                            rules, MAX_BODY_FRACTION, symmetric, clear_lens=Lens.pinhole(CLEAR_CONE_DEG))
 
 
 @dataclass(frozen=True)

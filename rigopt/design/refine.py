@@ -103,15 +103,15 @@ def refine(problem: RefineProblem, max_iter: int = 200) -> RefineOutcome:
         frame = ca.DM(surface_frame(problem.normals[k], camera.forward))
         position = ca.DM(camera.position) + frame[:, 0] * u[k] + frame[:, 1] * v[k]
         rotation = symbolic_rotation_from_yaw_pitch(ca, yaw[k], pitch[k])
-        lens = fov[k] if fov is not None and camera.lens is None else camera.fov
+        hfov = fov[k] if fov is not None and camera.lens.is_ideal_pinhole else camera.fov
         r = problem.matched[k]
         if r >= 0:
             target = reference.cameras[r]
             offset = position - ca.DM(target.position)
             angle = symbolic_rotation_angle(ca, ca.mtimes(ca.DM(target.rotation.T), rotation), SMOOTHING)
-            cost += lt * ca.sqrt(ca.sumsqr(offset) + SMOOTHING) + lr * angle + lf * ca.sqrt((lens - target.fov) ** 2
+            cost += lt * ca.sqrt(ca.sumsqr(offset) + SMOOTHING) + lr * angle + lf * ca.sqrt((hfov - target.fov) ** 2
                                                                                            + SMOOTHING)
-        tangents = (pinhole_half_tangents(lens, *camera.image_size, tan=ca.tan) if camera.lens is None
+        tangents = (pinhole_half_tangents(hfov, *camera.image_size, tan=ca.tan) if camera.lens.is_ideal_pinhole
                     else lens_half_tangents(camera))
         tan_h, tan_v = (t * (1 - FRUSTUM_INSET) for t in tangents)
         for q in np.flatnonzero(problem.duties[k]):
@@ -144,15 +144,15 @@ def refine(problem: RefineProblem, max_iter: int = 200) -> RefineOutcome:
 
     # Extract.
     values = [np.atleast_1d(solution.value(x)) for x in (u, v, yaw, pitch)]
-    lenses = np.atleast_1d(solution.value(fov)) if fov is not None else design.fovs
-    if not all(np.all(np.isfinite(x)) for x in (*values, lenses)):
+    fovs = np.atleast_1d(solution.value(fov)) if fov is not None else design.fovs
+    if not all(np.all(np.isfinite(x)) for x in (*values, fovs)):
         return RefineOutcome(status, None)
     cameras = []
     for k, camera in enumerate(design.cameras):
         frame = surface_frame(problem.normals[k], camera.forward)
         position = camera.position + frame[:, 0] * values[0][k] + frame[:, 1] * values[1][k]
         rotation = rotation_from_yaw_pitch_roll(values[2][k], values[3][k], 0.0)
-        cameras.append(_moved(camera, position, rotation, float(lenses[k])))
+        cameras.append(_moved(camera, position, rotation, float(fovs[k])))
     return RefineOutcome(status, Rig(design.name, design.vehicle, tuple(cameras)))
 
 
@@ -179,9 +179,9 @@ def _keep_pairs(opti, problem: RefineProblem, design: Rig, u, v, yaw, pitch, fov
 
 def _moved(camera: Camera, position, rotation, fov: float) -> Camera:
     """``camera`` at a new pose: a benchmark pinhole with FOV ``fov`` (deg), a real lens unchanged."""
-    if camera.lens is not None:
-        return Camera.with_lens(camera.id, position, rotation, camera.lens, camera.zone, role=camera.role)
-    return Camera(camera.id, position, rotation, fov, camera.image_size, camera.zone, role=camera.role)
+    if not camera.lens.is_ideal_pinhole:
+        return Camera(camera.id, position, rotation, camera.lens, camera.zone, role=camera.role)
+    return Camera.pinhole(camera.id, position, rotation, fov, camera.image_size, camera.zone, role=camera.role)
 
 
 def project_to_surface(rig: Rig, vehicle: Vehicle, rules: MountRules = MountRules()) -> Rig:

@@ -2,7 +2,7 @@
 
 The lens catalogue is a tuple of real cameras (:class:`CatalogueCamera`: a name and a
 :class:`rigopt.camera.Lens`, i.e. image size, intrinsics and distortion). The default is the benchmark's
-camera, a 1280 x 720 centred pinhole, at the FOVs of ``DEFAULT_LENSES``; a user catalogue file
+camera, a 1280 x 720 centred pinhole, at the FOVs of ``DEFAULT_FOVS``; a user catalogue file
 (:func:`read_catalogue`, TOML or JSON) lists real cameras.
 
 Light to import (numpy only at import time): the command line shows these defaults in its help. The
@@ -19,11 +19,12 @@ from typing import TYPE_CHECKING, Sequence
 
 import numpy as np
 
+from rigopt.benchmark import BENCHMARK_IMAGE_SIZE
 from rigopt.camera import DISTORTION_COEFFICIENTS, Lens
-from rigopt.design.defaults import DEFAULT_LENSES, DEFAULT_MAX_NODES, DEFAULT_PITCHES_DEG, DEFAULT_YAW_STEP_DEG, RANGE_STEP
+from rigopt.design.defaults import DEFAULT_FOVS, DEFAULT_MAX_NODES, DEFAULT_PITCHES_DEG, DEFAULT_YAW_STEP_DEG, RANGE_STEP
 from rigopt.errors import DataError, RigoptError, not_utf8
 from rigopt.output import existing_file
-from rigopt.rig.model import DEFAULT_IMAGE_SIZE, Camera
+from rigopt.rig.model import Camera
 
 if TYPE_CHECKING:
     from rigopt.mounting.rules import MountRules
@@ -48,19 +49,19 @@ def _check_fovs(fovs: Sequence[float]) -> None:
         raise RigoptError(f"lens FOVs must lie within (0, 180) degrees, got {', '.join(f'{f:g}' for f in bad)}")
 
 
-def lens_catalogue(fovs: Sequence[float]) -> tuple[float, ...]:
-    """The discrete lens catalogue ``fovs`` (deg) as floats, checked to lie within (0, 180) degrees."""
-    lenses = tuple(float(f) for f in fovs)
-    if not lenses:
+def fov_catalogue(fovs: Sequence[float]) -> tuple[float, ...]:
+    """The catalogue's horizontal FOVs ``fovs`` (deg) as floats, checked to lie within (0, 180) degrees."""
+    out = tuple(float(f) for f in fovs)
+    if not out:
         raise RigoptError("a lens catalogue needs at least one FOV")
-    _check_fovs(lenses)
-    return lenses
+    _check_fovs(out)
+    return out
 
 
-def range_lenses(low: float, high: float) -> tuple[float, ...]:
-    """The lenses (deg) that seed a continuous FOV range [``low``, ``high``] deg: every RANGE_STEP degrees
-    from ``low`` (``high`` itself when the range is a whole number of steps). The MILP picks among them
-    and the refinement then adjusts each camera's FOV within the range (``DesignSettings.fov_range``)."""
+def range_fovs(low: float, high: float) -> tuple[float, ...]:
+    """The FOVs (deg) that seed a continuous FOV range [``low``, ``high``] deg: every RANGE_STEP degrees
+    from ``low`` (``high`` itself when the range is a whole number of steps). The MILP picks among their
+    pinholes and the refinement then adjusts each camera's FOV within the range (``DesignSettings.fov_range``)."""
     _check_fovs((low, high))
     if low > high:
         raise RigoptError(f"a FOV range needs low <= high, got {low:g}-{high:g}")
@@ -69,50 +70,49 @@ def range_lenses(low: float, high: float) -> tuple[float, ...]:
 
 @dataclass(frozen=True)
 class CatalogueCamera:
-    """One camera of the lens catalogue: ``name``, its ``lens`` (image size, intrinsics, distortion) and
-    ``fov``, the horizontal FOV (deg) the metrics compare it by: the lens's
-    :attr:`~rigopt.camera.Lens.hfov`, or the exact FOV a benchmark pinhole was asked for."""
+    """One camera of the lens catalogue: a named :class:`~rigopt.camera.Lens` (image size, intrinsics,
+    distortion). Its :attr:`fov` is the lens's horizontal FOV (deg), the one the metrics compare it by."""
 
     name: str
     lens: Lens
-    fov: float
+
+    def __post_init__(self):
+        if not isinstance(self.lens, Lens):
+            raise RigoptError(f"catalogue camera {self.name!r}: its lens must be a rigopt.camera.Lens, got "
+                              f"{type(self.lens).__name__}")
 
     @classmethod
-    def pinhole(cls, fov: float, image_size=DEFAULT_IMAGE_SIZE) -> "CatalogueCamera":
+    def pinhole(cls, fov: float, image_size=BENCHMARK_IMAGE_SIZE) -> "CatalogueCamera":
         """The benchmark's camera: a centred square-pixel pinhole of horizontal FOV ``fov`` (deg) at
         ``image_size`` (width, height) px."""
         _check_fovs((fov,))
         width, height = image_size
-        return cls(f"pinhole {fov:g} deg {width}x{height}", Lens.pinhole(float(fov), (width, height)), float(fov))
+        return cls(f"pinhole {fov:g} deg {width}x{height}", Lens.pinhole(float(fov), (width, height)))
 
-    @classmethod
-    def of_lens(cls, name: str, lens: Lens) -> "CatalogueCamera":
-        """A real camera: its FOV is the lens's horizontal FOV."""
-        return cls(name, lens, lens.hfov)
+    @property
+    def fov(self) -> float:
+        """Horizontal FOV (deg): the lens's :attr:`~rigopt.camera.Lens.hfov` (a pinhole's, exactly as asked)."""
+        return self.lens.hfov
 
     def camera(self, id: str, position, rotation, zone: str | None = None) -> Camera:
-        """A rig camera of this catalogue camera at ``position`` (3,) m with ``rotation`` R_vehicle_cam: a
-        benchmark pinhole by its FOV and image size, any other lens carried whole."""
-        if self.lens.is_ideal_pinhole:
-            return Camera(id, position, rotation, self.fov, self.lens.image_size, zone)
-        return Camera.with_lens(id, position, rotation, self.lens, zone)
+        """A rig camera of this catalogue camera at ``position`` (3,) m with ``rotation`` R_vehicle_cam."""
+        return Camera(id, position, rotation, self.lens, zone)
 
 
-def pinhole_catalogue(fovs: Sequence[float], image_size=DEFAULT_IMAGE_SIZE) -> tuple[CatalogueCamera, ...]:
+def pinhole_catalogue(fovs: Sequence[float], image_size=BENCHMARK_IMAGE_SIZE) -> tuple[CatalogueCamera, ...]:
     """Benchmark pinholes of horizontal FOVs ``fovs`` (deg, within (0, 180)) at ``image_size`` (w, h) px."""
-    return tuple(CatalogueCamera.pinhole(f, image_size) for f in lens_catalogue(fovs))
+    return tuple(CatalogueCamera.pinhole(f, image_size) for f in fov_catalogue(fovs))
 
 
-def catalogue_of(lenses) -> tuple[CatalogueCamera, ...]:
+def catalogue_of(entries) -> tuple[CatalogueCamera, ...]:
     """A catalogue from CatalogueCameras, Lenses (named by their size and model) or FOVs (deg: benchmark
-    pinholes at the default image size), in the given order."""
+    pinholes at the benchmark's image size), in the given order."""
     out = []
-    for entry in lenses:
+    for entry in entries:
         if isinstance(entry, CatalogueCamera):
             out.append(entry)
         elif isinstance(entry, Lens):
-            out.append(CatalogueCamera.of_lens(f"{entry.distortion} {entry.width}x{entry.height} "
-                                               f"fx {entry.fx:g}", entry))
+            out.append(CatalogueCamera(f"{entry.distortion} {entry.width}x{entry.height} fx {entry.fx:g}", entry))
         else:
             out.append(CatalogueCamera.pinhole(entry))
     if not out:
@@ -159,7 +159,7 @@ def parse_catalogue(data, where: str) -> tuple[CatalogueCamera, ...]:
                         distortion, tuple(coefficients))
         except RigoptError as error:
             raise DataError(f"{what} ({name}): {error}") from None
-        cameras.append(CatalogueCamera.of_lens(name, lens))
+        cameras.append(CatalogueCamera(name, lens))
     return tuple(cameras)
 
 
@@ -188,10 +188,10 @@ class DesignSettings:
 
     cameras: tuple[int, int] | None = None
     """(min, max) camera count, inclusive; None for the (first) reference's count."""
-    lenses: tuple[CatalogueCamera, ...] = DEFAULT_LENSES
+    lenses: tuple[CatalogueCamera, ...] = DEFAULT_FOVS
     """The lens catalogue: real cameras (CatalogueCamera). Lenses or FOVs (deg; benchmark pinholes at
     1280 x 720) are turned into catalogue cameras, so the default is the benchmark's pinholes at
-    ``DEFAULT_LENSES``."""
+    ``DEFAULT_FOVS``."""
     zones: tuple[str, ...] | None = None
     """The zone names cameras may be mounted on; None for every zone of the vehicle."""
     pitches_deg: tuple[float, ...] = DEFAULT_PITCHES_DEG
@@ -226,7 +226,7 @@ class DesignSettings:
     refine: bool = True
     """Run the continuous stage (casadi + IPOPT) after the MILP (single-reference designs only)."""
     fov_range: tuple[float, float] | None = None
-    """(min, max) deg when the lens is continuous (the refinement then adjusts FOVs; see ``range_lenses``)."""
+    """(min, max) deg when the lens is continuous (the refinement then adjusts FOVs; see ``range_fovs``)."""
     coverage: CoverageSettings = field(default_factory=_design_coverage)
     """The rings and sectors of the coverage requirements (rings at 2, 5, 10, 20 m, 36 sectors)."""
     rules: MountRules = field(default_factory=_mount_rules)

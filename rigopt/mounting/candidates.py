@@ -20,7 +20,6 @@ from rigopt.mounting.features import segments_hit_swings, trailer_swings
 from rigopt.mounting.practice import keep_out_boxes, segments_hit_boxes
 from rigopt.mounting.rules import MountRules
 from rigopt.mounting.sampling import DEFAULT_SPACING, sample_zone_points
-from rigopt.rig.model import DEFAULT_IMAGE_SIZE
 from rigopt.vehicle.model import Vehicle
 
 DEFAULT_YAWS_DEG = tuple(range(-180, 180, 10))
@@ -45,18 +44,17 @@ class MountCandidates:
     fov: float
 
 
-def probe_directions(lens: float | Lens, rules: MountRules = MountRules(), image_size=DEFAULT_IMAGE_SIZE) -> np.ndarray:
+def probe_directions(lens: Lens, rules: MountRules = MountRules()) -> np.ndarray:
     """(9, 3) unit rays in the camera body frame: centre, edge midpoints and corners of the checked frustum of
-    ``lens`` (a Lens, or a pinhole's horizontal FOV in deg at ``image_size``)."""
-    if isinstance(lens, Lens):
-        return CameraModel.of_lens(lens).probe_rays(1.0 - rules.frustum_margin)
-    return CameraModel.from_fov(lens, image_size).probe_rays(1.0 - rules.frustum_margin)
+    ``lens`` (the benchmark's pinhole of a FOV is ``Lens.pinhole(fov)``)."""
+    if not isinstance(lens, Lens):
+        raise TypeError(f"a checked frustum needs a rigopt.camera.Lens (Lens.pinhole(fov) for a pinhole), got {lens!r}")
+    return CameraModel.of_lens(lens).probe_rays(1.0 - rules.frustum_margin)
 
 
-def clear_directions(vehicle: Vehicle, points, yaws, pitches, lens: float | Lens, rules: MountRules = MountRules()):
-    """(n, k, m) bool: the checked frustum of a camera with ``lens`` (a Lens, or a 1280 x 720 pinhole's FOV in
-    deg) at ``points`` (n, 3) facing (pitches[k], yaws[m]) meets no body surface between ``rules.near`` and
-    ``rules.frustum_range``."""
+def clear_directions(vehicle: Vehicle, points, yaws, pitches, lens: Lens, rules: MountRules = MountRules()):
+    """(n, k, m) bool: the checked frustum of a camera with ``lens`` at ``points`` (n, 3) facing
+    (pitches[k], yaws[m]) meets no body surface between ``rules.near`` and ``rules.frustum_range``."""
     points = np.atleast_2d(points)
     yaw_grid, pitch_grid = np.meshgrid(yaws, pitches)  # (k, m)
     rotations = rotation_from_yaw_pitch_roll(yaw_grid, pitch_grid, np.zeros_like(yaw_grid))  # (k, m, 3, 3)
@@ -78,16 +76,16 @@ def clear_directions(vehicle: Vehicle, points, yaws, pitches, lens: float | Lens
     return ~hit.reshape(n, *shape).any(axis=-1)
 
 
-def mount_candidates(vehicle: Vehicle, spacing: float = DEFAULT_SPACING, fov: float | Lens = 65.0, zones=None,
+def mount_candidates(vehicle: Vehicle, spacing: float = DEFAULT_SPACING, lens: Lens | None = None, zones=None,
                      yaws_deg=DEFAULT_YAWS_DEG, pitches_deg=DEFAULT_PITCHES_DEG,
                      rules: MountRules = MountRules()) -> MountCandidates:
-    """Sample the zones and check every (point, pitch, yaw) for a clear view with a lens: ``fov`` a Lens, or
-    the horizontal FOV (deg) of a 1280 x 720 pinhole."""
+    """Sample the zones and check every (point, pitch, yaw) for a clear view with ``lens`` (default the
+    benchmark's 65-degree pinhole, ``Lens.pinhole(65.0)``)."""
+    lens = Lens.pinhole(65.0) if lens is None else lens
     points, normals, names = sample_zone_points(vehicle, spacing, zones, rules=rules)
     yaws, pitches = np.deg2rad(np.asarray(yaws_deg, dtype=float)), np.deg2rad(np.asarray(pitches_deg, dtype=float))
-    clear = clear_directions(vehicle, points, yaws, pitches, fov, rules)
-    hfov = fov.hfov if isinstance(fov, Lens) else fov
-    return MountCandidates(points, normals, names, yaws, pitches, clear, float(hfov))
+    clear = clear_directions(vehicle, points, yaws, pitches, lens, rules)
+    return MountCandidates(points, normals, names, yaws, pitches, clear, float(lens.hfov))
 
 
 #: Image grid (columns, rows) the ego-body share of a candidate's image is estimated on.

@@ -226,7 +226,7 @@ def duplicates(rig: Rig, practice: MountPractice = MountPractice()) -> list[str 
         for earlier in cameras[:j]:
             if later.module is not None and later.module == earlier.module:
                 continue
-            if later.lens_model != earlier.lens_model:
+            if later.lens != earlier.lens:
                 continue
             apart = float(np.linalg.norm(later.position - earlier.position))
             angle = float(np.rad2deg(np.arccos(np.clip(later.forward @ earlier.forward, -1.0, 1.0))))

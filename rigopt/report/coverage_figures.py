@@ -86,7 +86,7 @@ def report_dict(report: CoverageReport) -> dict:
         "blind_search_m": _number(settings.blind_search),
         "cameras": [{"id": c.id, "self_occluded_frac": c.self_occluded_frac,
                      "overlap_deg": {k: float(v) for k, v in c.overlap_deg.items()},
-                     "lens": c.lens.summary() if c.lens is not None else None} for c in report.cameras],
+                     "lens": c.lens.summary()} for c in report.cameras],
         "overlap_ring": {"distance_m": settings.overlap_ring[0], "height_m": settings.overlap_ring[1]},
         "cameras_inside": list(report.cameras_inside),
         "bev": {"height_m": report.bev.height_m, "cell_m": settings.bev_cell, "extent_m": settings.bev_extent,

@@ -166,7 +166,7 @@ def render_html(report: CoverageReport, rig: Rig, comparison: CoverageComparison
         overlaps = ", ".join(f"{k} {v:.1f}°" for k, v in camera["overlap_deg"].items()) or "none"
         rows.append([escape(camera["id"] + (" (inside the body)" if camera["id"] in inside else "")), escape(position),
                      num(spec.fov, 1, "°") if spec is not None else "-",
-                     escape(spec.lens_model.label()) if spec is not None else "-", pct(camera["self_occluded_frac"]),
+                     escape(spec.lens.label()) if spec is not None else "-", pct(camera["self_occluded_frac"]),
                      f"<td>{escape(overlaps)}</td>"])
     parts.append(table(["camera", "position (m)", "hfov", "lens", "self-occluded", "overlaps"], rows))
 

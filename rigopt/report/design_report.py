@@ -68,7 +68,7 @@ def camera_rows(rig: Rig, reference: Rig, pairs, vehicle=None) -> list[dict]:
     for k, camera in enumerate(rig.cameras):
         row = {"id": camera.id, "zone": camera.zone, "role": camera.role, "fov": camera.fov,
                "position": (camera.position - origin).tolist(), "yaw_pitch_roll_deg": angles[k].tolist(),
-               "lens": camera.lens_model.summary(), "matched_reference_camera": None}
+               "lens": camera.lens.summary(), "matched_reference_camera": None}
         if vehicle is not None:
             costs = {z.name: z.cost for z in vehicle.zones}
             row["zone_cost"] = costs.get(camera.zone)

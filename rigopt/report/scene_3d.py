@@ -239,7 +239,7 @@ def camera_hover(camera: Camera, rig_name: str, origin=None, origin_text: str = 
     ``origin`` (3,) m, a point in the camera's frame, default its origin; ``origin_text`` names it) and
     yaw/pitch/roll in the ISO 8855 vehicle frame, and its lens."""
     yaw, pitch, roll = (float(np.rad2deg(a)) for a in yaw_pitch_roll_from_rotation(camera.rotation))
-    lens = camera.lens_model
+    lens = camera.lens
     model = "pinhole" if lens.distortion == "none" else f"{lens.distortion} " + ", ".join(
         f"{c:.3g}" for c in lens.coefficients)
     x, y, z = camera.position - (np.zeros(3) if origin is None else np.asarray(origin, dtype=float))

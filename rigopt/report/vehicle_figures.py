@@ -87,7 +87,7 @@ def _draw_view(ax, vehicle: Vehicle, patches, legend: dict[str, tuple], axes: tu
 def _draw_cameras(ax, rig: Rig, axes: tuple[int, int], vertical: bool):
     """Cameras as dots with their frustum wedge (horizontal FOV in the top view, vertical in the side view)."""
     for camera in rig.cameras:
-        vfov = vertical_fov(camera.fov, *camera.image_size) if camera.lens is None else camera.lens.vfov
+        vfov = vertical_fov(camera.fov, *camera.image_size) if camera.lens.is_ideal_pinhole else camera.lens.vfov
         half = np.deg2rad((vfov if vertical else camera.fov) / 2.0)
         spread = np.array([0.0, 0.0, 1.0]) if vertical else np.array([0.0, 1.0, 0.0])
         rays = [camera.rotation @ (np.array([np.cos(a), 0.0, 0.0]) + spread * np.sin(a)) for a in (-half, half)]

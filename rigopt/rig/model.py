@@ -3,16 +3,14 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from functools import cached_property
+from functools import cached_property, lru_cache
 
 import numpy as np
 
+from rigopt.benchmark import BENCHMARK_IMAGE_SIZE
 from rigopt.camera import Lens
-from rigopt.errors import RigFileError
+from rigopt.errors import RigFileError, RigoptError
 from rigopt.geometry import is_rotation, matrix_to_quaternion, sum_of_squares
-
-#: The benchmark's image size (width, height) in pixels.
-DEFAULT_IMAGE_SIZE = (1280, 720)
 
 #: Rows of :func:`camera_columns`: position (m), unit quaternion, FOV (deg).
 POSITION, QUATERNION, FOV = slice(0, 3), slice(3, 7), 7
@@ -51,7 +49,7 @@ def _frozen_array(values, shape, what: str) -> np.ndarray:
 
 @dataclass(frozen=True, eq=False)
 class Camera:
-    """One camera of a rig.
+    """One camera of a rig: a pose and a :class:`~rigopt.camera.Lens`.
 
     Attributes
     ----------
@@ -61,18 +59,12 @@ class Camera:
         Lens centre in metres, ISO 8855 vehicle frame (x forward, y left, z up).
     rotation : (3, 3) float
         ``R_vehicle_cam``: camera body (x along the optical axis, y left, z up) -> vehicle frame.
-    fov : float
-        Horizontal field of view in degrees: in (0, 180) for the benchmark's ideal pinhole; with a ``lens``,
-        the lens's :attr:`rigopt.camera.Lens.hfov` (up to 360 for a fisheye), the value RigV and RigCD use.
-    image_size : (int, int)
-        ``(width, height)`` in pixels; with a ``lens``, the lens's.
+    lens : Lens
+        The camera's intrinsics and distortion. The benchmark's ideal centred pinhole is
+        ``Lens.pinhole(fov, image_size)`` (:meth:`Camera.pinhole` builds such a camera); an ideal pinhole given
+        otherwise is stored as that pinhole of its horizontal FOV, so a camera has one form.
     zone : str or None
         Name of the mounting zone the camera sits in, when known.
-    lens : Lens or None
-        The camera's real intrinsics and distortion; None for the benchmark's ideal centred pinhole of
-        ``fov`` and ``image_size`` (an ideal pinhole given as a lens is stored as None, so a camera has one
-        form). :attr:`lens_model` gives the lens either way. Build a camera from a real
-        lens with :meth:`Camera.with_lens`, which derives ``fov`` and ``image_size`` from it.
     module : str or None
         Name of the camera module (one housing) it shares with other cameras of the rig: a roof cluster, a
         stereo pair. Cameras of one module are one part to the mount rules (their housings do not clash with
@@ -82,18 +74,16 @@ class Camera:
         distances) or ``"near_field"`` (for the regulation fields and the blind near field, not fed to the
         detector: counted for coverage, cost and packaging). One of ROLES; default perception.
 
-    Names (``id``, ``zone``, ``module``) are printable text: no control characters or terminal escapes, so
-    that they print and serialise (XML, JSON, tables) as they are. Positions lie within
-    ``MAX_POSITION_M`` of the origin in every coordinate.
+    :attr:`fov` and :attr:`image_size` are read from the lens. Names (``id``, ``zone``, ``module``) are
+    printable text: no control characters or terminal escapes, so that they print and serialise (XML, JSON,
+    tables) as they are. Positions lie within ``MAX_POSITION_M`` of the origin in every coordinate.
     """
 
     id: str
     position: np.ndarray
     rotation: np.ndarray
-    fov: float
-    image_size: tuple[int, int] = DEFAULT_IMAGE_SIZE
+    lens: Lens
     zone: str | None = None
-    lens: Lens | None = None
     module: str | None = None
     role: str = "perception"
 
@@ -113,37 +103,44 @@ class Camera:
         if not is_rotation(rotation):
             raise RigFileError(f"{what} rotation is not a proper rotation matrix (orthonormal, det +1)")
         object.__setattr__(self, "rotation", rotation)
-        if isinstance(self.fov, (bool, str)) or not isinstance(self.fov, (int, float, np.number)):
-            raise RigFileError(f"{what} fov must be a number of degrees, got {self.fov!r}")
-        fov = float(self.fov)
-        if self.lens is not None:
-            if not isinstance(self.lens, Lens):
-                raise RigFileError(f"{what} lens must be a rigopt.camera.Lens, got {type(self.lens).__name__}")
-            if not abs(fov - self.lens.hfov) <= FOV_TOLERANCE_DEG:
-                raise RigFileError(f"{what} fov {fov:g} deg disagrees with its lens's horizontal FOV "
-                                   f"{self.lens.hfov:.6f} deg; build it with Camera.with_lens")
-            object.__setattr__(self, "image_size", self.lens.image_size)
-            if self.lens.is_ideal_pinhole:  # the benchmark's camera: one way to say it
-                object.__setattr__(self, "lens", None)
-        elif not (np.isfinite(fov) and 0.0 < fov < 180.0):
-            raise RigFileError(f"{what} fov must be in (0, 180) degrees, got {self.fov!r}")
-        object.__setattr__(self, "fov", fov)
-        size = tuple(self.image_size) if isinstance(self.image_size, (tuple, list)) else ()
-        if len(size) != 2 or not all(isinstance(v, (int, np.integer)) and not isinstance(v, bool) and v > 0
-                                     for v in size):
-            raise RigFileError(f"{what} image_size must be two positive integers (width, height), got {self.image_size!r}")
-        object.__setattr__(self, "image_size", (int(size[0]), int(size[1])))
+        if not isinstance(self.lens, Lens):
+            raise RigFileError(f"{what} lens must be a rigopt.camera.Lens (Camera.pinhole builds the benchmark's "
+                               f"pinhole from a FOV), got {type(self.lens).__name__}")
+        if self.lens.is_ideal_pinhole:
+            pinhole = _pinhole(self.lens.hfov, self.lens.image_size)
+            if self.lens != pinhole or self.lens.stated_hfov != pinhole.stated_hfov:
+                object.__setattr__(self, "lens", pinhole)
 
     @classmethod
-    def with_lens(cls, id: str, position, rotation, lens: Lens, zone: str | None = None,
-                  module: str | None = None, role: str = "perception") -> "Camera":
-        """A camera with a real lens: ``fov`` and ``image_size`` derived from it."""
-        return cls(id, position, rotation, lens.hfov, lens.image_size, zone, lens, module, role)
+    def pinhole(cls, id: str, position, rotation, fov: float, image_size=BENCHMARK_IMAGE_SIZE,
+                zone: str | None = None, module: str | None = None, role: str = "perception") -> "Camera":
+        """A camera with the benchmark's ideal centred square-pixel pinhole: horizontal FOV ``fov`` deg in
+        (0, 180), ``image_size`` (width, height) px; its :attr:`fov` is ``fov`` to the bit."""
+        what = f"camera {id!r}"
+        if isinstance(fov, (bool, str)) or not isinstance(fov, (int, float, np.number)):
+            raise RigFileError(f"{what} fov must be a number of degrees, got {fov!r}")
+        if not (np.isfinite(fov) and 0.0 < fov < 180.0):
+            raise RigFileError(f"{what} fov must be in (0, 180) degrees, got {fov!r}")
+        size = tuple(image_size) if isinstance(image_size, (tuple, list)) else ()
+        if len(size) != 2 or not all(isinstance(v, (int, np.integer)) and not isinstance(v, bool) and v > 0
+                                     for v in size):
+            raise RigFileError(f"{what} image_size must be two positive integers (width, height), got {image_size!r}")
+        try:
+            lens = _pinhole(float(fov), (int(size[0]), int(size[1])))
+        except RigFileError as error:  # a FOV so narrow that the focal length overflows
+            raise RigFileError(f"{what} fov {fov!r} deg has no pinhole: {error}") from None
+        return cls(id, position, rotation, lens, zone, module, role)
 
     @property
-    def lens_model(self) -> Lens:
-        """The camera's lens: its own, or the benchmark's ideal pinhole of ``fov`` and ``image_size``."""
-        return self.lens if self.lens is not None else Lens.pinhole(self.fov, self.image_size)
+    def fov(self) -> float:
+        """Horizontal field of view in degrees, the lens's :attr:`~rigopt.camera.Lens.hfov`: in (0, 180) for a
+        pinhole (exactly the FOV it was built from), up to 360 for a fisheye; the value RigV and RigCD use."""
+        return self.lens.hfov
+
+    @property
+    def image_size(self) -> tuple[int, int]:
+        """``(width, height)`` in pixels, the lens's."""
+        return self.lens.image_size
 
     @property
     def forward(self) -> np.ndarray:
@@ -151,18 +148,26 @@ class Camera:
         return self.rotation[:, 0]
 
     def same_as(self, other: "Camera", atol: float = 1e-9) -> bool:
-        """True when every field agrees (arrays within ``atol``)."""
+        """True when every field agrees (arrays and the lens's numbers within ``atol``)."""
         return (
             self.id == other.id
             and np.allclose(self.position, other.position, atol=atol, rtol=0)
             and np.allclose(self.rotation, other.rotation, atol=atol, rtol=0)
             and abs(self.fov - other.fov) <= atol
-            and self.image_size == other.image_size
             and self.zone == other.zone
             and self.module == other.module
             and self.role == other.role
             and _same_lens(self.lens, other.lens, atol)
         )
+
+
+@lru_cache(maxsize=4096)
+def _pinhole(fov: float, image_size: tuple[int, int]) -> Lens:
+    """``Lens.pinhole(fov, image_size)``, built once per FOV and size (lenses are frozen values)."""
+    try:
+        return Lens.pinhole(fov, image_size)
+    except RigoptError as error:
+        raise RigFileError(str(error)) from None
 
 
 #: What a camera is for (see :class:`Camera`): fed to the detector, or for the near field and the regulations.
@@ -181,16 +186,15 @@ def _check_name(value, what: str) -> None:
                            "(letters, digits, punctuation, spaces)")
 
 
-def _same_lens(a: Lens | None, b: Lens | None, atol: float) -> bool:
-    if a is None or b is None:
-        return a is b
+def _same_lens(a: Lens, b: Lens, atol: float) -> bool:
+    """Lenses alike within ``atol`` (px): two benchmark pinholes by their image sizes (their FOVs, compared by
+    :meth:`Camera.same_as`, give the rest); other lenses by every intrinsic and coefficient."""
+    if a.is_ideal_pinhole and b.is_ideal_pinhole:
+        return a.image_size == b.image_size
     return (a.image_size == b.image_size and a.distortion == b.distortion
             and np.allclose([a.fx, a.fy, a.cx, a.cy, *a.coefficients], [b.fx, b.fy, b.cx, b.cy, *b.coefficients],
                             atol=atol, rtol=0))
 
-
-#: How far (deg) a camera's ``fov`` may be from its lens's derived horizontal FOV.
-FOV_TOLERANCE_DEG = 1e-6
 
 #: The reference points a rig's positions may be measured from (see :class:`RigOrigin`).
 ORIGIN_KINDS = ("vehicle_centre", "rear_axle", "custom")

@@ -15,7 +15,9 @@ ignored. rigopt adds optional keys, written only when they differ from the bench
   (``"near_field"``; absent: ``"perception"``, so files written before roles are all perception), and for a real lens
   ``"intrinsics": {"fx": .., "fy": .., "cx": .., "cy": ..}`` (px) with
   ``"distortion": {"model": "radtan" | "fisheye", "coefficients": [...]}`` (OpenCV order: k1, k2, p1, p2,
-  k3; fisheye k1..k4). With intrinsics, ``fov`` is the lens's derived horizontal FOV (checked on reading).
+  k3; fisheye k1..k4). With intrinsics, ``fov`` is the lens's derived horizontal FOV (checked on reading
+  and kept as the lens's stated FOV, :attr:`rigopt.camera.Lens.stated_hfov`); a benchmark pinhole is written
+  without them, as its ``fov`` alone.
 - per rig: ``"origin": "rear_axle"`` or ``{"custom": [x, y, z]}`` (metres, CARLA frame) when the positions
   are not measured from the benchmark's vehicle centre.
 """
@@ -28,11 +30,12 @@ from pathlib import Path
 
 import numpy as np
 
-from rigopt.camera import DISTORTION_COEFFICIENTS, Lens
+from rigopt.benchmark import BENCHMARK_IMAGE_SIZE
+from rigopt.camera import DISTORTION_COEFFICIENTS, FOV_TOLERANCE_DEG, Lens
 from rigopt.errors import RigFileError, RigoptError, not_utf8
 from rigopt.geometry import carla_to_iso, iso_to_carla
 from rigopt.output import existing_file
-from rigopt.rig.model import DEFAULT_IMAGE_SIZE, ROLES, VEHICLE_CENTRE, Camera, Rig, RigOrigin
+from rigopt.rig.model import ROLES, VEHICLE_CENTRE, Camera, Rig, RigOrigin
 
 #: Decimals kept when writing angles (degrees) and locations (metres): far below any mounting tolerance,
 #: and enough to give back the numbers of a file that was read.
@@ -72,21 +75,24 @@ def _camera_from_dict(entry, index: int, source: str) -> Camera:
     location = _numbers(entry["location"], 3, f"{where} ({entry['id']!r}) 'location' [x, y, z] metres")
     rotation = _numbers(entry["rotation"], 3, f"{where} ({entry['id']}) 'rotation' [pitch, yaw, roll] degrees")
     fov = _numbers([entry["fov"]], 1, f"{where} ({entry['id']}) 'fov' degrees")[0]
-    size = entry.get("image_size", DEFAULT_IMAGE_SIZE)
+    size = entry.get("image_size", BENCHMARK_IMAGE_SIZE)
     if not (isinstance(size, (list, tuple)) and len(size) == 2 and all(isinstance(v, int) and v > 0 for v in size)):
         raise RigFileError(f"{where} ({entry['id']}) 'image_size' must be [width, height] in pixels, got {size!r}")
     position, rotation_matrix = carla_to_iso(location, rotation)
-    lens = _lens_from(entry, size, f"{where} ({entry['id']})")
+    lens = _lens_from(entry, size, fov, f"{where} ({entry['id']})")
     role = entry.get("role", "perception")
     if role not in ROLES:
         raise RigFileError(f"{where} ({entry['id']}) 'role' must be one of {', '.join(ROLES)} (absent: perception), "
                            f"got {role!r}")
-    return Camera(entry["id"], position, rotation_matrix, fov, tuple(size), entry.get("zone"), lens,
-                  entry.get("module"), role)
+    if lens is None:
+        return Camera.pinhole(entry["id"], position, rotation_matrix, fov, tuple(size), entry.get("zone"),
+                              entry.get("module"), role)
+    return Camera(entry["id"], position, rotation_matrix, lens, entry.get("zone"), entry.get("module"), role)
 
 
-def _lens_from(entry: dict, size, where: str) -> Lens | None:
-    """The camera's real lens from 'intrinsics' and 'distortion', or None for the benchmark's pinhole."""
+def _lens_from(entry: dict, size, fov: float, where: str) -> Lens | None:
+    """The camera's lens from 'intrinsics' and 'distortion', stated by the file's ``fov`` (deg, checked against
+    the intrinsics); None without intrinsics: the benchmark's pinhole of ``fov`` and ``size``."""
     if "intrinsics" not in entry:
         if "distortion" in entry:
             raise RigFileError(f"{where} has 'distortion' without 'intrinsics'; give both (fx, fy, cx, cy in px)")
@@ -102,7 +108,14 @@ def _lens_from(entry: dict, size, where: str) -> Lens | None:
     names = DISTORTION_COEFFICIENTS[distortion["model"]]
     coefficients = _numbers(distortion.get("coefficients", []), len(names),
                             f"{where} 'distortion' coefficients ({', '.join(names) or 'none'})")
-    return Lens(size[0], size[1], fx, fy, cx, cy, distortion["model"], tuple(coefficients))
+    lens = Lens(size[0], size[1], fx, fy, cx, cy, distortion["model"], tuple(coefficients))
+    if not abs(fov - lens.hfov) <= FOV_TOLERANCE_DEG:
+        raise RigFileError(f"{where} fov {fov:g} deg disagrees with its lens's horizontal FOV {lens.hfov:.6f} deg "
+                           "(from 'intrinsics' and 'distortion'); write the lens's FOV")
+    if lens.is_ideal_pinhole:  # the benchmark's pinhole, of the file's fov
+        return Lens.pinhole(fov, lens.image_size)
+    return Lens(*lens.image_size, lens.fx, lens.fy, lens.cx, lens.cy, lens.distortion, lens.coefficients,
+                stated_hfov=fov)
 
 
 def _origin_from(value, source: str) -> RigOrigin:
@@ -142,7 +155,7 @@ def rig_to_dict(rig: Rig) -> dict:
             "rotation": _rounded(rot),
             "fov": _rounded([camera.fov])[0],
         }
-        if camera.image_size != DEFAULT_IMAGE_SIZE:
+        if camera.image_size != BENCHMARK_IMAGE_SIZE:
             entry["image_size"] = list(camera.image_size)
         if camera.zone is not None:
             entry["zone"] = camera.zone
@@ -150,7 +163,7 @@ def rig_to_dict(rig: Rig) -> dict:
             entry["module"] = camera.module
         if camera.role != "perception":
             entry["role"] = camera.role
-        if camera.lens is not None:
+        if not camera.lens.is_ideal_pinhole:  # the benchmark's pinhole is its fov alone
             lens = camera.lens
             entry["intrinsics"] = dict(zip(("fx", "fy", "cx", "cy"), _rounded([lens.fx, lens.fy, lens.cx, lens.cy])))
             if lens.distortion != "none":

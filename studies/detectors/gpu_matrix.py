@@ -38,13 +38,14 @@ import tarfile
 import time
 from pathlib import Path
 
+from rigopt.benchmark import SYNTHETIC_IMAGE_SIZE
 from rigopt.output import write_text_atomic
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from run import MATRIX, RESULTS, TRANSFER, rig_name  # noqa: E402
 
 FAMILY = "lss"
-SIZE = (160, 90)
+SIZE = SYNTHETIC_IMAGE_SIZE
 #: A training run in its own process (so that the deadline can stop it): rigopt bench train's own call.
 TRAIN_CALL = ("import sys; from rigopt.validation.detectors.config import model_config; "
               "from rigopt.validation.detectors.protocol import train_on; "

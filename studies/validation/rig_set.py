@@ -141,8 +141,8 @@ def factorial_rig(vehicle_name: str, outline: Outline, reference: Rig, levels) -
     for k, (yaw, z) in enumerate(zip(yaws, heights)):
         xy = outline.mount(yaw, z, values["plan_offset_m"])
         rotation = rotation_from_yaw_pitch_roll(np.radians(yaw), np.radians(values["pitch_deg"]), 0.0)
-        cameras.append(Camera(f"CAM_{k:02d}_YAW_{int(round(yaw)) % 360:03d}", np.array([xy[0], xy[1], z]),
-                              rotation, values["fov_deg"]))
+        cameras.append(Camera.pinhole(f"CAM_{k:02d}_YAW_{int(round(yaw)) % 360:03d}", np.array([xy[0], xy[1], z]),
+                                      rotation, values["fov_deg"]))
     name = (f"{vehicle_name}_h{values['height_offset_m']:g}_p{abs(values['pitch_deg']):g}_f{values['fov_deg']:g}"
             f"_n{values['cameras']}_d{values['plan_offset_m']:g}")
     return Rig(name, load_vehicle(vehicle_name).blueprint, tuple(cameras)), values

@@ -56,7 +56,7 @@ def box_footprint(box_vehicle) -> Footprint:
 
 def _camera(position, yaw_deg=0.0, pitch_deg=0.0, fov=90.0, image_size=(1280, 720), id="CAM"):
     rotation = rotation_from_yaw_pitch_roll(np.deg2rad(yaw_deg), np.deg2rad(pitch_deg), 0.0)
-    return Camera(id, np.asarray(position, dtype=float), rotation, fov, tuple(image_size))
+    return Camera.pinhole(id, np.asarray(position, dtype=float), rotation, fov, tuple(image_size))
 
 
 @pytest.fixture(scope="session")

@@ -15,8 +15,8 @@ SAME_FOCAL = Lens(1280, 960, 380.0, 380.0, 640.0, 480.0)  # the pinhole of the s
 
 def test_a_fisheye_covers_more_than_the_pinhole_of_its_focal_length(box_vehicle, rig, small_settings, camera):
     pose = camera([2.1, 0.0, 1.0])  # on the nose, looking forward
-    fisheye = Camera.with_lens("FISH", pose.position, pose.rotation, FISHEYE)
-    pinhole = Camera.with_lens("PIN", pose.position, pose.rotation, SAME_FOCAL)
+    fisheye = Camera("FISH", pose.position, pose.rotation, FISHEYE)
+    pinhole = Camera("PIN", pose.position, pose.rotation, SAME_FOCAL)
     sees = rig_coverage_matrix(rig(pinhole, fisheye), box_vehicle, small_settings).sees
     assert sees[1].sum() > sees[0].sum()
     assert np.all(sees[1] | ~sees[0])  # and everything the pinhole sees
@@ -27,7 +27,7 @@ def test_a_fisheye_covers_more_than_the_pinhole_of_its_focal_length(box_vehicle,
 
 def test_a_rig_matrix_is_the_candidate_matrix_of_its_lenses(box_vehicle, rig, small_settings, camera):
     pose = camera([0.0, 1.1, 1.0], yaw_deg=90.0)
-    cameras = [Camera.with_lens("FISH", pose.position, pose.rotation, FISHEYE), camera([2.1, 0.0, 1.0], id="P")]
+    cameras = [Camera("FISH", pose.position, pose.rotation, FISHEYE), camera([2.1, 0.0, 1.0], id="P")]
     the_rig = rig(*cameras)
     model = CameraModel.of_cameras(cameras)
     direct = coverage_matrix(box_vehicle, the_rig.positions, the_rig.rotations, settings=small_settings, model=model)
@@ -36,7 +36,7 @@ def test_a_rig_matrix_is_the_candidate_matrix_of_its_lenses(box_vehicle, rig, sm
 
 def test_a_coverage_report_lists_each_cameras_lens(box_vehicle, rig, small_settings, camera):
     pose = camera([2.1, 0.0, 1.0])
-    report = coverage_report(rig(Camera.with_lens("FISH", pose.position, pose.rotation, FISHEYE), pose),
+    report = coverage_report(rig(Camera("FISH", pose.position, pose.rotation, FISHEYE), pose),
                              box_vehicle, small_settings)
     assert report.cameras[0].lens == FISHEYE
     assert report.cameras[1].lens == Lens.pinhole(90.0, (1280, 720))

@@ -24,7 +24,7 @@ def ring_counts(vehicle, rig, settings, footprint):
 
 
 def widened(camera: Camera, extra: float) -> Camera:
-    return Camera(camera.id, camera.position, camera.rotation, min(camera.fov + extra, 179.0), camera.image_size)
+    return Camera.pinhole(camera.id, camera.position, camera.rotation, min(camera.fov + extra, 179.0), camera.image_size)
 
 
 @settings(max_examples=40)
@@ -38,7 +38,7 @@ def test_wider_fov_never_covers_less(box_vehicle, box_footprint, ring_settings, 
 @settings(max_examples=40)
 @given(rig=st.from_type(Rig), extra=st.from_type(Camera))
 def test_adding_a_camera_adds_exactly_its_own_view(box_vehicle, box_footprint, ring_settings, rig, extra):
-    extra = Camera("EXTRA", extra.position, extra.rotation, extra.fov, extra.image_size)
+    extra = Camera.pinhole("EXTRA", extra.position, extra.rotation, extra.fov, extra.image_size)
     before = ring_counts(box_vehicle, rig, ring_settings, box_footprint)
     after = ring_counts(box_vehicle, Rig(rig.name, rig.vehicle, rig.cameras + (extra,)), ring_settings,
                         box_footprint)

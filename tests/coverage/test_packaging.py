@@ -35,7 +35,7 @@ F_90 = float(focal_from_fov(90.0, 1280))  # 640 px
 def camera(position, yaw=0.0, pitch=0.0, roll=0.0, fov=90.0, size=(1280, 720), name="c") -> Camera:
     """A benchmark pinhole; angles in degrees (yaw > 0 left, pitch > 0 up)."""
     angles = np.deg2rad([yaw, pitch, roll])
-    return Camera(name, np.asarray(position, dtype=float), rotation_from_yaw_pitch_roll(*angles), fov, size)
+    return Camera.pinhole(name, np.asarray(position, dtype=float), rotation_from_yaw_pitch_roll(*angles), fov, size)
 
 
 @pytest.fixture(scope="module")
@@ -142,7 +142,7 @@ def test_only_the_seen_part_of_a_person_counts(box):
 
 def test_a_person_through_a_fisheye_follows_its_equidistant_projection(box):
     fisheye = Lens(1280, 960, 380.0, 380.0, 640.0, 480.0, "fisheye", (0.0, 0.0, 0.0, 0.0))  # r = f theta
-    lens = Camera.with_lens("fish", FRONT, np.eye(3), fisheye)
+    lens = Camera("fish", FRONT, np.eye(3), fisheye)
     height = person_height_px(lens, box, 1.8, person_directions(lens)["centre"], 5.0)
     assert height == pytest.approx(380.0 * (np.arctan(0.8 / 5.0) + np.arctan(1.0 / 5.0)), rel=1e-9)
 

@@ -281,7 +281,7 @@ def cli_rig(tmp_path_factory):
 
     root = tmp_path_factory.mktemp("regulations_cli")
     install_user_vehicle(root / "home", "regcar")
-    rear = Camera("CAM_BACK", np.array([-2.03, 0.0, 1.45]),
+    rear = Camera.pinhole("CAM_BACK", np.array([-2.03, 0.0, 1.45]),
                   rotation_from_yaw_pitch_roll(np.pi, np.deg2rad(-50.0), 0.0), 150.0)
     return root / "home", write_rig(Rig("rearonly", "vehicle.test.regcar", (rear,)), root / "rear.json")
 

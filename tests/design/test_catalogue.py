@@ -64,8 +64,9 @@ def test_a_catalogue_camera_becomes_a_rig_camera_with_its_lens():
     camera = radtan.camera("C", [1.0, 0.0, 1.0], np.eye(3), "front")
     assert camera.lens == radtan.lens and camera.image_size == (2048, 1550) and camera.fov == radtan.fov
     plain = CatalogueCamera.pinhole(65.0).camera("P", [1.0, 0.0, 1.0], np.eye(3))
-    assert plain.lens is None and plain.fov == 65.0 and plain.image_size == (1280, 720)
-    assert pinhole.camera("W", [1.0, 0.0, 1.0], np.eye(3)).lens is None  # an ideal pinhole: the benchmark's form
+    assert plain.lens == Lens.pinhole(65.0) and plain.fov == 65.0 and plain.image_size == (1280, 720)
+    ideal = pinhole.camera("W", [1.0, 0.0, 1.0], np.eye(3)).lens  # an ideal pinhole: the benchmark's form
+    assert ideal == Lens.pinhole(pinhole.fov, pinhole.lens.image_size) and ideal.stated_hfov == pinhole.fov
     assert DesignSettings(lenses=(radtan, 60.0)).fovs == (radtan.fov, 60.0)
 
 
@@ -82,10 +83,10 @@ def test_a_design_from_a_catalogue_keeps_each_cameras_lens(tmp_path):
     design = load_rig(out / "rig.json")
     assert len(design.perception()) == 8  # the catalogue's lenses; the near-field cameras are fisheyes
     for camera, entry in zip(design.perception().cameras, summary["cameras"]):
-        assert camera.lens_model in catalogue.values()  # refined or not, the lens is the catalogue's
-        assert entry["lens"]["width"] == camera.image_size[0] and entry["lens"]["fx"] == camera.lens_model.fx
+        assert camera.lens in catalogue.values()  # refined or not, the lens is the catalogue's
+        assert entry["lens"]["width"] == camera.image_size[0] and entry["lens"]["fx"] == camera.lens.fx
         assert entry["lens"]["hfov_deg"] == pytest.approx(camera.fov, abs=1e-6)
-    assert any(c.lens is not None for c in design.cameras)  # the radtan lens travels in the rig file
+    assert any(c.lens.is_distorted for c in design.cameras)  # the radtan lens travels in the rig file
     assert summary["solver"]["milp_status"] == "optimal"  # (the refinement, accepted or not, kept the lenses)
     assert "radtan" in (out / "report.html").read_text()
 

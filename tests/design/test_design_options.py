@@ -3,26 +3,26 @@
 import numpy as np
 import pytest
 
-from rigopt.cli.design_command import parse_camera_count, parse_lenses
+from rigopt.cli.design_command import parse_camera_count, parse_fovs
 from rigopt.design.selection import select_cameras
 from rigopt.design.settings import DesignSettings
 from rigopt.errors import RigoptError
 
 
-def test_a_lens_list_is_a_catalogue_without_range():
-    assert parse_lenses("60,65,120") == ((60.0, 65.0, 120.0), None)
+def test_a_fov_list_is_a_catalogue_without_range():
+    assert parse_fovs("60,65,120") == ((60.0, 65.0, 120.0), None)
 
 
-def test_a_lens_range_seeds_lenses_every_ten_degrees_and_keeps_the_range():
-    lenses, fov_range = parse_lenses("60-100")
-    assert lenses == (60.0, 70.0, 80.0, 90.0, 100.0)
+def test_a_fov_range_seeds_fovs_every_ten_degrees_and_keeps_the_range():
+    fovs, fov_range = parse_fovs("60-100")
+    assert fovs == (60.0, 70.0, 80.0, 90.0, 100.0)
     assert fov_range == (60.0, 100.0)
 
 
 @pytest.mark.parametrize("text", ["0,60", "60,180", "120-60", "abc", "60-200"])
-def test_bad_lenses_are_refused(text):
+def test_bad_fovs_are_refused(text):
     with pytest.raises(RigoptError, match="--fov"):
-        parse_lenses(text)
+        parse_fovs(text)
 
 
 @pytest.mark.parametrize("text, expected", [(None, None), ("8", (8, 8)), ("6-10", (6, 10))])

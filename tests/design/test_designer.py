@@ -65,7 +65,7 @@ def r1_on_its_vehicle() -> ReferenceRig:
 
 def front_reference(box_car: Vehicle) -> ReferenceRig:
     """One 100-degree camera on the box car's front, looking ahead: a reference that asks nothing behind."""
-    rig = Rig("boxref", box_car.blueprint, (Camera("F", np.array([2.04, 0.0, 1.0]), np.eye(3), 100.0),))
+    rig = Rig("boxref", box_car.blueprint, (Camera.pinhole("F", np.array([2.04, 0.0, 1.0]), np.eye(3), 100.0),))
     return ReferenceRig(rig, box_car)
 
 
@@ -157,7 +157,7 @@ def test_design_has_the_references_perception_camera_count_and_near_field_camera
     rig = firetruck.design.rig
     assert len(rig.perception()) == len(firetruck.reference) == len(firetruck.milp_rig)
     assert rig.near_field_count >= 1
-    assert all(c.lens is not None and c.lens.distortion == "fisheye" for c in rig.cameras if c.role == "near_field")
+    assert all(c.lens.distortion == "fisheye" for c in rig.cameras if c.role == "near_field")
 
 
 @pytest.mark.slow
@@ -419,7 +419,7 @@ def test_a_camera_may_slide_only_as_far_as_its_disc_stays_mountable(firetruck):
     vehicle, reach = firetruck.vehicle, 0.3
     # without the body-feature rules the samples reach the wheel arches' lips (the rules keep mounts off them)
     points, normals, zones = sample_zone_points(vehicle, 0.4, rules=MountRules(practice=MountPractice(features=False)))
-    cameras = tuple(Camera(f"c{k}", p, np.eye(3), 60.0, zone=z) for k, (p, z) in enumerate(zip(points, zones)))
+    cameras = tuple(Camera.pinhole(f"c{k}", p, np.eye(3), 60.0, zone=z) for k, (p, z) in enumerate(zip(points, zones)))
     radii = free_radii(Rig("r", "x", cameras), normals, vehicle, reach)
     assert np.all((radii >= 0) & (radii <= reach))
     assert np.any(radii > 0) and np.any(radii < reach)

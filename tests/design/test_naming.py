@@ -24,8 +24,8 @@ def test_repeated_names_are_numbered_in_order():
     assert unique(["A", "B", "A", "A"]) == ["A", "B", "A_2", "A_3"]
 
 
-def test_the_designs_plain_defaults_match_the_library():
-    from rigopt.design.defaults import BENCHMARK_IMAGE_SIZE
-    from rigopt.rig.model import DEFAULT_IMAGE_SIZE
+def test_the_designs_default_image_size_is_the_benchmarks():
+    from rigopt.benchmark import BENCHMARK_IMAGE_SIZE
+    from rigopt.design.settings import DesignSettings
 
-    assert BENCHMARK_IMAGE_SIZE == DEFAULT_IMAGE_SIZE
+    assert all(c.lens.image_size == BENCHMARK_IMAGE_SIZE for c in DesignSettings().lenses)

@@ -81,7 +81,7 @@ def test_a_two_role_design_leaves_the_fields_to_its_fisheyes():
     rig = result.design.rig
     perception, fisheyes = rig.perception(), [c for c in rig.cameras if c.role == "near_field"]
     assert len(perception) == 8 and 1 <= len(fisheyes) <= 8
-    assert all(c.lens is not None and c.lens.distortion == "fisheye" for c in fisheyes)
+    assert all(c.lens.distortion == "fisheye" for c in fisheyes)
     assert [r.key for r in result.regions] == ["r158"] and result.regions[0].covered_frac == 1.0
     assert result.design.check.valid, [c.problems for c in result.design.check.cameras if not c.valid]
     nf = Rig("nf", tt.blueprint, tuple(fisheyes))

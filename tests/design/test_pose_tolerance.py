@@ -48,8 +48,8 @@ def pitched(pitch_deg: float) -> np.ndarray:
 
 
 def test_the_tolerance_compares_height_above_ground_and_pitch():
-    reference = Rig("ref", "x", (Camera("A", np.array([0.0, 0.0, 1.0]), pitched(0.0), 90.0),
-                                 Camera("B", np.array([0.0, 0.0, 2.0]), pitched(-10.0), 90.0)))
+    reference = Rig("ref", "x", (Camera.pinhole("A", np.array([0.0, 0.0, 1.0]), pitched(0.0), 90.0),
+                                 Camera.pinhole("B", np.array([0.0, 0.0, 2.0]), pitched(-10.0), 90.0)))
     heights = np.array([1.05, 1.2, 1.95, 2.0])
     pitches = np.deg2rad([0.0, 0.0, -10.0, -5.0])
     free = within_pose_tolerance(heights, pitches, reference, DesignSettings())
@@ -61,8 +61,8 @@ def test_the_tolerance_compares_height_above_ground_and_pitch():
 
 
 def test_the_yaw_tolerance_wraps_around_and_the_fov_tolerance_compares_lenses():
-    reference = Rig("ref", "x", (Camera("back", np.zeros(3), pitched(0.0) @ _turn(180.0), 65.0),
-                                 Camera("front", np.zeros(3), pitched(0.0), 90.0)))
+    reference = Rig("ref", "x", (Camera.pinhole("back", np.zeros(3), pitched(0.0) @ _turn(180.0), 65.0),
+                                 Camera.pinhole("front", np.zeros(3), pitched(0.0), 90.0)))
     yaws = np.deg2rad([-176.0, 170.0, 4.0, 30.0])
     fovs = np.array([65.0, 65.0, 90.0, 70.0])
     level, heights = np.zeros(4), np.ones(4)
@@ -128,7 +128,7 @@ def test_a_design_within_the_tolerance_keeps_every_matched_camera_inside_it(box_
 
 
 def test_gaps_are_in_units_of_the_tolerance():
-    reference = Rig("ref", "vehicle.test", (Camera("a", np.array([0.0, 0.0, 1.0]), pitched(0.0), 65.0),))
+    reference = Rig("ref", "vehicle.test", (Camera.pinhole("a", np.array([0.0, 0.0, 1.0]), pitched(0.0), 65.0),))
     settings = DesignSettings(match_height_m=0.2, match_pitch_deg=5.0, match_fov_deg=0.0)
     heights, pitches = np.array([1.0, 1.3, 1.1, 1.0]), np.deg2rad([0.0, 0.0, -15.0, 0.0])
     gaps = pose_gaps(heights, pitches, reference, settings, fovs=np.array([65.0, 65.0, 65.0, 70.0]))

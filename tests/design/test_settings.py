@@ -5,14 +5,14 @@ import inspect
 
 import pytest
 
-from rigopt.design.settings import (DEFAULT_LENSES, DEFAULT_PITCHES_DEG, DEFAULT_YAW_STEP_DEG, RANGE_STEP,
-                                    DesignSettings, lens_catalogue, range_lenses)
+from rigopt.design.settings import (DEFAULT_FOVS, DEFAULT_PITCHES_DEG, DEFAULT_YAW_STEP_DEG, RANGE_STEP,
+                                    DesignSettings, fov_catalogue, range_fovs)
 from rigopt.errors import RigoptError
 
 
 def test_the_settings_defaults_are_the_named_defaults():
     settings = DesignSettings()
-    assert settings.fovs == DEFAULT_LENSES
+    assert settings.fovs == DEFAULT_FOVS
     # the published design's cameras: the benchmark's 1280 x 720 centred pinholes at those FOVs
     assert all(c.lens.image_size == (1280, 720) and c.lens.is_ideal_pinhole for c in settings.lenses)
     assert settings.pitches_deg == DEFAULT_PITCHES_DEG
@@ -33,22 +33,22 @@ def test_every_setting_has_its_own_docstring():
         assert lines[row + 1].strip().startswith('"""'), f"{field.name} has no docstring"
 
 
-def test_a_range_seeds_lenses_every_range_step_from_its_low_end():
+def test_a_range_seeds_fovs_every_range_step_from_its_low_end():
     assert RANGE_STEP == 10.0
-    assert range_lenses(60.0, 100.0) == (60.0, 70.0, 80.0, 90.0, 100.0)
-    assert range_lenses(65.0, 100.0) == (65.0, 75.0, 85.0, 95.0)
-    assert range_lenses(90.0, 90.0) == (90.0,)
+    assert range_fovs(60.0, 100.0) == (60.0, 70.0, 80.0, 90.0, 100.0)
+    assert range_fovs(65.0, 100.0) == (65.0, 75.0, 85.0, 95.0)
+    assert range_fovs(90.0, 90.0) == (90.0,)
 
 
 @pytest.mark.parametrize("low, high", [(120.0, 60.0), (0.0, 60.0), (60.0, 180.0)])
 def test_bad_ranges_are_refused(low, high):
     with pytest.raises(RigoptError):
-        range_lenses(low, high)
+        range_fovs(low, high)
 
 
 def test_a_catalogue_is_checked_and_made_floats():
-    assert lens_catalogue([60, 90]) == (60.0, 90.0)
+    assert fov_catalogue([60, 90]) == (60.0, 90.0)
     with pytest.raises(RigoptError, match="180"):
-        lens_catalogue([60.0, 180.0])
+        fov_catalogue([60.0, 180.0])
     with pytest.raises(RigoptError, match="at least one"):
-        lens_catalogue([])
+        fov_catalogue([])

@@ -45,7 +45,7 @@ def test_yaw_and_plan_moves_leave_the_depth_prior_alone():
 
 
 def test_a_camera_twice_as_high_sees_the_ground_twice_as_far():
-    level = Camera("C", np.array([0.0, 0.0, 0.5]), np.eye(3), 90.0)
+    level = Camera.pinhole("C", np.array([0.0, 0.0, 0.5]), np.eye(3), 90.0)
     high = dataclasses.replace(level, position=np.array([0.0, 0.0, 1.0]))
     low, up = (np.exp(ground_depths([c], grid=(4, 8))[0]) for c in (level, high))
     ground = (up < DEPTH_RANGE[1]) & (low > DEPTH_RANGE[0])

@@ -39,7 +39,7 @@ lambda_values = st.tuples(*[st.floats(0.0, 10.0)] * 3)
 
 def _rig(cameras, name="rig"):
     """A rig of (position, rotation, fov) triples with ids C0, C1, ..."""
-    return Rig(name, "vehicle.test", tuple(Camera(f"C{k}", p, r, f) for k, (p, r, f) in enumerate(cameras)))
+    return Rig(name, "vehicle.test", tuple(Camera.pinhole(f"C{k}", p, r, f) for k, (p, r, f) in enumerate(cameras)))
 
 
 def _small_rigs(max_cameras=5):
@@ -51,7 +51,7 @@ def _small_rigs(max_cameras=5):
 def _reflected(rig):
     """The same rig described in a mirrored frame (y flipped), as CARLA vs ISO 8855."""
     return Rig(rig.name, rig.vehicle, tuple(
-        Camera(c.id, S @ c.position, S @ c.rotation @ S, c.fov, c.image_size, c.zone) for c in rig.cameras))
+        Camera.pinhole(c.id, S @ c.position, S @ c.rotation @ S, c.fov, c.image_size, c.zone) for c in rig.cameras))
 
 
 def _permuted(rig, order):

@@ -35,14 +35,14 @@ def _random_rotations(rng, n):
 def _random_rig(rng, n, name):
     """n cameras: positions within +-3 m, uniform rotations, FOVs 60-120 deg (ties have probability 0)."""
     rotations = _random_rotations(rng, n)
-    return Rig(name, "v", tuple(Camera(f"C{k}", rng.uniform(-3, 3, 3), rotations[k], float(rng.uniform(60, 120)))
+    return Rig(name, "v", tuple(Camera.pinhole(f"C{k}", rng.uniform(-3, 3, 3), rotations[k], float(rng.uniform(60, 120)))
                                 for k in range(n)))
 
 
 def _tie_rig(rng, n, name):
     """n cameras at x = 0 or 1 m, turned by 0 or pi about z, FOV 60 or 61 deg: most costs tie exactly (a
     matching that breaks ties unlike scipy differs from scipy's pairing on about 2 rigs in 5)."""
-    return Rig(name, "v", tuple(Camera(f"C{k}", [float(rng.integers(0, 2)), 0.0, 0.0],
+    return Rig(name, "v", tuple(Camera.pinhole(f"C{k}", [float(rng.integers(0, 2)), 0.0, 0.0],
                                        HALF_TURNS[int(rng.integers(0, 2))], float(rng.integers(60, 62)))
                                 for k in range(n)))
 
@@ -90,8 +90,8 @@ def test_match_is_the_brute_force_minimum_with_ties_and_unequal_counts(seed):
 def test_a_wrong_matching_is_caught_by_the_brute_force_minimum():
     # The check above can fail: the identity pairing of these rigs costs more than the optimum.
     same = (np.eye(3), 60.0)
-    a = Rig("A", "v", (Camera("C0", [0.0, 0.0, 0.0], *same), Camera("C1", [10.0, 0.0, 0.0], *same)))
-    b = Rig("B", "v", (Camera("C0", [10.0, 0.0, 0.0], *same), Camera("C1", [0.0, 0.0, 0.0], *same)))
+    a = Rig("A", "v", (Camera.pinhole("C0", [0.0, 0.0, 0.0], *same), Camera.pinhole("C1", [10.0, 0.0, 0.0], *same)))
+    b = Rig("B", "v", (Camera.pinhole("C0", [10.0, 0.0, 0.0], *same), Camera.pinhole("C1", [0.0, 0.0, 0.0], *same)))
     cost = _cost_matrix(a, b)
     assert np.trace(cost) > _brute_force_minimum(cost) + 1.0
     assert rigcd(a, b).match * 2 == pytest.approx(_brute_force_minimum(cost), abs=1e-12)

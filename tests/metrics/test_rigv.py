@@ -25,12 +25,12 @@ lambda_values = st.tuples(*[st.floats(0.0, 10.0)] * 3)
 
 
 def _rig(cameras, name="rig"):
-    return Rig(name, "vehicle.test", tuple(Camera(f"C{k}", p, r, f) for k, (p, r, f) in enumerate(cameras)))
+    return Rig(name, "vehicle.test", tuple(Camera.pinhole(f"C{k}", p, r, f) for k, (p, r, f) in enumerate(cameras)))
 
 
 def _reflected(rig):
     return Rig(rig.name, rig.vehicle, tuple(
-        Camera(c.id, S @ c.position, S @ c.rotation @ S, c.fov, c.image_size, c.zone) for c in rig.cameras))
+        Camera.pinhole(c.id, S @ c.position, S @ c.rotation @ S, c.fov, c.image_size, c.zone) for c in rig.cameras))
 
 
 def _assert_matches_reference(result, expected, scale=1.0):

@@ -22,8 +22,8 @@ BACKWARDS = rotation_from_yaw_pitch_roll(np.pi, 0.0, 0.0)
 @pytest.fixture(scope="module")
 def tailboard_rig(tmp_path_factory):
     """R6's front camera (valid) and a rear camera on the tailboard's face, 0.86 m up."""
-    rig = Rig("tailboard", FIRETRUCK, (Camera("CAM_FRONT", np.array([3.98, 0.0, 1.2]), np.eye(3), 120.0),
-                                       Camera("CAM_TAIL", np.array([-4.40, 0.0, 0.86]), BACKWARDS, 75.0)))
+    rig = Rig("tailboard", FIRETRUCK, (Camera.pinhole("CAM_FRONT", np.array([3.98, 0.0, 1.2]), np.eye(3), 120.0),
+                                       Camera.pinhole("CAM_TAIL", np.array([-4.40, 0.0, 0.86]), BACKWARDS, 75.0)))
     return write_rig(rig, tmp_path_factory.mktemp("tailboard") / "tailboard.json")
 
 
@@ -45,8 +45,8 @@ def test_check_json_carries_the_reason_and_nothing_else(tailboard_rig):
 
 
 def test_check_names_a_duplicate_front_camera(tmp_path):
-    rig = Rig("stacked", FIRETRUCK, (Camera("CAM_FRONT", np.array([3.98, 0.0, 1.2]), np.eye(3), 120.0),
-                                     Camera("CAM_FRONT_LOW", np.array([4.10, 0.0, 0.80]), np.eye(3), 120.0)))
+    rig = Rig("stacked", FIRETRUCK, (Camera.pinhole("CAM_FRONT", np.array([3.98, 0.0, 1.2]), np.eye(3), 120.0),
+                                     Camera.pinhole("CAM_FRONT_LOW", np.array([4.10, 0.0, 0.80]), np.eye(3), 120.0)))
     result = run_rigopt("check", write_rig(rig, tmp_path / "stacked.json"), "--json")
     assert result.returncode == 1
     cameras = {c["id"]: c for c in json.loads(result.stdout)["cameras"]}

@@ -174,7 +174,7 @@ def mentions(problems, *words) -> bool:
 
 def camera(camera_id, position, yaw_deg=0.0, pitch_deg=0.0, fov=60.0, module=None) -> Camera:
     rotation = rotation_from_yaw_pitch_roll(np.deg2rad(yaw_deg), np.deg2rad(pitch_deg), 0.0)
-    return Camera(camera_id, np.array(position, dtype=float), rotation, fov, module=module)
+    return Camera.pinhole(camera_id, np.array(position, dtype=float), rotation, fov, module=module)
 
 
 # --- steps and tailboards -------------------------------------------------------------------------------------

@@ -5,31 +5,32 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from rigopt.camera import Lens
 from rigopt.mounting.candidates import clear_directions, mount_candidates
 from rigopt.mounting.rules import MountRules
 
 
 def test_front_point_can_look_forward_not_backward(box_car):
-    clear = clear_directions(box_car, [[2.03, 0.0, 1.0]], np.deg2rad([0.0, 180.0]), np.array([0.0]), 65.0)
+    clear = clear_directions(box_car, [[2.03, 0.0, 1.0]], np.deg2rad([0.0, 180.0]), np.array([0.0]), Lens.pinhole(65.0))
     assert clear.shape == (1, 1, 2)
     assert clear[0, 0].tolist() == [True, False]
 
 
 def test_side_point_can_look_outward_not_across_the_body(box_car):
-    clear = clear_directions(box_car, [[0.0, 0.93, 1.0]], np.deg2rad([90.0, -90.0]), np.array([0.0]), 65.0)
+    clear = clear_directions(box_car, [[0.0, 0.93, 1.0]], np.deg2rad([90.0, -90.0]), np.array([0.0]), Lens.pinhole(65.0))
     assert clear[0, 0].tolist() == [True, False]
 
 
 def test_clear_directions_use_the_frustum_margin(box_car):
     # on the left side looking 40 deg outward with a 120 deg lens: the outer half of the view grazes the body
-    args = (box_car, [[0.0, 0.93, 1.0]], np.deg2rad([40.0]), np.array([0.0]), 120.0)
+    args = (box_car, [[0.0, 0.93, 1.0]], np.deg2rad([40.0]), np.array([0.0]), Lens.pinhole(120.0))
     assert clear_directions(*args)[0, 0, 0]
     assert not clear_directions(*args, rules=MountRules(frustum_margin=0.0))[0, 0, 0]
 
 
 @pytest.fixture(scope="module")
 def front_candidates(box_car):
-    return mount_candidates(box_car, 0.3, fov=65.0, zones=["front"], yaws_deg=range(-180, 180, 10),
+    return mount_candidates(box_car, 0.3, lens=Lens.pinhole(65.0), zones=["front"], yaws_deg=range(-180, 180, 10),
                             pitches_deg=(-10, 0, 10))
 
 
@@ -60,7 +61,7 @@ def test_front_clear_yaws_form_one_band_around_zero(front_candidates):
 
 
 def test_front_clear_band_is_symmetric_on_the_centre_line(box_car):
-    c = mount_candidates(box_car, 0.3, fov=65.0, zones=["front"], yaws_deg=range(-180, 180, 10), pitches_deg=(0,))
+    c = mount_candidates(box_car, 0.3, lens=Lens.pinhole(65.0), zones=["front"], yaws_deg=range(-180, 180, 10), pitches_deg=(0,))
     central = np.flatnonzero(np.abs(c.points[:, 1]) < 0.5)
     assert len(central) > 0
     yaws = np.rad2deg(c.yaws)

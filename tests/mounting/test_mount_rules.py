@@ -64,7 +64,7 @@ def step_car(tmp_path_factory):
 
 def camera(camera_id, position, yaw_deg=0.0, pitch_deg=0.0, fov=60.0) -> Camera:
     rotation = rotation_from_yaw_pitch_roll(np.deg2rad(yaw_deg), np.deg2rad(pitch_deg), 0.0)
-    return Camera(camera_id, np.array(position, dtype=float), rotation, fov)
+    return Camera.pinhole(camera_id, np.array(position, dtype=float), rotation, fov)
 
 
 def check(vehicle, *cameras, rules=MountRules()) -> RigCheck:

@@ -17,7 +17,7 @@ FRONT = [2.03, 0.0, 1.0]
 
 def camera(camera_id, position, yaw_deg=0.0, pitch_deg=0.0, fov=60.0) -> Camera:
     rotation = rotation_from_yaw_pitch_roll(np.deg2rad(yaw_deg), np.deg2rad(pitch_deg), 0.0)
-    return Camera(camera_id, np.array(position, dtype=float), rotation, fov)
+    return Camera.pinhole(camera_id, np.array(position, dtype=float), rotation, fov)
 
 
 def test_frustum_vertices_span_near_to_range():

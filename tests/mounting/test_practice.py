@@ -27,7 +27,7 @@ def hgv():
 
 def test_a_camera_on_the_rear_tyre_sidewall_is_refused(firetruck):
     # the example: accepted before, on the tyre's sidewall
-    rig = Rig("tyre", firetruck.blueprint, (Camera("CAM_TYRE", [-2.75, -1.28, 0.55], np.eye(3), 90.0),))
+    rig = Rig("tyre", firetruck.blueprint, (Camera.pinhole("CAM_TYRE", [-2.75, -1.28, 0.55], np.eye(3), 90.0),))
     (check,) = check_rig(rig, firetruck).cameras
     assert not check.valid and any("rear-right wheel: tyre or wheel arch" in p for p in check.problems)
 
@@ -112,7 +112,7 @@ def test_the_trailer_keep_out_holds_by_default_and_lifts_by_name(hgv):
     mudguard = [[-2.5, 0.96, 1.25]]
     assert in_keep_outs(hgv, mudguard) == [["trailer (a coupled semi-trailer)"]]
     assert in_keep_outs(hgv, mudguard, lifted=("trailer",)) == [[]]
-    rig = Rig("behind", hgv.blueprint, (Camera("CAM_MUDGUARD", mudguard[0], np.eye(3), 90.0),))
+    rig = Rig("behind", hgv.blueprint, (Camera.pinhole("CAM_MUDGUARD", mudguard[0], np.eye(3), 90.0),))
     assert not check_rig(rig, hgv).valid
     solo = MountRules(practice=MountPractice(lifted=("trailer",)))
     assert not any("trailer" in p for p in check_rig(rig, hgv, solo).cameras[0].problems)
@@ -145,7 +145,7 @@ def test_a_keep_out_with_min_not_below_max_names_the_file():
 def test_practice_switched_off_allows_what_it_forbids(firetruck, hgv):
     off = MountPractice(enabled=False)
     assert practice_problems(firetruck, [[-2.75, -1.28, 0.55], [3.0, 0.0, 0.3]], off) == [[], []]
-    rig = Rig("behind", hgv.blueprint, (Camera("CAM_MUDGUARD", [-2.5, 0.96, 1.25], np.eye(3), 90.0),))
+    rig = Rig("behind", hgv.blueprint, (Camera.pinhole("CAM_MUDGUARD", [-2.5, 0.96, 1.25], np.eye(3), 90.0),))
     problems = check_rig(rig, hgv, MountRules(practice=off)).cameras[0].problems
     assert not any("keep-out" in p or "trailer" in p for p in problems)
 

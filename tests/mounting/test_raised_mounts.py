@@ -16,7 +16,7 @@ ROOF = 1.645  # etron roof skin height near x = 0 (m)
 
 def camera(name, position, yaw_deg, pitch_deg=0.0):
     rotation = rotation_from_yaw_pitch_roll(np.deg2rad(yaw_deg), np.deg2rad(pitch_deg), 0.0)
-    return Camera(name, np.array(position, float), rotation, 70.0, (1600, 900), None)
+    return Camera.pinhole(name, np.array(position, float), rotation, 70.0, (1600, 900), None)
 
 
 @pytest.fixture(scope="module")

@@ -46,9 +46,9 @@ def car(tmp_path_factory) -> Vehicle:
 def rig() -> Rig:
     """A front camera turned 20 degrees left and tilted 10 down, and a left camera rolled 5 degrees."""
     return Rig("design", "vehicle.test.reportcar", (
-        Camera("F", np.array([2.04, 0.0, 1.0]), rotation_from_yaw_pitch_roll(*np.deg2rad([20.0, -10.0, 0.0])), 90.0,
+        Camera.pinhole("F", np.array([2.04, 0.0, 1.0]), rotation_from_yaw_pitch_roll(*np.deg2rad([20.0, -10.0, 0.0])), 90.0,
                zone="front"),
-        Camera("L", np.array([0.5, 0.94, 1.2]), rotation_from_yaw_pitch_roll(*np.deg2rad([90.0, 0.0, 5.0])), 100.0,
+        Camera.pinhole("L", np.array([0.5, 0.94, 1.2]), rotation_from_yaw_pitch_roll(*np.deg2rad([90.0, 0.0, 5.0])), 100.0,
                zone="side")))
 
 
@@ -83,7 +83,7 @@ def test_packaging_rows_are_the_sheets_from_the_rear_axle(car, rig):
 
 
 def test_a_rig_measured_from_the_rear_axle_reports_the_same_positions(car, rig):
-    moved = Rig("axle", rig.vehicle, tuple(Camera(c.id, c.position + [1.3, 0, 0], c.rotation, c.fov, zone=c.zone)
+    moved = Rig("axle", rig.vehicle, tuple(Camera.pinhole(c.id, c.position + [1.3, 0, 0], c.rotation, c.fov, zone=c.zone)
                                           for c in rig.cameras), RigOrigin("rear_axle"))
     assert packaging_rows(moved, car) == packaging_rows(rig, car)
 
@@ -118,7 +118,7 @@ def test_the_page_has_the_packaging_table_and_one_frame(car, rig):
 
 
 def test_the_packaging_table_says_where_the_camera_sees_no_ground(car):
-    sky = Rig("sky", "vehicle.test.reportcar", (Camera("U", np.array([2.04, 0.0, 1.0]),
+    sky = Rig("sky", "vehicle.test.reportcar", (Camera.pinhole("U", np.array([2.04, 0.0, 1.0]),
                                                        rotation_from_yaw_pitch_roll(0.0, 1.0, 0.0), 60.0),))
     section = "".join(packaging_section(packaging_rows(sky, car), FRAME))
     row = re.search(r"<tr><td>U</td>(.*?)</tr>", section).group(1)

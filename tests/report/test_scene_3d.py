@@ -79,18 +79,18 @@ def rig(fisheye) -> Rig:
     """A pinhole looking forward-down-left, a radtan lens looking left, and the fisheye on the roof."""
     radtan = Lens(1920, 1080, 1000.0, 1010.0, 950.0, 530.0, "radtan", (-0.3, 0.1, 0.001, -0.002, 0.0))
     return Rig("scene", "vehicle.test.wheelbox", (
-        Camera("front", np.array([2.04, 0.1, 1.2]), rotation_from_yaw_pitch_roll(0.2, -0.1, 0.05), 70.0,
+        Camera.pinhole("front", np.array([2.04, 0.1, 1.2]), rotation_from_yaw_pitch_roll(0.2, -0.1, 0.05), 70.0,
                (1280, 720), zone="front"),
-        Camera.with_lens("left", np.array([0.5, 0.94, 1.0]), rotation_from_yaw_pitch_roll(np.pi / 2, 0.0, 0.0),
+        Camera("left", np.array([0.5, 0.94, 1.0]), rotation_from_yaw_pitch_roll(np.pi / 2, 0.0, 0.0),
                          radtan, zone="side"),
-        Camera.with_lens("up", np.array([0.0, 0.0, 1.54]), rotation_from_yaw_pitch_roll(0.0, np.pi / 2, 0.0),
+        Camera("up", np.array([0.0, 0.0, 1.54]), rotation_from_yaw_pitch_roll(0.0, np.pi / 2, 0.0),
                          fisheye)))
 
 
 @pytest.fixture(scope="module")
 def figure(car, rig):
     regions = [("notched field", np.array([[4.0, -2.0], [8.0, -2.0], [8.0, 2.0], [6.0, 0.0], [4.0, 2.0], [4.0, -2.0]]))]
-    compare = Rig("older", rig.vehicle, (Camera("front", np.array([2.04, 0.0, 1.0]), np.eye(3), 90.0),))
+    compare = Rig("older", rig.vehicle, (Camera.pinhole("front", np.array([2.04, 0.0, 1.0]), np.eye(3), 90.0),))
     return scene_figure(car, rig, regions=regions, compare=compare, frustum_range=RANGE)
 
 
@@ -119,7 +119,7 @@ def test_one_frustum_and_one_lens_marker_per_camera_in_a_legend_group(figure, ri
         assert np.allclose([lens.x[0], lens.y[0], lens.z[0]], camera.position, atol=1e-12)
         assert f"<b>{camera.id}</b>" in lens.hovertext and "vehicle frame" in lens.hovertext
         assert "CARLA" not in lens.hovertext  # CARLA's frame only in the CARLA export
-        assert f"{camera.lens_model.hfov:.1f} x {camera.lens_model.vfov:.1f} deg" in lens.hovertext
+        assert f"{camera.lens.hfov:.1f} x {camera.lens.vfov:.1f} deg" in lens.hovertext
 
 
 def test_a_pinhole_frustum_spans_its_fovs(figure, rig):
@@ -136,7 +136,7 @@ def test_a_pinhole_frustum_spans_its_fovs(figure, rig):
 
 
 def test_frustum_lines_follow_the_corner_rays_exactly():
-    camera = Camera("c", np.array([1.0, 2.0, 3.0]), rotation_from_yaw_pitch_roll(0.3, 0.2, -0.1), 90.0, (1600, 900))
+    camera = Camera.pinhole("c", np.array([1.0, 2.0, 3.0]), rotation_from_yaw_pitch_roll(0.3, 0.2, -0.1), 90.0, (1600, 900))
     corners, outline = frustums.frustum_lines(camera, 1.0)
     body = (corners - camera.position) @ camera.rotation
     half_h, half_v = np.deg2rad(45.0), np.deg2rad(vertical_fov(90.0, 1600, 900) / 2)
@@ -148,7 +148,7 @@ def test_frustum_lines_follow_the_corner_rays_exactly():
 @pytest.mark.parametrize("index", [1, 2])
 def test_a_distorted_lens_draws_its_true_corners_and_outline(figure, rig, index):
     camera = rig.cameras[index]
-    lens = camera.lens_model
+    lens = camera.lens
     corners, outline = frustums.frustum_lines(camera, RANGE)
     optical = ((np.concatenate([corners, outline]) - camera.position) @ camera.rotation) @ R_CAM_OPTICAL
     pixels = lens.project(optical)  # back through the lens's own projection
@@ -192,7 +192,7 @@ def test_the_compared_rig_is_grey_and_dashed(figure):
 
 
 def test_a_rig_from_the_rear_axle_is_drawn_from_the_vehicle_centre(car):
-    camera = Camera("c", np.array([3.3, 0.0, 1.2]), np.eye(3), 60.0)  # 3.3 m ahead of the rear axle (x -1.3)
+    camera = Camera.pinhole("c", np.array([3.3, 0.0, 1.2]), np.eye(3), 60.0)  # 3.3 m ahead of the rear axle (x -1.3)
     rig = Rig("axle", "vehicle.test.wheelbox", (camera,), origin=RigOrigin("rear_axle"))
     (lens,) = traces(scene_figure(car, rig), "lens")
     assert lens.x[0] == pytest.approx(2.0) and lens.z[0] == pytest.approx(1.2)
@@ -396,7 +396,7 @@ def _pinhole_footprint_oracle(camera, reach):
 
 @pytest.mark.parametrize("yaw, pitch, roll", [(0.3, -0.35, 0.0), (-2.0, -0.6, 0.2), (1.0, -1.2, -0.1)])
 def test_a_pinhole_footprint_is_the_pyramids_section_by_the_ground(yaw, pitch, roll):
-    camera = Camera("c", np.array([1.0, 0.5, 1.2]), rotation_from_yaw_pitch_roll(yaw, pitch, roll), 90.0, (1280, 720))
+    camera = Camera.pinhole("c", np.array([1.0, 0.5, 1.2]), rotation_from_yaw_pitch_roll(yaw, pitch, roll), 90.0, (1280, 720))
     footprint = frustums.frustum_footprint(camera, 5.0)
     oracle = _pinhole_footprint_oracle(camera, 5.0)
     assert oracle.area > 1.0
@@ -405,14 +405,14 @@ def test_a_pinhole_footprint_is_the_pyramids_section_by_the_ground(yaw, pitch, r
 
 
 def test_a_camera_looking_up_has_no_footprint_and_draws_none(car):
-    up = Camera("sky", np.array([0.0, 0.0, 1.6]), rotation_from_yaw_pitch_roll(0.0, 1.0, 0.0), 60.0)
+    up = Camera.pinhole("sky", np.array([0.0, 0.0, 1.6]), rotation_from_yaw_pitch_roll(0.0, 1.0, 0.0), 60.0)
     assert frustums.frustum_footprint(up).is_empty
     figure = scene_figure(car, Rig("upwards", "vehicle.test.wheelbox", (up,)))
     assert not traces(figure, "footprint")
 
 
 def test_a_fisheye_looking_down_covers_the_disc_its_sphere_cuts(fisheye):
-    down = Camera.with_lens("down", np.array([0.0, 0.0, 1.5]), rotation_from_yaw_pitch_roll(0.0, -np.pi / 2, 0.0),
+    down = Camera("down", np.array([0.0, 0.0, 1.5]), rotation_from_yaw_pitch_roll(0.0, -np.pi / 2, 0.0),
                             fisheye)
     footprint = frustums.frustum_footprint(down, 5.0)  # wider than 150 degrees: it ends on the 5 m sphere
     radius = np.sqrt(5.0**2 - 1.5**2)
@@ -422,7 +422,7 @@ def test_a_fisheye_looking_down_covers_the_disc_its_sphere_cuts(fisheye):
 
 
 def test_the_footprint_is_drawn_on_the_ground_in_the_cameras_group(car):
-    camera = Camera("down", np.array([2.04, 0.0, 1.2]), rotation_from_yaw_pitch_roll(0.0, -0.6, 0.0), 90.0)
+    camera = Camera.pinhole("down", np.array([2.04, 0.0, 1.2]), rotation_from_yaw_pitch_roll(0.0, -0.6, 0.0), 90.0)
     figure = scene_figure(car, Rig("r", "vehicle.test.wheelbox", (camera,)))
     fill = next(t for t in traces(figure, "footprint") if t.type == "mesh3d")
     points = np.array([fill.x, fill.y, fill.z], dtype=float).T
@@ -478,8 +478,8 @@ def test_the_coverage_page_holds_the_view_when_given_the_vehicle(car, tmp_path):
     from rigopt.coverage.measures import CoverageSettings, coverage_report
     from rigopt.report.coverage_html import write_html_report
 
-    rig = Rig("two", "vehicle.test.wheelbox", (Camera("F", np.array([2.04, 0.0, 1.0]), np.eye(3), 100.0),
-                                                Camera("B", np.array([-2.04, 0.0, 1.0]), rotation_from_yaw_pitch_roll(
+    rig = Rig("two", "vehicle.test.wheelbox", (Camera.pinhole("F", np.array([2.04, 0.0, 1.0]), np.eye(3), 100.0),
+                                                Camera.pinhole("B", np.array([-2.04, 0.0, 1.0]), rotation_from_yaw_pitch_roll(
                                                     np.pi, 0.0, 0.0), 100.0)))
     quick = CoverageSettings(ring_distances=(2.0,), ring_heights=(0.0,), ring_samples=72, sectors=72, bev_extent=10.0,
                              blind_azimuths=36, blind_search=5.0, blind_cell=0.2, image_grid=(16, 9),

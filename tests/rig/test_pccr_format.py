@@ -167,7 +167,7 @@ def _random_rigs(draw):
              math.sqrt(u1) * math.sin(2 * math.pi * u3), math.sqrt(u1) * math.cos(2 * math.pi * u3)]
         rotation = quaternion_to_matrix(q)
         position = np.round(draw(st.tuples(*[st.floats(-5.0, 5.0)] * 3)), 9)
-        cameras.append(Camera(f"CAM_{k}", position, rotation, draw(st.floats(30.0, 150.0))))
+        cameras.append(Camera.pinhole(f"CAM_{k}", position, rotation, draw(st.floats(30.0, 150.0))))
     return Rig("random", "vehicle.test", tuple(cameras))
 
 

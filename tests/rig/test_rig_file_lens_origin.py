@@ -16,10 +16,10 @@ FISHEYE = Lens(1920, 1080, 330.0, 331.0, 960.5, 540.0, "fisheye", (0.05, -0.01, 
 
 
 def real_rig(origin=RigOrigin("rear_axle")) -> Rig:
-    return Rig("real", "nuscenes", (Camera.with_lens("FRONT", [1.6, 0.0, 1.5], np.eye(3), RADTAN, "roof"),
-                                    Camera.with_lens("LEFT", [1.0, 0.9, 1.0], np.eye(3)[[1, 0, 2]] * [[1], [-1], [1]],
+    return Rig("real", "nuscenes", (Camera("FRONT", [1.6, 0.0, 1.5], np.eye(3), RADTAN, "roof"),
+                                    Camera("LEFT", [1.0, 0.9, 1.0], np.eye(3)[[1, 0, 2]] * [[1], [-1], [1]],
                                                      FISHEYE),
-                                    Camera("PIN", [0.0, 0.0, 1.8], np.eye(3), 70.0)), origin)
+                                    Camera.pinhole("PIN", [0.0, 0.0, 1.8], np.eye(3), 70.0)), origin)
 
 
 @pytest.mark.parametrize("origin", [RigOrigin("rear_axle"), RigOrigin("custom", (0.5, -0.2, 0.3)), RigOrigin()])
@@ -37,9 +37,11 @@ def test_the_benchmark_rigs_write_no_new_keys():
 
 
 def test_a_lens_written_as_an_ideal_pinhole_is_the_benchmark_camera():
-    camera = Camera.with_lens("C", [0, 0, 1], np.eye(3), Lens.pinhole(65.0, (1280, 720)))
-    assert camera.lens is None and camera.fov == pytest.approx(65.0, abs=1e-9)
-    assert camera.lens_model.is_ideal_pinhole
+    derived = Lens.pinhole(65.0, (1280, 720))
+    derived = Lens(1280, 720, derived.fx, derived.fy, derived.cx, derived.cy)  # the same lens, no stated FOV
+    camera = Camera("C", [0, 0, 1], np.eye(3), derived)
+    assert camera.lens == Lens.pinhole(derived.hfov, (1280, 720)) and camera.lens.stated_hfov == derived.hfov
+    assert camera.fov == pytest.approx(65.0, abs=1e-9) and camera.lens.is_ideal_pinhole
 
 
 def test_a_fov_that_disagrees_with_the_lens_is_refused():
@@ -72,8 +74,8 @@ def test_an_unknown_origin_is_refused_with_the_accepted_forms():
 
 def test_camera_modules_round_trip_and_only_when_present():
     r1 = load_rig("R1")
-    paired = Rig("paired", r1.vehicle, tuple(c if k > 1 else Camera(c.id, c.position, c.rotation, c.fov, c.image_size,
-                                                                     c.zone, c.lens, "front_pair")
+    paired = Rig("paired", r1.vehicle, tuple(c if k > 1 else Camera(c.id, c.position, c.rotation, c.lens, c.zone,
+                                                                     "front_pair")
                                              for k, c in enumerate(r1.cameras)))
     data = rig_to_dict(paired)
     assert [c.get("module") for c in data["cameras"]][:3] == ["front_pair", "front_pair", None]

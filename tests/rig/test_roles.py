@@ -7,6 +7,7 @@ import json
 
 import pytest
 
+from rigopt.camera import Lens
 from rigopt.errors import RigFileError
 from rigopt.rig.formats.carla import export_carla, read_carla
 from rigopt.rig.formats.nuscenes import export_nuscenes
@@ -66,7 +67,7 @@ def test_rigcd_and_rank_compare_the_perception_cameras_and_say_so(tmp_path, caps
     from rigopt.rig.pccr_format import write_rig
 
     r1 = load_rig("R1")
-    extra = dataclasses.replace(r1.cameras[0], id="CAM_FISHEYE_FRONT", role="near_field", fov=120.0)
+    extra = dataclasses.replace(r1.cameras[0], id="CAM_FISHEYE_FRONT", role="near_field", lens=Lens.pinhole(120.0))
     with_near_field = write_rig(dataclasses.replace(r1, name="r1nf", cameras=(*r1.cameras, extra)),
                                 tmp_path / "r1nf.json")
     capsys.readouterr()

@@ -62,7 +62,7 @@ def vehicles(box):
 def cam(id, position, yaw=0.0, pitch=0.0, fov=90.0, image_size=(1280, 720)):
     """A camera; yaw, pitch in degrees (yaw > 0 turns left, pitch > 0 tilts up)."""
     rotation = rotation_from_yaw_pitch_roll(math.radians(yaw), math.radians(pitch), 0.0)
-    return Camera(id, np.asarray(position, dtype=float), rotation, fov, tuple(image_size))
+    return Camera.pinhole(id, np.asarray(position, dtype=float), rotation, fov, tuple(image_size))
 
 
 def rig(*cameras, name="test", vehicle=BOX):

@@ -46,7 +46,7 @@ def test_a_mirrored_rotation_negates_yaw_and_roll_and_keeps_pitch():
 
 
 def camera(id, x, y, z, yaw_deg, fov=90.0):
-    return Camera(id, np.array([x, y, z]), rotation_from_yaw_pitch_roll(np.deg2rad(yaw_deg), 0.0, 0.0), fov)
+    return Camera.pinhole(id, np.array([x, y, z]), rotation_from_yaw_pitch_roll(np.deg2rad(yaw_deg), 0.0, 0.0), fov)
 
 
 def test_rig_symmetry_finds_pairs_centreline_cameras_and_the_unpaired():

@@ -23,8 +23,8 @@ def test_figure_without_rig(box_car, tmp_path):
 
 
 def test_figure_with_rig(box_car, tmp_path):
-    rig = Rig("front", "boxcar", (Camera("F", np.array([2.03, 0.0, 1.0]), np.eye(3), 60.0),
-                                  Camera("L", np.array([0.0, 0.93, 1.0]), np.array([[0.0, -1, 0], [1, 0, 0], [0, 0, 1]]),
+    rig = Rig("front", "boxcar", (Camera.pinhole("F", np.array([2.03, 0.0, 1.0]), np.eye(3), 60.0),
+                                  Camera.pinhole("L", np.array([0.0, 0.93, 1.0]), np.array([[0.0, -1, 0], [1, 0, 0], [0, 0, 1]]),
                                          90.0)))
     assert is_png(write_vehicle_figure(box_car, tmp_path / "rig.png", rig))
 

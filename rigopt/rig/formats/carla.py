@@ -44,7 +44,7 @@ def export_carla(rig: Rig) -> Exported:
                           + "export with --format opencv instead")
     sensors, approximated = [], []
     for camera in rig.cameras:
-        if camera.lens is not None:
+        if not camera.lens.is_ideal_pinhole:
             approximated.append(camera.id)
         location, rotation = iso_to_carla(camera.position, camera.rotation)
         width, height = camera.image_size
@@ -91,8 +91,8 @@ def read_carla(path, name: str | None = None, vehicle: str | None = None, origin
         position, matrix = carla_to_iso(location, rotation)
         role = attributes.get("role_name", "perception")
         try:
-            cameras.append(Camera(str(sensor["id"]), position, matrix, fov, tuple(size),
-                                  role=role if role in ROLES else "perception"))
+            cameras.append(Camera.pinhole(str(sensor["id"]), position, matrix, fov, tuple(size),
+                                          role=role if role in ROLES else "perception"))
         except RigoptError as error:
             raise RigFileError(f"{where}: {error}") from None
     origin = origin or RigOrigin()

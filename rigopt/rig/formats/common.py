@@ -153,9 +153,9 @@ def make_lens(where: str, width, height, fx, fy, cx, cy, distortion="none", coef
 
 
 def make_camera(where: str, camera_id: str, position, rotation, lens: Lens) -> Camera:
-    """A camera with a real lens (FOV and image size derived from it)."""
+    """A camera with a real lens (FOV and image size read from it)."""
     try:
-        return Camera.with_lens(camera_id, position, rotation, lens)
+        return Camera(camera_id, position, rotation, lens)
     except RigoptError as error:
         raise RigFileError(f"{where}: {error}") from None
 
@@ -200,7 +200,7 @@ def make_rig(where: str, name: str, vehicle: str, cameras, origin: RigOrigin) ->
 
 def same_pose_and_lens(a: Camera, b: Camera) -> bool:
     """True when two cameras hold the same calibration (id aside) within the SAME_* tolerances."""
-    la, lb = a.lens_model, b.lens_model
+    la, lb = a.lens, b.lens
     return (np.allclose(a.position, b.position, rtol=0, atol=SAME_POSITION_M)
             and np.allclose(a.rotation, b.rotation, rtol=0, atol=SAME_ROTATION)
             and la.image_size == lb.image_size and la.distortion == lb.distortion

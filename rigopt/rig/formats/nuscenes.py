@@ -322,7 +322,7 @@ def export_nuscenes(rig: Rig) -> Exported:
             "prev": "", "next": ""})
     exported = Exported({SENSOR_FILE: _dump(sensors), CALIBRATION_FILE: _dump(records),
                          SAMPLE_DATA_FILE: _dump(sample_data)})
-    distorted = [c.id for c in rig.cameras if c.lens is not None and c.lens.is_distorted]
+    distorted = [c.id for c in rig.cameras if c.lens.is_distorted]
     if distorted:
         exported.warnings.append(f"nuScenes cameras are rectified and carry no distortion; the distortion of "
                                  f"{', '.join(distorted)} is dropped (intrinsics kept)")
@@ -336,7 +336,7 @@ def _tables(rig: Rig, image_size) -> tuple[list, list, list]:
     for camera in rig.cameras:
         sensor_token = nuscenes_token("sensor", camera.id)
         sensors.append({"token": sensor_token, "channel": camera.id, "modality": "camera"})
-        if image_size is not None or camera.lens is None:
+        if image_size is not None or camera.lens.is_ideal_pinhole:
             width, height = image_size or camera.image_size
             k = intrinsic_matrix(camera.fov, width, height).tolist()
         else:

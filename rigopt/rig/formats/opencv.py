@@ -166,7 +166,7 @@ def export_camchain(rig: Rig) -> tuple[str, list[str]]:
     lines, warnings, previous = [], [], None
     five = []
     for k, camera in enumerate(rig.cameras):
-        lens = camera.lens_model
+        lens = camera.lens
         t_body_optical = np.eye(4)
         t_body_optical[:3, :3] = optical_from_body(camera.rotation)
         t_body_optical[:3, 3] = camera.position

@@ -59,7 +59,7 @@ def _text(values) -> str:
 
 def export_urdf(rig: Rig) -> Exported:
     """The URDF text of ``rig`` (key "" of the files) and warnings; refuses fisheye lenses."""
-    fisheye = [c.id for c in rig.cameras if c.lens is not None and c.lens.distortion == "fisheye"]
+    fisheye = [c.id for c in rig.cameras if c.lens.distortion == "fisheye"]
     if fisheye:
         raise RigoptError(f"URDF/SDFormat cameras have no Kannala-Brandt fisheye model, so {', '.join(fisheye)} "
                           "cannot be written; export with --format opencv (Kalibr's equidistant) instead")
@@ -71,7 +71,7 @@ def export_urdf(rig: Rig) -> Exported:
         _joint(robot, f"{camera.id}_joint", "base_link", camera.id, camera.position, rpy_from_rotation(camera.rotation))
         ElementTree.SubElement(robot, "link", name=optical)
         _joint(robot, f"{camera.id}_optical_joint", camera.id, optical, (0.0, 0.0, 0.0), OPTICAL_RPY)
-        lens = camera.lens_model
+        lens = camera.lens
         gazebo = ElementTree.SubElement(robot, "gazebo", reference=camera.id)
         sensor = ElementTree.SubElement(gazebo, "sensor", type="camera", name=camera.id)
         element = ElementTree.SubElement(sensor, "camera")

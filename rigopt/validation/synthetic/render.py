@@ -26,6 +26,7 @@ import shapely
 import trimesh
 
 from rigopt.validation.synthetic.scene_model import Boxes, Road, Scene
+from rigopt.benchmark import SYNTHETIC_IMAGE_SIZE
 from rigopt.camera import CameraModel, pixel_centres
 from rigopt.raycast import RayCaster
 from rigopt.rig.model import Camera, Rig
@@ -81,13 +82,13 @@ class Rendered:
 
 
 def render_rig(scene: Scene, frame_index: int, rig: Rig, ego_mesh: trimesh.Trimesh | None,
-               size: tuple[int, int] = (160, 90), max_range: float = 120.0) -> dict[str, Rendered]:
+               size: tuple[int, int] = SYNTHETIC_IMAGE_SIZE, max_range: float = 120.0) -> dict[str, Rendered]:
     """Render frame ``frame_index`` of ``scene`` with every camera of ``rig``: camera id -> Rendered."""
     return {camera.id: render_camera(scene, frame_index, camera, ego_mesh, size, max_range) for camera in rig.cameras}
 
 
 def render_camera(scene: Scene, frame_index: int, camera: Camera, ego_mesh: trimesh.Trimesh | None,
-                  size: tuple[int, int] = (160, 90), max_range: float = 120.0) -> Rendered:
+                  size: tuple[int, int] = SYNTHETIC_IMAGE_SIZE, max_range: float = 120.0) -> Rendered:
     """Render frame ``frame_index`` of ``scene`` through ``camera`` (mounted on the ego vehicle).
 
     Parameters
@@ -109,7 +110,7 @@ def render_camera(scene: Scene, frame_index: int, camera: Camera, ego_mesh: trim
     w, h = (int(v) for v in size)
     if w <= 0 or h <= 0:
         raise ValueError(f"image size must be two positive integers (width, height), got {size!r}")
-    if camera.lens is None:
+    if camera.lens.is_ideal_pinhole:
         model = CameraModel.from_fov(camera.fov, (w, h))
     else:
         model = CameraModel.of_lens(camera.lens).resized((w, h))

@@ -90,7 +90,7 @@ def test_without_intrinsics_the_fov_gives_the_centred_pinhole(tmp_path):
     first_camera(robot).find("horizontal_fov").text = repr(math.radians(70.0))
     camera = read_urdf(write(tmp_path, robot)).rig.cameras[0]
     assert camera.fov == pytest.approx(70.0, abs=1e-9)
-    assert camera.lens_model.cx == camera.image_size[0] / 2
+    assert camera.lens.cx == camera.image_size[0] / 2
 
 
 def test_intrinsics_and_a_disagreeing_fov_are_refused(tmp_path):
@@ -111,7 +111,7 @@ def test_intrinsics_win_over_a_fov_that_agrees_within_rounding(tmp_path):
     rounded = round(2.0 * math.atan(width / 2.0 / fx), 3)  # a hand-written FOV: three decimals
     first_camera(robot).find("horizontal_fov").text = repr(rounded)
     camera = read_urdf(write(tmp_path, robot)).rig.cameras[0]
-    assert camera.lens_model.fx == fx  # the intrinsics give the lens, not the rounded FOV
+    assert camera.lens.fx == fx  # the intrinsics give the lens, not the rounded FOV
     assert camera.fov == pytest.approx(load_rig("R1").cameras[0].fov, abs=1e-9)
 
 

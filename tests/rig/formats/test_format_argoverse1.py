@@ -80,7 +80,7 @@ def test_ring_cameras_frames_positions_and_notes():
 def test_pinhole_lenses_by_default():
     front = read_argoverse1(FILE).rig.cameras[0]
     value = file_values()["ring_front_center"]
-    lens = front.lens_model
+    lens = front.lens
     assert lens.distortion == "none"
     assert (lens.fx, lens.fy, lens.cx, lens.cy) == (value["focal_length_x_px_"], value["focal_length_y_px_"],
                                                     value["focal_center_x_px_"], value["focal_center_y_px_"])
@@ -110,7 +110,7 @@ def test_raw_lenses_are_radtan_with_no_tangential_terms():
     values = file_values()
     for camera in imported.rig.cameras:
         k1, k2, k3 = values[camera.id]["distortion_coefficients_"]
-        lens = camera.lens_model
+        lens = camera.lens
         assert lens.distortion == "radtan" and lens.coefficients == (k1, k2, 0.0, 0.0, k3)
         expected = math.degrees(_radial_edge_angle(lens, 0.0) + _radial_edge_angle(lens, lens.width))
         assert camera.fov == pytest.approx(expected, abs=1e-6), camera.id

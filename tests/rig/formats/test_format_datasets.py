@@ -60,7 +60,7 @@ def independent_hfov(lens) -> float:
 
 def assert_fovs_derive_from_lenses(rig):
     for camera in rig.cameras:
-        lens = camera.lens_model
+        lens = camera.lens
         assert camera.fov == pytest.approx(independent_hfov(lens), abs=0.5), camera.id
         assert camera.image_size == lens.image_size
 
@@ -108,7 +108,7 @@ def test_nuscenes_lenses_frames_and_origin():
     front, back, left = rig.cameras
     assert front.forward[0] > 0.99 and back.forward[0] < -0.99 and left.forward[1] > 0.5
     assert front.image_size == (1600, 900)  # from sample_data
-    lens = front.lens_model
+    lens = front.lens
     assert (lens.fx, lens.cx, lens.cy, lens.distortion) == (1266.417203046554, 816.2670197447984,
                                                             491.50706579294757, "none")
     expected = math.degrees(math.atan(816.2670197447984 / 1266.417203046554)
@@ -173,7 +173,7 @@ def test_argoverse2_ring_and_stereo_cameras(av2_log):
     assert cameras["ring_rear_left"].forward[0] < -0.4 and cameras["ring_rear_left"].forward[1] > 0.4
     # the ego origin is at the rear axle's height; rigopt's rear-axle origin is on the ground below it
     np.testing.assert_allclose(cameras["stereo_front_left"].position, [1.625085, 0.248148, 1.222831 + 0.35])
-    lens = cameras["ring_front_center"].lens_model
+    lens = cameras["ring_front_center"].lens
     assert lens.distortion == "none" and (lens.fx, lens.cx) == (1773.504272, 775.826693)  # undistorted imagery
     assert_fovs_derive_from_lenses(rig)
     assert cameras["ring_front_center"].fov < cameras["ring_front_left"].fov  # portrait: narrower horizontally
@@ -209,7 +209,7 @@ def test_dgp_six_cameras_with_sizes_from_the_scene():
     assert all(c.image_size == (1936, 1216) for c in rig.cameras)
     yaws = [math.degrees(math.atan2(c.forward[1], c.forward[0])) for c in rig.cameras]
     np.testing.assert_allclose(yaws, [0, 60, -60, 120, -120, 180], atol=1e-9)
-    front, back = rig.cameras[0].lens_model, rig.cameras[5].lens_model
+    front, back = rig.cameras[0].lens, rig.cameras[5].lens
     assert front.distortion == "radtan" and front.coefficients == (-0.18, 0.094, 0.0002, -0.0001, 0.0)
     assert back.distortion == "fisheye" and back.coefficients == (0.05, -0.01, 0.002, -0.0003)
     assert_fovs_derive_from_lenses(rig)
@@ -288,7 +288,7 @@ def test_waymo_five_cameras_in_its_own_camera_frame(waymo_file):
     np.testing.assert_allclose(rig.cameras[0].rotation, np.eye(3), atol=1e-12)  # x forward: rigopt's body frame
     np.testing.assert_allclose(rig.cameras[3].forward, [0, 1, 0], atol=1e-12)
     np.testing.assert_allclose(rig.cameras[0].position, [1.59, -0.02, 2.12], atol=1e-12)
-    assert rig.cameras[0].lens_model.coefficients == (0.0436, -0.3373, 0.0011, -0.0008, 0.0)
+    assert rig.cameras[0].lens.coefficients == (0.0436, -0.3373, 0.0011, -0.0008, 0.0)
     assert_fovs_derive_from_lenses(rig)
     with pytest.raises(RigFileError, match=r"2 distinct calibrations"):
         read_waymo(waymo_file)
@@ -306,8 +306,8 @@ def test_kalibr_camchain_with_imu_frame_and_chain():
     np.testing.assert_allclose(cam0.rotation, np.eye(3), atol=1e-12)
     np.testing.assert_allclose(cam1.position, [1.9, -0.25, 1.45], atol=1e-12)
     np.testing.assert_allclose(cam1.forward, [0, -1, 0], atol=1e-12)
-    assert cam0.lens_model.distortion == "radtan" and cam0.lens_model.coefficients[4] == 0.0
-    assert cam1.lens_model.distortion == "fisheye" and cam1.image_size == (512, 512)
+    assert cam0.lens.distortion == "radtan" and cam0.lens.coefficients[4] == 0.0
+    assert cam1.lens.distortion == "fisheye" and cam1.image_size == (512, 512)
     assert cam1.fov > 150.0  # a wide equidistant lens
     assert_fovs_derive_from_lenses(imported.rig)
     assert imported.rig.origin.kind == "vehicle_centre" and "assumed" in imported.notes[0]

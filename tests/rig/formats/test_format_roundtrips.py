@@ -26,7 +26,7 @@ def lens_rig(distortions=("radtan", "fisheye"), origin=RigOrigin()) -> Rig:
         "radtan": Lens(1920, 1280, 2059.6, 2061.2, 944.5, 638.9, "radtan", (0.0436, -0.3373, 0.0011, -0.0008, 0.012)),
         "fisheye": Lens(1280, 960, 330.2, 330.9, 641.3, 479.4, "fisheye", (0.0348, 0.0071, -0.0021, 0.0002)),
     }
-    cameras = [Camera.with_lens(c.id, c.position, c.rotation, lenses[d]) for c, d in zip(r1.cameras, ("none", *distortions))]
+    cameras = [Camera(c.id, c.position, c.rotation, lenses[d]) for c, d in zip(r1.cameras, ("none", *distortions))]
     return Rig("lensy", "vehicle.audi.etron", tuple(cameras), origin)
 
 
@@ -94,7 +94,7 @@ def test_lossy_exports_say_what_they_drop(tmp_path):
     carla = export_rig(rig, "carla")
     assert any("ideal centred pinholes" in w for w in carla.warnings)
     assert any("--origin rear_axle" in w for w in carla.warnings)
-    wide = Camera.with_lens("WIDE", [0, 0, 1], np.eye(3), Lens(1280, 960, 300.0, 300.0, 640.0, 480.0, "fisheye"))
+    wide = Camera("WIDE", [0, 0, 1], np.eye(3), Lens(1280, 960, 300.0, 300.0, 640.0, 480.0, "fisheye"))
     assert wide.fov > 180.0
     with pytest.raises(RigoptError, match="FOV under 180 deg"):
         export_rig(Rig("wide", "v", (wide,)), "carla")
@@ -151,8 +151,7 @@ def test_a_design_with_near_field_fisheyes_goes_to_carla_with_its_perception_cam
     from rigopt.rig.pccr_format import write_rig
 
     r1, fisheye = load_rig("R1"), fisheye_190()
-    near = dataclasses.replace(r1.cameras[0], id="NEAR", role="near_field", lens=fisheye.lens, fov=fisheye.fov,
-                               image_size=(fisheye.lens.width, fisheye.lens.height))
+    near = dataclasses.replace(r1.cameras[0], id="NEAR", role="near_field", lens=fisheye.lens)
     path = write_rig(dataclasses.replace(r1, name="two_roles", cameras=(*r1.cameras, near)), tmp_path / "rig.json")
     refused = run_rigopt("export", path, "--format", "carla", "--out", tmp_path / "carla.json")
     assert refused.returncode == 2 and "--perception" in refused.stderr and "NEAR" in refused.stderr

@@ -168,7 +168,7 @@ def test_v1_and_v2_of_the_same_calibration_are_the_same_rig(segment_file, tmp_pa
         transform = np.reshape(values[number][1], (4, 4))
         np.testing.assert_allclose(camera.rotation, transform[:3, :3], atol=1e-12)
         np.testing.assert_allclose(camera.position, transform[:3, 3], atol=1e-12)
-        assert camera.lens_model.coefficients == values[number][0][4:]
+        assert camera.lens.coefficients == values[number][0][4:]
         assert camera.image_size == values[number][2:]
 
 

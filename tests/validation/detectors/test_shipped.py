@@ -192,8 +192,7 @@ def test_a_rig_with_near_field_fisheyes_is_measured_on_its_perception_cameras_on
     from rigopt.rig.pccr_format import write_rig
 
     r5 = load_rig("R5")
-    fisheye = dataclasses.replace(r5.cameras[0], id="FISHEYE", role="near_field", lens=fisheye_190().lens,
-                                  fov=fisheye_190().fov, image_size=(fisheye_190().lens.width, fisheye_190().lens.height))
+    fisheye = dataclasses.replace(r5.cameras[0], id="FISHEYE", role="near_field", lens=fisheye_190().lens)
     path = write_rig(dataclasses.replace(r5, name="with_fisheye", cameras=(*r5.cameras, fisheye)), tmp_path / "f.json")
     capsys.readouterr()
     code = run(["validate", str(path), "--ref", "R1", "--model", "lss", "--json", "--workers", "1",

@@ -37,7 +37,7 @@ def scene(static=None, road=NO_ROAD, T=None, agents=None):
 
 
 def camera(position=(0.0, 0.0, 1.5), rotation=None, fov=90.0, cam_id="CAM"):
-    return Camera(cam_id, np.array(position, float), np.eye(3) if rotation is None else rotation, fov)
+    return Camera.pinhole(cam_id, np.array(position, float), np.eye(3) if rotation is None else rotation, fov)
 
 
 def rectangle(cols, rows, shape=(H, W)):
@@ -287,7 +287,7 @@ def test_a_fisheye_camera_renders_at_the_asked_size_and_sees_below_its_lens_plan
     from rigopt.camera import Lens
 
     lens = Lens(1280, 960, 380.0, 380.0, 640.0, 480.0, "fisheye", (-0.02, 0.003, 0.0, 0.0))  # ~200 degrees
-    fisheye = Camera.with_lens("FISH", np.array([0.0, 0.0, 1.5]), np.eye(3), lens)
+    fisheye = Camera("FISH", np.array([0.0, 0.0, 1.5]), np.eye(3), lens)
     out = render_camera(scene(), 0, fisheye, None, (W, H))
     assert out.rgb.shape == (H, W, 3) and out.rgb.dtype == np.uint8
     assert out.depth.shape == (H, W) and out.object_id.shape == (H, W)
@@ -303,7 +303,7 @@ def test_a_radtan_camera_renders_the_ground_where_its_lens_puts_it():
     from rigopt.camera import CameraModel, Lens, pixel_centres
 
     lens = Lens(2048, 1550, 1773.0, 1773.0, 1024.0, 775.0, "radtan", (-0.26, 0.07, 0.0, 0.0, 0.0))
-    level = Camera.with_lens("ARGO", np.array([0.0, 0.0, 1.5]), np.eye(3), lens)
+    level = Camera("ARGO", np.array([0.0, 0.0, 1.5]), np.eye(3), lens)
     size = (128, 97)
     out = render_camera(scene(), 0, level, None, size)
     assert out.rgb.shape == (97, 128, 3)
@@ -314,7 +314,7 @@ def test_a_radtan_camera_renders_the_ground_where_its_lens_puts_it():
     ground = np.isfinite(out.depth) & np.isfinite(expected) & (expected < 100)
     assert ground.sum() > 1000
     np.testing.assert_allclose(out.depth[ground], expected[ground], rtol=1e-5)
-    pinhole = render_camera(scene(), 0, Camera("P", level.position, level.rotation, 2 * np.degrees(
+    pinhole = render_camera(scene(), 0, Camera.pinhole("P", level.position, level.rotation, 2 * np.degrees(
         np.arctan(1024 / 1773)), (2048, 1550)), None, size)
     assert not np.array_equal(np.isinf(pinhole.depth), np.isinf(out.depth)) or \
         not np.allclose(pinhole.depth[ground], out.depth[ground])
@@ -326,7 +326,7 @@ def test_a_fisheye_rig_sees_a_box_beside_it_and_a_pinhole_does_not():
 
     lens = Lens(1280, 960, 380.0, 380.0, 640.0, 480.0, "fisheye", (-0.02, 0.003, 0.0, 0.0))
     beside = boxes([[0.0, 6.0, 1.0]], [[3.0, 2.0, 2.0]])  # left of the lens, 90 degrees off a forward axis
-    fisheye = Rig("fish", "v", (Camera.with_lens("F", np.array([0.0, 0.0, 1.5]), np.eye(3), lens),))
+    fisheye = Rig("fish", "v", (Camera("F", np.array([0.0, 0.0, 1.5]), np.eye(3), lens),))
     pinhole = Rig("pin", "v", (camera(fov=120.0, cam_id="F"),))
     the_scene = scene(static=beside)
     fractions = [visible_fractions(beside, rig, np.eye(4), render_rig(the_scene, 0, rig, None, (W, H)))[0]
