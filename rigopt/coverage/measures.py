@@ -101,8 +101,8 @@ class CameraCoverage:
 
     id: str
     self_occluded_frac: float
+    lens: Lens
     overlap_deg: dict[str, float] = field(default_factory=dict)
-    lens: Lens | None = None
 
 
 @dataclass(frozen=True)
@@ -191,7 +191,7 @@ def camera_coverage(vehicle: Vehicle, rig: Rig, settings: CoverageSettings, foot
             np.repeat(camera.position[None], len(rays), axis=0), rays)
         overlap = {other.id: float((ring[k] & ring[j]).sum() * degrees)
                    for j, other in enumerate(rig.cameras) if j != k and (ring[k] & ring[j]).any()}
-        out.append(CameraCoverage(camera.id, float(np.mean(hits <= settings.max_range)), overlap, camera.lens))
+        out.append(CameraCoverage(camera.id, float(np.mean(hits <= settings.max_range)), camera.lens, overlap))
     return tuple(out)
 
 
