@@ -55,7 +55,7 @@ def generate_command(
     """Render the same scenes under every rig and write images and nuScenes tables (resumable)."""
     from rich.progress import Progress
 
-    from rigopt.validation.synthetic.generate import ego_mesh_lookup, generate_split
+    from rigopt.validation.synthetic.generate import ego_body_lookup, generate_split
     from rigopt.validation.synthetic.render import render_rig
     from rigopt.validation.synthetic.scenes import split_scenes
     from rigopt.rig.library import load_rig
@@ -71,7 +71,7 @@ def generate_command(
     except OSError as error:
         raise RigoptError(f"--out {out}: cannot create the output folder ({error.strerror})") from None
 
-    ego_mesh_of = ego_mesh_lookup(lambda message: status_console.print(f"[yellow]warning:[/] {message}"))
+    ego_body_of = ego_body_lookup(lambda message: status_console.print(f"[yellow]warning:[/] {message}"))
 
     scene_list = split_scenes(split, scenes, frames, seed)
     with Progress(console=status_console, transient=True) as progress:
@@ -82,7 +82,7 @@ def generate_command(
             if "rendering " in message or "skipped" in message or message.endswith("rendered"):
                 progress.advance(task)
 
-        roots = generate_split(loaded, scene_list, out, width_height, render_rig, ego_mesh_of, step,
+        roots = generate_split(loaded, scene_list, out, width_height, render_rig, ego_body_of, step,
                                lambda message: status_console.print(f"rigopt: note: {message}", markup=False,
                                                                     highlight=False, soft_wrap=True), ray, workers)
     console.print("wrote " + ", ".join(str(r) for r in roots))

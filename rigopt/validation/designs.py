@@ -98,7 +98,7 @@ def validate_design(design: Rig, reference: str, family: str, data, calibration:
     every validation of this test split and seed); ``design_minus`` holds the design's drop minus each other rig's,
     with its paired interval (below 0: the design loses less).
     """
-    from rigopt.validation.synthetic.generate import ego_mesh_lookup, generate_split, split_layout
+    from rigopt.validation.synthetic.generate import ego_body_lookup, generate_split, split_layout
     from rigopt.validation.synthetic.render import render_rig
     from rigopt.metrics.ranking import predict_transfer
 
@@ -114,7 +114,7 @@ def validate_design(design: Rig, reference: str, family: str, data, calibration:
     if len(set(names)) != len(names) or reference_rig.name in names:
         raise DataError(f"rig names must differ from each other and from the reference: {names}")
     progress(f"rendering the {len(scenes)}-scene test split under {', '.join(names)} (finished ones are kept)")
-    generate_split([rig for _, rig in rigs], scenes, data, size, render_rig, ego_mesh_lookup(progress))
+    generate_split([rig for _, rig in rigs], scenes, data, size, render_rig, ego_body_lookup(progress))
 
     progress(f"evaluating the {family} model trained on {reference_rig.name}")
     test_rigs = [reference_rig.name, *names]

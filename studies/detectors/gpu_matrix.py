@@ -56,7 +56,7 @@ TRAIN_CALL = ("import sys; from rigopt.validation.detectors.config import model_
 
 def render(args, timings: dict) -> None:
     """Phase 1: every (rig, split, scene) not rendered yet in one pool (``generate_split``), then the tables."""
-    from rigopt.validation.synthetic.generate import ego_mesh_lookup, generate_split
+    from rigopt.validation.synthetic.generate import ego_body_lookup, generate_split
     from rigopt.validation.synthetic.render import render_rig
     from rigopt.validation.synthetic.scenes import split_scenes
     from rigopt.rig.library import load_rig
@@ -75,7 +75,7 @@ def render(args, timings: dict) -> None:
             if len(rendered) % 100 == 0:
                 print(f"[{time.perf_counter() - started:6.0f} s] rendered {len(rendered)} pairs", flush=True)
 
-    generate_split(rigs, scenes, args.data, SIZE, render_rig, ego_mesh_lookup(print), progress, print,
+    generate_split(rigs, scenes, args.data, SIZE, render_rig, ego_body_lookup(print), progress, print,
                    workers=args.render_workers)
     timings["render_s"] = round(time.perf_counter() - started, 1)
     timings["render_camera_images"] = sum(rendered)

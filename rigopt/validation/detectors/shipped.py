@@ -130,12 +130,12 @@ def render_cached(rigs: Sequence[Rig], detector: ShippedDetector, cache: Path, w
     rigs' folder names there."""
     import dataclasses
 
-    from rigopt.validation.synthetic.generate import ego_mesh_lookup, generate_split
+    from rigopt.validation.synthetic.generate import ego_body_lookup, generate_split
     from rigopt.validation.synthetic.render import render_rig
 
     named = [dataclasses.replace(rig, name=cache_name(rig)) for rig in rigs]
     size = tuple(detector.card["test_data"]["image_size"])
-    generate_split(named, test_scenes(detector), cache, size, render_rig, ego_mesh_lookup(progress), progress,
+    generate_split(named, test_scenes(detector), cache, size, render_rig, ego_body_lookup(progress), progress,
                    workers=workers)
     return [rig.name for rig in named]
 

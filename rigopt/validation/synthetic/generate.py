@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import Callable, Sequence
+from typing import TYPE_CHECKING, Callable, Sequence
 
 import numpy as np
 
@@ -32,6 +32,9 @@ from rigopt.output import atomic_file, atomic_folder
 from rigopt.rig.model import Rig
 from rigopt.vehicle.placement import in_vehicle_frame
 from rigopt.rig.formats.nuscenes import nuscenes_token, write_nuscenes_calibration
+
+if TYPE_CHECKING:
+    from rigopt.validation.synthetic.render import EgoBody
 
 ANNOTATION_RANGE = 80.0
 #: Relative depth agreement for a surface point to count as the rendered pixel's surface.
@@ -95,7 +98,7 @@ def visible_fractions(boxes: Boxes, rig: Rig, T_world_ego: np.ndarray, rendered:
     return np.where(seeable.sum(axis=1) > 0, seen.sum(axis=1) / np.maximum(seeable.sum(axis=1), 1), 0.0)
 
 
-def scene_records(scene: Scene, rig: Rig, root: Path, size: tuple[int, int], ego_mesh,
+def scene_records(scene: Scene, rig: Rig, root: Path, size: tuple[int, int], ego_body,
                   render_rig: Callable) -> dict[str, list[dict]]:
     """Render ``scene`` under ``rig``: write the images under ``root/samples`` and return the scene's records."""
     from PIL import Image
@@ -108,7 +111,7 @@ def scene_records(scene: Scene, rig: Rig, root: Path, size: tuple[int, int], ego
     sample_tokens = [nuscenes_token("sample", f"{scene.name}/{k}") for k in range(len(scene.frames))]
     instances: dict[int, dict] = {}
     for k, frame in enumerate(scene.frames):
-        rendered = render_rig(scene, k, rig, ego_mesh, size)
+        rendered = render_rig(scene, k, rig, ego_body, size)
         ego_token = nuscenes_token("ego_pose", f"{scene.name}/{k}")
         tables["ego_pose"].append(pose_record(ego_token, frame.T_world_ego, timestamp=frame.timestamp_us))
         tables["sample"].append({"token": sample_tokens[k], "timestamp": frame.timestamp_us, "scene_token": scene_token,
@@ -154,7 +157,7 @@ def scene_records(scene: Scene, rig: Rig, root: Path, size: tuple[int, int], ego
 
 
 def generate_split(rigs: Sequence[Rig], scenes: Sequence[Scene], out, size: tuple[int, int], render_rig: Callable,
-                   ego_mesh_of: Callable, progress: Callable[[str], None] = lambda message: None,
+                   ego_body_of: Callable, progress: Callable[[str], None] = lambda message: None,
                    note: Callable[[str], None] = lambda message: None, ray_address: str | None = None,
                    workers: int = 1) -> list[Path]:
     """Render every (rig, scene) pair not done yet and (re)assemble each rig's tables; returns the roots
@@ -178,7 +181,7 @@ def generate_split(rigs: Sequence[Rig], scenes: Sequence[Scene], out, size: tupl
             if (root / ".parts" / f"{scene.name}.json").is_file():
                 progress(f"{rig.name} / {scene.name}: done before, skipped")
             else:
-                todo[(rig.name, scene.name)] = (scene, rig, root, size, render_rig, ego_mesh_of(rig))
+                todo[(rig.name, scene.name)] = (scene, rig, root, size, render_rig, ego_body_of(rig))
     if ray_address or workers > 1:
         where = "as Ray tasks" if ray_address else f"in {workers} processes"
         progress(f"{len(todo)} (rig, scene) pairs to render {where}")
@@ -197,11 +200,11 @@ def generate_split(rigs: Sequence[Rig], scenes: Sequence[Scene], out, size: tupl
 
 
 def render_scene(scene: Scene, rig: Rig, root: Path, size: tuple[int, int], render_rig: Callable,
-                 ego_mesh) -> None:
-    """Render and annotate one (rig, scene) pair under ``root`` (``ego_mesh``: the body, None for none) and
+                 ego_body) -> None:
+    """Render and annotate one (rig, scene) pair under ``root`` (``ego_body``: the vehicle's EgoBody, None for none) and
     leave its part, the mark of a finished pair (written last, whole). Takes plain values only, so that it
     can run as a Ray task."""
-    records = scene_records(scene, rig, root, size, ego_mesh, render_rig)
+    records = scene_records(scene, rig, root, size, ego_body, render_rig)
     part = root / ".parts" / f"{scene.name}.json"
     part.parent.mkdir(parents=True, exist_ok=True)
     temporary = part.with_suffix(".tmp")
@@ -227,24 +230,25 @@ def assemble(root: Path, rig: Rig, split: str, size: tuple[int, int]) -> Path:
     return root
 
 
-def ego_mesh_lookup(warn: Callable[[str], None] = lambda message: None) -> Callable[[Rig], object]:
-    """``ego_mesh_of(rig)``: the mesh of the rig's vehicle, loaded once per vehicle; None (after ``warn``)
-    for a vehicle rigopt has no mesh of, which is then rendered without its body."""
+def ego_body_lookup(warn: Callable[[str], None] = lambda message: None) -> Callable[[Rig], EgoBody | None]:
+    """``ego_body_of(rig)``: the body of the rig's vehicle (an EgoBody of its mesh), made once per vehicle; None
+    (after ``warn``) for a vehicle rigopt has no mesh of, which is then rendered without its body."""
+    from rigopt.validation.synthetic.render import EgoBody
     from rigopt.vehicle.library import load_vehicle
 
-    meshes: dict[str, object] = {}
+    bodies: dict[str, EgoBody | None] = {}
 
-    def ego_mesh_of(rig: Rig):
-        if rig.vehicle not in meshes:
+    def ego_body_of(rig: Rig) -> EgoBody | None:
+        if rig.vehicle not in bodies:
             try:
-                meshes[rig.vehicle] = load_vehicle(rig.vehicle).mesh
+                bodies[rig.vehicle] = EgoBody(load_vehicle(rig.vehicle).mesh)
             except RigoptError:
                 warn(f"no mesh for vehicle {rig.vehicle!r}: rendering {rig.name} without the ego body "
                      "(no self-occlusion)")
-                meshes[rig.vehicle] = None
-        return meshes[rig.vehicle]
+                bodies[rig.vehicle] = None
+        return bodies[rig.vehicle]
 
-    return ego_mesh_of
+    return ego_body_of
 
 
 def split_layout(root) -> tuple[list[Scene], tuple[int, int]]:

@@ -60,8 +60,6 @@ GLASS, TYRE, SKIN = np.array([0.08, 0.10, 0.13]), np.array([0.05, 0.05, 0.05]), 
 SIGN_RED, WINDOW = np.array([0.80, 0.08, 0.08]), np.array([0.22, 0.27, 0.34])
 LAMPS = np.array([[0.9, 0.1, 0.1], [0.95, 0.7, 0.1], [0.1, 0.85, 0.3]])
 SKY_HORIZON, SKY_ZENITH = np.array([0.80, 0.85, 0.90]), np.array([0.30, 0.50, 0.85])
-#: Width (m) of the pavement strip around the road surface, and half-width (m) of a kerb strip.
-PAVEMENT_WIDTH, KERB_HALF_WIDTH = 4.0, 0.15
 
 
 @dataclass(frozen=True, eq=False)
@@ -81,13 +79,13 @@ class Rendered:
     model: CameraModel | None = None
 
 
-def render_rig(scene: Scene, frame_index: int, rig: Rig, ego_mesh: trimesh.Trimesh | None,
+def render_rig(scene: Scene, frame_index: int, rig: Rig, ego: EgoBody | None,
                size: tuple[int, int] = SYNTHETIC_IMAGE_SIZE, max_range: float = 120.0) -> dict[str, Rendered]:
     """Render frame ``frame_index`` of ``scene`` with every camera of ``rig``: camera id -> Rendered."""
-    return {camera.id: render_camera(scene, frame_index, camera, ego_mesh, size, max_range) for camera in rig.cameras}
+    return {camera.id: render_camera(scene, frame_index, camera, ego, size, max_range) for camera in rig.cameras}
 
 
-def render_camera(scene: Scene, frame_index: int, camera: Camera, ego_mesh: trimesh.Trimesh | None,
+def render_camera(scene: Scene, frame_index: int, camera: Camera, ego: EgoBody | None,
                   size: tuple[int, int] = SYNTHETIC_IMAGE_SIZE, max_range: float = 120.0) -> Rendered:
     """Render frame ``frame_index`` of ``scene`` through ``camera`` (mounted on the ego vehicle).
 
@@ -100,8 +98,8 @@ def render_camera(scene: Scene, frame_index: int, camera: Camera, ego_mesh: trim
     camera : Camera
         Pose in the ego frame and lens (a benchmark pinhole of its horizontal FOV, or its real lens); its own
         ``image_size`` is ignored in favour of ``size``: a real lens's intrinsics are scaled to it.
-    ego_mesh : trimesh.Trimesh or None
-        The ego vehicle body in the ego frame (m), or None for no body.
+    ego : EgoBody or None
+        The ego vehicle's body (its mesh in the ego frame, m), or None for no body.
     size : (int, int)
         ``(width, height)`` px of the rendered image.
     max_range : float
@@ -137,8 +135,8 @@ def render_camera(scene: Scene, frame_index: int, camera: Camera, ego_mesh: trim
     t_box, box_index = _box_hits(boxes, origin, dirs.reshape(h, w, 3), R_world_cam, model, max_range, distorted)
     t_box, box_index = t_box.ravel(), box_index.ravel()
     t_ego, normal_ego = np.full(h * w, np.inf), np.zeros((h * w, 3))
-    if ego_mesh is not None and len(ego_mesh.faces):
-        t_ego, normal_ego = _ego_view(ego_mesh, camera, model, body)
+    if ego is not None and len(ego.mesh.faces):
+        t_ego, normal_ego = ego.view(camera, model, body)
     candidates = np.stack([t_ground, t_box, t_ego])  # (3, h*w)
     kind = np.argmin(candidates, axis=0)
     t = candidates[kind, np.arange(h * w)]
@@ -272,35 +270,48 @@ def _box_hits(boxes: Boxes, origin, dirs: np.ndarray, R_world_cam, model: Camera
     return depth, index
 
 
-_EGO_CACHE: dict[tuple, tuple] = {}
+class EgoBody:
+    """The ego vehicle's body as the renderer sees it: ``mesh`` (trimesh.Trimesh, ego frame, m).
+
+    A body and the cameras on it are fixed in the ego frame, so every frame of a scene sees the body alike:
+    :meth:`view` casts a camera's pixel rays at it once (per camera pose and camera model) and keeps the answer,
+    with the body's ray caster. Pickled as its mesh alone: a worker process casts afresh.
+    """
+
+    def __init__(self, mesh: trimesh.Trimesh):
+        self.mesh = mesh
+        self._caster: RayCaster | None = None
+        self._views: dict[tuple, tuple[np.ndarray, np.ndarray]] = {}
+
+    def __getstate__(self) -> dict:
+        return {"mesh": self.mesh}
+
+    def __setstate__(self, state: dict) -> None:
+        self.__init__(state["mesh"])
+
+    def view(self, camera: Camera, model: CameraModel, body: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Depth (h*w,) float (inf: none) and hit normals (h*w, 3), ego frame, of the body along the rays ``body``
+        (h*w, 3), camera frame, of ``camera`` with ``model``. A body hit behind a nearer ground or box loses the
+        nearest-surface choice, so casting without that limit changes no pixel."""
+        key = (camera.position.tobytes(), camera.rotation.tobytes(), model.intrinsic_matrix().tobytes(),
+               str(model.distortion), np.asarray(model.coefficients).tobytes(), float(model.width),
+               float(model.height))
+        if key not in self._views:
+            if self._caster is None:
+                self._caster = RayCaster(self.mesh)
+            self._views[key] = _ego_hits(self._caster, camera.position, body @ camera.rotation.T,
+                                         np.full(len(body), np.inf))
+        return self._views[key]
 
 
-def _ego_view(mesh: trimesh.Trimesh, camera: Camera, model: CameraModel, body: np.ndarray):
-    """The body as ``camera`` sees it: depth (h*w,) float (inf: none) and hit normals (h*w, 3), ego frame, of
-    the rays ``body`` (h*w, 3) camera frame. Body and camera are fixed in the ego frame, so every frame of a
-    scene sees the same: cast once per camera, then cached (holding the mesh keeps its id from being reused).
-    A body hit behind a nearer ground or box loses the nearest-surface choice, so casting without that
-    limit changes no pixel."""
-    key = (id(mesh), camera.position.tobytes(), camera.rotation.tobytes(), model.intrinsic_matrix().tobytes(),
-           str(model.distortion), np.asarray(model.coefficients).tobytes(), float(model.width), float(model.height))
-    cached = _EGO_CACHE.get(key)
-    if cached is None or cached[0] is not mesh:
-        if len(_EGO_CACHE) >= 16:  # a rig has a few cameras; a new scene task brings a new mesh object
-            _EGO_CACHE.pop(next(iter(_EGO_CACHE)))
-        hits = _ego_hits(mesh, camera.position, body @ camera.rotation.T, np.full(len(body), np.inf))
-        cached = _EGO_CACHE[key] = (mesh, *hits)
-    return cached[1], cached[2]
-
-
-def _ego_hits(mesh: trimesh.Trimesh, position, dirs: np.ndarray, limit: np.ndarray):
-    """First body triangle along each ray: dirs (m, 3) ego-frame rays from ``position`` (3,) with unit
-    optical-axis component -> depth (m,) float (inf: none) and the hit face normals (m, 3), ego frame. Only
-    rays that meet the mesh's bounding box before depth ``limit`` (m,) are cast."""
+def _ego_hits(caster: RayCaster, position, dirs: np.ndarray, limit: np.ndarray):
+    """First body triangle (the mesh of ``caster``) along each ray: dirs (m, 3) ego-frame rays from ``position``
+    (3,) with unit optical-axis component -> depth (m,) float (inf: none) and the hit face normals (m, 3), ego
+    frame. Only rays that meet the mesh's bounding box before depth ``limit`` (m,) are cast."""
     depth, normal = np.full(len(dirs), np.inf), np.zeros((len(dirs), 3))
-    lo, hi = mesh.bounds
+    lo, hi = caster.mesh.bounds
     near, far = _slab(position - (lo + hi) / 2.0, dirs.T, (hi - lo) / 2.0 + 1e-6)
     cast = np.flatnonzero((near <= far) & (far > 0) & (near < limit))
-    caster = RayCaster(mesh)
     for start in range(0, len(cast), CHUNK):
         _cast_ego(caster, position, dirs, cast[start:start + CHUNK], depth, normal)
     return depth, normal
@@ -360,35 +371,11 @@ def _noise(x: np.ndarray, y: np.ndarray, cell: float, footprint: np.ndarray, see
     return (top * (1 - fy) + bottom * fy - 0.5) * np.clip(2.0 - 4.0 * footprint / cell, 0.0, 1.0)
 
 
-_ROAD_CACHE: dict[int, tuple[Road, list]] = {}
-
-
-def _road_regions(road: Road) -> list:
-    """Prepared shapely regions (pavement, asphalt, kerbs, markings; None where empty) of ``road``, cached."""
-    cached = _ROAD_CACHE.get(id(road))
-    if cached is not None and cached[0] is road:
-        return cached[1]
-    surface = shapely.union_all([shapely.Polygon(p) for p in road.surface]) if road.surface else None
-    segments = {name: np.asarray(getattr(road, name), dtype=float).reshape(-1, 2, 2) for name in ("kerbs", "markings")}
-    kerbs = (shapely.union_all(shapely.buffer(shapely.linestrings(segments["kerbs"]), KERB_HALF_WIDTH))
-             if len(segments["kerbs"]) else None)
-    markings = (shapely.union_all(shapely.buffer(shapely.linestrings(segments["markings"]), road.marking_width / 2))
-                if len(segments["markings"]) and road.marking_width > 0 else None)
-    regions = [surface.buffer(PAVEMENT_WIDTH) if surface is not None else None, surface, kerbs, markings]
-    for region in regions:
-        if region is not None:
-            shapely.prepare(region)
-    if len(_ROAD_CACHE) >= 16:
-        _ROAD_CACHE.pop(next(iter(_ROAD_CACHE)))
-    _ROAD_CACHE[id(road)] = (road, regions)  # holding the road keeps its id from being reused
-    return regions
-
-
 def _shade_ground(road: Road, xy: np.ndarray, footprint: np.ndarray) -> np.ndarray:
     """(m, 3) unlit albedo of ground points xy (m, 2) world m seen with pixel footprint (m,) m."""
     x, y = xy[:, 0], xy[:, 1]
     colour = np.broadcast_to(GRASS, xy.shape[:1] + (3,)).copy()
-    for region, albedo in zip(_road_regions(road), (PAVEMENT, ASPHALT, KERB, MARKING)):
+    for region, albedo in zip(road.regions, (PAVEMENT, ASPHALT, KERB, MARKING)):
         if region is not None:
             colour[shapely.contains_xy(region, x, y)] = albedo
     grain = (0.5 * _noise(x, y, 0.15, footprint, 1) + 0.35 * _noise(x, y, 0.6, footprint, 2)

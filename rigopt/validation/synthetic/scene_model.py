@@ -11,8 +11,10 @@ Timestamps are microseconds, samples at 2 Hz as in the benchmark.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
+import shapely
 
 #: The benchmark's nine detection classes, in its order.
 CLASSES = ("car", "truck", "bus", "motorcycle", "bicycle", "adult", "child", "traffic_sign", "traffic_light")
@@ -61,6 +63,10 @@ class Boxes:
         return np.stack([x, y, local[..., 2]], axis=-1) + self.centers[:, None]
 
 
+#: Width (m) of the pavement strip around the road surface, and half-width (m) of a kerb strip.
+PAVEMENT_WIDTH, KERB_HALF_WIDTH = 4.0, 0.15
+
+
 @dataclass(frozen=True)
 class Road:
     """The road network of a scene, on the ground (z = 0), world frame.
@@ -75,6 +81,26 @@ class Road:
     markings: np.ndarray
     marking_width: float
     kerbs: np.ndarray
+
+    @cached_property
+    def regions(self) -> list:
+        """Prepared shapely regions on the ground, world frame: [pavement (the surface widened by
+        PAVEMENT_WIDTH), asphalt (the surface), kerbs, markings], None where there is none; built once per road."""
+        surface = shapely.union_all([shapely.Polygon(p) for p in self.surface]) if self.surface else None
+        segments = {name: np.asarray(getattr(self, name), dtype=float).reshape(-1, 2, 2) for name in ("kerbs", "markings")}
+        kerbs = (shapely.union_all(shapely.buffer(shapely.linestrings(segments["kerbs"]), KERB_HALF_WIDTH))
+                 if len(segments["kerbs"]) else None)
+        markings = (shapely.union_all(shapely.buffer(shapely.linestrings(segments["markings"]), self.marking_width / 2))
+                    if len(segments["markings"]) and self.marking_width > 0 else None)
+        regions = [surface.buffer(PAVEMENT_WIDTH) if surface is not None else None, surface, kerbs, markings]
+        for region in regions:
+            if region is not None:
+                shapely.prepare(region)
+        return regions
+
+    def __getstate__(self) -> dict:
+        """The road's fields alone: its regions are rebuilt where they are needed."""
+        return {key: value for key, value in self.__dict__.items() if key != "regions"}
 
 
 @dataclass(frozen=True)

@@ -30,13 +30,13 @@ def packed(tmp_path_factory):
     from rigopt.validation.detectors.config import model_config
     from rigopt.validation.detectors.data import RigSplit
     from rigopt.validation.detectors.training import train
-    from rigopt.validation.synthetic.generate import ego_mesh_lookup, generate_split
+    from rigopt.validation.synthetic.generate import ego_body_lookup, generate_split
     from rigopt.validation.synthetic.render import render_rig
     from rigopt.validation.synthetic.scenes import split_scenes
 
     base = tmp_path_factory.mktemp("shipped")
     data = base / "data"
-    generate_split([load_rig("R1")], split_scenes("test", 1, FRAMES), data, SIZE, render_rig, ego_mesh_lookup())
+    generate_split([load_rig("R1")], split_scenes("test", 1, FRAMES), data, SIZE, render_rig, ego_body_lookup())
     config = model_config("lss", "tiny", lr=1e-2, weight_decay=0.0, batch_size=FRAMES, epochs=60)
     runs = {seed: base / f"run{seed}" for seed in (0, 1)}
     for seed, folder in runs.items():
@@ -105,7 +105,7 @@ def test_scoring_the_seeds_in_two_processes_gives_what_one_gives(use_packed, tmp
 def test_a_rig_scores_as_the_data_path_scores_it(use_packed, tmp_path):
     """The cache path and ``--data``'s (render the rig beside the reference, evaluate the checkpoint) agree."""
     from rigopt.validation.detectors.protocol import evaluate_on_rigs
-    from rigopt.validation.synthetic.generate import ego_mesh_lookup, generate_split, split_layout
+    from rigopt.validation.synthetic.generate import ego_body_lookup, generate_split, split_layout
     from rigopt.validation.synthetic.render import render_rig
 
     data, _ = use_packed
@@ -115,7 +115,7 @@ def test_a_rig_scores_as_the_data_path_scores_it(use_packed, tmp_path):
     copy = tmp_path / "data"
     shutil.copytree(data / "R1", copy / "R1")
     scenes, size = split_layout(copy / "R1" / "test")
-    generate_split([rig], scenes, copy, size, render_rig, ego_mesh_lookup())
+    generate_split([rig], scenes, copy, size, render_rig, ego_body_lookup())
     for seed in (0, 1):
         metrics = evaluate_on_rigs(detector.checkpoint(seed), copy, ["R1", "R5"], family="lss")
         own, other = metrics["R1"]["mAP"], metrics["R5"]["mAP"]

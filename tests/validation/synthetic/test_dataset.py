@@ -23,7 +23,7 @@ class FakeRendered:
     object_id: np.ndarray
 
 
-def fake_render_rig(scene, k, rig, ego_mesh, size):
+def fake_render_rig(scene, k, rig, ego, size):
     w, h = size
     k_matrix = np.array([[w / 2, 0, w / 2], [0, w / 2, h / 2], [0, 0, 1.0]])
     return {c.id: FakeRendered(np.full((h, w, 3), 10 * k, np.uint8), np.full((h, w), np.inf, np.float32), k_matrix,
@@ -141,9 +141,9 @@ def test_a_rear_axle_rig_is_rendered_from_its_vehicle_centre(tmp_path, scene, al
     unknown = Rig("unknown", "lab_car", cameras, RigOrigin("rear_axle"))
     seen, notes = {}, []
 
-    def recording_render(scene, k, rig, ego_mesh, size):
+    def recording_render(scene, k, rig, ego, size):
         seen[rig.name] = rig
-        return fake_render_rig(scene, k, rig, ego_mesh, size)
+        return fake_render_rig(scene, k, rig, ego, size)
 
     generate_split([on_axle, unknown], [scene], tmp_path, (16, 9), recording_render, lambda r: None,
                    note=notes.append)

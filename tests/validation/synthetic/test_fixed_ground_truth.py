@@ -16,6 +16,7 @@ import pytest
 from rigopt.validation.synthetic.dataset import read_dataset
 from rigopt.validation.synthetic.evaluation import Detections, GroundTruth, SamplePrediction, evaluate
 from rigopt.validation.synthetic.generate import generate_split
+from rigopt.validation.synthetic.render import EgoBody
 from rigopt.errors import DataError
 from rigopt.rig.library import load_rig
 
@@ -39,7 +40,7 @@ def roots(tmp_path_factory):
     assert len(rigs[2]) == 3
     out = tmp_path_factory.mktemp("fixed_truth")
     found = generate_split(rigs, [generate_scene(11, "mini", n_frames=2)], out, SIZE, render_rig,
-                           lambda r: load_vehicle(r.vehicle).mesh)
+                           lambda r: EgoBody(load_vehicle(r.vehicle).mesh))
     return {rig.name: root for rig, root in zip(rigs, found)}
 
 

@@ -5,7 +5,7 @@ import pytest
 import trimesh
 
 from rigopt.validation.synthetic import render as render_module
-from rigopt.validation.synthetic.render import Rendered, render_camera, render_rig
+from rigopt.validation.synthetic.render import EgoBody, Rendered, render_camera, render_rig
 from rigopt.validation.synthetic.scene_model import Boxes, Frame, Road, Scene
 from rigopt.geometry import rot_y, rot_z
 from rigopt.rig.model import Camera, Rig
@@ -139,11 +139,16 @@ def test_screen_tiles_do_not_change_the_image(monkeypatch, yaw):
     np.testing.assert_array_equal(whole.depth, tiled.depth)
     assert (whole.object_id >= 0).any()
 
-def ego_box():
-    """A 2 x 2 x 2 m body: x, y in [-1, 1], z in [0, 2], ego frame."""
+def box_mesh():
+    """A 2 x 2 x 2 m box: x, y in [-1, 1], z in [0, 2], ego frame."""
     mesh = trimesh.creation.box((2.0, 2.0, 2.0))
     mesh.apply_translation((0.0, 0.0, 1.0))
     return mesh
+
+
+def ego_box():
+    """The box as the ego body."""
+    return EgoBody(box_mesh())
 
 
 def test_a_camera_looking_back_at_the_ego_body_sees_it_and_nothing_behind_it():
@@ -263,7 +268,7 @@ def test_render_rig_renders_every_camera():
 
 def test_full_resolution_renders_the_same_geometry():
     box = boxes([11.0, 0.5, 1.5], [2.0, 4.0, 2.0], instance=[42])
-    body = ego_box().apply_translation((-2.0, 0.0, 0.0))  # behind the lens, out of view
+    body = EgoBody(box_mesh().apply_translation((-2.0, 0.0, 0.0)))  # behind the lens, out of view
     out = render_camera(scene(box), 0, camera(), body, (1280, 720))
     assert out.rgb.shape == (720, 1280, 3)
     # f = 640: u in [480, 736], v in [296, 424] -> columns 480..735, rows 296..423.
@@ -332,3 +337,35 @@ def test_a_fisheye_rig_sees_a_box_beside_it_and_a_pinhole_does_not():
     fractions = [visible_fractions(beside, rig, np.eye(4), render_rig(the_scene, 0, rig, None, (W, H)))[0]
                  for rig in (fisheye, pinhole)]
     assert 0.2 < fractions[0] <= 1.0 and fractions[1] == 0.0
+
+
+def test_the_ego_body_casts_each_camera_once_and_pickles_as_its_mesh(monkeypatch):
+    """A body keeps each camera's view (the same arrays on the next frame), casts anew for another camera, and
+    crosses to a worker process as its mesh alone: the view cast there is the same."""
+    import pickle
+
+    calls = []
+    real = render_module._ego_hits
+    monkeypatch.setattr(render_module, "_ego_hits", lambda *args: calls.append(1) or real(*args))
+    s, body = city(), ego_box()
+    cam = camera((5.0, 0.0, 1.0), rot_z(np.pi - 0.5), fov=120.0)
+    first = render_camera(s, 0, cam, body, (W, H))
+    again = render_camera(s, 0, cam, body, (W, H))
+    assert len(calls) == 1
+    np.testing.assert_array_equal(first.depth, again.depth)
+    render_camera(s, 0, camera((5.0, 0.0, 1.0), rot_z(np.pi)), body, (W, H))
+    assert len(calls) == 2
+    copy = pickle.loads(pickle.dumps(body))
+    assert copy._views == {} and len(copy.mesh.faces) == len(body.mesh.faces)
+    np.testing.assert_array_equal(render_camera(s, 0, cam, copy, (W, H)).rgb, first.rgb)
+
+
+def test_a_road_builds_its_regions_once_and_pickles_without_them():
+    import pickle
+
+    road = city().road
+    assert road.regions is road.regions
+    copy = pickle.loads(pickle.dumps(road))
+    assert "regions" not in copy.__dict__ and (copy.kind, copy.marking_width) == (road.kind, road.marking_width)
+    assert np.array_equal(copy.markings, road.markings) and np.array_equal(copy.kerbs, road.kerbs)
+    assert [r is None for r in copy.regions] == [r is None for r in road.regions]
