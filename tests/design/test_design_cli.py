@@ -1,7 +1,8 @@
 """``rigopt design``: the JSON summary and the rig file of one real run (firetruck from R1, module-scoped),
 and bad input, which exits 2 with one ``rigopt: error:`` line and no traceback (run in-process through the
 console script's error handling; tests/cli/test_console_script.py checks that path in real processes). The real
-run is a whole design: its tests run with ``-m slow``.
+run is a whole design: its tests run with ``-m slow``; a small design on the tt (one lens, one pitch) checks the
+same keys and the rig file in the default run.
 """
 
 from __future__ import annotations
@@ -62,9 +63,21 @@ def bad_runs(tmp_path_factory):
 # --- the JSON summary ---------------------------------------------------------------------------------
 
 
-@pytest.mark.slow
-def test_json_has_the_documented_keys(design_run):
-    summary, _, _ = design_run
+#: A small design (the tt, one lens, one pitch, few yaws): the command end to end in the default run.
+SMALL = ["--vehicle", "tt", "--ref", "R1", "--fov", "120", "--pitch", "0", "--yaw-step", "30", "--cameras", "6"]
+
+
+@pytest.fixture(scope="module")
+def small_run(tmp_path_factory):
+    """``rigopt design SMALL --json --out OUT``, in-process: (summary, out folder)."""
+    out = tmp_path_factory.mktemp("design_cli_small") / "OUT"
+    outcome = run_rigopt("design", *SMALL, "--json", "--out", out)
+    assert outcome.returncode == 0, outcome.stderr
+    return json.loads(outcome.stdout), out
+
+
+def documented_keys(summary: dict) -> None:
+    """The keys docs/cli.md documents for ``design --json``, at every level."""
     assert {"rig_file", "predicted_drop", "rigcd", "n_cameras", "coverage", "reference_coverage", "solver",
             "comparisons"} <= summary.keys()
     assert {"milp_status", "milp_gap", "refine_status", "seconds"} <= summary["solver"].keys()
@@ -72,6 +85,20 @@ def test_json_has_the_documented_keys(design_run):
     assert {"predicted_drop", "coverage"} <= summary["comparisons"]["naive_transfer"].keys()
     assert {"name", "predicted_drop", "coverage"} <= summary["comparisons"]["benchmark_rig"].keys()
     assert {"interval", "linear_drop", "extrapolation", "fallback"} <= summary.keys()
+
+
+@pytest.mark.slow
+def test_json_has_the_documented_keys(design_run):
+    documented_keys(design_run[0])
+
+
+def test_a_small_design_has_the_documented_keys_and_its_rig_file(small_run):
+    summary, out = small_run
+    documented_keys(summary)
+    rig = load_rig(str(out / "rig.json"))
+    assert rig.vehicle == "vehicle.audi.tt" and len(rig.perception()) == 6  # the CARLA blueprint, as R1 names it
+    assert summary["solver"]["milp_status"] == "optimal" and summary["n_cameras"] == len(rig)
+    assert {p.name for p in out.iterdir()} >= {"rig.json", "report.json", "report.html"}
 
 
 @pytest.mark.slow
