@@ -21,7 +21,8 @@ import numpy as np
 from rigopt.validation.synthetic.evaluation import Detections, GroundTruth, _rank, match, resampled_maps
 from rigopt.validation.synthetic.scene_model import CLASSES
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "validation" / "synthetic"))  # the oracles live with the tests
+ORACLES = Path(__file__).resolve().parents[1] / "tests" / "validation" / "synthetic"  # the oracles live with the tests
+sys.path.insert(0, str(ORACLES))
 from evaluation_oracles import plain_match, plain_resampled_maps  # noqa: E402
 
 

@@ -9,6 +9,7 @@ import typer
 
 from rigopt.benchmark import SYNTHETIC_IMAGE_SIZE
 from rigopt.cli.app import PICTURE_SUFFIXES, app, console, print_next, status_console
+from rigopt.cli.parsing import image_size_text, parse_image_size
 from rigopt.errors import RigoptError
 
 #: Largest image side ``bench generate`` renders (px); larger sizes are refused with a memory estimate.
@@ -20,7 +21,6 @@ BYTES_PER_PIXEL = 64
 
 def render_size(text: str) -> tuple[int, int]:
     """``--size`` as (width, height), refused beyond MAX_SIDE with the memory one image would take."""
-    from rigopt.cli.parsing import parse_image_size
 
     width, height = parse_image_size(text, "--size")
     if max(width, height) > MAX_SIDE:
@@ -43,7 +43,8 @@ def generate_command(
     scenes: int = typer.Option(2, min=1, help="Number of scenes."),
     out: Path = typer.Option(..., "--out", help="Output folder: <out>/<rig>/<split>/ per rig (resumable: a rerun "
                                                 "renders only the scenes not finished)."),
-    size: str = typer.Option(f"{SYNTHETIC_IMAGE_SIZE[0]}x{SYNTHETIC_IMAGE_SIZE[1]}", help=f"Image size WIDTHxHEIGHT in pixels (at most {MAX_SIDE} a side)."),
+    size: str = typer.Option(image_size_text(SYNTHETIC_IMAGE_SIZE),
+                             help=f"Image size WIDTHxHEIGHT in pixels (at most {MAX_SIDE} a side)."),
     frames: int = typer.Option(40, min=1, help="Samples per scene (2 Hz)."),
     seed: int = typer.Option(0, min=0, help="Seed offset of the scenes (0 or more)."),
     ray: Optional[str] = typer.Option(None, "--ray", help="Render each (rig, scene) pair as a task on the Ray cluster "

@@ -11,7 +11,7 @@ import typer
 from rigopt.cli.app import (FORCE_HELP, MIN_HEIGHT_HELP, NO_TRAILER_HELP, app, finite, more_than, mount_rules, note,
                             note_fallback, print_json, print_next, print_table)
 from rigopt.cli.metric_commands import METRIC_HELP
-from rigopt.cli.parsing import parse_image_size
+from rigopt.cli.parsing import image_size_text, parse_image_size
 from rigopt.benchmark import BENCHMARK_IMAGE_SIZE
 from rigopt.design.defaults import DEFAULT_FOVS, DEFAULT_MAX_NODES, DEFAULT_PITCHES_DEG, DEFAULT_YAW_STEP_DEG, POSES
 from rigopt.errors import RigoptError
@@ -81,7 +81,7 @@ def design_command(
     fov: str = typer.Option(numbers_text(DEFAULT_FOVS), help="Lens catalogue: horizontal FOVs in degrees of "
                                                                 "pinholes at --image-size, or a continuous range "
                                                                 "such as 60-120."),
-    image_size: str = typer.Option(f"{BENCHMARK_IMAGE_SIZE[0]}x{BENCHMARK_IMAGE_SIZE[1]}", "--image-size",
+    image_size: str = typer.Option(image_size_text(BENCHMARK_IMAGE_SIZE), "--image-size",
                                    help="Image size WIDTHxHEIGHT (px) of the --fov pinholes."),
     cameras_file: Optional[Path] = typer.Option(None, "--cameras-file",
                                                 help="Camera catalogue file (TOML or JSON): real cameras with "

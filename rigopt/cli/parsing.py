@@ -30,6 +30,11 @@ def parse_image_size(text: str, option: str = "--image-size") -> tuple[int, int]
     return size
 
 
+def image_size_text(size: tuple[int, int]) -> str:
+    """(1600, 900) -> ``"1600x900"``, the form :func:`parse_image_size` reads."""
+    return f"{size[0]}x{size[1]}"
+
+
 def parse_origin_offset(text: str) -> tuple[float, float, float]:
     """``"-1.4,0,0.3"`` -> (-1.4, 0.0, 0.3) metres; raises RigoptError on anything but three finite numbers."""
     parts = text.split(",")

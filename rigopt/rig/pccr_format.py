@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import json
 import math
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -114,8 +115,7 @@ def _lens_from(entry: dict, size, fov: float, where: str) -> Lens | None:
                            "(from 'intrinsics' and 'distortion'); write the lens's FOV")
     if lens.is_ideal_pinhole:  # the benchmark's pinhole, of the file's fov
         return Lens.pinhole(fov, lens.image_size)
-    return Lens(*lens.image_size, lens.fx, lens.fy, lens.cx, lens.cy, lens.distortion, lens.coefficients,
-                stated_hfov=fov)
+    return replace(lens, stated_hfov=fov)
 
 
 def _origin_from(value, source: str) -> RigOrigin:

@@ -20,6 +20,7 @@ the ego vehicle; a vertical sky gradient; mild distance fog.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 import shapely
@@ -280,8 +281,12 @@ class EgoBody:
 
     def __init__(self, mesh: trimesh.Trimesh):
         self.mesh = mesh
-        self._caster: RayCaster | None = None
         self._views: dict[tuple, tuple[np.ndarray, np.ndarray]] = {}
+
+    @cached_property
+    def caster(self) -> RayCaster:
+        """The body's ray caster, built on the first view cast."""
+        return RayCaster(self.mesh)
 
     def __getstate__(self) -> dict:
         return {"mesh": self.mesh}
@@ -297,9 +302,7 @@ class EgoBody:
                str(model.distortion), np.asarray(model.coefficients).tobytes(), float(model.width),
                float(model.height))
         if key not in self._views:
-            if self._caster is None:
-                self._caster = RayCaster(self.mesh)
-            self._views[key] = _ego_hits(self._caster, camera.position, body @ camera.rotation.T,
+            self._views[key] = _ego_hits(self.caster, camera.position, body @ camera.rotation.T,
                                          np.full(len(body), np.inf))
         return self._views[key]
 
