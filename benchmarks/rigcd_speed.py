@@ -2,9 +2,9 @@
 
 Prints the time of each implementation, its ratio to the batched call, and its largest disagreement with it.
 Every implementation starts from the same Rig objects, whose cached arrays (positions, rotations, FOVs and
-the column form batched metrics stack) are built once before any timing; that one-off cost is printed too.
+the column bytes batched metrics join) are built once before any timing; that one-off cost is printed too.
   batched           rigopt.metrics.rigcd.rigcd_pairs(rigs_a, rigs_b): the whole call on lists of Rig
-  core on arrays    rigcd_pairs on two RigBatch built beforehand from concatenated (8, C) camera columns
+  core on arrays    rigcd_pairs on two RigBatch built beforehand (the (C, 8) camera rows of each side)
   naive (floats)    the tests' oracle oracles.metrics.rigcd_reference per pair: Python loops over camera pairs
                     on Python floats, arccos of the trace, scipy's linear_sum_assignment, the means, the count
   naive (numpy)     the same definition per pair with one numpy call per camera pair (norm, Ra^T Rb, trace,
@@ -73,11 +73,10 @@ def main() -> None:
     rigs_b = [random_rig(rng, f"B{k}") for k in range(args.pairs)]
 
     # Rig arrays are built once on first access and cached; time that once, outside every comparison.
-    _, t_arrays = timed(lambda: [(r.positions, r.rotations, r.fovs, r.columns) for r in rigs_a + rigs_b])
+    _, t_arrays = timed(lambda: [(r.positions, r.rotations, r.fovs, r.column_bytes) for r in rigs_a + rigs_b])
     runs = [timed(lambda: rigcd_pairs(rigs_a, rigs_b).rigcd) for _ in range(args.repeats)]
     batched, t_batched = runs[0][0], float(np.median([seconds for _, seconds in runs]))
-    arrays = [RigBatch(np.concatenate([r.columns for r in rigs], axis=1), [len(r) for r in rigs])
-              for rigs in (rigs_a, rigs_b)]
+    arrays = [RigBatch.from_rigs(rigs) for rigs in (rigs_a, rigs_b)]
     core_runs = [timed(lambda: rigcd_pairs(*arrays).rigcd) for _ in range(args.repeats)]
     core, t_core = core_runs[0][0], float(np.median([seconds for _, seconds in core_runs]))
     floats, t_floats = timed(lambda: np.array([rigcd_reference(a, b)["rigcd"] for a, b in zip(rigs_a, rigs_b)]))

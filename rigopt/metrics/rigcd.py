@@ -13,33 +13,29 @@ function the designer's MILP uses. Rotations are compared through unit quaternio
 (:func:`rigopt.geometry.quaternion_angle`): the same geodesic angle as the definition's arccos of a trace,
 but exact near 0 and pi, so RigCD(A, A) is exactly 0.
 
-Speed (``benchmarks/rigcd_speed.py``): pairs are grouped by camera counts and each group (in chunks of at most
-CHUNK pairs) is gathered straight from the rigs' cached column blocks into one (8, N, G) array; its costs are
-one array expression per component over (N_A, N_B, G), written into reused buffers (:func:`group_costs`, the
-same operations as :func:`column_costs`, so the same bits); only the exact assignment runs per pair. The
-assignment is scipy's ``linear_sum_assignment`` on the wide orientation of each cost matrix (what scipy
-itself solves for a tall one), so every pairing, ties included, is scipy's. A lockstep
-shortest-augmenting-path solver over all pairs at once in numpy reproduced scipy's pairings bit for bit but
-took about 5x the per-pair loop's time (about 15 augmenting steps per 6-10-camera pair, each a dozen array
-operations; docs/benchmarks.md), so the per-pair solve stays.
+Speed (``benchmarks/rigcd_speed.py``): pairs are grouped by camera counts, and each group (in chunks of at
+most CHUNK pairs) gets its distances and exact matchings from compiled loops over the pairs
+(:mod:`rigopt.metrics.pair_kernels`): the same operations as :func:`column_costs`, so the same bits, and
+scipy's ``linear_sum_assignment`` pairing, ties included. scipy's assignment called once per pair took about
+as long as all the rest; a lockstep shortest-augmenting-path solver over all pairs at once in numpy
+reproduced its pairings but took about 5x longer (docs/benchmarks.md).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from operator import attrgetter, itemgetter
+from operator import attrgetter
 from typing import Sequence
 
 import numpy as np
-from scipy.optimize import linear_sum_assignment
 
 from rigopt.errors import RigoptError
 from rigopt.geometry import quaternion_angle, sum_of_squares
+from rigopt.metrics.pair_kernels import assign_pairs, pair_distances
 from rigopt.rig.model import FOV, POSITION, QUATERNION, Rig, camera_columns
 
 DEFAULT_ALPHA = 0.9
 DEFAULT_LAMBDAS = (1.0, 1.0, 1.0)
-_SECOND = itemgetter(1)  # the column indices of linear_sum_assignment's (rows, cols)
 
 
 def camera_costs(positions_a, rotations_a, fovs_a, positions_b, rotations_b, fovs_b):
@@ -125,54 +121,39 @@ class RigCDBreakdown:
 
 
 class RigBatch:
-    """Many rigs as one array of camera columns, the input of the batched metric core.
+    """Many rigs as one array of cameras, the input of the batched metric core.
 
-    columns : (8, C) float, the C cameras of all rigs as :func:`rigopt.rig.model.camera_columns` (position m,
-    unit quaternion, FOV deg); counts : (n,) int cameras per rig, each >= 1; rig k owns columns
-    ``offsets[k] : offsets[k] + counts[k]``. A batch built by :meth:`from_rigs` keeps the rigs' own (8, N_k)
-    blocks and concatenates them only when ``columns`` is read: the core gathers each camera-count group
-    straight from the blocks.
+    cameras : (C, 8) float, the C cameras of all rigs, rig after rig, each row the camera's
+    :func:`rigopt.rig.model.camera_columns` (position m, unit quaternion, FOV deg); counts : (n,) int cameras
+    per rig, each >= 1; rig k owns rows ``offsets[k] : offsets[k] + counts[k]``.
     """
 
-    def __init__(self, columns, counts):
+    def __init__(self, cameras, counts):
         self.counts = np.asarray(counts, dtype=int)
         if self.counts.ndim != 1 or len(self.counts) == 0 or np.any(self.counts < 1):
             raise RigoptError("a rig batch needs at least one rig and at least one camera per rig")
         self.offsets = np.cumsum(self.counts) - self.counts
-        self._blocks = None
-        self._columns = np.ascontiguousarray(columns, dtype=float)
-        if self._columns.shape != (8, int(self.counts.sum())):
-            raise RigoptError(f"rig batch columns must be (8, {int(self.counts.sum())}), got {self._columns.shape}")
+        self.cameras = np.ascontiguousarray(cameras, dtype=float)
+        if self.cameras.shape != (int(self.counts.sum()), 8):
+            raise RigoptError(f"rig batch cameras must be ({int(self.counts.sum())}, 8), got {self.cameras.shape}")
 
     @classmethod
     def from_rigs(cls, rigs: Sequence[Rig]) -> "RigBatch":
-        """The batch of ``rigs``, in order (each rig's columns are built once and cached on the rig)."""
+        """The batch of ``rigs``, in order: their cached :attr:`Rig.column_bytes` joined in one copy."""
         if len(rigs) == 0:
             raise RigoptError("no rigs given; pass at least one rig")
-        batch = cls.__new__(cls)  # the blocks are the rigs' own checked columns: nothing to validate or copy
-        batch._blocks = list(map(attrgetter("columns"), rigs))
-        batch._columns = None
-        batch.counts = np.fromiter(map(len, map(attrgetter("cameras"), rigs)), dtype=int, count=len(rigs))
+        blocks = list(map(attrgetter("column_bytes"), rigs))
+        batch = cls.__new__(cls)  # the blocks are the rigs' own checked columns: nothing to validate
+        batch.cameras = np.frombuffer(b"".join(blocks), dtype=float).reshape(-1, 8)
+        batch.counts = np.fromiter(map(len, blocks), dtype=int, count=len(blocks)) // _CAMERA_BYTES
         batch.offsets = np.cumsum(batch.counts) - batch.counts
         return batch
-
-    @property
-    def columns(self) -> np.ndarray:
-        """(8, C) float: every camera of the batch, rig after rig."""
-        if self._columns is None:
-            self._columns = np.concatenate(self._blocks, axis=1)
-        return self._columns
 
     def __len__(self) -> int:
         return len(self.counts)
 
-    def gather(self, index: np.ndarray, n: int) -> np.ndarray:
-        """Columns of the cameras of rigs ``index`` (G,), all with ``n`` cameras: (8, n, G) float, contiguous,
-        the rigs on the last axis (long, contiguous inner loops for the pairwise costs)."""
-        if self._blocks is not None:
-            stacked = np.array(list(map(self._blocks.__getitem__, index.tolist())))  # (G, 8, n)
-            return np.ascontiguousarray(stacked.transpose(1, 2, 0))
-        return self.columns[:, self.offsets[index] + np.arange(n)[:, None]]
+
+_CAMERA_BYTES = 8 * np.dtype(float).itemsize  # one camera's row of a RigBatch
 
 
 def _as_batch(rigs) -> RigBatch:
@@ -197,64 +178,7 @@ def check_same_origin(*groups) -> None:
                           "(rigopt.vehicle.placement.common_frame, or --vehicle on the command line)")
 
 
-def _sum_of_squares_into(out, square, combine, a, b):
-    """out = sum_k combine(a[k], b[k]) ** 2, added in index order as :func:`rigopt.geometry.sum_of_squares`
-    (so the same bits); a, b : (k, ...) broadcastable float; out, square : buffers of the broadcast shape."""
-    combine(a[0], b[0], out=out)
-    np.multiply(out, out, out=out)
-    for k in range(1, len(a)):
-        combine(a[k], b[k], out=square)
-        np.multiply(square, square, out=square)
-        out += square
-    return out
-
-
-def group_costs(a, b, lambdas):
-    """Costs of every camera of each rig of a group against every camera of its partner.
-
-    a : (8, Na, G), b : (8, Nb, G) float camera columns (:meth:`RigBatch.gather`); lambdas (lt, lr, lf).
-    Returns (t m, r rad, f deg, cost), each (Na, Nb, G) float, ``cost = lt t + lr r + lf f``: the same
-    operations as :func:`column_costs` and :func:`rigopt.geometry.quaternion_angle`, element by element, so
-    the same bits, computed into buffers one component at a time (no (4, Na, Nb, G) temporaries).
-    """
-    lt, lr, lf = lambdas
-    a, b = a[:, :, None, :], b[:, None, :, :]
-    shape = (a.shape[1], b.shape[2], a.shape[3])
-    t, r, f, cost, work, square = (np.empty(shape) for _ in range(6))
-    np.sqrt(_sum_of_squares_into(t, square, np.subtract, a[POSITION], b[POSITION]), out=t)
-    d2 = _sum_of_squares_into(cost, square, np.subtract, a[QUATERNION], b[QUATERNION])
-    s2 = _sum_of_squares_into(f, square, np.add, a[QUATERNION], b[QUATERNION])
-    np.sqrt(np.minimum(d2, s2, out=work), out=work)
-    np.sqrt(np.maximum(d2, s2, out=square), out=square)
-    np.multiply(np.arctan2(work, square, out=r), 4.0, out=r)
-    np.abs(np.subtract(a[FOV], b[FOV], out=f), out=f)
-    # lt t + lr r + lf f, added in that order; x 1 is exact, so the default weights skip the products
-    np.add(t if lt == 1.0 else np.multiply(t, lt, out=cost), r if lr == 1.0 else np.multiply(r, lr, out=work),
-           out=cost)
-    cost += f if lf == 1.0 else np.multiply(f, lf, out=work)
-    return t, r, f, cost
-
-
-def assign_group(cost):
-    """Minimum-cost matchings of a group: scipy's ``linear_sum_assignment`` per pair, exactly as one call on
-    each (Na, Nb) matrix would answer.
-
-    cost : (Na, Nb, G) float. Returns (rows, cols), each (G, M) int with M = min(Na, Nb): camera indices in A
-    and in B of the matched pairs, sorted by the A index (scipy's order). A tall matrix (Na > Nb) is solved
-    as its transpose, which is what scipy does inside, and the pairs are then sorted by A as scipy sorts them.
-    """
-    na, nb, g = cost.shape
-    if na <= nb:
-        wide = np.ascontiguousarray(cost.transpose(2, 0, 1))  # (G, Na, Nb)
-        cols = np.concatenate(list(map(_SECOND, map(linear_sum_assignment, wide)))).reshape(g, na)
-        return np.tile(np.arange(na), (g, 1)), cols
-    wide = np.ascontiguousarray(cost.transpose(2, 1, 0))  # (G, Nb, Na): B's cameras as rows
-    matched_a = np.concatenate(list(map(_SECOND, map(linear_sum_assignment, wide)))).reshape(g, nb)
-    cols = np.argsort(matched_a, axis=1)
-    return np.take_along_axis(matched_a, cols, axis=1), cols
-
-
-#: Most pairs whose costs are computed in one step (their buffers, 6 x N_A x N_B x this many floats, stay in cache).
+#: Most pairs whose distances are computed in one step (their arrays, 4 x N_A x N_B x this many floats, stay in cache).
 CHUNK = 512
 
 
@@ -270,10 +194,10 @@ def match_pairs(pack_a: RigBatch, index_a, pack_b: RigBatch, index_b, alpha: flo
     """RigCD of the pairs (pack_a[index_a[p]], pack_b[index_b[p]]); index_* : (P,) int; alpha and lambdas
     as checked by :func:`check_weights` (the matching minimises the cost with these lambdas).
 
-    Pairs are grouped by camera counts so that cost tensors are built in one vectorised step per group
-    and only the small assignment solves run per pair. Returns (values, assignments): values a dict of (P,)
-    float arrays keyed rigcd, match, count, t, r, f; assignments, with ``keep_assignment``, a list of
-    (rows (M,), cols (M,)) int camera indices per pair, else None.
+    Pairs are grouped by camera counts, and each group (in chunks of at most CHUNK pairs) gets its distances
+    and matchings from the compiled loops of :mod:`rigopt.metrics.pair_kernels`. Returns (values,
+    assignments): values a dict of (P,) float arrays keyed rigcd, match, count, t, r, f; assignments, with
+    ``keep_assignment``, a list of (rows (M,), cols (M,)) int camera indices per pair, else None.
     """
     lt, lr, lf = lambdas
     index_a, index_b = np.asarray(index_a), np.asarray(index_b)
@@ -285,13 +209,15 @@ def match_pairs(pack_a: RigBatch, index_a, pack_b: RigBatch, index_b, alpha: flo
     order = np.argsort(key, kind="stable")
     starts = np.flatnonzero(np.r_[True, np.diff(key[order]) != 0])
     ends = np.r_[starts[1:], len(order)]
-    # Groups of one (N_A, N_B), cut into chunks whose buffers stay in cache (and memory bounded).
+    # Groups of one (N_A, N_B), cut into chunks whose arrays stay in cache (and memory bounded).
     chunks = [order[s:e] for start, end in zip(starts, ends) for s, e in _chunk_bounds(start, end)]
+    buffer = np.empty((4, max(map(len, chunks)) * int(na_all.max()) * int(nb_all.max())))  # reused by each chunk
     for group in chunks:
         na, nb = int(na_all[group[0]]), int(nb_all[group[0]])
-        t, r, f, cost = group_costs(pack_a.gather(index_a[group], na), pack_b.gather(index_b[group], nb), lambdas)
-        rows, cols = assign_group(cost)  # each (G, M)
-        flat = (rows * nb + cols) * len(group) + np.arange(len(group))[:, None]  # into (Na, Nb, G)
+        t, r, f = pair_distances(pack_a.cameras, pack_a.offsets[index_a[group]], na,
+                                 pack_b.cameras, pack_b.offsets[index_b[group]], nb, buffer)  # each (G, Na, Nb)
+        rows, cols = assign_pairs(t, r, f, lambdas)  # each (G, M)
+        flat = (np.arange(len(group))[:, None] * na + rows) * nb + cols
         for key, values in (("t", t), ("r", r), ("f", f)):
             out[key][group] = values.ravel().take(flat).mean(axis=1)
         if keep_assignment:

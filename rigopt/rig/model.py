@@ -299,10 +299,11 @@ class Rig:
         return _read_only(np.array([c.fov for c in self.cameras]))
 
     @cached_property
-    def columns(self) -> np.ndarray:
-        """(8, N) float: the cameras as :func:`camera_columns` (position, unit quaternion, FOV), built once;
-        batched metrics concatenate these blocks."""
-        return _read_only(np.ascontiguousarray(camera_columns(self.positions, self.rotations, self.fovs)))
+    def column_bytes(self) -> bytes:
+        """The cameras as :func:`camera_columns` (position, unit quaternion, FOV), camera after camera: the bytes
+        of an (N, 8) float64 array, built once. Batches of many rigs join these in one copy
+        (:class:`rigopt.metrics.rigcd.RigBatch`)."""
+        return np.ascontiguousarray(camera_columns(self.positions, self.rotations, self.fovs).T).tobytes()
 
     @property
     def near_field_count(self) -> int:

@@ -1,7 +1,7 @@
 """rigopt.metrics.rigcd's batched core: the costs of a group, the per-pair assignment and its bookkeeping.
 
 The batched core must answer every pair exactly as one pair at a time would: the same costs to the bit
-(``group_costs`` against ``column_costs``), a matching of minimum cost (against brute force over every
+(the compiled ``pair_distances`` against ``column_costs``), a matching of minimum cost (against brute force over every
 injective assignment), scipy's pairing even where matchings tie (tie-heavy rigs: two positions, two
 headings, two FOVs) and whichever rig has more cameras, and values that do not depend on how the pairs are
 grouped or chunked.
@@ -16,9 +16,10 @@ import pytest
 from scipy.optimize import linear_sum_assignment
 
 import rigopt.metrics.rigcd as rigcd_module
-from rigopt.metrics.rigcd import RigBatch, camera_costs, column_costs, group_costs, match_pairs, rigcd, rigcd_pairs
+from rigopt.metrics.pair_kernels import pair_distances
+from rigopt.metrics.rigcd import RigBatch, camera_costs, column_costs, match_pairs, rigcd, rigcd_pairs
 from rigopt.rig.library import library_rig, rig_names
-from rigopt.rig.model import Camera, Rig
+from rigopt.rig.model import Camera, Rig, camera_columns
 
 COMPONENTS = ("rigcd", "match", "count", "t", "r", "f")
 HALF_TURNS = [np.eye(3), np.diag([-1.0, -1.0, 1.0])]  # about z: 0 and pi
@@ -61,18 +62,27 @@ def _brute_force_minimum(cost):
     return min(cost[rows, list(cols)].sum() for cols in itertools.permutations(range(cost.shape[1]), len(rows)))
 
 
-@pytest.mark.parametrize("lambdas", [(1.0, 1.0, 1.0), (0.3, 2.0, 0.05), (0.0, 1.0, 0.0)])
-def test_group_costs_are_column_costs_to_the_bit(lambdas):
+def test_pair_distances_are_column_costs_to_the_bit():
     rng = np.random.default_rng(3)
     rigs_a = [_random_rig(rng, 4, f"a{k}") for k in range(7)]
-    rigs_b = [_random_rig(rng, 6, f"b{k}") for k in range(7)]
-    a = RigBatch.from_rigs(rigs_a).gather(np.arange(7), 4)  # (8, 4, 7)
-    b = RigBatch.from_rigs(rigs_b).gather(np.arange(7), 6)  # (8, 6, 7)
-    t, r, f, cost = group_costs(a, b, lambdas)
-    assert t.shape == r.shape == f.shape == cost.shape == (4, 6, 7)
-    t0, r0, f0 = column_costs(a[:, :, None, :], b[:, None, :, :])
-    for got, expected in ((t, t0), (r, r0), (f, f0), (cost, lambdas[0] * t0 + lambdas[1] * r0 + lambdas[2] * f0)):
-        np.testing.assert_array_equal(got, expected)
+    rigs_b = [_random_rig(rng, 6, f"b{k}") for k in range(7)] + [_tie_rig(rng, 6, f"t{k}") for k in range(7)]
+    rigs_a += rigs_a  # against random rigs and against tie-heavy ones
+    pack_a, pack_b = RigBatch.from_rigs(rigs_a), RigBatch.from_rigs(rigs_b)
+    t, r, f = pair_distances(pack_a.cameras, pack_a.offsets, 4, pack_b.cameras, pack_b.offsets, 6)
+    assert t.shape == r.shape == f.shape == (14, 4, 6)
+    for p, (a, b) in enumerate(zip(rigs_a, rigs_b)):
+        expected = camera_costs(a.positions, a.rotations, a.fovs, b.positions, b.rotations, b.fovs)
+        for got, want in zip((t[p], r[p], f[p]), expected):
+            np.testing.assert_array_equal(got, want)
+
+
+def test_pair_distances_of_a_rig_against_itself_are_exactly_zero_on_the_diagonal():
+    rng = np.random.default_rng(4)
+    pack = RigBatch.from_rigs([_random_rig(rng, 5, f"a{k}") for k in range(3)])
+    t, r, f = pair_distances(pack.cameras, pack.offsets, 5, pack.cameras, pack.offsets, 5)
+    for part in (t, r, f):
+        assert np.all(np.diagonal(part, axis1=1, axis2=2) == 0.0)
+        assert np.all(part[:, ~np.eye(5, dtype=bool)] > 0.0)
 
 
 @pytest.mark.parametrize("seed", range(4))
@@ -136,9 +146,9 @@ def test_batch_of_arrays_equals_batch_of_rigs_exactly():
     rng = np.random.default_rng(6)
     rigs_a = [_random_rig(rng, int(rng.integers(1, 6)), f"a{k}") for k in range(30)]
     rigs_b = [_random_rig(rng, int(rng.integers(1, 6)), f"b{k}") for k in range(30)]
-    arrays = [RigBatch(np.concatenate([r.columns for r in rigs], axis=1), [len(r) for r in rigs])
-              for rigs in (rigs_a, rigs_b)]
-    np.testing.assert_array_equal(RigBatch.from_rigs(rigs_a).columns, arrays[0].columns)
+    arrays = [RigBatch(np.concatenate([camera_columns(r.positions, r.rotations, r.fovs).T for r in rigs]),
+                       [len(r) for r in rigs]) for rigs in (rigs_a, rigs_b)]
+    np.testing.assert_array_equal(RigBatch.from_rigs(rigs_a).cameras, arrays[0].cameras)
     index = rng.permutation(30)
     from_rigs, _ = match_pairs(RigBatch.from_rigs(rigs_a), index, RigBatch.from_rigs(rigs_b), index[::-1],
                                0.9, (1.0, 1.0, 1.0))
