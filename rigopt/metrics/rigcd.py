@@ -133,9 +133,10 @@ class RigBatch:
         if self.counts.ndim != 1 or len(self.counts) == 0 or np.any(self.counts < 1):
             raise RigoptError("a rig batch needs at least one rig and at least one camera per rig")
         self.offsets = np.cumsum(self.counts) - self.counts
-        self.cameras = np.ascontiguousarray(cameras, dtype=float)
+        self.cameras = np.array(cameras, dtype=float, order="C")  # a read-only copy, as a batch of rigs holds
         if self.cameras.shape != (int(self.counts.sum()), 8):
             raise RigoptError(f"rig batch cameras must be ({int(self.counts.sum())}, 8), got {self.cameras.shape}")
+        self.cameras.flags.writeable = False
 
     @classmethod
     def from_rigs(cls, rigs: Sequence[Rig]) -> "RigBatch":

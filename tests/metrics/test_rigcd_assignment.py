@@ -149,6 +149,9 @@ def test_batch_of_arrays_equals_batch_of_rigs_exactly():
     arrays = [RigBatch(np.concatenate([camera_columns(r.positions, r.rotations, r.fovs).T for r in rigs]),
                        [len(r) for r in rigs]) for rigs in (rigs_a, rigs_b)]
     np.testing.assert_array_equal(RigBatch.from_rigs(rigs_a).cameras, arrays[0].cameras)
+    for batch in (RigBatch.from_rigs(rigs_a), arrays[0]):  # read-only, whichever way it was built
+        with pytest.raises(ValueError, match="read-only"):
+            batch.cameras[0, 0] = 1.0
     index = rng.permutation(30)
     from_rigs, _ = match_pairs(RigBatch.from_rigs(rigs_a), index, RigBatch.from_rigs(rigs_b), index[::-1],
                                0.9, (1.0, 1.0, 1.0))
