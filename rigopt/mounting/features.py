@@ -35,6 +35,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from rigopt.mounting.shapes import surface_frame
 from rigopt.vehicle.model import Vehicle
 from rigopt.vehicle.spec import HINGE_EDGES
 
@@ -192,8 +193,6 @@ def width_protrusion(vehicle: Vehicle, points, normals, zones, housing, exempt=(
     surface of outward ``normals`` (n, 3)) sticks out beyond its side's limit (:func:`width_limits`): (n,) m,
     0 where it does not (by more than WIDTH_TOLERANCE_M) or where its foot's zone (``zones`` (n,)) is one of
     ``exempt``; and that limit (n,) m. Whether a protrusion is allowed is the practice's ``width_allowance``."""
-    from rigopt.mounting.shapes import surface_frame
-
     points, normals = np.atleast_2d(points), np.atleast_2d(normals)
     half = np.asarray(housing, dtype=float) / 2.0
     reach = np.array([np.abs(surface_frame(n, np.array([1.0, 0.0, 0.0]))[1]) @ half for n in normals])

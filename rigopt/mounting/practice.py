@@ -28,6 +28,7 @@ import numpy as np
 
 from rigopt.mounting import features
 from rigopt.rig.model import Rig
+from rigopt.vehicle.arches import wheel_name
 from rigopt.vehicle.model import SurfaceQuery, Vehicle
 
 #: The lowest lens height (m) when neither the rules nor the vehicle say otherwise.
@@ -87,8 +88,6 @@ class MountPractice:
 
 def on_wheels(vehicle: Vehicle, points, clearance: float) -> list[list[str]]:
     """For each point (n, 3) m: the wheels ('front-left wheel', ...) whose keep-out it is in."""
-    from rigopt.vehicle.arches import wheel_name
-
     points = np.atleast_2d(np.asarray(points, dtype=float))
     found: list[list[str]] = [[] for _ in range(len(points))]
     for centre, radius, width in vehicle.wheels:

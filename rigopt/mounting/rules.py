@@ -39,7 +39,7 @@ import numpy as np
 
 from rigopt.mounting.features import trailer_swings
 from rigopt.mounting.practice import DEFAULT_HOUSING, MountPractice, duplicates, keep_out_boxes, practice_problems
-from rigopt.mounting.shapes import collides, frustum_object, housing_object, surface_frame
+from rigopt.mounting.shapes import box_object, collides, frustum_object, housing_object, post_object, swing_object
 from rigopt.rig.model import Camera, Rig
 from rigopt.vehicle.model import Vehicle, Zone
 
@@ -116,38 +116,6 @@ def raised_mounts(vehicle: Vehicle, positions) -> list[RaisedMount | None]:
             if found[k] is None and zone.contains(hits.location[k], normals[k])[0]:
                 found[k] = RaisedMount(zone, hits.location[k], zone.normal, float(hits.distance[k]))
     return found
-
-
-def post_object(mount: RaisedMount, forward, rules: MountRules = MountRules()):
-    """fcl box of a raised camera's post: the housing's footprint from the foot to the housing's back face;
-    None when the housing sits on the surface."""
-    import fcl
-
-    w, h, d = rules.housing
-    length = mount.height - d / 2.0
-    if length <= 1e-3:
-        return None
-    frame = surface_frame(mount.axis, np.asarray(forward, float))
-    return fcl.CollisionObject(fcl.Box(w, h, length), fcl.Transform(frame, mount.foot + mount.axis * length / 2.0))
-
-
-def box_object(low, high):
-    """An fcl box filling [low, high] (3,) m."""
-    from rigopt.mounting.shapes import _fcl
-
-    fcl = _fcl()
-    low, high = np.asarray(low, dtype=float), np.asarray(high, dtype=float)
-    return fcl.CollisionObject(fcl.Box(*(high - low)), fcl.Transform(np.eye(3), (low + high) / 2.0))
-
-
-def swing_object(swing):
-    """An fcl cylinder filling a trailer's swing (:class:`rigopt.mounting.features.TrailerSwing`)."""
-    from rigopt.mounting.shapes import _fcl
-
-    fcl = _fcl()
-    length = swing.top - swing.kingpin[2]
-    centre = np.array([swing.kingpin[0], swing.kingpin[1], swing.kingpin[2] + length / 2.0])
-    return fcl.CollisionObject(fcl.Cylinder(swing.radius, length), fcl.Transform(np.eye(3), centre))
 
 
 def check_rig(rig: Rig, vehicle: Vehicle, rules: MountRules = MountRules()) -> RigCheck:

@@ -12,7 +12,8 @@ import trimesh
 
 from rigopt.errors import RigoptError
 from rigopt.mounting.practice import practical
-from rigopt.mounting.rules import MountRules, housing_fits
+from rigopt.mounting.rules import MountRules, housing_fits, raised_mounts
+from rigopt.mounting.shapes import collides, housing_object
 from rigopt.quiet import quiet_trimesh
 from rigopt.vehicle.model import Vehicle
 from rigopt.vehicle.symmetry import mirror_points
@@ -202,9 +203,6 @@ def _raised_points(vehicle: Vehicle, zone_name: str, spacing: float, seed: int, 
 def _raised_ok(vehicle: Vehicle, points, names, axes, surface, rules: MountRules) -> np.ndarray:
     """(n,) bool: raised lens positions that the mount checks will put on a post of their own zone, with the
     housing clear of the body."""
-    from rigopt.mounting.rules import raised_mounts
-    from rigopt.mounting.shapes import collides, housing_object
-
     ok = np.zeros(len(points), dtype=bool)
     body = vehicle.collision_object
     far = surface.distance > rules.max_distance

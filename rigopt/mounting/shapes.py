@@ -1,5 +1,6 @@
-"""The solids the mount rules collide, as python-fcl objects: the body, a camera housing on the surface, and the
-near view frustum (its shape from the camera model, :class:`rigopt.camera.CameraModel`).
+"""The solids the mount rules collide, as python-fcl objects: the body, a camera housing on the surface, a raised
+camera's post, the near view frustum (its shape from the camera model, :class:`rigopt.camera.CameraModel`), the
+keep-out boxes and a trailer's swing.
 
 Frames and units: vehicle frame (ISO 8855), metres. python-fcl is imported on first use.
 """
@@ -14,7 +15,7 @@ from rigopt.camera import CameraModel
 from rigopt.rig.model import Camera
 
 if TYPE_CHECKING:
-    from rigopt.mounting.rules import MountRules
+    from rigopt.mounting.rules import MountRules, RaisedMount
 
 
 def _fcl():
@@ -78,3 +79,30 @@ def collides(a, b) -> bool:
     """True when the fcl objects ``a`` and ``b`` intersect."""
     fcl = _fcl()
     return fcl.collide(a, b, fcl.CollisionRequest(), fcl.CollisionResult()) > 0
+
+
+def box_object(low, high):
+    """An fcl box filling [low, high] (3,) m."""
+    fcl = _fcl()
+    low, high = np.asarray(low, dtype=float), np.asarray(high, dtype=float)
+    return fcl.CollisionObject(fcl.Box(*(high - low)), fcl.Transform(np.eye(3), (low + high) / 2.0))
+
+
+def swing_object(swing):
+    """An fcl cylinder filling a trailer's swing (:class:`rigopt.mounting.features.TrailerSwing`)."""
+    fcl = _fcl()
+    length = swing.top - swing.kingpin[2]
+    centre = np.array([swing.kingpin[0], swing.kingpin[1], swing.kingpin[2] + length / 2.0])
+    return fcl.CollisionObject(fcl.Cylinder(swing.radius, length), fcl.Transform(np.eye(3), centre))
+
+
+def post_object(mount: RaisedMount, forward, rules: MountRules):
+    """fcl box of a raised camera's post: the housing's footprint from the foot to the housing's back face;
+    None when the housing sits on the surface."""
+    fcl = _fcl()
+    w, h, d = rules.housing
+    length = mount.height - d / 2.0
+    if length <= 1e-3:
+        return None
+    frame = surface_frame(mount.axis, np.asarray(forward, float))
+    return fcl.CollisionObject(fcl.Box(w, h, length), fcl.Transform(frame, mount.foot + mount.axis * length / 2.0))
