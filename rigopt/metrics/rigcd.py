@@ -14,7 +14,7 @@ function the designer's MILP uses. Rotations are compared through unit quaternio
 but exact near 0 and pi, so RigCD(A, A) is exactly 0.
 
 Speed (``benchmarks/rigcd_speed.py``): pairs are grouped by camera counts, and each group (in chunks of at
-most CHUNK pairs) gets its distances and exact matchings from compiled loops over the pairs
+most CHUNK_CAMERA_PAIRS camera pairs) gets its distances and exact matchings from compiled loops over the pairs
 (:mod:`rigopt.metrics.pair_kernels`): the same operations as :func:`column_costs`, so the same bits, and
 scipy's ``linear_sum_assignment`` pairing, ties included. scipy's assignment called once per pair took about
 as long as all the rest; a lockstep shortest-augmenting-path solver over all pairs at once in numpy
@@ -179,13 +179,16 @@ def check_same_origin(*groups) -> None:
                           "(rigopt.vehicle.placement.common_frame, or --vehicle on the command line)")
 
 
-#: Most pairs whose distances are computed in one step (their arrays, 4 x N_A x N_B x this many floats, stay in cache).
-CHUNK = 512
+#: Most camera pairs whose distances are computed in one step: a chunk's four (G, N_A, N_B) arrays stay in cache
+#: (1 MiB) and memory stays bounded whatever the rigs' sizes.
+CHUNK_CAMERA_PAIRS = 32768
 
 
-def _chunk_bounds(start: int, end: int):
-    """(start, end) of consecutive runs of at most CHUNK items covering start:end, near-equal in size."""
-    pieces = -(-(end - start) // CHUNK)
+def _chunk_bounds(start: int, end: int, camera_pairs: int):
+    """(start, end) of consecutive runs covering start:end, near-equal in size, each of at most
+    CHUNK_CAMERA_PAIRS // camera_pairs items (at least one)."""
+    most = max(1, CHUNK_CAMERA_PAIRS // camera_pairs)
+    pieces = -(-(end - start) // most)
     cuts = start + (np.arange(pieces + 1) * (end - start)) // pieces
     return zip(cuts[:-1].tolist(), cuts[1:].tolist())
 
@@ -195,8 +198,8 @@ def match_pairs(pack_a: RigBatch, index_a, pack_b: RigBatch, index_b, alpha: flo
     """RigCD of the pairs (pack_a[index_a[p]], pack_b[index_b[p]]); index_* : (P,) int; alpha and lambdas
     as checked by :func:`check_weights` (the matching minimises the cost with these lambdas).
 
-    Pairs are grouped by camera counts, and each group (in chunks of at most CHUNK pairs) gets its distances
-    and matchings from the compiled loops of :mod:`rigopt.metrics.pair_kernels`. Returns (values,
+    Pairs are grouped by camera counts, and each group (in chunks of at most CHUNK_CAMERA_PAIRS camera pairs)
+    gets its distances and matchings from the compiled loops of :mod:`rigopt.metrics.pair_kernels`. Returns (values,
     assignments): values a dict of (P,) float arrays keyed rigcd, match, count, t, r, f; assignments, with
     ``keep_assignment``, a list of (rows (M,), cols (M,)) int camera indices per pair, else None.
     """
@@ -211,8 +214,10 @@ def match_pairs(pack_a: RigBatch, index_a, pack_b: RigBatch, index_b, alpha: flo
     starts = np.flatnonzero(np.r_[True, np.diff(key[order]) != 0])
     ends = np.r_[starts[1:], len(order)]
     # Groups of one (N_A, N_B), cut into chunks whose arrays stay in cache (and memory bounded).
-    chunks = [order[s:e] for start, end in zip(starts, ends) for s, e in _chunk_bounds(start, end)]
-    buffer = np.empty((4, max(map(len, chunks)) * int(na_all.max()) * int(nb_all.max())))  # reused by each chunk
+    chunks = [order[s:e] for start, end in zip(starts, ends)
+              for s, e in _chunk_bounds(start, end, int(na_all[order[start]] * nb_all[order[start]]))]
+    sizes = [len(group) * int(na_all[group[0]]) * int(nb_all[group[0]]) for group in chunks]
+    buffer = np.empty((4, max(sizes)))  # each chunk's distances, in turn
     for group in chunks:
         na, nb = int(na_all[group[0]]), int(nb_all[group[0]])
         t, r, f = pair_distances(pack_a.cameras, pack_a.offsets[index_a[group]], na,

@@ -126,9 +126,9 @@ def test_pairing_of_the_library_rigs_is_scipys():
             assert rigcd(a, b).pairs == tuple((a.cameras[i].id, b.cameras[j].id) for i, j in zip(rows, cols))
 
 
-@pytest.mark.parametrize("chunk", [1, 3, 512])
+@pytest.mark.parametrize("chunk", [1, 40, 32768])  # camera pairs: one rig pair a chunk, a few, every pair
 def test_batched_values_equal_one_pair_at_a_time_exactly(chunk, monkeypatch):
-    monkeypatch.setattr(rigcd_module, "CHUNK", chunk)
+    monkeypatch.setattr(rigcd_module, "CHUNK_CAMERA_PAIRS", chunk)
     rng = np.random.default_rng(5)
     rigs_a = [_random_rig(rng, int(rng.integers(1, 7)), f"a{k}") for k in range(40)]
     rigs_b = [_random_rig(rng, int(rng.integers(1, 7)), f"b{k}") for k in range(40)]
