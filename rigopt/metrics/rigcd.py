@@ -214,12 +214,12 @@ def match_pairs(pack_a: RigBatch, index_a, pack_b: RigBatch, index_b, alpha: flo
     starts = np.flatnonzero(np.r_[True, np.diff(key[order]) != 0])
     ends = np.r_[starts[1:], len(order)]
     # Groups of one (N_A, N_B), cut into chunks whose arrays stay in cache (and memory bounded).
-    chunks = [order[s:e] for start, end in zip(starts, ends)
-              for s, e in _chunk_bounds(start, end, int(na_all[order[start]] * nb_all[order[start]]))]
-    sizes = [len(group) * int(na_all[group[0]]) * int(nb_all[group[0]]) for group in chunks]
-    buffer = np.empty((4, max(sizes)))  # each chunk's distances, in turn
-    for group in chunks:
-        na, nb = int(na_all[group[0]]), int(nb_all[group[0]])
+    chunks = []  # (pairs, N_A, N_B)
+    for start, end in zip(starts, ends):
+        na, nb = int(na_all[order[start]]), int(nb_all[order[start]])
+        chunks += [(order[s:e], na, nb) for s, e in _chunk_bounds(start, end, na * nb)]
+    buffer = np.empty((4, max(len(group) * na * nb for group, na, nb in chunks)))  # each chunk's distances, in turn
+    for group, na, nb in chunks:
         t, r, f = pair_distances(pack_a.cameras, pack_a.offsets[index_a[group]], na,
                                  pack_b.cameras, pack_b.offsets[index_b[group]], nb, buffer)  # each (G, Na, Nb)
         rows, cols = assign_pairs(t, r, f, lambdas)  # each (G, M)
@@ -268,7 +268,8 @@ def rigcd(rig_a: Rig, rig_b: Rig, alpha: float = DEFAULT_ALPHA,
     alpha, lambdas = check_weights(alpha, lambdas)
     check_same_origin([rig_a], [rig_b])
     zero = np.zeros(1, dtype=int)
-    out, assignments = match_pairs(RigBatch.from_rigs([rig_a]), zero, RigBatch.from_rigs([rig_b]), zero, alpha, lambdas, True)
+    out, assignments = match_pairs(RigBatch.from_rigs([rig_a]), zero, RigBatch.from_rigs([rig_b]), zero, alpha, lambdas,
+                                   keep_assignment=True)
     rows, cols = assignments[0]
     pairs = tuple((rig_a.cameras[i].id, rig_b.cameras[j].id) for i, j in zip(rows, cols))
     values = {k: float(v[0]) for k, v in out.items()}

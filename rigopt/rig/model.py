@@ -303,7 +303,7 @@ class Rig:
         """The cameras as :func:`camera_columns` (position, unit quaternion, FOV), camera after camera: the bytes
         of an (N, 8) float64 array, built once. Batches of many rigs join these in one copy
         (:class:`rigopt.metrics.rigcd.RigBatch`)."""
-        return np.ascontiguousarray(camera_columns(self.positions, self.rotations, self.fovs).T).tobytes()
+        return camera_columns(self.positions, self.rotations, self.fovs).T.tobytes()  # C order: camera-major
 
     @property
     def near_field_count(self) -> int:
