@@ -146,6 +146,11 @@ def design_command(
                                               help="Lens tolerance (deg): each perception camera's horizontal FOV "
                                                    "within this of its matched reference camera's (0: the "
                                                    "reference's lens)."),
+    height_search: Optional[float] = typer.Option(None, "--height-search", min=0.0, callback=finite(),
+                                                  help="With --match-height and free perception cameras: move each "
+                                                       "perception camera, within this many metres, to the valid "
+                                                       "mount (0.03 m grid) nearest its matched reference camera's "
+                                                       "height (0: off; default: as --pose says, 0.75 for nearest)."),
     perception_range: Optional[float] = typer.Option(None, "--perception-range", min=0.0, callback=finite(),
                                            help="With near-field cameras: the perception cameras keep the "
                                                 "reference's coverage only on the rings at least this far (m) from "
@@ -200,7 +205,8 @@ def design_command(
         raise RigoptError(f"--pose must be one of {', '.join(POSES)}, got {pose!r}")
     given = {"match_height_m": match_height, "match_pitch_deg": match_pitch, "match_yaw_deg": match_yaw,
              "match_fov_deg": match_fov, "perception_range_m": perception_range,
-             "perception_symmetric": None if free_perception is None else not free_perception}
+             "perception_symmetric": None if free_perception is None else not free_perception,
+             "height_search_m": height_search}
     defaults = POSES[pose.lower() if two_roles else "free"]
     pose_settings = {k: defaults[k] if v is None else v for k, v in given.items()}
     settings = DesignSettings(
@@ -272,8 +278,14 @@ def design_command(
             print(f"rigopt: note: {summary['regions_fallback']}", file=sys.stderr)
         for region in summary["regions"]:
             state = "required" if summary["regions_required"] else "reported"
-            print(f"field {region['key']} ({state}): {region['covered_frac']:.1%} of its points seen, unseen area "
+            print(f"field {region['key']} ({state}): {region['covered_frac']:.1%} of its points seen "
+                  f"({region['weighted_covered_frac']:.1%} weighted by criticality), unseen area "
                   f"{region['unseen_area_m2']:.1f} m²", file=sys.stderr)
+        moves = summary["pose_tolerance"]["height_moves"]
+        if moves:
+            heights = ", ".join(f"{m['camera']} {m['from_m']:.2f} -> {m['to_m']:.2f} m" for m in moves)
+            print(f"height search: {len(moves)} perception camera(s) moved nearer their reference camera's height "
+                  f"({heights})", file=sys.stderr)
         print(f"MILP {solver['milp_status']} (gap {solver['milp_gap']:.2e}) on {solver['offered_to_milp']} of "
               f"{solver['candidates']} candidates; refinement {solver['refine_status']}; {solver['seconds']:.1f} s",
               file=sys.stderr)

@@ -32,6 +32,7 @@ from rigopt.mounting.rules import RigCheck, check_rig
 from rigopt.coverage.matrix import rig_coverage_matrix
 from rigopt.coverage.visibility import visible_by
 from rigopt.design.candidates import CandidateSet, build_candidates
+from rigopt.design.heights import search_heights
 from rigopt.design.problem import ReferenceRig
 from rigopt.design.refine import (RefineProblem, duty_points, free_radii, frustum_margins, project_to_surface,
                                   refine)
@@ -295,6 +296,18 @@ def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRi
                                  status=f"rejected: moves {', '.join(outside)} out of {tolerance_text(settings)}")
         if refinement.accepted:
             design = refinement.refined
+    height_moves = ()
+    if (settings.height_search_m > 0 and settings.match_height_m is not None and len(rigs) == 1
+            and not settings.perception_mirrored_on(vehicle)):
+        progress("moving each perception camera to the mount nearest its reference camera's height")
+        rig, height_moves = search_heights(
+            design.rig, matched, reference, vehicle, settings.height_search_m, settings,
+            lambda trial: bool(np.all(requirements.counts(trial, vehicle, settings) >= requirements.needed)))
+        if height_moves:
+            design = summarise(rig, vehicle, rigs, calibration, requirements, settings,
+                               check_rig(rig, vehicle, settings.rules))
+            widen = matched_widening(tolerance_gaps(rig.positions[:len(matched)], rig.rotations[:len(matched)],
+                                                    rig.fovs[:len(matched)], reference, settings), matched)
     naive_refinement = "off"
     if naive is not None and refines:  # before the near-field stage: meanwhile a background worker finishes it
         progress("refining the naive transfer as the design")
@@ -322,7 +335,7 @@ def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRi
                         calibration, settings, time.perf_counter() - start, symmetry_fallback, regions,
                         fields_fallback, stage,
                         tuple((reference.cameras[k].id, float(widen[k])) for k in np.flatnonzero(widen > 1.0)),
-                        settings.near_field and near_field_mirrored)
+                        settings.near_field and near_field_mirrored, height_moves)
 
 
 def near_field_stage_choice(vehicle: Vehicle, presets: tuple, settings: DesignSettings, user_require: str | None,

@@ -122,5 +122,7 @@ class DesignResult:
     """(reference camera id, factor): the reference cameras no mount keeps within the pose tolerance, with the
     factor their tolerance was widened by (inf: matched without it)."""
     near_field_mirrored: bool = False
+    height_moves: tuple = ()
+    """The height search's moves (:class:`rigopt.design.heights.HeightMove`), in camera order."""
     """Whether the near-field cameras were placed in mirrored pairs (with the perception cameras or, under
     ``perception_symmetric=False``, without them)."""

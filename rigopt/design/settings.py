@@ -261,6 +261,10 @@ class DesignSettings:
     match_fov_deg: float | None = None
     """Lens tolerance (``--match-fov``): each perception camera's horizontal FOV within this many degrees of its
     matched reference camera's (None: any; 0: the reference's lens)."""
+    height_search_m: float = 0.0
+    """With a height tolerance and freely placed perception cameras: after the MILP, each perception camera moves
+    to the valid mount within this many metres whose height is nearest its matched reference camera's, on a grid
+    finer than the MILP's (``--height-search``; :mod:`rigopt.design.heights`; 0: off)."""
     perception_range_m: float = 0.0
     """With near-field cameras: the perception cameras keep the reference's coverage only on the rings at least
     this far (m) from the body (``--perception-range``; 0: every ring); the nearer rings are the near-field
@@ -292,6 +296,9 @@ class DesignSettings:
                             ("yaw", self.match_yaw_deg), ("FOV", self.match_fov_deg)):
             if value is not None and not (np.isfinite(value) and value >= 0.0):
                 raise RigoptError(f"the {name} tolerance must be a finite number >= 0, got {value}")
+        if not (np.isfinite(self.height_search_m) and self.height_search_m >= 0.0):
+            raise RigoptError(f"the height search radius must be a finite number of metres >= 0, got "
+                              f"{self.height_search_m}")
         if not (np.isfinite(self.perception_range_m) and self.perception_range_m >= 0.0):
             raise RigoptError(f"the perception range must be a finite number of metres >= 0, got "
                               f"{self.perception_range_m}")
