@@ -567,6 +567,15 @@ class CameraModel:
             return cls.from_fov(camera.lens.hfov, camera.lens.image_size)
         return cls.of_lens(camera.lens)
 
+    @classmethod
+    def rendered(cls, camera: "Camera", image_size) -> "CameraModel":
+        """The model of one rig camera rendered at ``image_size`` (width, height) px, batch shape (): the
+        centred pinhole of its FOV at that size for the benchmark's ideal pinhole, else its own lens
+        :meth:`resized` to it. What the benchmark's renderer sees through and its tables record."""
+        if camera.lens.is_ideal_pinhole:
+            return cls.from_fov(camera.fov, image_size)
+        return cls.of_lens(camera.lens).resized(image_size)
+
     def lens(self, index=()) -> Lens:
         """The :class:`Lens` of the camera at ``index`` of the batch (``()`` for a single camera); image sizes
         are rounded to whole pixels."""

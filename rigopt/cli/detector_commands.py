@@ -247,6 +247,8 @@ def validate_command(
         return
     with status_console.status("validating") as status:
         result = validate_design(rig, ref, family, data, calibration, runs, device, status.update)
+    if "near_field" in result:  # the note of the shipped path: what the detector was fed, what was kept
+        note(result["near_field"]["note"])
     if out is not None:
         write_text_atomic(out, json.dumps(json_ready(result), indent=1) + "\n")
     if as_json:
@@ -272,7 +274,6 @@ def validate_command(
 def _validate_shipped(rig, ref: str, family: str, calibration, weights: str, device: str, cache, workers: int,
                       compare: bool, out, as_json: bool) -> None:
     """validate without --data: the shipped models, the reference's test scenes rendered into the cache."""
-    import dataclasses
     import json
     import os
 
@@ -283,7 +284,7 @@ def _validate_shipped(rig, ref: str, family: str, calibration, weights: str, dev
         shipped_detector,
         without_resamples,
     )
-    from rigopt.validation.designs import comparison_rigs
+    from rigopt.validation.designs import WHOLE_ROLE, comparison_rigs, fed_rigs
     from rigopt.metrics.ranking import predict_transfer
     from rigopt.output import existing_folder, write_text_atomic
     from rigopt.report.json_values import json_ready
@@ -293,19 +294,9 @@ def _validate_shipped(rig, ref: str, family: str, calibration, weights: str, dev
     reference = load_rig(detector.reference)
     if cache is not None and cache.exists():
         existing_folder(cache, "renderings of the reference's test scenes (made by rigopt validate)", option="--cache")
-    rigs = [("rig", rig)]
-    if rig.near_field_count:  # the detector is fed the perception cameras; the whole rig is kept for the record
-        rigs = [("perception cameras", rig.perception())]
-        fisheyes = [c.id for c in rig.cameras if c.lens.distortion == "fisheye" or c.fov >= 180.0]
-        if fisheyes:  # a pinhole detector cannot take them: the whole rig has no measured drop to record
-            whole = (f"; not measured whole: {len(fisheyes)} of its cameras are fisheyes "
-                     f"({', '.join(fisheyes[:3])}{', ...' if len(fisheyes) > 3 else ''}) and the shipped "
-                     f"{family} models take pinhole images")
-        else:
-            rigs.append(("whole rig", dataclasses.replace(rig, name=f"{rig.name}_whole")))
-            whole = ", and whole for the record"
-        note(f"{rig.name}: {rig.near_field_count} near_field camera(s) are not fed to the detector: measured on its "
-             f"{len(rigs[0][1])} perception cameras{whole}")
+    rigs, near_field = fed_rigs(rig, "rig", family)  # the perception cameras fed, the whole rig for the record
+    if near_field is not None:
+        note(near_field["note"])
     if compare:
         rigs += comparison_rigs(rig, reference, calibration)[1:]
     names = [r.name for _, r in rigs]
@@ -329,9 +320,11 @@ def _validate_shipped(rig, ref: str, family: str, calibration, weights: str, dev
                         "interval_informative": prediction.interval_informative,
                         "extrapolation": prediction.to_dict()["extrapolation"], "rigcd": prediction.rigcd}
                        for (role, _), entry, prediction in zip(rigs, measured, predictions)]}
+    if near_field is not None:
+        result["near_field"] = near_field
     if compare:  # the rig (its perception cameras) against each yardstick, on the same scene resamples
         result["paired"] = [{"role": role, **paired_differences(measured[0], entry)}
-                            for (role, _), entry in zip(rigs[1:], measured[1:]) if role != "whole rig"]
+                            for (role, _), entry in zip(rigs[1:], measured[1:]) if role != WHOLE_ROLE]
     if out is not None:
         write_text_atomic(out, json.dumps(json_ready(result), indent=1) + "\n")
     if as_json:

@@ -32,6 +32,45 @@ from rigopt.metrics.reliability import DEFAULT_BOOTSTRAP, DEFAULT_SEED, finite_o
 from rigopt.rig.library import load_rig
 from rigopt.rig.model import Rig
 
+#: Roles of the rows a rig with near_field cameras is measured in: the cameras the detector is fed, and the whole
+#: rig, near_field cameras included, for the record.
+PERCEPTION_ROLE, WHOLE_ROLE = "perception cameras", "whole rig"
+
+
+def fed_rigs(rig: Rig, role: str, family: str) -> tuple[list[tuple[str, Rig]], dict | None]:
+    """The rows ``rig`` is measured in, (role, rig), and the record of what they hold (None for a rig of
+    perception cameras only: one row, ``role``, the rig itself).
+
+    A rig with near_field cameras feeds the detector its perception cameras (:meth:`Rig.perception`), row
+    :data:`PERCEPTION_ROLE`, named ``<rig>_perception``; the drops, measured and predicted, that stand for the
+    rig are that row's. The whole rig, named ``<rig>_whole``, is measured too for the record (row
+    :data:`WHOLE_ROLE`) where the ``family`` takes every camera's lens (:func:`families.takes_lenses`, or no
+    lens is distorted). The suffixes keep the two renderings (a folder per rig name under ``--data``) apart from
+    each other and from any made of the rig under its own name. The record: ``perception_cameras``, ``near_field_cameras`` (ids), ``whole_rig`` (``rig``, ``n_cameras``,
+    ``measured``, ``reason`` when not) and ``note``, a line for the user.
+    """
+    if not rig.near_field_count:
+        return [(role, rig)], None
+    from rigopt.validation.detectors.families import takes_lenses
+
+    perception = dataclasses.replace(rig.perception(), name=f"{rig.name}_perception")
+    whole = dataclasses.replace(rig, name=f"{rig.name}_whole")
+    rows = [(PERCEPTION_ROLE, perception)]
+    distorted = [c.id for c in rig.cameras if c.lens.is_distorted]
+    reason = None
+    if distorted and not takes_lenses(family):
+        reason = (f"{len(distorted)} of its cameras have distorted lenses ({', '.join(distorted[:3])}"
+                  f"{', ...' if len(distorted) > 3 else ''}) and {family} detectors take pinholes only")
+    else:
+        rows.append((WHOLE_ROLE, whole))
+    near_field = [c.id for c in rig.cameras if c.role == "near_field"]
+    note = (f"{rig.name}: {len(near_field)} near_field camera(s) are not fed to the detector: measured on its "
+            f"{len(perception)} perception cameras" + (f"; not measured whole: {reason}" if reason else
+                                                        f", and whole ({len(rig)} cameras) for the record"))
+    return rows, {"perception_cameras": [c.id for c in perception.cameras], "near_field_cameras": near_field,
+                  "whole_rig": {"rig": whole.name, "n_cameras": len(whole), "measured": reason is None,
+                                "reason": reason},
+                  "note": note}
 
 
 def load_design(path) -> Rig:
@@ -97,6 +136,10 @@ def validate_design(design: Rig, reference: str, family: str, data, calibration:
     ``bootstrap.measured_drops`` keeps each rig's resampled drops (the same draws, in the same order, for
     every validation of this test split and seed); ``design_minus`` holds the design's drop minus each other rig's,
     with its paired interval (below 0: the design loses less).
+
+    A design with near_field cameras is measured as :func:`fed_rigs` says: the detector is fed its perception
+    cameras (the row that stands for the design, in ``design_minus`` too), the whole design is kept for the
+    record where the family takes its lenses; ``near_field`` holds what was measured (absent without them).
     """
     from rigopt.validation.synthetic.generate import ego_body_lookup, generate_split, split_layout
     from rigopt.validation.synthetic.render import render_rig
@@ -109,7 +152,8 @@ def validate_design(design: Rig, reference: str, family: str, data, calibration:
         raise DataError(f"{checkpoint}: no {family} model trained on {reference_rig.name}; train it first with "
                         f"rigopt bench train --data {data} --rig {reference_rig.name} --model {family}")
     scenes, size = split_layout(split_root(data, reference_rig.name, TEST_SPLIT))
-    rigs = comparison_rigs(design, reference_rig, calibration)
+    fed, near_field = fed_rigs(design, "design", family)
+    rigs = fed + comparison_rigs(design, reference_rig, calibration)[1:]
     names = [rig.name for _, rig in rigs]
     if len(set(names)) != len(names) or reference_rig.name in names:
         raise DataError(f"rig names must differ from each other and from the reference: {names}")
@@ -142,15 +186,20 @@ def validate_design(design: Rig, reference: str, family: str, data, calibration:
                         "interval_informative": predicted["interval_informative"],
                         "extrapolation": predicted["extrapolation"],
                         "rigcd": prediction.rigcd})
+    others = [k for k in range(2, len(test_rigs)) if rigs[k - 1][0] != WHOLE_ROLE]  # the design's own rows aside
     design_minus = [{"rig": names[k - 1], "role": rigs[k - 1][0], "difference": finite_or_none(drops[1] - drops[k]),
-                     "ci": interval(resampled_drops[:, 1] - resampled_drops[:, k])} for k in range(2, len(test_rigs))]
-    return {"reference": reference_rig.name, "model": family, "checkpoint": str(checkpoint),
-            "metric": calibration.metric, "weights": calibration.name, "reference_mAP": finite_or_none(maps[0]),
-            "reference_mAP_visible": finite_or_none(maps_visible[0]),
-            "test_scenes": len(scenes), "image_size": list(size), "rigs": entries,
-            "design_minus": design_minus,
-            "bootstrap": {"resamples": resamples, "seed": seed, "unit": "scene", "blocks": len(blocks),
-                          "measured_drops": {name: [round(float(v), 4) if np.isfinite(v) else None for v in column]
-                                             for name, column in zip(names, resampled_drops[:, 1:].T)}}}
+                     "ci": interval(resampled_drops[:, 1] - resampled_drops[:, k])} for k in others]
+    result = {"reference": reference_rig.name, "model": family, "checkpoint": str(checkpoint),
+              "metric": calibration.metric, "weights": calibration.name, "reference_mAP": finite_or_none(maps[0]),
+              "reference_mAP_visible": finite_or_none(maps_visible[0]),
+              "test_scenes": len(scenes), "image_size": list(size), "rigs": entries,
+              "design_minus": design_minus,
+              "bootstrap": {"resamples": resamples, "seed": seed, "unit": "scene", "blocks": len(blocks),
+                            "measured_drops": {name: [round(float(v), 4) if np.isfinite(v) else None
+                                                      for v in column]
+                                               for name, column in zip(names, resampled_drops[:, 1:].T)}}}
+    if near_field is not None:
+        result["near_field"] = near_field
+    return result
 
 

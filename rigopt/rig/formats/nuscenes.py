@@ -28,7 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
-from rigopt.camera import intrinsic_matrix
+from rigopt.camera import CameraModel, intrinsic_matrix
 from rigopt.errors import RigFileError
 from rigopt.geometry import matrix_to_quaternion, optical_from_body
 from rigopt.output import existing_folder
@@ -331,14 +331,17 @@ def export_nuscenes(rig: Rig) -> Exported:
     return exported
 
 
-def _tables(rig: Rig, image_size) -> tuple[list, list, list]:
+def _tables(rig: Rig, image_size, lenses: bool = False) -> tuple[list, list, list]:
+    """sensor and calibrated_sensor records of ``rig`` (``image_size`` (w, h) px or None: each camera's own);
+    with ``lenses``, a distorted lens's record carries its distortion model and coefficients."""
     sensors, records = [], []
     for camera in rig.cameras:
         sensor_token = nuscenes_token("sensor", camera.id)
         sensors.append({"token": sensor_token, "channel": camera.id, "modality": "camera"})
-        if image_size is not None or camera.lens.is_ideal_pinhole:
-            width, height = image_size or camera.image_size
-            k = intrinsic_matrix(camera.fov, width, height).tolist()
+        if image_size is not None:
+            k = CameraModel.rendered(camera, image_size).intrinsic_matrix().tolist()
+        elif camera.lens.is_ideal_pinhole:
+            k = intrinsic_matrix(camera.fov, *camera.image_size).tolist()
         else:
             lens = camera.lens
             k = [[lens.fx, 0.0, lens.cx], [0.0, lens.fy, lens.cy], [0.0, 0.0, 1.0]]
@@ -349,6 +352,9 @@ def _tables(rig: Rig, image_size) -> tuple[list, list, list]:
             "rotation": [float(v) for v in matrix_to_quaternion(optical_from_body(camera.rotation))],
             "camera_intrinsic": k,
         })
+        if lenses and camera.lens.is_distorted:
+            records[-1].update({"distortion": camera.lens.distortion,
+                                "distortion_coefficients": [float(c) for c in camera.lens.coefficients]})
     return sensors, records, []
 
 
@@ -362,13 +368,16 @@ def write_nuscenes_calibration(rig: Rig, directory, image_size=None) -> Path:
 
     One camera channel per camera, named by its id; tokens are hashes of the channel names, so the
     same rig always gives the same files. ``image_size`` ``(width, height)`` pixels overrides each
-    camera's own for a centred intrinsic matrix of the camera's FOV. Returns the directory.
+    camera's own: the intrinsic matrix is then that of the camera as the benchmark renders it at that size
+    (:meth:`CameraModel.rendered`: a benchmark pinhole's centred matrix of its FOV, a real lens's scaled).
+    A distorted lens's record also carries ``"distortion"`` (its model) and ``"distortion_coefficients"``
+    (rigopt's additions to the nuScenes fields, read by the benchmark's detectors). Returns the directory.
     """
     directory = Path(directory)
     if image_size is not None:
         image_size = _image_sizes(image_size, directory)[None]
     directory.mkdir(parents=True, exist_ok=True)
-    sensors, records, _ = _tables(rig, image_size)
+    sensors, records, _ = _tables(rig, image_size, lenses=True)
     (directory / SENSOR_FILE).write_text(_dump(sensors))
     (directory / CALIBRATION_FILE).write_text(_dump(records))
     return directory

@@ -9,6 +9,8 @@ order of their sorted channel names)::
     boxes       list of B BoxTargets (ego frame, ISO 8855: x forward, y left, z up), the boxes the rig sees
     depths      (B, N, H, W)    float32 renderer depth along the optical axis, m (0: no surface), or None
                                 when the dataset has no depth maps
+    lenses      CameraModel (N,) of the images as they are (size, intrinsics, distortion), or None when
+                                every camera is a pinhole of its intrinsics (the split records no distortion)
 
 Images are decoded once and kept as uint8 in memory (a 480-sample, 8-camera split at 160 x 90 is 170 MB).
 """
@@ -23,7 +25,8 @@ import torch
 
 from rigopt.validation.synthetic.dataset import TrainingSample, read_dataset
 from rigopt.validation.synthetic.generate import DEPTH_SCALE
-from rigopt.errors import DataError
+from rigopt.camera import CameraModel, Lens
+from rigopt.errors import DataError, RigoptError
 from rigopt.geometry import rot_z
 
 
@@ -51,11 +54,12 @@ class Batch:
     boxes: list
     tokens: list
     depths: torch.Tensor | None = None
+    lenses: CameraModel | None = None
 
     def to(self, device) -> Batch:
         return Batch(self.images.to(device), self.intrinsics.to(device), self.cam_to_ego.to(device),
                      [b.to(device) for b in self.boxes], self.tokens,
-                     None if self.depths is None else self.depths.to(device))
+                     None if self.depths is None else self.depths.to(device), self.lenses)
 
     @property
     def n_cameras(self) -> int:
@@ -78,7 +82,8 @@ def split_root(data, rig: str, split: str) -> Path:
 class RigSplit:
     """The samples of ``<data>/<rig>/<split>``, images resized to ``image_size`` (width, height) if given;
     batches carry the depth maps where every sample has them, unless ``depths`` is False (inference and
-    training without depth supervision need none, and skip decoding them)."""
+    training without depth supervision need none, and skip decoding them), and the cameras' lens models
+    (``lenses``) where some camera's calibration records a distortion."""
 
     def __init__(self, data, rig: str, split: str, image_size: tuple[int, int] | None = None,
                  max_range: float = np.inf, depths: bool = True):
@@ -99,6 +104,7 @@ class RigSplit:
         self.intrinsics = torch.tensor(np.stack([scale @ first.intrinsics[c] for c in self.channels]),
                                        dtype=torch.float32)
         self.cam_to_ego = torch.tensor(np.stack([first.T_ego_cam[c] for c in self.channels]), dtype=torch.float32)
+        self.lenses = _lens_models(first, self.channels, self.native_size, self.image_size, self.root)
         self.max_range = max_range
         self.has_depth = depths and all(sample.depths for sample in self.samples)
         self._images: dict[int, np.ndarray] = {}
@@ -146,7 +152,7 @@ class RigSplit:
             depths = torch.from_numpy(np.stack([self.depths(i) for i in indices]).astype(np.float32)) / DEPTH_SCALE
         return Batch(images.float().div_(255.0), self.intrinsics.expand(b, -1, -1, -1).clone(),
                      self.cam_to_ego.expand(b, -1, -1, -1).clone(), [self.targets(i) for i in indices],
-                     [self.samples[i].token for i in indices], depths)
+                     [self.samples[i].token for i in indices], depths, self.lenses)
 
     def batches(self, batch_size: int, order=None):
         """Batches of ``batch_size`` samples in ``order`` (default: the split's order)."""
@@ -159,7 +165,7 @@ def augment(batch: Batch, rng: np.random.Generator, max_yaw: float = np.pi / 8) 
     """``batch`` seen by a rotated and mirrored ego frame (BEVDet's bird's-eye augmentation), per sample: a
     turn by U(-max_yaw, max_yaw) rad about z after mirroring x and y each with probability 1/2. The
     calibration (cam_to_ego) and the boxes move together, so every image still shows its boxes where the
-    calibration says; the images and depth maps are unchanged."""
+    calibration says; the images, depth maps and lenses are unchanged."""
     cam_to_ego, boxes = batch.cam_to_ego.clone(), []
     for b, targets in enumerate(batch.boxes):
         angle = rng.uniform(-max_yaw, max_yaw)
@@ -170,7 +176,23 @@ def augment(batch: Batch, rng: np.random.Generator, max_yaw: float = np.pi / 8) 
         heading = heading @ A.T
         boxes.append(BoxTargets(targets.centers @ A.T, targets.sizes, torch.atan2(heading[:, 1], heading[:, 0]),
                                 targets.classes))
-    return Batch(batch.images, batch.intrinsics, cam_to_ego, boxes, batch.tokens, batch.depths)
+    return Batch(batch.images, batch.intrinsics, cam_to_ego, boxes, batch.tokens, batch.depths, batch.lenses)
+
+
+def _lens_models(sample: TrainingSample, channels, native_size, image_size, root) -> CameraModel | None:
+    """(N,) models of the cameras ``channels`` of ``sample`` (its intrinsics at ``native_size``, its recorded
+    distortions) seeing images of ``image_size``; None when no camera records a distortion."""
+    if not sample.distortions:
+        return None
+    lenses = []
+    for channel in channels:
+        k = sample.intrinsics[channel]
+        distortion, coefficients = sample.distortions.get(channel, ("none", ()))
+        try:
+            lenses.append(Lens(*native_size, k[0, 0], k[1, 1], k[0, 2], k[1, 2], distortion, coefficients))
+        except RigoptError as error:
+            raise DataError(f"{root}: camera {channel}: {error}") from None
+    return CameraModel.of_lenses(lenses).resized(image_size)
 
 
 def _read_image(path, size: tuple[int, int], mode: str) -> np.ndarray:

@@ -31,7 +31,10 @@ class Detector(Protocol):
 
     - ``family`` : str, the registry key (saved in checkpoints and results);
     - ``config_defaults`` : mapping of ``ModelConfig`` fields this family starts from before the size
-      preset and the user's overrides (e.g. its learning rate).
+      preset and the user's overrides (e.g. its learning rate);
+    - ``takes_lenses`` (optional, default False): True when the family computes each camera's rays through
+      its lens model where the batch carries one (``Batch.lenses``: distorted cameras, fisheyes included);
+      a family without it takes pinholes only (:func:`takes_lenses`).
     """
 
     family: str
@@ -60,3 +63,8 @@ DETECTORS: dict[str, type[Detector]] = {
     "lss": LSSDetector,
     "petr": PETRDetector,
 }
+
+
+def takes_lenses(family: str) -> bool:
+    """True when the detectors of ``family`` take distorted cameras (``Detector.takes_lenses``)."""
+    return bool(getattr(DETECTORS[family], "takes_lenses", False))

@@ -1,5 +1,6 @@
 """Pieces both detector families share: the image encoder and the pixel rays of a calibrated rig (pinhole
-rays from the intrinsic matrices in torch, or any lens's rays from the camera model in numpy)."""
+rays from the intrinsic matrices in torch, or any lens's rays from the camera model in numpy: :func:`lens_rays`,
+and :func:`lens_cells` for lenses that see beyond 90 degrees off their axis)."""
 
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ import torch
 from torch import nn
 from torch.nn import functional as F
 
-from rigopt.camera import CameraModel
+from rigopt.camera import MIN_DEPTH, CameraModel
 
 #: Per-channel image normalisation (RGB in [0, 1]).
 IMAGE_MEAN, IMAGE_STD = 0.45, 0.25
@@ -65,6 +66,23 @@ def lens_rays(model: CameraModel, feature_hw: tuple[int, int], stride: int = 8,
     return torch.as_tensor(rays.reshape(*model.shape, h, w, 3), dtype=dtype)
 
 
+def lens_cells(model: CameraModel, feature_hw: tuple[int, int], stride: int = 8,
+               dtype: torch.dtype = torch.float32) -> tuple[torch.Tensor, torch.Tensor]:
+    """The cells of a feature map that look in front of their lens, and their rays, through each lens's
+    distortion (the camera model's unprojection, numpy). ``model`` has batch shape (...,) (e.g. (N,) cameras)
+    at the image size the features were made from. Returns (..., h, w, 3) optical-frame rays at unit depth,
+    for :func:`pixel_rays` ``camera_rays``, and (..., h, w) bool: the cells whose ray points in front of the
+    lens (depth > 0). A fisheye cell 90 degrees or more off the axis has no point at positive depth: its ray
+    is zero and it is False, to be left out by the caller; the other cells' rays are :func:`lens_rays`'."""
+    h, w = feature_hw
+    unit = model.pixel_rays(cell_centres(feature_hw, stride), unit=True, frame="optical")
+    depth = unit[..., 2:]
+    in_front = depth > MIN_DEPTH
+    rays = np.where(in_front, unit / np.where(in_front, depth, 1.0), 0.0)
+    return (torch.as_tensor(rays.reshape(*model.shape, h, w, 3), dtype=dtype),
+            torch.as_tensor(in_front.reshape(*model.shape, h, w)))
+
+
 def pixel_rays(intrinsics: torch.Tensor, cam_to_ego: torch.Tensor, feature_hw: tuple[int, int],
                stride: int = 8, camera_rays: torch.Tensor | None = None) -> tuple[torch.Tensor, torch.Tensor]:
     """Rays through the centres of a feature map's cells, in the ego frame.
@@ -80,7 +98,7 @@ def pixel_rays(intrinsics: torch.Tensor, cam_to_ego: torch.Tensor, feature_hw: t
     mirror of :meth:`rigopt.camera.CameraModel.pixel_rays` (``unit=False``), which owns the projection
     model; tests/validation/detectors/test_layers.py checks that the two agree. For distorted lenses pass
     ``camera_rays`` ((B, N, h, w, 3) or (N, h, w, 3) optical-frame rays at unit depth, from
-    :func:`lens_rays`): they replace the ``intrinsics`` rays.
+    :func:`lens_rays` or :func:`lens_cells`): they replace the ``intrinsics`` rays.
     """
     h, w = feature_hw
     device, dtype = intrinsics.device, intrinsics.dtype

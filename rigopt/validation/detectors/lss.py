@@ -5,6 +5,9 @@
    product places the context along the cell's ray at every bin's depth, weighted by its probability.
 3. Splat: every lifted point goes, through the camera calibration, to the ego-frame bird's-eye cell
    below it (points more than 2 m below the ground or 6 m above it are dropped); cells sum their points.
+   The rays come from the intrinsics for pinholes; where the batch carries lens models (``Batch.lenses``:
+   some camera is distorted, e.g. a fisheye), every camera's rays come from its lens model's unprojection,
+   and a fisheye's cells 90 degrees or more off its axis (no point at positive depth) are not lifted.
 4. A bird's-eye CNN and a centre-heatmap head (``center_head.py``) detect the boxes.
 
 Depth supervision (as BEVDepth): where the batch carries the renderer's depth maps, each feature cell's depth
@@ -23,7 +26,7 @@ from torch.nn import functional as F
 from rigopt.validation.detectors.center_head import CenterHead
 from rigopt.validation.detectors.config import FAMILY_DEFAULTS, ModelConfig
 from rigopt.validation.detectors.data import Batch
-from rigopt.validation.detectors.layers import ImageEncoder, conv_block, pixel_rays
+from rigopt.validation.detectors.layers import ImageEncoder, conv_block, lens_cells, pixel_rays
 
 HEIGHT_LIMITS = (-2.0, 6.0)  # m, ego z of the lifted points kept
 
@@ -33,6 +36,7 @@ class LSSDetector(nn.Module):
 
     family = "lss"
     config_defaults = FAMILY_DEFAULTS["lss"]
+    takes_lenses = True
 
     def __init__(self, config: ModelConfig):
         super().__init__()
@@ -70,12 +74,18 @@ class LSSDetector(nn.Module):
         Only those points' products are formed (not the whole (B, N, D, Cc, h, w) volume)."""
         b, n, d, h, w = depth.shape
         g, cell, half = self.head.grid, self.config.bev_cell, self.config.bev_range
-        origins, directions = pixel_rays(batch.intrinsics, batch.cam_to_ego, (h, w), self.encoder.stride)
+        camera_rays = in_front = None
+        if batch.lenses is not None:  # some lens is distorted: every camera's rays through its lens model
+            camera_rays, in_front = lens_cells(batch.lenses, (h, w), self.encoder.stride, depth.dtype)
+        origins, directions = pixel_rays(batch.intrinsics, batch.cam_to_ego, (h, w), self.encoder.stride,
+                                         camera_rays)
         points = origins[:, :, None] + self.depths[None, None, :, None, None, None] * directions[:, :, None]
         ix = torch.floor((points[..., 0] + half) / cell).long()  # (B, N, D, h, w)
         iy = torch.floor((points[..., 1] + half) / cell).long()
         kept = (ix >= 0) & (ix < g) & (iy >= 0) & (iy < g) & (points[..., 2] >= HEIGHT_LIMITS[0]) & (
             points[..., 2] <= HEIGHT_LIMITS[1])
+        if in_front is not None:  # a fisheye's cells that look behind its lens plane have no point to lift
+            kept &= in_front.to(kept.device)[None, :, None]
         sample, camera, _, row, col = kept.nonzero(as_tuple=True)  # in the volume's order
         flat = sample * g * g + ix[kept] * g + iy[kept]
         values = depth[kept][:, None] * context.permute(0, 1, 3, 4, 2)[sample, camera, row, col]  # (P, Cc)

@@ -38,6 +38,7 @@ from scipy.optimize import linear_sum_assignment
 from torch import nn
 from torch.nn import functional as F
 
+from rigopt.errors import DataError
 from rigopt.validation.detectors.config import FAMILY_DEFAULTS, ModelConfig
 from rigopt.validation.detectors.data import Batch
 from rigopt.validation.detectors.layers import ImageEncoder, pixel_rays
@@ -85,6 +86,7 @@ class PETRDetector(nn.Module):
 
     family = "petr"
     config_defaults = FAMILY_DEFAULTS["petr"]
+    takes_lenses = False  # its rays, cell widths and token targets are a pinhole's of the intrinsics
 
     def __init__(self, config: ModelConfig, n_classes: int = len(CLASSES)):
         super().__init__()
@@ -113,6 +115,9 @@ class PETRDetector(nn.Module):
         nn.init.constant_(self.token_head.bias[0], -math.log((1 - 0.01) / 0.01))
 
     def forward(self, batch: Batch) -> dict:
+        if batch.lenses is not None:
+            raise DataError("a camera of this rig has a distorted lens (radtan or fisheye) and the petr family "
+                            "takes pinholes only (its rays come from the intrinsics); use --model lss")
         b, n = batch.images.shape[:2]
         features = self.input_projection(self.encoder(batch.images.flatten(0, 1)))  # (B*N, C, h, w)
         h, w = features.shape[-2:]

@@ -12,19 +12,22 @@ quaternions are (w, x, y, z), annotation sizes are (width, length, height) metre
 ``calibrated_sensor`` maps its optical frame (z forward, x right, y down) into the ego frame. The reader
 serves rigopt's own data and the real benchmark's folders alike.
 
-Two fields are rigopt's own. Each ``sample_data`` record of rigopt's data names its depth map in
+Three fields are rigopt's own. Each ``calibrated_sensor`` record of a distorted lens carries ``distortion``
+(``"radtan"`` or ``"fisheye"``, :class:`rigopt.camera.Lens`) and ``distortion_coefficients``: its
+``camera_intrinsic`` is then the ``K`` of the distorted normalised coordinates, not a pinhole's (a record
+without them is a pinhole). Each ``sample_data`` record of rigopt's data names its depth map in
 ``depth_filename`` (depth along the optical axis in cm, 0 where no surface; ``generate.DEPTH_SCALE``). Each
 ``sample_annotation`` record of rigopt's data carries ``visible_fraction``,
 the float in [0, 1] its ``visibility_token`` is binned from; 0 marks an object that no camera of the rig
 sees (nuScenes' lowest level, v0-40, cannot tell it from a barely visible one). nuScenes loaders ignore the
-extra key. A record without it (the real benchmark's data, or rigopt's data made before the field, when
-only seen objects were annotated) reads as visible.
+extra keys. An annotation without ``visible_fraction`` (the real benchmark's data, or rigopt's data made
+before the field, when only seen objects were annotated) reads as visible.
 """
 
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -81,7 +84,8 @@ class TrainingSample:
     instance tokens (the same object across samples and, for rigopt's data, across rigs);
     visible_fractions (n,) float in [0, 1] (NaN where the dataset does not record it), None when not read;
     depths : {channel: path} of the renderer's depth maps (``generate.DEPTH_SCALE``), None when the dataset
-    has none.
+    has none; distortions : {channel: (model, coefficients)} of the channels whose calibration records a lens
+    distortion (the others are pinholes of their intrinsics).
     """
 
     token: str
@@ -99,6 +103,7 @@ class TrainingSample:
     instances: np.ndarray
     visible_fractions: np.ndarray | None = None
     depths: dict | None = None
+    distortions: dict = field(default_factory=dict)
 
     @property
     def visible(self) -> np.ndarray:
@@ -152,7 +157,7 @@ def read_dataset(root, version: str | None = None) -> list[TrainingSample]:
 
     samples = []
     for sample in sorted(tables["sample"], key=lambda s: (scene_name.get(s["scene_token"], ""), s["timestamp"])):
-        images, depths, intrinsics, extrinsics, T_world_ego = {}, {}, {}, {}, None
+        images, depths, intrinsics, extrinsics, distortions, T_world_ego = {}, {}, {}, {}, {}, None
         for record in data_by_sample.get(sample["token"], []):
             calibration = by_token["calibrated_sensor"][record["calibrated_sensor_token"]]
             channel = channel_of.get(calibration["sensor_token"])
@@ -162,6 +167,9 @@ def read_dataset(root, version: str | None = None) -> list[TrainingSample]:
             if record.get("depth_filename"):
                 depths[channel] = root / record["depth_filename"]
             intrinsics[channel] = np.asarray(calibration["camera_intrinsic"], dtype=float)
+            if "distortion" in calibration:
+                distortions[channel] = (calibration["distortion"],
+                                        tuple(calibration.get("distortion_coefficients", ())))
             extrinsics[channel] = _transform(calibration)
             T_world_ego = _transform(by_token["ego_pose"][record["ego_pose_token"]])
         if T_world_ego is None:
@@ -178,7 +186,8 @@ def read_dataset(root, version: str | None = None) -> list[TrainingSample]:
             sample["token"], scene_name.get(sample["scene_token"], ""), int(sample["timestamp"]), images, intrinsics,
             extrinsics, T_world_ego, centers, sizes, np.angle(np.exp(1j * (world_yaw - ego_yaw))), classes,
             np.array([b.get("visibility_token", "") for b in boxes]), np.array([b["instance_token"] for b in boxes]),
-            np.array([_fraction(b) for b in boxes], dtype=float), depths if len(depths) == len(images) else None))
+            np.array([_fraction(b) for b in boxes], dtype=float), depths if len(depths) == len(images) else None,
+            distortions))
     return samples
 
 

@@ -109,10 +109,7 @@ def render_camera(scene: Scene, frame_index: int, camera: Camera, ego: EgoBody |
     w, h = (int(v) for v in size)
     if w <= 0 or h <= 0:
         raise ValueError(f"image size must be two positive integers (width, height), got {size!r}")
-    if camera.lens.is_ideal_pinhole:
-        model = CameraModel.from_fov(camera.fov, (w, h))
-    else:
-        model = CameraModel.of_lens(camera.lens).resized((w, h))
+    model = CameraModel.rendered(camera, (w, h))
     distorted = bool(model.distorted)
     K = model.intrinsic_matrix()
     f = K[0, 0]

@@ -138,6 +138,41 @@ def test_validate_renders_the_design_and_reports_measured_beside_predicted(train
             assert draws == pytest.approx([entry["measured_drop"]] * 1000, abs=1e-4)
 
 
+def test_validate_with_data_feeds_the_perception_cameras_and_keeps_the_whole_design_for_the_record(
+        trained, tmp_path, capsys, monkeypatch):
+    """A design with a near_field fisheye: the detector is fed its perception cameras (the row that stands for
+    the design, its predicted drop theirs), the whole design is measured for the record through its lenses, and
+    the note says so, as without --data. The comparison rigs are left out (they need the designer)."""
+    import dataclasses
+
+    from rigopt.design.near_field import fisheye_190
+    from rigopt.metrics.calibration import load_weights
+    from rigopt.metrics.ranking import predict_transfer
+    from rigopt.rig.library import load_rig
+    from rigopt.rig.pccr_format import write_rig
+    from rigopt.validation import designs
+    from rigopt.validation.detectors.data import RigSplit
+
+    monkeypatch.setattr(designs, "comparison_rigs", lambda design, reference, calibration=None: [("design", design)])
+    r5 = load_rig("R5")
+    fisheye = dataclasses.replace(r5.cameras[0], id="FISHEYE", role="near_field", lens=fisheye_190().lens)
+    design = dataclasses.replace(r5, name="fed", cameras=(*r5.cameras, fisheye))
+    code, stderr = run_cli(capsys, "validate", write_rig(design, tmp_path / "fed.json"), "--ref", "R1", "--model",
+                           "lss", "--data", trained, "--json", "--out", tmp_path / "out.json")
+    assert code == 0, stderr
+    result = json.loads((tmp_path / "out.json").read_text())
+    assert [(e["role"], e["rig"], e["n_cameras"]) for e in result["rigs"]] == [
+        ("perception cameras", "fed_perception", 4), ("whole rig", "fed_whole", 5)]
+    assert RigSplit(trained, "fed_perception", "test").channels == tuple(sorted(c.id for c in r5.cameras))
+    assert "FISHEYE" in RigSplit(trained, "fed_whole", "test").channels
+    assert result["design_minus"] == []  # the whole design is not another rig to beat
+    assert result["near_field"]["whole_rig"] == {"rig": "fed_whole", "n_cameras": 5, "measured": True, "reason": None}
+    perception = predict_transfer(load_rig("R1"), [design.perception()], load_weights("joint", "rigcd"))[0]
+    assert result["rigs"][0]["predicted_drop"] == pytest.approx(perception.predicted_drop)
+    assert ("fed: 1 near_field camera(s) are not fed to the detector: measured on its 4 perception cameras, and "
+            "whole (5 cameras) for the record") in stderr
+
+
 @pytest.mark.parametrize("args, message", [
     (["bench", "train", "--data", "{data}", "--rig", "R1", "--model", "yolo"], "unknown model family 'yolo'"),
     (["bench", "train", "--data", "{data}", "--rig", "R7", "--model", "lss"], "no train split for rig 'R7'"),

@@ -186,8 +186,9 @@ def test_near_field_cameras_are_not_fed_to_the_detector(use_packed, tmp_path, ca
 
 
 @pytest.mark.slow
-def test_a_rig_with_near_field_fisheyes_is_measured_on_its_perception_cameras_only(use_packed, tmp_path, capsys):
-    """The shipped models take pinhole images: a design's fisheyes are named, the whole rig is not measured."""
+def test_a_rig_with_near_field_fisheyes_is_measured_whole_through_its_lenses(use_packed, tmp_path, capsys):
+    """The shipped lss models lift a fisheye's cells along its lens's rays: the perception cameras are fed, the
+    whole rig, fisheye included, is measured for the record."""
     from rigopt.design.near_field import fisheye_190
     from rigopt.rig.pccr_format import write_rig
 
@@ -199,8 +200,11 @@ def test_a_rig_with_near_field_fisheyes_is_measured_on_its_perception_cameras_on
                 "--cache", str(tmp_path / "cache")])
     captured = capsys.readouterr()
     assert code == 0, captured.err
-    assert [(e["role"], e["n_cameras"]) for e in json.loads(captured.out)["rigs"]] == [("perception cameras", 4)]
-    assert "not measured whole" in captured.err and "FISHEYE" in captured.err
+    result = json.loads(captured.out)
+    assert [(e["role"], e["n_cameras"]) for e in result["rigs"]] == [("perception cameras", 4), ("whole rig", 5)]
+    assert all(e["drop"] is not None for e in result["rigs"])
+    assert result["near_field"]["whole_rig"]["measured"] and result["near_field"]["near_field_cameras"] == ["FISHEYE"]
+    assert "and whole (5 cameras) for the record" in captured.err
 
 
 @pytest.mark.slow
