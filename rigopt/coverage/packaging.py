@@ -86,6 +86,15 @@ class ReportDatum:
         """The frame's name, e.g. "ISO 8855, origin on the ground below the rear axle's centre"."""
         return f"ISO 8855, {self.origin}"
 
+    @property
+    def axis_text(self) -> str:
+        """The origin as an axis title names it: "from the rear axle" or "from the vehicle centre"."""
+        return "from the rear axle" if self.origin == REAR_AXLE_ORIGIN else "from the vehicle centre"
+
+
+#: The vehicle-centre frame's datum: the mesh's and the rig file's origin, the coverage page's frame.
+CENTRE_DATUM = ReportDatum(np.zeros(3), "origin on the ground at the vehicle's centre")
+
 
 def report_origin(vehicle: Vehicle) -> ReportDatum:
     """The reports' datum: the ground below the rear axle's centre (:attr:`Vehicle.rear_axle`), or the

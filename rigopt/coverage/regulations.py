@@ -470,7 +470,8 @@ class RegionCoverage:
     positions where some required height is unseen; ``cameras`` (CameraShare, in the rig's order) each camera's
     share, ``overlap_frac`` the share seen by two cameras or more, so that the cameras' ``only_frac`` and
     ``overlap_frac`` add up to ``covered_frac`` (all 0 for a field with no required point, which counts as
-    covered); ``polygon`` the region (vehicle frame, m).
+    covered); ``polygon`` the region (vehicle frame, m); ``n_excluded`` the region's points not asked for, inside
+    the body's footprint or a keep-out in force (on a tractor with its trailer coupled, most of R158's field).
     """
 
     key: str
@@ -488,6 +489,7 @@ class RegionCoverage:
     weighted_covered_frac: float = 1.0
     cameras: tuple[CameraShare, ...] = ()
     overlap_frac: float = 0.0
+    n_excluded: int = 0
 
     @property
     def covered(self) -> bool:
@@ -549,5 +551,6 @@ def region_coverage(rig: Rig, vehicle: Vehicle, presets, spacing: float = 0.1, b
             preset.key, preset.title, preset.source, tuple(preset.heights), _share(seen[needed]),
             tuple(_share(s[n]) for s, n in by_height), points[needed & ~seen], int(needed.sum()),
             float(polygon.area), float(polygon.area * unseen_share), float(spacing), polygon,
-            _share(seen[needed], weights), shares, float(np.mean(count[needed] >= 2)) if needed.any() else 0.0))
+            _share(seen[needed], weights), shares, float(np.mean(count[needed] >= 2)) if needed.any() else 0.0,
+            int((~needed).sum())))
     return tuple(out)

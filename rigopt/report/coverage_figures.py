@@ -2,8 +2,11 @@
 
 Every picture is drawn with forward (+x) up and the vehicle's left (+y) on the left, as seen from above:
 in the polar plots azimuth 0 (forward) is up and azimuths grow counter-clockwise (90 deg = left); in the
-bird's-eye panels the horizontal axis is y with +y to the left. Figures are matplotlib ``Figure`` objects
-(no pyplot) saved as PNG.
+top views (bird's-eye panels, blind zone, regulation fields) the horizontal axis is y with +y to the left,
+and positions are measured from a datum (``datum``, :class:`rigopt.coverage.packaging.ReportDatum`: the
+vehicle's centre by default, the report's datum where its tables use one), which the axis titles name.
+The reports hold vehicle-centre positions; the drawing shifts them. Figures are matplotlib ``Figure``
+objects (no pyplot) saved as PNG.
 """
 
 from __future__ import annotations
@@ -20,6 +23,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
 from rigopt.coverage.measures import CoverageComparison, CoverageReport, RingReport
+from rigopt.coverage.packaging import CENTRE_DATUM, ReportDatum
 from rigopt.coverage.regulations import RegionCoverage
 from rigopt.rig.model import Rig
 
@@ -126,11 +130,18 @@ def figure_png(figure: Figure) -> bytes:
     return buffer.getvalue()
 
 
-def _top(points) -> tuple[np.ndarray, np.ndarray]:
-    """Plot coordinates of vehicle-frame points (..., >= 2) in a forward-up top view: (y, x); the axes that
-    show them have their horizontal axis inverted so that +y (left) is on the left."""
-    points = np.asarray(points, dtype=float)
-    return points[..., 1], points[..., 0]
+def _top(points, origin) -> tuple[np.ndarray, np.ndarray]:
+    """Plot coordinates of vehicle-centre-frame points (..., >= 2) m in a forward-up top view measured from
+    ``origin`` (>= 2,) m, a point in that frame: (y, x); the axes that show them have their horizontal axis
+    inverted so that +y (left) is on the left."""
+    points, origin = np.asarray(points, dtype=float), np.asarray(origin, dtype=float)
+    return points[..., 1] - origin[1], points[..., 0] - origin[0]
+
+
+def _top_titles(ax, datum: ReportDatum) -> None:
+    """Name a top view's axes and the datum they are measured from."""
+    ax.set_xlabel("y left (m), the vehicle's left on the left")
+    ax.set_ylabel(f"x forward (m), {datum.axis_text}")
 
 
 def _polar_axes(ax, title: str) -> None:
@@ -168,62 +179,65 @@ def _count_colours(top: int) -> tuple[ListedColormap, BoundaryNorm]:
     return cmap, BoundaryNorm(np.arange(-0.5, top + 1.0), cmap.N)
 
 
-def _draw_frustums(ax, rig: Rig, labels: bool, inside: tuple[str, ...] = ()) -> None:
-    """Cameras as dots with their horizontal frustum wedge; cameras inside the body as black crosses."""
+def _draw_frustums(ax, rig: Rig, labels: bool, origin, inside: tuple[str, ...] = ()) -> None:
+    """Cameras (vehicle-centre frame) as dots with their horizontal frustum wedge, measured from ``origin``
+    (3,) m; cameras inside the body as black crosses."""
     for camera in rig.cameras:
         half = np.deg2rad(camera.fov / 2.0)
         rays = [camera.rotation @ np.array([np.cos(a), np.sin(a), 0.0]) for a in np.linspace(-half, half, 16)]
         tips = np.array([camera.position + FRUSTUM_DRAW_LENGTH * r for r in rays])
         wedge = np.vstack([camera.position, tips, camera.position])
-        ax.plot(*_top(wedge), color="tab:red", linewidth=0.7, alpha=0.85, zorder=6)
+        ax.plot(*_top(wedge, origin), color="tab:red", linewidth=0.7, alpha=0.85, zorder=6)
         if camera.id in inside:
-            ax.plot(*_top(camera.position), "X", color="black", markersize=6, zorder=7)
+            ax.plot(*_top(camera.position, origin), "X", color="black", markersize=6, zorder=7)
         else:
-            ax.plot(*_top(camera.position), "o", color="tab:red", markersize=3.5, markeredgecolor="white",
+            ax.plot(*_top(camera.position, origin), "o", color="tab:red", markersize=3.5, markeredgecolor="white",
                     markeredgewidth=0.5, zorder=7)
         if labels:
             tip = camera.position + 2.2 * camera.forward
             text = camera.id.removeprefix("CAM_") + (" (inside the body)" if camera.id in inside else "")
-            ax.annotate(text, _top(tip), fontsize=6, color="darkred", ha="center",
+            ax.annotate(text, _top(tip, origin), fontsize=6, color="darkred", ha="center",
                         va="center", zorder=8,
                         bbox={"boxstyle": "round,pad=0.15", "fc": "white", "ec": "none", "alpha": 0.7})
 
 
-def _draw_bev_panel(ax, report: CoverageReport, rig: Rig | None, half: float, cmap, norm, near: bool):
+def _draw_bev_panel(ax, report: CoverageReport, rig: Rig | None, half: float, cmap, norm, near: bool,
+                    datum: ReportDatum):
     bev, footprint = report.bev, report.footprint
-    cell = report.settings.bev_cell
+    cell, origin = report.settings.bev_cell, datum.point
     counts = np.ma.masked_less(bev.counts, 0).T  # rows along x (forward, up), columns along y
-    extent = (bev.y[0] - cell / 2, bev.y[-1] + cell / 2, bev.x[0] - cell / 2, bev.x[-1] + cell / 2)
+    y, x = _top(np.stack([bev.x[[0, -1]], bev.y[[0, -1]]], axis=1), origin)
+    extent = (y[0] - cell / 2, y[1] + cell / 2, x[0] - cell / 2, x[1] + cell / 2)
     image = ax.imshow(counts, origin="lower", extent=extent, cmap=cmap, norm=norm, interpolation="nearest")
-    ax.fill(*_top(footprint.outline), facecolor="white", edgecolor="black", linewidth=1.0, zorder=3)
+    ax.fill(*_top(footprint.outline, origin), facecolor="white", edgecolor="black", linewidth=1.0, zorder=3)
     azimuths = report.settings.azimuths(720)
     for distance in report.settings.ring_distances:
         ring = footprint.ring_points(azimuths, distance, bev.height_m)
         closed = np.vstack([ring, ring[:1]])
-        ax.plot(*_top(closed), color="black", linewidth=0.5, alpha=0.55, zorder=4)
+        ax.plot(*_top(closed, origin), color="black", linewidth=0.5, alpha=0.55, zorder=4)
         if distance < half * 1.3:
             label = footprint.ring_points([np.deg2rad(30.0)], distance, bev.height_m)[0]
-            ax.annotate(f"{distance:g} m", _top(label), fontsize=6 if near else 7, color="black", zorder=5,
+            ax.annotate(f"{distance:g} m", _top(label, origin), fontsize=6 if near else 7, color="black", zorder=5,
                         bbox={"boxstyle": "round,pad=0.1", "fc": "white", "ec": "none", "alpha": 0.6})
     if rig is not None:
-        _draw_frustums(ax, rig, labels=near, inside=report.cameras_inside)
-    cx, cy = footprint.centre
+        _draw_frustums(ax, rig, near, origin, report.cameras_inside)
+    cy, cx = _top(footprint.centre, origin)
     ax.set_xlim(cy + half, cy - half)  # +y (left) on the left
     ax.set_ylim(cx - half, cx + half)
     ax.set_aspect("equal")
-    ax.set_xlabel("y (m), left <-> right")
-    ax.set_ylabel("x (m), forward up")
+    _top_titles(ax, datum)
     return image
 
 
-def bev_figure(report: CoverageReport, rig: Rig | None = None) -> Figure:
-    """Two bird's-eye panels (full extent and +-15 m) of how many cameras see each cell at the map's height."""
+def bev_figure(report: CoverageReport, rig: Rig | None = None, datum: ReportDatum = CENTRE_DATUM) -> Figure:
+    """Two bird's-eye panels (full extent and +-15 m) of how many cameras see each cell at the map's height,
+    positions measured from ``datum``."""
     top = max(int(report.bev.counts.max(initial=0)), 1)
     cmap, norm = _count_colours(top)
     figure = Figure(figsize=(14, 7.2), dpi=DPI, layout="constrained")
     full, near = figure.subplots(1, 2)
-    image = _draw_bev_panel(full, report, rig, report.settings.bev_extent, cmap, norm, near=False)
-    _draw_bev_panel(near, report, rig, NEAR_HALF_SIZE, cmap, norm, near=True)
+    image = _draw_bev_panel(full, report, rig, report.settings.bev_extent, cmap, norm, False, datum)
+    _draw_bev_panel(near, report, rig, NEAR_HALF_SIZE, cmap, norm, True, datum)
     full.set_title(f"full extent (+-{report.settings.bev_extent:g} m)")
     near.set_title(f"near view (+-{NEAR_HALF_SIZE:g} m)" + (", frustums 10 m" if rig is not None else ""))
     rings = ", ".join(f"{d:g}" for d in report.settings.ring_distances)
@@ -234,10 +248,10 @@ def bev_figure(report: CoverageReport, rig: Rig | None = None) -> Figure:
     return figure
 
 
-def write_bev_figure(report: CoverageReport, path, rig: Rig | None = None) -> Path:
-    """The bird's-eye count map of ``report`` (with ``rig``'s cameras and frustum wedges when given); PNG at
-    ``path``."""
-    return _save(bev_figure(report, rig), path)
+def write_bev_figure(report: CoverageReport, path, rig: Rig | None = None, datum: ReportDatum = CENTRE_DATUM) -> Path:
+    """The bird's-eye count map of ``report`` (with ``rig``'s cameras and frustum wedges when given), measured
+    from ``datum``; PNG at ``path``."""
+    return _save(bev_figure(report, rig, datum), path)
 
 
 # ------------------------------------------------------------------------------------------------ rings
@@ -302,9 +316,10 @@ def _blind_outline(report: CoverageReport) -> np.ndarray:
     return points
 
 
-def blind_figure(report: CoverageReport) -> Figure:
-    """Left: polar plot of the blind distance per azimuth; right: the same boundary on the ground, top view."""
-    blind, settings = report.blind, report.settings
+def blind_figure(report: CoverageReport, datum: ReportDatum = CENTRE_DATUM) -> Figure:
+    """Left: polar plot of the blind distance per azimuth; right: the same boundary on the ground, top view
+    measured from ``datum``."""
+    blind, settings, origin = report.blind, report.settings, datum.point
     missing = ~np.isfinite(blind.distance_m)
     shown = np.where(missing, settings.blind_search, blind.distance_m)
     figure = Figure(figsize=(13.5, 6.6), dpi=DPI, layout="constrained")
@@ -327,22 +342,21 @@ def blind_figure(report: CoverageReport) -> Figure:
 
     outline = _blind_outline(report)
     closed = np.vstack([outline, outline[:1]])
-    ground.fill(*_top(closed), facecolor="tab:red", alpha=0.15, linewidth=0)
-    ground.plot(*_top(closed), color="tab:red", linewidth=1.2)
+    ground.fill(*_top(closed, origin), facecolor="tab:red", alpha=0.15, linewidth=0)
+    ground.plot(*_top(closed, origin), color="tab:red", linewidth=1.2)
     if missing.any():
-        ground.plot(*_top(outline[missing]), "x", color="darkred", markersize=3)
+        ground.plot(*_top(outline[missing], origin), "x", color="darkred", markersize=3)
     radius = report.footprint.ring_points(settings.azimuths(720), blind.radius_m, 0.0)
-    ground.plot(*_top(np.vstack([radius, radius[:1]])), color="black", linestyle="--", linewidth=0.8)
-    ground.fill(*_top(report.footprint.outline), facecolor="white", edgecolor="black", linewidth=1.0)
+    ground.plot(*_top(np.vstack([radius, radius[:1]]), origin), color="black", linestyle="--", linewidth=0.8)
+    ground.fill(*_top(report.footprint.outline, origin), facecolor="white", edgecolor="black", linewidth=1.0)
     reach = max(float(np.max(np.abs(closed - report.footprint.centre))), float(np.max(np.abs(
         radius[:, :2] - report.footprint.centre)))) + 1.0
-    cx, cy = report.footprint.centre
+    cy, cx = _top(report.footprint.centre, origin)
     ground.set_xlim(cy + reach, cy - reach)
     ground.set_ylim(cx - reach, cx + reach)
     ground.set_aspect("equal")
     ground.grid(alpha=0.3)
-    ground.set_xlabel("y (m), left <-> right")
-    ground.set_ylabel("x (m), forward up")
+    _top_titles(ground, datum)
     ground.set_title(f"top view: unseen ground area within {blind.radius_m:g} m = {blind.area_m2:.1f} m2")
     finite = blind.distance_m[~missing]
     median = float(np.median(blind.distance_m))
@@ -354,41 +368,43 @@ def blind_figure(report: CoverageReport) -> Figure:
     return figure
 
 
-def write_blind_figure(report: CoverageReport, path) -> Path:
+def write_blind_figure(report: CoverageReport, path, datum: ReportDatum = CENTRE_DATUM) -> Path:
     """Polar plot of the blind distance per azimuth (never seen: drawn at the search limit, marked x) and its
-    top view; PNG at ``path``."""
-    return _save(blind_figure(report), path)
+    top view measured from ``datum``; PNG at ``path``."""
+    return _save(blind_figure(report, datum), path)
 
 
 # ------------------------------------------------------------------------------------- regulation fields
 
 
 def regions_figure(regions: tuple[RegionCoverage, ...], report: CoverageReport | RingReport,
-                   rig: Rig | None = None) -> Figure:
+                   rig: Rig | None = None, datum: ReportDatum = CENTRE_DATUM) -> Figure:
     """Top view of the regulation fields (outlines) over the body, the ground positions where some height is
-    unseen marked, and ``rig``'s cameras with their frustum wedges; forward up, the vehicle's left on the left.
-    Either report kind: only its footprint and cameras inside the body are drawn."""
+    unseen marked, and ``rig``'s cameras with their frustum wedges; forward up, the vehicle's left on the left,
+    positions measured from ``datum``. Either report kind: only its footprint and cameras inside the body are
+    drawn."""
+    origin = datum.point
     bounds = [report.footprint.polygon.bounds] + [r.polygon.bounds for r in regions if not r.polygon.is_empty]
-    low, high = np.min([b[:2] for b in bounds], axis=0) - 1.0, np.max([b[2:] for b in bounds], axis=0) + 1.0
+    low = np.min([b[:2] for b in bounds], axis=0) - 1.0 - origin[:2]
+    high = np.max([b[2:] for b in bounds], axis=0) + 1.0 - origin[:2]
     aspect = (high[1] - low[1]) / (high[0] - low[0])  # across / along, as drawn
     figure = Figure(figsize=(float(np.clip(9.0 * aspect + 1.5, 6.0, 16.0)), 9.0), dpi=DPI, layout="constrained")
     ax = figure.subplots()
-    ax.fill(*_top(report.footprint.outline), facecolor="white", edgecolor="black", linewidth=1.0, zorder=3)
+    ax.fill(*_top(report.footprint.outline, origin), facecolor="white", edgecolor="black", linewidth=1.0, zorder=3)
     palette = colormaps["tab10"]
     for k, region in enumerate(regions):
         colour = palette(k % 10)
         for ring in _rings(region.polygon) if not region.polygon.is_empty else []:
-            ax.plot(*_top(ring), color=colour, linewidth=1.2, zorder=4)
+            ax.plot(*_top(ring, origin), color=colour, linewidth=1.2, zorder=4)
         unseen = np.unique(np.round(region.unseen[:, :2], 6), axis=0) if len(region.unseen) else np.zeros((0, 2))
-        ax.plot(*_top(unseen), ".", color=colour, markersize=1.2, alpha=0.6, zorder=2,
+        ax.plot(*_top(unseen, origin), ".", color=colour, markersize=1.2, alpha=0.6, zorder=2,
                 label=f"{region.key}: {100 * region.covered_frac:.1f} % seen ({region.unseen_area_m2:.1f} m² unseen)")
     if rig is not None:
-        _draw_frustums(ax, rig, labels=False, inside=report.cameras_inside)
+        _draw_frustums(ax, rig, False, origin, report.cameras_inside)
     ax.set_xlim(high[1], low[1])  # +y (left) on the left
     ax.set_ylim(low[0], high[0])
     ax.set_aspect("equal")
-    ax.set_xlabel("y (m), left <-> right")
-    ax.set_ylabel("x (m), forward up")
+    _top_titles(ax, datum)
     ax.legend(loc="best", fontsize=7, markerscale=6)
     ax.set_title(f"{report.rig} on {report.vehicle}: regulation fields (outlines)\nand their unseen ground positions "
                  "(dots: some height unseen)", fontsize=9)
@@ -401,6 +417,6 @@ def _rings(geometry) -> list[np.ndarray]:
 
 
 def write_regions_figure(regions: tuple[RegionCoverage, ...], report: CoverageReport | RingReport, path,
-                         rig: Rig | None = None) -> Path:
+                         rig: Rig | None = None, datum: ReportDatum = CENTRE_DATUM) -> Path:
     """The regulation fields figure (:func:`regions_figure`) as a PNG at ``path``."""
-    return _save(regions_figure(regions, report, rig), path)
+    return _save(regions_figure(regions, report, rig, datum), path)

@@ -14,6 +14,7 @@ import numpy as np
 import shapely
 
 from rigopt.coverage.measures import CoverageComparison, CoverageReport
+from rigopt.coverage.packaging import CENTRE_DATUM
 from rigopt.report.coverage_figures import (
     bev_figure,
     blind_figure,
@@ -27,7 +28,7 @@ from rigopt.report.coverage_figures import (
     write_regions_figure,
     write_rings_figure,
 )
-from rigopt.report.coverage_tables import camera_field_rows, regions_dict
+from rigopt.report.coverage_tables import field_tables_html, regions_dict
 from rigopt.report.html_page import escape, image, num, page, pct, table
 from rigopt.report.json_values import json_ready
 from rigopt.rig.model import Rig
@@ -112,29 +113,8 @@ def render_html(report: CoverageReport, rig: Rig, comparison: CoverageComparison
     parts.append(table(header, rows))
 
     if regions:
-        fields = regions_dict(regions)
         parts.append("<h2>Regulation fields</h2>")
-        parts.append('<p class="note">Share of each field\'s required points (a grid and the field\'s outline, at '
-                     "every height) seen by at least one camera, and the field's ground where some height is unseen; "
-                     "weighted: each point weighted by its criticality (nearer the body and the nearside front corner "
-                     "weighs more). A field is covered when every point is. Fields, figures and sources: "
-                     "docs/regulations.md.</p>")
-        rows = []
-        for region in fields:
-            heights = ", ".join(f"{h['height_m']:g} m {100 * h['covered_frac']:.1f} %"
-                                for h in region["height_covered_frac"])
-            rows.append([f"<td>{escape(region['key'])}</td>", f"<td>{escape(region['title'])}</td>",
-                         "yes" if region["covered"] else "no", pct(region["covered_frac"]),
-                         num(region["unseen_area_m2"], 1, " m²"), pct(region["weighted_covered_frac"]),
-                         f"<td>{escape(heights)}</td>", num(region["area_m2"], 1, " m²"),
-                         f"<td>{escape(region['source'])}</td>"])
-        parts.append(table(["field", "what", "covered", "seen", "unseen area", "weighted seen", "seen per height",
-                            "area", "source"], rows))
-        columns, rows = camera_field_rows(fields)
-        parts.append('<p class="note">Which camera covers which field: the share of each field\'s required points a '
-                     "camera sees and, in brackets, sees alone; the alone shares and the share seen by two cameras or "
-                     "more add up to the share seen by any.</p>")
-        parts.append(table(columns, [[f"<td>{escape(row[0])}</td>", *(escape(c) for c in row[1:])] for row in rows]))
+        parts += field_tables_html(regions_dict(regions))
 
     parts.append("<h2>Blind zone and bird's-eye view</h2>")
     blind, bev = data["blind_distance_m"], data["bev"]
@@ -168,7 +148,8 @@ def render_html(report: CoverageReport, rig: Rig, comparison: CoverageComparison
                      num(spec.fov, 1, "°") if spec is not None else "-",
                      escape(spec.lens.label()) if spec is not None else "-", pct(camera["self_occluded_frac"]),
                      f"<td>{escape(overlaps)}</td>"])
-    parts.append(table(["camera", "position (m)", "hfov", "lens", "self-occluded", "overlaps"], rows))
+    parts.append(table(["camera", f"position x, y, z (m, {CENTRE_DATUM.axis_text})", "hfov", "lens", "self-occluded",
+                        "overlaps"], rows))
 
     if comparison is not None:
         diff = comparison_dict(comparison)
@@ -202,6 +183,8 @@ def render_html(report: CoverageReport, rig: Rig, comparison: CoverageComparison
                   f"{escape(FRAME_TEXT)}.</p>", scene]
     if figures:
         parts.append("<h2>Figures</h2>")
+        parts.append(f'<p class="note">Positions in the top views as in the camera table: {escape(CENTRE_DATUM.frame)} '
+                     "(x forward, y left, metres).</p>")
         for name in ("bev", "rings", "blind", "regions"):
             if name in figures:
                 parts.append(image(figures[name], f"{name} figure of {report.rig}", _CAPTIONS[name]))

@@ -6,6 +6,7 @@ from datetime import datetime, timezone
 from pathlib import Path
 
 
+from rigopt.report.coverage_tables import field_tables_html
 from rigopt.report.html_page import escape, image, num, page, pct, table
 
 _CAPTIONS = {
@@ -14,8 +15,8 @@ _CAPTIONS = {
     "naive_transfer": "The naive transfer: each reference camera moved to the nearest mount point facing its way.",
     "coverage": "Camera count per azimuth on each ring: the design solid, the reference (on its own vehicle) "
                 "dashed. Forward is up, the vehicle's left on the left.",
-    "fields": "The regulation fields over the design's near-field blind zones (ISO vehicle frame, x forward, "
-              "y left): unseen field points marked.",
+    "fields": "The regulation fields over the design's near-field blind zones (x forward, y left): unseen field "
+              "points marked.",
 }
 
 
@@ -28,8 +29,10 @@ def _distortion_text(lens: dict) -> str:
 
 def _match_text(camera: dict) -> str:
     match = camera.get("matched_reference_camera")
+    if match is None and camera.get("role") == "near_field":
+        return "- (near-field camera: not fed to the detector, not compared)"
     if match is None:
-        return "- (no partner: more cameras than the reference)"
+        return "- (no partner: more perception cameras than the reference)"
     return f"{match['id']} ({match['t_m']:.2f}, {match['r_rad']:.2f}, {match['f_deg']:.1f})"
 
 
@@ -65,7 +68,8 @@ def scene_section(scene: str, compared: str | None, frame: str | None = None) ->
             '<p class="note">Drag to turn, scroll to zoom, hover for details; click a legend entry to hide or show '
             "it. The design's cameras with their frustums to "
             f"{FRUSTUM_RANGE_M:g} m (lines to the image corners along the lens's own corner rays, outline through "
-            "its edges' rays) and, in the camera's colour on the ground, where each frustum meets the ground; the "
+            "its edges' rays; a ray that meets the ground sooner ends there) and, in the camera's colour on the "
+            "ground, where each frustum meets the ground; the "
             "mounting zones as in the pictures, the keep-outs in orange, the wheels (not mountable) dark grey."
             f"{grey} Frame: {escape(where)}.</p>",
             scene]
@@ -125,6 +129,22 @@ def packaging_section(packaging: list[dict], frame: str) -> list[str]:
             "docs/design.md and rigopt/coverage/packaging.py.</p>"]
 
 
+def breakdown_note(summary: dict) -> str:
+    """The note giving the RigCD breakdown (``summary["rigcd_breakdown"]``, unit weights) of the reference to the
+    design's perception cameras, the ones ``rigopt rigcd`` compares; it says how many near-field cameras were
+    left out (``summary["roles"]``)."""
+    values = dict(summary["rigcd_breakdown"])
+    compared = values.pop("design_cameras", summary["n_cameras"])
+    reference = values.pop("reference_cameras", None)
+    near_field = summary.get("roles", {}).get("near_field", 0)
+    left_out = (f"; as rigopt rigcd compares them, the design's {near_field} near-field "
+                f"camera{'s' if near_field != 1 else ''}, not fed to the detector, left out" if near_field else "")
+    of_reference = f"'s {reference} cameras" if reference is not None else ""
+    return (f'<p class="note">RigCD of the reference{escape(of_reference)} to the {compared} perception cameras of the '
+            f"design (unit weights{escape(left_out)}): "
+            + escape("; ".join(f"{k} {v:.3f}" for k, v in values.items())) + ".</p>")
+
+
 def render_design_html(summary: dict, figures: dict[str, bytes], scene: str | None = None,
                        compared: str | None = None) -> str:
     """The page for ``summary`` (the ``design_dict`` of a result) and PNG ``figures`` by name; ``scene``: the
@@ -180,8 +200,7 @@ def render_design_html(summary: dict, figures: dict[str, bytes], scene: str | No
                 escape(f"{c['lens']['hfov_deg']:.1f}° x {c['lens']['vfov_deg']:.1f}°"), escape(_match_text(c)),
                 num(c.get("zone_cost"), 2, ""), escape(c.get("spray") or "-")]
                for c in summary["cameras"]], numeric_from=4),
-        "<p class=\"note\">RigCD of the reference to the design (unit weights): " + escape(
-            "; ".join(f"{k} {v:.3f}" for k, v in summary["rigcd_breakdown"].items())) + ".</p>",
+        breakdown_note(summary),
         f'<p class="note">Positions and angles in this report: {escape(frame)} (x forward, y left, z up). The rig '
         f'file, {escape(summary["rig_file"])} beside this report, is in the benchmark\'s JSON format, whose frame is '
         "CARLA's (origin at the vehicle's centre, y to the right).</p>",
@@ -191,19 +210,13 @@ def render_design_html(summary: dict, figures: dict[str, bytes], scene: str | No
     if summary.get("regions"):
         state = ("reported, not required (--require to enforce)" if not summary["regions_required"] else
                  "required of the near-field cameras" if summary["solver"].get("near_field") else "required")
-        parts += [f"<h2>Regulation fields ({escape(state)})</h2>",
-                  table(["field", "source", "seen", "seen per height", "unseen area"],
-                        [[escape(r["key"]), escape(r["source"]), pct(r["covered_frac"]),
-                          escape(", ".join(f"{h['height_m']:g} m {h['covered_frac']:.1%}"
-                                           for h in r["height_covered_frac"])),
-                          num(r["unseen_area_m2"], 2, " m²")] for r in summary["regions"]], numeric_from=2),
-                  '<p class="note">Every point of each field (grid and outline every '
-                  f'{summary["regions"][0]["spacing_m"]:g} m, at each test-object height) checked with occlusion; '
-                  "geometry and sources in docs/regulations.md.</p>"]
+        parts += [f"<h2>Regulation fields ({escape(state)})</h2>", *field_tables_html(summary["regions"])]
     if scene is not None:
         parts += scene_section(scene, compared, summary.get("frame"))
     if figures:
-        parts.append("<h2>Pictures</h2>")
+        parts += ["<h2>Pictures</h2>",
+                  f'<p class="note">Positions in the pictures as in the tables: {escape(frame)} (x forward, y left, '
+                  "z up, metres); the reference rig on its own vehicle, from that vehicle's datum.</p>"]
         parts += [image(figures[name], name, _CAPTIONS.get(name, name)) for name in _CAPTIONS if name in figures]
     parts += ["<h2>Next steps</h2>", "<p>In this folder:</p>", "<ul>",
               *(f"<li><code>{escape(command)}</code>: {escape(why)}</li>" for command, why in NEXT_STEPS), "</ul>"]

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -13,6 +14,9 @@ from rigopt.report.json_values import json_ready
 from rigopt.rig.model import Rig
 from rigopt.rig.pccr_format import write_rig
 from rigopt.vehicle.symmetry import rig_symmetry
+
+if TYPE_CHECKING:
+    from rigopt.metrics.rigcd import RigCDBreakdown
 
 
 def prediction_extras(p) -> dict:
@@ -50,7 +54,8 @@ def camera_rows(rig: Rig, reference: Rig, pairs, vehicle=None) -> list[dict]:
     from the ground below the rear axle's centre, :func:`rigopt.coverage.packaging.report_origin`, or from the
     vehicle centre without a ``vehicle``; yaw > 0 turns left, pitch > 0 tilts up), and the reference camera
     it is matched to by RigCD (unit weights) with that pair's t (m), r (rad), f (deg) (``pairs``:
-    RigCDBreakdown.pairs, (reference id, rig id)); with the ``vehicle``, its zone's mounting ``zone_cost`` and
+    RigCDBreakdown.pairs, (reference id, rig id), of the perception cameras, :func:`perception_breakdown`: a
+    near-field camera has none); with the ``vehicle``, its zone's mounting ``zone_cost`` and
     its tyre ``spray`` exposure (high / low). ``rig`` is in the vehicle-centre frame (the design's); CARLA's
     frame appears only in the rig file."""
     from rigopt.coverage.packaging import report_origin
@@ -110,6 +115,19 @@ def breakdown_dict(b) -> dict:
     return {"rigcd": b.rigcd, "match": b.match, "count": b.count, "t_m": b.t, "r_rad": b.r, "f_deg": b.f}
 
 
+def perception_breakdown(reference: Rig, rig: Rig) -> tuple[RigCDBreakdown, dict]:
+    """The unit-weight RigCD of ``reference`` to ``rig`` as ``rigopt rigcd`` gives it: of their perception cameras
+    only (the detector's; near-field cameras are left out). Returns the RigCDBreakdown (its ``pairs`` match each
+    perception camera of ``rig`` to a reference camera) and its JSON values: :func:`breakdown_dict` with the
+    cameras compared, ``reference_cameras`` and ``design_cameras``."""
+    from rigopt.metrics.rigcd import rigcd
+
+    reference, perception = reference.perception(), rig.perception()
+    breakdown = rigcd(reference, perception)
+    return breakdown, {**breakdown_dict(breakdown), "reference_cameras": len(reference),
+                       "design_cameras": len(perception)}
+
+
 def symmetry_dict(result: DesignResult) -> dict:
     """The design's mirror symmetry: whether it was asked for, the vehicle's, and the pairs it has."""
     symmetry = rig_symmetry(result.design.rig)
@@ -127,12 +145,11 @@ def design_dict(result: DesignResult, rig_file: Path | None) -> dict:
     """The ``rigopt design --json`` object (and the body of report.json). Positions are in one frame, named by
     ``frame`` (ISO 8855 from the ground below the rear axle's centre, :func:`frame_dict`): the cameras'
     poses and the ``packaging`` sheets (:func:`packaging_rows`); CARLA's frame is only the rig file's."""
-    from rigopt.metrics.rigcd import rigcd
     from rigopt.report.coverage_tables import regions_dict
 
     design, milp, comparisons = result.design, result.milp, result.comparisons
     reference = result.references[0].rig
-    breakdown = rigcd(reference, design.rig)  # unit weights: the matching each camera reports
+    breakdown, breakdown_values = perception_breakdown(reference, design.rig)  # the matching each camera reports
     summary = {
         "rig_file": str(rig_file) if rig_file else None,
         "vehicle": design.rig.vehicle,
@@ -168,7 +185,7 @@ def design_dict(result: DesignResult, rig_file: Path | None) -> dict:
         "regions_required": result.settings.require != "none",
         "regions_fallback": result.fields_fallback,
         "regions": regions_dict(result.regions),
-        "rigcd_breakdown": breakdown_dict(breakdown),
+        "rigcd_breakdown": breakdown_values,
         "comparisons": {
             "naive_transfer": ({**summary_dict(comparisons.naive_transfer, result.vehicle),
                                 "refinement": comparisons.naive_refinement} if comparisons.naive_transfer else None),
@@ -212,22 +229,27 @@ def write_design_pictures(vehicle, reference, design: Rig, naive: Rig | None, re
     """The design's pictures in ``out_dir``: design.png, reference.png (``reference``, a ReferenceRig, on its own
     vehicle), naive_transfer.png (``naive``, when there is one), coverage.png (the design's rings beside the
     reference's) and, with ``regions`` (RegionCoverage), fields.png (the regulation fields over the near-field
-    blind zones). Returns {picture name: path}. A module-level function of picklable values: it may run in a
-    background worker."""
+    blind zones). Positions are drawn in the tables' frame (:func:`frame_dict`: from the datum of
+    :func:`rigopt.coverage.packaging.report_origin`), the reference on its own vehicle from that vehicle's datum.
+    Returns {picture name: path}. A module-level function of picklable values: it may run in a background
+    worker."""
     from rigopt.coverage.measures import ring_report
+    from rigopt.coverage.packaging import report_origin
     from rigopt.report.coverage_figures import write_regions_figure, write_rings_figure
     from rigopt.report.vehicle_figures import write_vehicle_figure
 
     out_dir = Path(out_dir)
-    pictures = {"design": write_vehicle_figure(vehicle, out_dir / "design.png", design),
-                "reference": write_vehicle_figure(reference.vehicle, out_dir / "reference.png", reference.rig)}
+    datum = report_origin(vehicle)
+    pictures = {"design": write_vehicle_figure(vehicle, out_dir / "design.png", design, datum),
+                "reference": write_vehicle_figure(reference.vehicle, out_dir / "reference.png", reference.rig,
+                                                  report_origin(reference.vehicle))}
     if naive is not None:
-        pictures["naive_transfer"] = write_vehicle_figure(vehicle, out_dir / "naive_transfer.png", naive)
+        pictures["naive_transfer"] = write_vehicle_figure(vehicle, out_dir / "naive_transfer.png", naive, datum)
     design_coverage = ring_report(design, vehicle)
     reference_coverage = ring_report(reference.rig, reference.vehicle)
     pictures["coverage"] = write_rings_figure(design_coverage, out_dir / "coverage.png", compare=reference_coverage)
     if regions:
-        pictures["fields"] = write_regions_figure(regions, design_coverage, out_dir / "fields.png", design)
+        pictures["fields"] = write_regions_figure(regions, design_coverage, out_dir / "fields.png", design, datum)
     return pictures
 
 

@@ -1,6 +1,7 @@
 """A camera's frustum as the reports draw it: lines to its image's corners and its outline along the real
-lens's rays (:func:`frustum_lines`), ended on a plane across the axis or on a sphere (:func:`_frustum_cap`),
-and where that solid meets the ground (:func:`frustum_footprint`). Vehicle frame: ISO 8855 (x forward, y left,
+lens's rays (:func:`frustum_lines`), ended on a plane across the axis or on a sphere (:func:`_frustum_cap`)
+and, as drawn, at the ground (:func:`ended_at_ground`), and where that solid meets the ground
+(:func:`frustum_footprint`). Vehicle frame: ISO 8855 (x forward, y left,
 z up), metres, the ground at z = 0; the camera as placed on its vehicle (the vehicle-centre frame)."""
 
 from __future__ import annotations
@@ -60,6 +61,19 @@ def frustum_lines(camera: Camera, frustum_range: float = FRUSTUM_RANGE_M) -> tup
     distance = reach / rays[:, 0] if kind == "plane" else np.full(len(rays), reach)
     points = camera.position + (distance[:, None] * rays) @ camera.rotation.T
     return points[:4], points[4:]
+
+
+def ended_at_ground(lens: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """(k, 3) float m: ``points`` (k, 3) m, each on its ray from ``lens`` (3,) m (vehicle frame), with those below
+    the ground moved back along their ray to where it meets the ground z = 0, so that a drawn frustum line
+    ends there; points at or above the ground, and every point of a lens not above it, stay."""
+    points = np.array(points, dtype=float)
+    below = points[:, 2] < 0
+    if lens[2] > 0 and below.any():
+        share = lens[2] / (lens[2] - points[below, 2])  # of the way from the lens to the point: in (0, 1)
+        points[below] = lens + share[:, None] * (points[below] - lens)
+        points[below, 2] = 0.0
+    return points
 
 
 def frustum_footprint(camera: Camera, frustum_range: float = FRUSTUM_RANGE_M):

@@ -16,8 +16,9 @@ another origin (its rear axle) is placed on the vehicle first. What is drawn:
 - each camera: a marker at its lens (hover: id, zone, pose from the datum, lens), its frustum: lines from
   the lens to the image's four corners ``frustum_range`` m (default 5 m) away along the real lens's corner
   rays, and the image's outline through the rays of points along its edges (so a distorted lens draws its
-  true, curved outline; see :func:`frustum_lines`), and where that frustum meets the ground, translucent in
-  the camera's colour (:func:`frustum_footprint`);
+  true, curved outline; see :func:`frustum_lines`), each ray ended at the ground where it meets it sooner
+  (:func:`ended_at_ground`), and where that frustum meets the ground, translucent in the camera's colour
+  (:func:`frustum_footprint`);
 - optionally a second rig in grey (``compare``, frustums only) and ground regions (translucent polygons at
   z = 0).
 
@@ -38,7 +39,7 @@ import numpy as np
 from rigopt.errors import RigoptError
 from rigopt.geometry import clip_polygon, yaw_pitch_roll_from_rotation
 from rigopt.mounting.practice import keep_out_boxes
-from rigopt.report.frustums import FRUSTUM_RANGE_M, frustum_footprint, frustum_lines
+from rigopt.report.frustums import FRUSTUM_RANGE_M, ended_at_ground, frustum_footprint, frustum_lines
 from rigopt.rig.model import Camera, Rig
 from rigopt.vehicle.model import Vehicle
 from rigopt.vehicle.placement import to_vehicle_centre
@@ -281,13 +282,14 @@ def _camera_traces(go, rig: Rig, frustum_range: float, dimmed: bool, origin=None
     footprint (:func:`frustum_footprint`), in one legend group so that one click shows or hides them.
 
     The frustum trace's x, y, z: for each corner (top-left, top-right, bottom-right, bottom-left) the lens
-    and that corner, then a gap (None); then the image outline (:func:`frustum_lines`)."""
+    and that corner, then a gap (None); then the image outline (:func:`frustum_lines`); every point below the
+    ground is taken back along its ray to the ground (:func:`ended_at_ground`), so no line runs under it."""
     traces = []
     for n, camera in enumerate(rig.cameras):
         colour = _COMPARE_GREY if dimmed else _CAMERA_COLOURS[n % len(_CAMERA_COLOURS)]
         name = f"{rig.name}: {camera.id}" if dimmed else camera.id
         group = f"camera {rig.name} {camera.id}"
-        corners, outline = frustum_lines(camera, frustum_range)
+        corners, outline = (ended_at_ground(camera.position, p) for p in frustum_lines(camera, frustum_range))
         x, y, z = _polylines([np.stack([camera.position, c]) for c in corners] + [outline])
         traces.append(go.Scatter3d(x=x, y=y, z=z, mode="lines", name=name, legendgroup=group, showlegend=True,
                                    line=dict(color=colour, width=2 if dimmed else 3, dash="dash" if dimmed else "solid"),
@@ -457,13 +459,13 @@ def scene_figure(vehicle: Vehicle, rig: Rig | None = None, *, regions: Sequence[
     The view opens framed on the vehicle (:func:`framed_scene`), the legend beside the scene."""
     import plotly.graph_objects as go
 
+    from rigopt.coverage.packaging import CENTRE_DATUM, report_origin
     from rigopt.report.palette import zone_colours
 
     if not frustum_range > 0:
         raise RigoptError(f"the frustum range must be positive (m), got {frustum_range}")
     origin, _ = view_datum(vehicle, datum)
-    origin_text = "from the rear axle" if datum == "rear_axle" and vehicle.rear_axle is not None else \
-        "from the vehicle centre"
+    origin_text = (report_origin(vehicle) if datum == "rear_axle" else CENTRE_DATUM).axis_text
     triangles, labels, missing = body_triangles(vehicle, max_faces)
     colours = {name: "rgb({:.0f}, {:.0f}, {:.0f})".format(*(255 * np.array(c[:3])))
                for name, c in zone_colours(vehicle).items()}

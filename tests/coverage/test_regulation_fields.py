@@ -23,7 +23,9 @@ from rigopt.coverage.regulations import (
     PRESETS,
     R46_HORIZON_CUT,
     FieldPolygon,
+    boundary_samples,
     criticality_weights,
+    grid_inside,
     region_coverage,
     required_mask,
 )
@@ -253,18 +255,26 @@ def test_a_field_with_no_required_point_has_no_camera_share(tmp_path_factory, bo
     (result,) = region_coverage(rig(camera([2.03, 0.0, 1.0], id="FRONT")), coupled, [PRESETS["r158"]], spacing=0.2)
     assert result.n_points == 0 and result.covered and result.covered_frac == 1.0
     assert result.cameras[0].seen_frac == 0.0 and result.overlap_frac == 0.0
+    # every point of the field lies under the trailer: counted as not asked for, so a "100 %" says what it rests on
+    polygon = PRESETS["r158"].polygon(coupled)
+    total = len(grid_inside(polygon, 0.2)) + len(boundary_samples(polygon, 0.2))
+    assert result.n_excluded == total * len(PRESETS["r158"].heights) > 0
+    (solo,) = region_coverage(rig(camera([2.03, 0.0, 1.0], id="FRONT")), coupled, [PRESETS["r158"]], spacing=0.2,
+                              lifted=("trailer",))
+    assert solo.n_excluded == 0 and solo.n_points == result.n_excluded
 
 
-def test_the_camera_field_table_lists_every_camera_and_the_totals(box_vehicle, camera, rig):
+def test_the_camera_field_table_lists_every_camera_seeing_a_field_and_the_totals(box_vehicle, camera, rig):
     from rigopt.report.coverage_tables import camera_field_rows, regions_dict
 
     cameras = rig(camera([-2.03, 0.0, 1.45], yaw_deg=180.0, pitch_deg=-50.0, fov=150.0, id="REAR"),
-                  camera([2.03, 0.0, 1.0], fov=120.0, id="FRONT"))
+                  camera([2.03, 0.0, 1.0], fov=120.0, id="FRONT"),
+                  camera([0.0, 0.0, 1.51], pitch_deg=80.0, fov=60.0, id="SKY"))
     regions = regions_dict(region_coverage(cameras, box_vehicle, [PRESETS["r158"], PRESETS["r159"]], spacing=0.2))
     columns, rows = camera_field_rows(regions)
     assert columns == ["camera", "r158", "r159"]
-    assert [row[0] for row in rows] == ["REAR", "FRONT", "seen by >= 2", "seen by any"]
-    assert rows[0][1] == "100.0 % (100.0 % alone)" and rows[1][1] == "0.0 % (0.0 % alone)"
+    assert [row[0] for row in rows] == ["REAR", "FRONT", "seen by >= 2", "seen by any"]  # SKY sees no field
+    assert rows[0][1] == "100.0 % (100.0 % alone)" and rows[1][1] == "0.0 %"  # alone: only where it is so
     assert rows[3][2] == f"{100 * regions[1]['covered_frac']:.1f} %"
 
 

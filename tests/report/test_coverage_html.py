@@ -85,7 +85,8 @@ def test_the_folder_holds_the_page_the_json_and_the_figures(report):
 
 def test_every_camera_has_its_row_with_its_lens(report):
     rig, parts, _ = report
-    cameras = next(t for t in parts.tables if t[0][:3] == ["camera", "position (m)", "hfov"])
+    cameras = next(t for t in parts.tables if t[0][:3] == ["camera", "position x, y, z (m, from the vehicle centre)",
+                                                           "hfov"])
     rows = {row[0]: row for row in cameras[1:]}
     assert sorted(rows) == sorted(c.id for c in rig.cameras)
     for camera in rig.cameras:

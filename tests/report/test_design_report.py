@@ -124,3 +124,93 @@ def test_the_packaging_table_says_where_the_camera_sees_no_ground(car):
     row = re.search(r"<tr><td>U</td>(.*?)</tr>", section).group(1)
     assert "5 m: - / -; 10 m: - / -; 20 m: - / -" in row  # no ground there: said, not a number
     assert html.escape(REAR_AXLE_ORIGIN) in section
+
+
+# --- the RigCD breakdown, the field tables, the pictures' frame ------------------------------------------
+
+
+def _with_near_field(rig: Rig) -> Rig:
+    """``rig`` and two near-field cameras low on the sides, looking down."""
+    near = tuple(Camera.pinhole(f"N{k}", np.array([0.0, side * 0.94, 0.6]),
+                                rotation_from_yaw_pitch_roll(*np.deg2rad([side * 90.0, -60.0, 0.0])), 120.0,
+                                zone="side", role="near_field") for k, side in enumerate((1.0, -1.0)))
+    return Rig(rig.name, rig.vehicle, rig.cameras + near)
+
+
+def test_the_breakdown_compares_the_perception_cameras_only(car, rig):
+    from rigopt.report.design_report import perception_breakdown
+
+    designed = _with_near_field(rig)
+    breakdown, values = perception_breakdown(rig, designed)
+    assert values["count"] == 0.0 and values["rigcd"] == pytest.approx(0.0, abs=1e-12)  # as rigopt rigcd says
+    assert (values["reference_cameras"], values["design_cameras"]) == (2, 2)
+    assert sorted(b for _, b in breakdown.pairs) == ["F", "L"]  # no near-field camera has a partner
+    rows = camera_rows(designed, rig, breakdown.pairs, car)
+    assert [r["matched_reference_camera"] is None for r in rows] == [False, False, True, True]
+    summary = {**_summary(designed, car), "rigcd_breakdown": values, "roles": {"perception": 2, "near_field": 2},
+               "cameras": rows}
+    page = html.unescape(render_design_html(summary, {}))
+    assert "to the 2 perception cameras of the design" in page and "the design's 2 near-field cameras, not fed to the detector, left out" in page
+    assert "count 0.000" in page and "design_cameras" not in page
+    assert "near-field camera: not fed to the detector, not compared" in page
+
+
+def _field(key: str, cameras: list[tuple[str, float, float]], covered: float, weighted: float) -> dict:
+    """A ``regions_dict`` entry of a field seen by ``cameras`` [(id, seen, alone)]."""
+    overlap = covered - sum(alone for _, _, alone in cameras)
+    return {"key": key, "title": f"{key} field", "source": f"UN {key}", "heights_m": [0.0, 0.8], "covered": covered == 1,
+            "covered_frac": covered, "weighted_covered_frac": weighted,
+            "height_covered_frac": [{"height_m": 0.0, "covered_frac": covered}, {"height_m": 0.8, "covered_frac": 1.0}],
+            "n_points": 100, "n_unseen": 0, "area_m2": 12.0, "unseen_area_m2": 1.5, "spacing_m": 0.1,
+            "cameras": [{"camera": c, "seen_frac": s, "only_frac": a} for c, s, a in cameras], "overlap_frac": overlap}
+
+
+def test_the_field_tables_give_the_weighted_share_and_which_camera_sees_which_field(car, rig):
+    regions = [_field("r158", [("F", 0.0, 0.0), ("N0", 0.62, 0.04), ("N1", 0.9, 0.3)], 0.96, 0.873),
+               _field("r151", [("F", 0.0, 0.0), ("N0", 0.5, 0.5), ("N1", 0.0, 0.0)], 0.5, 0.41)]
+    summary = {**_summary(rig, car), "regions": regions, "regions_required": True}
+    page = render_design_html(summary, {})
+    section = page[page.index("<h2>Regulation fields"):]
+    fields = re.search(r"<table>.*?</table>", section, flags=re.S).group(0)
+    assert "<th>weighted seen</th>" in fields and ">87.3 %<" in fields and ">41.0 %<" in fields
+    table_map = re.findall(r"<table>.*?</table>", section, flags=re.S)[1]
+    rows = {cells[0]: cells[1:] for cells in (re.findall(r"<td[^>]*>([^<]*)</td>", row)
+                                              for row in re.findall(r"<tr>(.*?)</tr>", table_map)) if cells}
+    assert "F" not in rows  # it sees no field: no row
+    assert rows["N0"] == ["62.0 % (4.0 % alone)", "50.0 % (50.0 % alone)"]
+    assert rows["N1"] == ["90.0 % (30.0 % alone)", "0.0 %"]  # alone only where it is the only camera for some
+    assert rows["seen by any"] == ["96.0 %", "50.0 %"]
+
+
+def test_the_coverage_page_builds_its_field_tables_as_the_design_report_does():
+    from rigopt.report import coverage_html, design_html
+    from rigopt.report.coverage_tables import field_tables_html
+
+    assert coverage_html.field_tables_html is field_tables_html is design_html.field_tables_html
+
+
+def _plotted(ax, marker: str) -> np.ndarray:
+    """(n, 2) float: the data of every line of ``ax`` drawn with ``marker``, in the axes' coordinates."""
+    return np.concatenate([line.get_xydata() for line in ax.get_lines() if line.get_marker() == marker])
+
+
+def test_the_pictures_draw_the_cameras_where_the_tables_put_them(car, rig):
+    from rigopt.coverage.measures import ring_report
+    from rigopt.coverage.packaging import report_origin
+    from rigopt.coverage.regulations import PRESETS, region_coverage
+    from rigopt.report.coverage_figures import regions_figure
+    from rigopt.report.vehicle_figures import vehicle_figure
+
+    datum = report_origin(car)
+    rows = camera_rows(rig, rig, [], car)  # the tables: x 3.34 and 1.8 from the rear axle
+    top, side = vehicle_figure(car, rig, datum).axes[:2]
+    assert np.allclose(_plotted(top, "o"), [r["position"][:2] for r in rows])
+    assert np.allclose(_plotted(side, "o"), [r["position"][::2] for r in rows])
+    assert top.get_xlabel() == "x forward (m), from the rear axle" and "rear axle" in top.get_title()
+    fields = region_coverage(rig, car, [PRESETS["r158"]], spacing=0.5)
+    (ax,) = regions_figure(fields, ring_report(rig, car), rig, datum).axes
+    assert np.allclose(_plotted(ax, "o"), [[r["position"][1], r["position"][0]] for r in rows])  # (y, x) top view
+    assert ax.get_ylabel() == "x forward (m), from the rear axle"
+    (centred,) = regions_figure(fields, ring_report(rig, car), rig).axes  # the coverage page: the vehicle centre
+    assert np.allclose(_plotted(centred, "o")[:, 1], rig.positions[:, 0])
+    assert centred.get_ylabel() == "x forward (m), from the vehicle centre"

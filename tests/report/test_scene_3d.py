@@ -353,11 +353,43 @@ def test_the_view_opens_framed_on_the_vehicle_beside_its_legend(figure, car):
     assert figure.layout.legend.x >= scene.domain.x[1] and figure.layout.legend.xanchor == "left"
 
 
-def test_frustums_reach_5_m_by_default(car, rig):
+def test_frustums_reach_5_m_by_default_or_the_ground_before(car, rig):
     assert frustums.FRUSTUM_RANGE_M == 5.0
     trace = next(t for t in traces(scene_figure(car, rig), "frustum") if t.name == "front")
     camera = rig.cameras[0]
-    assert np.allclose(np.linalg.norm(corners_of(trace) - camera.position, axis=1), 5.0, atol=1e-9)
+    drawn, corners = corners_of(trace), frustums.frustum_lines(camera)[0]
+    assert np.allclose(np.linalg.norm(drawn[:2] - camera.position, axis=1), 5.0, atol=1e-9)  # the top corners
+    assert np.all(corners[2:, 2] < 0) and np.allclose(drawn[2:, 2], 0.0)  # the bottom ones end on the ground ...
+    along = (drawn[2:] - camera.position) / (corners[2:] - camera.position)
+    assert np.allclose(along, along[:, :1]) and np.all((0 < along) & (along < 1))  # ... on their own rays
+
+
+def test_no_frustum_line_runs_below_the_ground_and_the_footprints_stay(car, fisheye):
+    """Cameras low and tilted down (a pinhole, the fisheye looking down and sideways): every drawn frustum point
+    is at or above z = 0, from either datum; the ground footprints are the frustums' sections, as before."""
+    cameras = (Camera.pinhole("low", np.array([2.04, 0.0, 0.6]), rotation_from_yaw_pitch_roll(0.1, -0.5, 0.0), 90.0),
+               Camera("down", np.array([0.0, 0.94, 1.5]), rotation_from_yaw_pitch_roll(np.pi / 2, -1.2, 0.0), fisheye))
+    rig = Rig("low", "vehicle.test.wheelbox", cameras)
+    compare = Rig("grey", rig.vehicle, cameras[:1])
+    for datum in scene_3d.DATUMS:
+        figure = scene_figure(car, rig, compare=compare, datum=datum)
+        for trace in traces(figure, "frustum"):
+            z = np.array([v for v in trace.z if v is not None], dtype=float)
+            assert z.min() >= -1e-6, (datum, trace.name)
+        assert min(v for t in traces(figure, "frustum") for v in t.z if v is not None) < 1e-6  # some reach it
+    for camera in cameras:
+        fills = [t for t in traces(scene_figure(car, rig), "footprint") if t.type == "mesh3d" and t.name == camera.id]
+        points = np.concatenate([np.array([t.x, t.y, t.z], dtype=float).T[np.array([t.i, t.j, t.k]).T]
+                                 for t in fills])
+        assert _areas(points).sum() == pytest.approx(frustums.frustum_footprint(camera).area, rel=1e-6)
+
+
+def test_ended_at_ground_moves_only_points_below_it_along_their_rays():
+    lens = np.array([1.0, 2.0, 1.0])
+    points = np.array([[3.0, 2.0, -1.0], [1.0, 5.0, 0.5], [1.0, 2.0, -3.0]])
+    assert np.allclose(frustums.ended_at_ground(lens, points), [[2.0, 2.0, 0.0], [1.0, 5.0, 0.5], [1.0, 2.0, 0.0]])
+    buried = np.array([0.0, 0.0, -0.1])  # a lens not above the ground: nothing to end
+    assert np.array_equal(frustums.ended_at_ground(buried, points), points)
 
 
 # --- ground footprints -----------------------------------------------------------------------------------
