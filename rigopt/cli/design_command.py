@@ -280,7 +280,7 @@ def design_command(
             state = "required" if summary["regions_required"] else "reported"
             print(f"field {region['key']} ({state}): {region['covered_frac']:.1%} of its points seen "
                   f"({region['weighted_covered_frac']:.1%} weighted by criticality), unseen area "
-                  f"{region['unseen_area_m2']:.1f} m²", file=sys.stderr)
+                  f"{region['unseen_area_m2']:.1f} m²" + _excluded_text(region), file=sys.stderr)
         moves = summary["pose_tolerance"]["height_moves"]
         if moves:
             heights = ", ".join(f"{m['camera']} {m['from_m']:.2f} -> {m['to_m']:.2f} m" for m in moves)
@@ -297,6 +297,16 @@ def design_command(
 
     finally:
         background.close()
+
+def _excluded_text(region: dict) -> str:
+    """What a field line adds when some of the field's points are not asked for (inside the body's footprint or a
+    keep-out in force, such as a coupled trailer)."""
+    excluded = region.get("n_excluded", 0)
+    if not excluded:
+        return ""
+    return (f"; {excluded} of its {excluded + region['n_points']} points lie inside the body or a keep-out in force "
+            "and are not asked for")
+
 
 def _reference(name: str, vehicle: Optional[str]):
     """A --ref rig on its vehicle (``vehicle`` when given), origin converted (noted), cameras inside refused."""

@@ -39,11 +39,37 @@ def measured_rigs(vehicle_name: str):
             ("naive transfer", copies["naive transfer"]), ("height-matched transfer", copies["height-matched transfer"])]
 
 
+def searched_copy(vehicle_name: str):
+    """(the design with the height search, R1's height-matched transfer with the same height search): each copy
+    camera moved as the designer moves its perception cameras (``rigopt.design.heights.search_heights``, 0.75 m,
+    the mount checks; the copy has no coverage requirements). An exploratory diagnostic, not pre-registered: is
+    the design's gain over the copy more than the finer height grid?"""
+    import dataclasses
+
+    import numpy as np
+
+    from rigopt.design.defaults import NEAREST_POSE
+    from rigopt.design.heights import search_heights
+    from rigopt.design.settings import DesignSettings
+    from rigopt.rig.library import load_rig
+    from rigopt.vehicle.library import load_vehicle
+
+    (_, design), _, _, (_, copy) = measured_rigs(vehicle_name)
+    reference, vehicle = load_rig("R1"), load_vehicle(vehicle_name)
+    matched = np.array([[c.id for c in reference.cameras].index(c.id) for c in copy.cameras])
+    moved, _ = search_heights(copy, matched, reference, vehicle, NEAREST_POSE["height_search_m"], DesignSettings(),
+                              lambda rig: True)
+    return design, dataclasses.replace(moved, name=f"{copy.name}_searched")
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--vehicles", nargs="+", default=["firetruck", "hgv"])
     parser.add_argument("--cache", type=Path, default=None, help="renderings (default: rigopt validate's cache)")
     parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--searched-copy", action="store_true",
+                        help="instead: the design against the height-matched copy given the same height search "
+                             "(exploratory; designs/<vehicle>_heights_copy.json)")
     args = parser.parse_args(argv)
     from rigopt.validation.detectors.shipped import measure, paired_differences, shipped_detector, without_resamples
 
@@ -57,6 +83,17 @@ def main(argv=None) -> int:
             log.write(line + "\n")
             log.flush()
 
+        if args.searched_copy:
+            design, copy = searched_copy(vehicle_name)
+            progress(f"{vehicle_name}: {design.name} and {copy.name} (heights {copy.positions[:, 2].round(2)})")
+            entries = measure([design, copy], detector, args.cache, "cpu", args.workers, progress)
+            result = {"vehicle": vehicle_name, "note": searched_copy.__doc__.split(". An")[0],
+                      "copy_positions": copy.positions.round(3).tolist(),
+                      "rigs": [without_resamples(entry) for entry in entries],
+                      "design_minus_searched_copy": paired_differences(entries[0], entries[1])}
+            _write(DESIGNS / f"{vehicle_name}_heights_copy.json", result, progress)
+            log.close()
+            continue
         rigs = measured_rigs(vehicle_name)
         progress(f"{vehicle_name}: {', '.join(rig.name for _, rig in rigs)}")
         entries = measure([rig for _, rig in rigs], detector, args.cache, "cpu", args.workers, progress)
@@ -65,13 +102,17 @@ def main(argv=None) -> int:
                                                      for (role, rig), entry in zip(rigs, entries)],
                   "design_minus": [{"role": role, **paired_differences(entries[0], entry)}
                                    for (role, _), entry in zip(rigs[1:], entries[1:])]}
-        out = DESIGNS / f"{vehicle_name}_heights.json"
-        temporary = out.with_suffix(".tmp")
-        temporary.write_text(json.dumps(result, indent=1))
-        temporary.replace(out)
-        progress(f"wrote {out}")
+        _write(DESIGNS / f"{vehicle_name}_heights.json", result, progress)
         log.close()
     return 0
+
+
+def _write(out: Path, result: dict, progress) -> None:
+    """``result`` as JSON into ``out``, whole or not at all."""
+    temporary = out.with_suffix(".tmp")
+    temporary.write_text(json.dumps(result, indent=1))
+    temporary.replace(out)
+    progress(f"wrote {out}")
 
 
 if __name__ == "__main__":

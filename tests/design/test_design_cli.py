@@ -236,3 +236,7 @@ def test_each_camera_reports_its_pose_from_the_rear_axle_and_the_reference_camer
     assert all(camera["spray"] in ("high", "low") and camera["zone_cost"] == 1.0 for camera in summary["cameras"])
     breakdown = summary["rigcd_breakdown"]
     assert breakdown["t_m"] == pytest.approx(np.mean([m["t_m"] for m in matched]), rel=1e-9)
+    # the perception cameras only, as rigopt rigcd compares them: R1's count, so no count term
+    assert breakdown["design_cameras"] == summary["roles"]["perception"] == len(reference) and breakdown["count"] == 0
+    assert breakdown["rigcd"] == pytest.approx(rigcd(load_rig("R1"), rig.perception()).rigcd, rel=1e-9)
+    assert all(c["matched_reference_camera"] is None for c in summary["cameras"] if c["role"] == "near_field")

@@ -177,7 +177,8 @@ def test_the_command_takes_the_tolerance_and_reports_it(tmp_path):
 
     summary = json.loads(result.stdout)
     assert summary["pose_tolerance"] == {"height_m": 0.2, "pitch_deg": 0.0, "yaw_deg": None, "fov_deg": 30.0,
-                                          "lifted_for": [], "widened_by": {}}
+                                          "lifted_for": [], "widened_by": {}, "height_search_m": 0.0,
+                                          "height_moves": []}
     assert summary["perception_range_m"] == 0.0
     assert all(abs(c["fov"] - 65.0) <= 30.0 for c in summary["cameras"])  # R1's lenses are all 65 deg
     bad = run_rigopt("design", "--vehicle", "tt", "--ref", "R1", "--match-height", "-1")
