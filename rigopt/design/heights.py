@@ -20,6 +20,7 @@ import numpy as np
 
 from rigopt.camera import CameraModel
 from rigopt.design.naming import mount_name, unique
+from rigopt.design.settings import DesignSettings
 from rigopt.mounting.candidates import body_fraction
 from rigopt.mounting.rules import check_rig
 from rigopt.mounting.sampling import sample_zone_points
@@ -51,7 +52,8 @@ class HeightMove:
                 "from_m": self.from_m, "to_m": self.to_m, "moved_m": self.moved_m}
 
 
-def search_heights(rig: Rig, matched: np.ndarray, reference: Rig, vehicle: Vehicle, radius: float, settings,
+def search_heights(rig: Rig, matched: np.ndarray, reference: Rig, vehicle: Vehicle, radius: float,
+                   settings: DesignSettings,
                    meets_requirements: Callable[[Rig], bool]) -> tuple[Rig, tuple[HeightMove, ...]]:
     """``rig`` with its first ``len(matched)`` cameras (the perception cameras, camera k matched to reference
     camera ``matched[k]``; positions in ``vehicle``'s centre frame, ground at z = 0) moved as the module says,
