@@ -1,7 +1,7 @@
 """Designs for the firetruck, the hgv and the tt from R1 and from R3, against the benchmark's own rigs.
 
-For each (vehicle, reference) it runs the designer with default settings and writes into
-studies/designs/results/<vehicle>_from_<ref>/ the design's rig.json, report.json and design.png (the
+For each (vehicle, reference) it runs the designer with the command's default settings (``--pose nearest``) and
+writes into studies/designs/results/<vehicle>_from_<ref>/ the design's rig.json, report.json and design.png (the
 command `rigopt design` also writes the reference and naive-transfer pictures and report.html), then
 results.md and results.csv: predicted drop, RigCD, coverage and requirement check of the design, the naive
 transfer and every benchmark rig of that vehicle, with the solver figures.
@@ -14,6 +14,7 @@ import csv
 import json
 from pathlib import Path
 
+from rigopt.coverage.packaging import report_origin
 from rigopt.design.designer import design_rig
 from rigopt.design.problem import ReferenceRig, benchmark_rigs
 from rigopt.metrics.calibration import load_weights
@@ -31,7 +32,16 @@ CASES = [(vehicle, ref) for ref in ("R1", "R3") for vehicle in ("firetruck", "hg
 #: The trade-off ladder: each step adds one demand to the design from R1 (see tradeoff_rows).
 LADDER = ("reference coverage only, free mounting", "+ practical mounts", "+ symmetry",
           "+ the category's safety fields on the same cameras (--single-set)",
-          "+ the fields on near-field fisheyes (two roles, the default)")
+          "+ the fields on near-field fisheyes (two roles, --pose free)",
+          "+ perception cameras at the nearest pose, heights searched (the command's default)")
+
+
+def command_default():
+    """The DesignSettings of ``rigopt design``'s default (``--pose nearest``)."""
+    from rigopt.design.defaults import NEAREST_POSE
+    from rigopt.design.settings import DesignSettings
+
+    return DesignSettings(**NEAREST_POSE)
 
 
 def ladder_settings(step: str):
@@ -45,7 +55,8 @@ def ladder_settings(step: str):
     free = replace(one_set, max_body_fraction=None, symmetric=False, require="none")
     free = replace(free, rules=replace(free.rules, practice=MountPractice(enabled=False)))
     return {LADDER[0]: free, LADDER[1]: replace(one_set, symmetric=False, require="none"),
-            LADDER[2]: replace(one_set, require="none"), LADDER[3]: one_set, LADDER[4]: DesignSettings()}[step]
+            LADDER[2]: replace(one_set, require="none"), LADDER[3]: one_set, LADDER[4]: DesignSettings(),
+            LADDER[5]: command_default()}[step]
 
 
 def tradeoff_rows(vehicle_name: str) -> list[str]:
@@ -89,13 +100,13 @@ def main() -> None:
     rows = []
     for vehicle_name, ref in CASES:
         vehicle, reference = load_vehicle(vehicle_name), load_rig(ref)
-        result = design_rig(vehicle, ReferenceRig.on_own_vehicle(reference), weights,
+        result = design_rig(vehicle, ReferenceRig.on_own_vehicle(reference), weights, command_default(),
                             compare_with=benchmark_rigs(vehicle))
         folder = out / f"{vehicle_name}_from_{ref}"
         folder.mkdir(exist_ok=True)
         rig_file = write_rig(result.design.rig, folder / "rig.json")
         (folder / "report.json").write_text(json.dumps(json_ready(design_dict(result, rig_file)), indent=2) + "\n")
-        write_vehicle_figure(vehicle, folder / "design.png", result.design.rig)
+        write_vehicle_figure(vehicle, folder / "design.png", result.design.rig, report_origin(vehicle))
         milp = result.milp
         entries = [("design", result.design)]
         if result.comparisons.naive_transfer:
@@ -128,7 +139,9 @@ def main() -> None:
               "10 % ego body); + mirrored pairs; + the vehicle category's regulation fields required of the same "
               "cameras (trucks r151, r159, r158; cars r158; camera count up to the reference's + 4; dropped with a "
               "note when no design sees them all); + the fields required of near-field fisheyes instead, the "
-              "perception cameras designed for the reference alone (two roles, the default). "
+              "perception cameras designed for the reference alone (two roles, --pose free); + the perception "
+              "cameras at the nearest pose to their reference cameras', heights searched on a finer grid, placed "
+              "freely (--pose nearest, the command's default). "
               "Predicted drop bounded (from the perception cameras) (linear in brackets); near field: ground seen on the 2 m ring, unseen ground "
               "within 5 m; fields: the smallest seen fraction of the category's fields; mounting cost: zone costs + "
               "0.5 per camera in tyre spray; seconds: the design stages.", "",
