@@ -298,6 +298,7 @@ def design_command(
     finally:
         background.close()
 
+
 def _excluded_text(region: dict) -> str:
     """What a field line adds when some of the field's points are not asked for (inside the body's footprint or a
     keep-out in force, such as a coupled trailer)."""

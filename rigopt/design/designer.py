@@ -6,7 +6,9 @@ vehicle stays seen (plus optional stricter requirements), and every camera passe
 With several reference rigs (a fleet) it minimises the largest RigCD over them and meets the union of
 their coverage requirements; the continuous refinement then stays off.
 A selected camera that fails the python-fcl checks is removed from the candidates and the MILP solved
-again, so a returned design is always valid.
+again, so a returned design is always valid. With a height tolerance, the refined perception cameras then move to
+the mounts nearest their reference cameras' heights (:mod:`rigopt.design.heights`), and a two-role design's
+near-field stage adds its fisheyes.
 
 Every input is explicit: the references come with the vehicles they were designed on and the rigs to
 compare with are passed in (:mod:`rigopt.design.problem` builds the usual ones); the result

@@ -36,7 +36,8 @@ def measured_rigs(vehicle_name: str):
     before = load_design(DESIGNS / f"{vehicle_name}_from_R1_nearest_free" / "report.json").perception()
     copies = dict(comparison_rigs(design, load_rig("R1"), load_weights("joint")))
     return [("design with the height search", design), ("design before it", before),
-            ("naive transfer", copies["naive transfer"]), ("height-matched transfer", copies["height-matched transfer"])]
+            ("naive transfer", copies["naive transfer"]),
+            ("height-matched transfer", copies["height-matched transfer"])]
 
 
 def searched_copy(vehicle_name: str):

@@ -111,6 +111,9 @@ def test_the_default_design_moves_its_cameras_to_the_reference_heights_and_heigh
     assert searched.returncode == 0, searched.stderr
     summary = json.loads(searched.stdout)
     assert summary["pose_tolerance"]["height_search_m"] == 0.75
+    moved_line = f"height search: {len(summary['pose_tolerance']['height_moves'])} perception camera(s) moved"
+    assert moved_line in searched.stderr
+    assert "weighted by criticality" in searched.stderr and "not asked for" not in searched.stderr
     moves = summary["pose_tolerance"]["height_moves"]
     assert moves and all(abs(m["to_m"] - m["reference_m"]) < abs(m["from_m"] - m["reference_m"]) for m in moves)
     assert all(m["moved_m"] <= 0.75 for m in moves)
