@@ -106,10 +106,10 @@ def test_the_setting_is_checked():
 
 @pytest.mark.slow
 def test_the_default_design_moves_its_cameras_to_the_reference_heights_and_height_search_0_keeps_the_grid(tmp_path):
-    common = ("design", "--vehicle", "firetruck", "--ref", "R1", "--json")
-    searched = run_rigopt(*common, "--out", tmp_path / "s")
+    common = ("design", "--vehicle", "firetruck", "--ref", "R1")
+    searched = run_rigopt(*common, "--out", tmp_path / "s")  # printed summary; the figures from report.json
     assert searched.returncode == 0, searched.stderr
-    summary = json.loads(searched.stdout)
+    summary = json.loads((tmp_path / "s" / "report.json").read_text())
     assert summary["pose_tolerance"]["height_search_m"] == 0.75
     moved_line = f"height search: {len(summary['pose_tolerance']['height_moves'])} perception camera(s) moved"
     assert moved_line in searched.stderr
@@ -117,7 +117,7 @@ def test_the_default_design_moves_its_cameras_to_the_reference_heights_and_heigh
     moves = summary["pose_tolerance"]["height_moves"]
     assert moves and all(abs(m["to_m"] - m["reference_m"]) < abs(m["from_m"] - m["reference_m"]) for m in moves)
     assert all(m["moved_m"] <= 0.75 for m in moves)
-    grid = json.loads(run_rigopt(*common, "--height-search", "0", "--out", tmp_path / "g").stdout)
+    grid = json.loads(run_rigopt(*common, "--json", "--height-search", "0", "--out", tmp_path / "g").stdout)
     assert grid["pose_tolerance"]["height_moves"] == [] and grid["pose_tolerance"]["widened_by"]
     assert not summary["pose_tolerance"]["widened_by"]  # every fire-truck camera within 0.05 m of R1's height
     checked = run_rigopt("check", tmp_path / "s" / "rig.json", "--vehicle", "firetruck")
