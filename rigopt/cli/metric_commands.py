@@ -61,14 +61,15 @@ def rigcd_command(
     if metric == "rigcd+" and not weights:
         raise RigoptError("--metric rigcd+ matches cameras under calibrated weights: add --weights (e.g. joint)")
     calibration = load_weights(weights or DEFAULT_WEIGHTS, metric)
-    (rig_a, rig_b), changes = _comparable([a, b], vehicle)
+    (rig_a, rig_b), changes, left_out = _comparable([a, b], vehicle)
     p = predict_transfer(rig_a, [rig_b], calibration)[0]
     if weights is None and calibration.lifting is None:  # RigCD's unit-weight distance, the default drop
         unit = predict_transfer(rig_a, [rig_b], None)[0]
         p = replace(p, rigcd=unit.rigcd, match=unit.match)
     _note_changes((rig_a, rig_b), changes)
     data = {"a": p.reference, "b": p.rig, **{k: v for k, v in p.to_dict().items() if k not in ("reference", "rig")},
-            "weights": weights or f"{DEFAULT_WEIGHTS} (default)", "origin_changes": [c.as_dict() for c in changes]}
+            "weights": weights or f"{DEFAULT_WEIGHTS} (default)", "origin_changes": [c.as_dict() for c in changes],
+            "near_field_left_out": left_out}
     if as_json:
         print_json(data)
         return
@@ -97,11 +98,11 @@ def rank_command(
     from rigopt.metrics.ranking import rank_candidates
 
     calibration = load_weights(weights, metric)
-    (reference, *others), changes = _comparable([ref, *candidates], vehicle)
+    (reference, *others), changes, left_out = _comparable([ref, *candidates], vehicle)
     ranked = rank_candidates(reference, others, calibration)
     _note_changes((reference, *others), changes)
     if as_json:
-        print_json([p.to_dict() for p in ranked])
+        print_json([{**p.to_dict(), "near_field_left_out": left_out.get(p.rig, 0)} for p in ranked])
         return
     print_table(f"Candidates ranked by predicted drop from {ref} ({calibration.metric}, {weights} weights)",
                 ["rank", "rig", "predicted drop", "interval", f"{calibration.metric} ({weights} weights)", "t (m)",
@@ -112,14 +113,17 @@ def rank_command(
 
 
 def _comparable(names: List[str], vehicle: Optional[str]):
-    """The perception cameras of the rigs ``names`` in one frame (:func:`rigopt.vehicle.placement.comparable_rigs`)
-    and the origin changes made; :func:`_note_changes` says them once the command has succeeded."""
+    """The perception cameras of the rigs ``names`` in one frame (:func:`rigopt.vehicle.placement.comparable_rigs`),
+    the origin changes made (:func:`_note_changes` says them once the command has succeeded) and {rig name: number
+    of near_field cameras left out} of the rigs that have some."""
     from rigopt.rig.library import load_rig
     from rigopt.vehicle.library import load_vehicle
     from rigopt.vehicle.placement import comparable_rigs
 
-    rigs = [_perception(load_rig(name)) for name in names]
-    return comparable_rigs(rigs, load_vehicle(vehicle) if vehicle is not None else None)
+    loaded = [load_rig(name) for name in names]
+    rigs, changes = comparable_rigs([_perception(rig) for rig in loaded],
+                                    load_vehicle(vehicle) if vehicle is not None else None)
+    return rigs, changes, {rig.name: rig.near_field_count for rig in loaded if rig.near_field_count}
 
 
 def _perception(rig):

@@ -75,7 +75,9 @@ def test_rigcd_and_rank_compare_the_perception_cameras_and_say_so(tmp_path, caps
     captured = capsys.readouterr()
     data = json.loads(captured.out)
     assert data["rigcd"] == 0 and data["count"] == 0  # the near-field camera is not compared
+    assert data["near_field_left_out"] == {"r1nf": 1}  # and the JSON says so, as the note does
     assert "1 near_field camera(s) are not fed to the detector" in captured.err
     assert run(["rank", "--ref", "R1", str(with_near_field), "R1-c6", "--json"]) == 0
     ranked = json.loads(capsys.readouterr().out)
     assert ranked[0]["rig"] == "r1nf" and ranked[0]["rigcd"] == 0
+    assert [p["near_field_left_out"] for p in ranked] == [1, 0]
