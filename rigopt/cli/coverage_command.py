@@ -73,6 +73,7 @@ def coverage_command(
 ):
     """Coverage of a rig around its vehicle: rings at 2-50 m, bird's-eye counts, near-field blind zone, per camera."""
     from rigopt.coverage.measures import compare_coverage, coverage_report
+    from rigopt.coverage.packaging import report_origin
     from rigopt.coverage.regulations import parse_require, region_coverage
     from rigopt.report.coverage_figures import comparison_dict, report_dict
     from rigopt.report.coverage_tables import regions_dict
@@ -90,7 +91,7 @@ def coverage_command(
     if compare is not None:
         _, other, announce_other = _report(compare, None)
         comparison = compare_coverage(other, report)  # differences: RIG minus --compare
-    data = report_dict(report)
+    data = report_dict(report, loaded, report_origin(on))  # the design report's frame, as the --out folder's
     data["regions"] = regions_dict(regions)
     if comparison is not None:
         data["compare"] = comparison_dict(comparison)
@@ -148,11 +149,11 @@ def _print_tables(data: dict, other: dict | None) -> None:
 
     inside = set(data["cameras_inside"])
     ring = data["overlap_ring"]
-    print_table(f"cameras (overlap: degrees of the {ring['distance_m']:g} m ring at {ring['height_m']:g} m "
-                "seen by both)",
-                ["camera", "lens", "self-occluded", "overlaps (deg)"],
-                [[c["id"] + (" (INSIDE BODY)" if c["id"] in inside else ""), _lens_text(c["lens"]),
-                  c["self_occluded_frac"],
+    print_table(f"cameras (positions: {data['frame']}; overlap: degrees of the {ring['distance_m']:g} m ring at "
+                f"{ring['height_m']:g} m seen by both)",
+                ["camera", "x, y, z (m)", "lens", "self-occluded", "overlaps (deg)"],
+                [[c["id"] + (" (INSIDE BODY)" if c["id"] in inside else ""),
+                  ", ".join(f"{v:.2f}" for v in c["position"]), _lens_text(c["lens"]), c["self_occluded_frac"],
                   ", ".join(f"{k} {v:.1f}" for k, v in c["overlap_deg"].items()) or "-"] for c in data["cameras"]])
 
     blind, bev = data["blind_distance_m"], data["bev"]

@@ -91,8 +91,13 @@ class ReportDatum:
         """The origin as an axis title names it: "from the rear axle" or "from the vehicle centre"."""
         return "from the rear axle" if self.origin == REAR_AXLE_ORIGIN else "from the vehicle centre"
 
+    def to_dict(self) -> dict:
+        """The frame as the reports' JSON names it: ``frame`` and ``origin_from_vehicle_centre_m`` ([x, y, z] m,
+        ``point``: subtract it from a vehicle-centre position to get the report's)."""
+        return {"frame": self.frame, "origin_from_vehicle_centre_m": self.point.tolist()}
 
-#: The vehicle-centre frame's datum: the mesh's and the rig file's origin, the coverage page's frame.
+
+#: The vehicle-centre frame's datum: the mesh's and the rig file's origin, the figures' default.
 CENTRE_DATUM = ReportDatum(np.zeros(3), "origin on the ground at the vehicle's centre")
 
 

@@ -65,21 +65,27 @@ def bev_summary(report: CoverageReport, within: float = BEV_SUMMARY_RADIUS) -> d
     }
 
 
-def report_dict(report: CoverageReport) -> dict:
+def report_dict(report: CoverageReport, rig: Rig | None = None, datum: ReportDatum = CENTRE_DATUM) -> dict:
     """The coverage report as plain JSON values (inf and NaN become None).
 
-    ``rings``: covered (>= 1 camera) and overlap (>= 2) fractions per ring; ``blind_area_m2_within_5m``: the
-    unseen ground area within ``blind_radius_m`` (default 5) of the body; ``blind_distance_m``: statistics
-    over azimuths of the distance at which the ground becomes visible (None when some azimuth sees no
-    ground within ``blind_search_m``, counted by ``blind_not_found_frac``); ``bev``: the bird's-eye map's
-    fractions within 20 m of the body.
+    ``frame`` and ``origin_from_vehicle_centre_m``: the frame of its positions (``datum``, e.g. the report's,
+    :func:`rigopt.coverage.packaging.report_origin`; :meth:`ReportDatum.to_dict`); ``rings``: covered (>= 1
+    camera) and overlap (>= 2) fractions per ring; ``blind_area_m2_within_5m``: the unseen ground area within
+    ``blind_radius_m`` (default 5) of the body; ``blind_distance_m``: statistics over azimuths of the distance
+    at which the ground becomes visible (None when some azimuth sees no ground within ``blind_search_m``,
+    counted by ``blind_not_found_frac``); ``bev``: the bird's-eye map's fractions within 20 m of the body.
+    With ``rig`` (the measured rig, vehicle-centre frame) each camera's ``position`` [x, y, z] m from
+    ``datum``. Distances, areas and shares hold in any frame.
     """
     settings, blind = report.settings, report.blind
     distance = np.asarray(blind.distance_m, dtype=float)
     bev = bev_summary(report)
+    positions = ({c.id: (c.position - datum.point + 0.0).tolist() for c in rig.cameras}  # + 0.0: no -0.0
+                 if rig is not None else {})
     return {
         "rig": report.rig,
         "vehicle": report.vehicle,
+        **datum.to_dict(),
         "rings": [{"distance_m": r.distance_m, "height_m": r.height_m, "covered_frac": r.covered_frac,
                    "overlap2_frac": r.overlap2_frac} for r in report.rings],
         "blind_area_m2_within_5m": _number(blind.area_m2),
@@ -88,7 +94,8 @@ def report_dict(report: CoverageReport) -> dict:
                              "max": _number(np.max(distance))},
         "blind_not_found_frac": float(np.mean(~np.isfinite(distance))),
         "blind_search_m": _number(settings.blind_search),
-        "cameras": [{"id": c.id, "self_occluded_frac": c.self_occluded_frac,
+        "cameras": [{"id": c.id, **({"position": positions.get(c.id)} if rig is not None else {}),
+                     "self_occluded_frac": c.self_occluded_frac,
                      "overlap_deg": {k: float(v) for k, v in c.overlap_deg.items()},
                      "lens": c.lens.summary()} for c in report.cameras],
         "overlap_ring": {"distance_m": settings.overlap_ring[0], "height_m": settings.overlap_ring[1]},

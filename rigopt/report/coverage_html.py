@@ -2,6 +2,10 @@
 
 No external CSS, JavaScript, fonts or images: the page's only style is an inline ``<style>`` element and
 every figure is a ``data:image/png;base64`` URI. Every piece of text from rigs and vehicles is escaped.
+
+Positions (the camera table, coverage.json, the top views, the 3D view) are in the design report's frame:
+ISO 8855 from the ground below the rear axle's centre (:func:`rigopt.coverage.packaging.report_origin`), or
+from the vehicle's centre where its axles are unknown or no vehicle is given; the page and the JSON name it.
 """
 
 from __future__ import annotations
@@ -14,7 +18,7 @@ import numpy as np
 import shapely
 
 from rigopt.coverage.measures import CoverageComparison, CoverageReport
-from rigopt.coverage.packaging import CENTRE_DATUM
+from rigopt.coverage.packaging import CENTRE_DATUM, ReportDatum, report_origin
 from rigopt.report.coverage_figures import (
     bev_figure,
     blind_figure,
@@ -47,16 +51,23 @@ def _diff_cell(value: float, text: str, better_when_positive: bool = True) -> st
     return f'<td class="{cls}">{escape(text)}</td>'
 
 
+def page_datum(vehicle: Vehicle | None) -> ReportDatum:
+    """The coverage page's datum: the report's (:func:`rigopt.coverage.packaging.report_origin`) on ``vehicle``,
+    the vehicle's centre without one."""
+    return report_origin(vehicle) if vehicle is not None else CENTRE_DATUM
+
+
 def _figures(report: CoverageReport, rig: Rig, compare_report: CoverageReport | None,
-             figures: dict[str, Path] | None, regions=()) -> dict[str, bytes]:
+             figures: dict[str, Path] | None, regions=(), datum: ReportDatum = CENTRE_DATUM) -> dict[str, bytes]:
     """PNG bytes of the bev, rings, blind (and, with ``regions``, regions) figures: read from ``figures`` paths
-    when given, else drawn."""
+    when given, else drawn, the top views measured from ``datum``."""
     if figures is not None:
         return {name: Path(path).read_bytes() for name, path in figures.items()}
-    drawn = {"bev": figure_png(bev_figure(report, rig)), "rings": figure_png(rings_figure(report, compare_report)),
-             "blind": figure_png(blind_figure(report))}
+    drawn = {"bev": figure_png(bev_figure(report, rig, datum)),
+             "rings": figure_png(rings_figure(report, compare_report)),
+             "blind": figure_png(blind_figure(report, datum))}
     if regions:
-        drawn["regions"] = figure_png(regions_figure(regions, report, rig))
+        drawn["regions"] = figure_png(regions_figure(regions, report, rig, datum))
     return drawn
 
 
@@ -74,11 +85,12 @@ _CAPTIONS = {
 
 def render_html(report: CoverageReport, rig: Rig, comparison: CoverageComparison | None = None,
                 compare_report: CoverageReport | None = None, figures: dict[str, bytes] | None = None,
-                scene: str | None = None, regions=()) -> str:
+                scene: str | None = None, regions=(), datum: ReportDatum = CENTRE_DATUM) -> str:
     """The report page as a string; ``figures`` maps ``bev``, ``rings``, ``blind``, ``regions`` to PNG bytes
     (omitted figures are left out); ``scene``: the 3D view's HTML fragment (``report.scene_3d.scene_html``), if
-    any; ``regions`` the regulation fields' coverage (RegionCoverage), if any."""
-    data = report_dict(report)
+    any; ``regions`` the regulation fields' coverage (RegionCoverage), if any. Positions are measured from
+    ``datum`` (:func:`page_datum`; the figures and the scene must be drawn from it too), which the page names."""
+    data = report_dict(report, rig, datum)
     other = report_dict(compare_report) if compare_report is not None else None
     settings = report.settings
     parts = [
@@ -142,14 +154,19 @@ def render_html(report: CoverageReport, rig: Rig, comparison: CoverageComparison
     rows = []
     for camera in data["cameras"]:
         spec = by_id.get(camera["id"])
-        position = ", ".join(f"{v:.2f}" for v in spec.position) if spec is not None else "-"
+        position = ", ".join(f"{v:.2f}" for v in camera["position"]) if spec is not None else "-"
         overlaps = ", ".join(f"{k} {v:.1f}°" for k, v in camera["overlap_deg"].items()) or "none"
         rows.append([escape(camera["id"] + (" (inside the body)" if camera["id"] in inside else "")), escape(position),
                      num(spec.fov, 1, "°") if spec is not None else "-",
                      escape(spec.lens.label()) if spec is not None else "-", pct(camera["self_occluded_frac"]),
                      f"<td>{escape(overlaps)}</td>"])
-    parts.append(table(["camera", f"position x, y, z (m, {CENTRE_DATUM.axis_text})", "hfov", "lens", "self-occluded",
+    parts.append(table(["camera", f"position x, y, z (m, {datum.axis_text})", "hfov", "lens", "self-occluded",
                         "overlaps"], rows))
+    parts.append(f'<p class="note">Positions in this page (the camera table, the top views, the 3D view) and in '
+                 f"coverage.json: {escape(datum.frame)} (x forward, y left, z up, metres), the design report's frame "
+                 "where the vehicle's axles are known. The rig is first placed on the vehicle, from its centre; "
+                 "coverage.json's origin_from_vehicle_centre_m is where this page's origin lies from that "
+                 "centre.</p>")
 
     if comparison is not None:
         diff = comparison_dict(comparison)
@@ -174,16 +191,14 @@ def render_html(report: CoverageReport, rig: Rig, comparison: CoverageComparison
                      + f" ({escape(diff['b'])} minus {escape(diff['a'])}; negative is better).</p>")
 
     if scene is not None:
-        from rigopt.report.scene_3d import FRAME_TEXT
-
         parts += ["<h2>3D view</h2>",
                   '<p class="note">Drag to turn, scroll to zoom, hover for details; click a legend entry to hide or '
                   "show it. The cameras with their frustums (lines to the image corners along each lens's own "
-                  "corner rays), the mounting zones, the keep-outs in orange, the wheels dark grey. "
-                  f"{escape(FRAME_TEXT)}.</p>", scene]
+                  "corner rays), the mounting zones, the keep-outs in orange, the wheels dark grey. Frame: "
+                  f"{escape(datum.frame)} (x forward, y left, z up, metres), as the camera table.</p>", scene]
     if figures:
         parts.append("<h2>Figures</h2>")
-        parts.append(f'<p class="note">Positions in the top views as in the camera table: {escape(CENTRE_DATUM.frame)} '
+        parts.append(f'<p class="note">Positions in the top views as in the camera table: {escape(datum.frame)} '
                      "(x forward, y left, metres).</p>")
         for name in ("bev", "rings", "blind", "regions"):
             if name in figures:
@@ -197,20 +212,22 @@ def write_html_report(report: CoverageReport, out_dir, rig: Rig, comparison: Cov
                       regions=()) -> Path:
     """Write ``report.html`` into ``out_dir`` (created): self-contained, figures embedded as PNG data URIs.
 
-    ``figures`` maps ``bev``, ``rings``, ``blind`` to PNG files already written (e.g. by the CLI) so that they
-    are not drawn twice; without it the figures are drawn here (``compare_report`` dashed in the ring plot).
-    With the ``vehicle`` the rig sits on, the page also holds the interactive 3D view (plotly.js inline).
-    Returns the path of the page.
+    ``figures`` maps ``bev``, ``rings``, ``blind`` to PNG files already written (e.g. by the CLI, from
+    :func:`page_datum`) so that they are not drawn twice; without it the figures are drawn here
+    (``compare_report`` dashed in the ring plot). With the ``vehicle`` the rig sits on, positions are measured
+    from its report datum (:func:`page_datum`) and the page also holds the interactive 3D view (plotly.js
+    inline). Returns the path of the page.
     """
     from rigopt.report.scene_3d import scene_html
 
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
+    datum = page_datum(vehicle)
     outlines = [(r.key, np.asarray(part.exterior.coords)[:, :2]) for r in regions
                 for part in shapely.get_parts(r.polygon) if not part.is_empty]
-    scene = scene_html(vehicle, rig, regions=outlines) if vehicle is not None else None
+    scene = scene_html(vehicle, rig, regions=outlines, datum="rear_axle") if vehicle is not None else None
     page = render_html(report, rig, comparison, compare_report,
-                       _figures(report, rig, compare_report, figures, regions), scene, regions)
+                       _figures(report, rig, compare_report, figures, regions, datum), scene, regions, datum)
     path = out_dir / REPORT_FILE
     path.write_text(page, encoding="utf-8")
     return path
@@ -221,7 +238,8 @@ def write_coverage_folder(out_dir, report: CoverageReport, rig: Rig, comparison:
                           regions=()) -> list[Path]:
     """Write the coverage folder: ``coverage.json``, ``bev.png``, ``rings.png``, ``blind.png``, with
     ``regions`` (RegionCoverage of the regulation fields) ``regions.png``, and ``report.html`` (with the 3D
-    view when the rig's ``vehicle`` is given).
+    view when the rig's ``vehicle`` is given). Positions everywhere are measured from :func:`page_datum` of
+    ``vehicle`` (the design report's frame where its axles are known), which the JSON and the page name.
 
     ``out_dir`` is created if missing and written in place (callers that need the folder whole or not at all
     write into a temporary sibling, see ``rigopt.output.atomic_folder``). The JSON holds ``report_dict``, the
@@ -230,17 +248,18 @@ def write_coverage_folder(out_dir, report: CoverageReport, rig: Rig, comparison:
     """
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    data = report_dict(report)
+    datum = page_datum(vehicle)
+    data = report_dict(report, rig, datum)
     data["regions"] = regions_dict(regions)
     if comparison is not None:
         data["compare"] = comparison_dict(comparison)
     json_path = out_dir / "coverage.json"
     json_path.write_text(json.dumps(json_ready(data), indent=2) + "\n")
-    figures = {"bev": write_bev_figure(report, out_dir / "bev.png", rig),
+    figures = {"bev": write_bev_figure(report, out_dir / "bev.png", rig, datum),
                "rings": write_rings_figure(report, out_dir / "rings.png", compare_report),
-               "blind": write_blind_figure(report, out_dir / "blind.png")}
+               "blind": write_blind_figure(report, out_dir / "blind.png", datum)}
     if regions:
-        figures["regions"] = write_regions_figure(regions, report, out_dir / "regions.png", rig)
+        figures["regions"] = write_regions_figure(regions, report, out_dir / "regions.png", rig, datum)
     page_path = write_html_report(report, out_dir, rig, comparison, compare_report, figures=figures, vehicle=vehicle,
                                   regions=regions)
     return [json_path, *figures.values(), page_path]

@@ -106,8 +106,7 @@ def frame_dict(vehicle) -> dict:
     CARLA's y right into ISO's y left, to get the report's)."""
     from rigopt.coverage.packaging import report_origin
 
-    datum = report_origin(vehicle)
-    return {"frame": datum.frame, "origin_from_vehicle_centre_m": datum.point.tolist()}
+    return report_origin(vehicle).to_dict()
 
 
 def breakdown_dict(b) -> dict:

@@ -3,8 +3,8 @@ their frustums and the frustums' ground footprints, for the HTML reports; the pa
 so it opens offline.
 
 Everything is drawn in the ISO 8855 vehicle frame (x forward, y left, z up; metres) from a named origin on
-the ground (``datum``): the vehicle's centre, the frame of every rigopt vehicle mesh (the coverage page), or
-the ground below the rear axle's centre (the design report, whose tables use it too). A rig measured from
+the ground (``datum``): the vehicle's centre, the frame of every rigopt vehicle mesh, or the ground below the
+rear axle's centre (the design and coverage reports, whose tables use it too). A rig measured from
 another origin (its rear axle) is placed on the vehicle first. What is drawn:
 
 - the body mesh, each face split exactly along the planes of the zone boxes it crosses and each piece

@@ -12,6 +12,7 @@ import json
 from pathlib import Path
 
 from rigopt.coverage.measures import coverage_report
+from rigopt.coverage.packaging import report_origin
 from rigopt.report.coverage_figures import report_dict
 from rigopt.report.coverage_html import write_html_report
 from rigopt.rig.library import library_rig, rig_names
@@ -37,8 +38,9 @@ def main() -> None:
         report = coverage_report(rig, vehicle)
         folder = out / name
         folder.mkdir(parents=True, exist_ok=True)
-        (folder / "coverage.json").write_text(json.dumps(report_dict(report), indent=2) + "\n")
-        write_html_report(report, folder, rig)
+        (folder / "coverage.json").write_text(json.dumps(report_dict(report, rig, report_origin(vehicle)), indent=2)
+                                              + "\n")
+        write_html_report(report, folder, rig, vehicle=vehicle)
         far, ground = ring(report, 10.0, 0.8), ring(report, 2.0, 0.0)
         worst = max(report.cameras, key=lambda c: c.self_occluded_frac)
         lines.append(f"| {name} | {vehicle.name} | {len(rig)} | {far.covered_frac:.3f} | {far.overlap2_frac:.3f} | "

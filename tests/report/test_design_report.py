@@ -211,6 +211,6 @@ def test_the_pictures_draw_the_cameras_where_the_tables_put_them(car, rig):
     (ax,) = regions_figure(fields, ring_report(rig, car), rig, datum).axes
     assert np.allclose(_plotted(ax, "o"), [[r["position"][1], r["position"][0]] for r in rows])  # (y, x) top view
     assert ax.get_ylabel() == "x forward (m), from the rear axle"
-    (centred,) = regions_figure(fields, ring_report(rig, car), rig).axes  # the coverage page: the vehicle centre
+    (centred,) = regions_figure(fields, ring_report(rig, car), rig).axes  # the default: the vehicle centre
     assert np.allclose(_plotted(centred, "o")[:, 1], rig.positions[:, 0])
     assert centred.get_ylabel() == "x forward (m), from the vehicle centre"
