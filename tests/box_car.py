@@ -1,5 +1,5 @@
 """The box car of the tests: a 4 x 1.8 x 1.2 m box (x in [-2, 2], y in [-0.9, 0.9], z in [0.3, 1.5]) as
-vehicle spec text, with front and side zones and an optional roof zone. Imported by test modules (the
+vehicle spec text, with front and side zones, an optional roof zone and optional wheels. Imported by test modules (the
 tests folder is on the import path through its conftest)."""
 
 import textwrap
@@ -10,6 +10,18 @@ name = "body"
 type = "prism"
 side = [[-2, 0.3], [2, 0.3], [2, 1.5], [-2, 1.5]]
 plan = [[2, 0], [2, 0.9], [-2, 0.9], [-2, 0]]
+"""
+
+#: The box car's wheels (solid text to add to BOX_BODY): axles at x = 1.3 and -1.3 m, so its rear axle, the
+#: reports' datum, lies 1.3 m behind its centre.
+BOX_WHEELS = """
+[[solids]]
+name = "wheels"
+type = "wheels"
+axles = [1.3, -1.3]
+radius = 0.35
+width = 0.25
+track = 1.6
 """
 
 BOX_ZONES = """

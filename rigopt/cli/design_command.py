@@ -302,7 +302,7 @@ def design_command(
 def _excluded_text(region: dict) -> str:
     """What a field line adds when some of the field's points are not asked for (inside the body's footprint or a
     keep-out in force, such as a coupled trailer)."""
-    excluded = region.get("n_excluded", 0)
+    excluded = region["n_excluded"]
     if not excluded:
         return ""
     return (f"; {excluded} of its {excluded + region['n_points']} points lie inside the body or a keep-out in force "

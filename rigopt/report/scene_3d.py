@@ -370,23 +370,23 @@ def _region_traces(go, regions: Sequence[tuple[str, np.ndarray]]) -> list:
 # ------------------------------------------------------------------------------------------------ figure
 
 
-def view_datum(vehicle: Vehicle, datum: str = "vehicle_centre") -> tuple[np.ndarray, str]:
-    """The origin a view is drawn from: its point (3,) m in the vehicle-centre frame and its words (for the
-    frame text). ``datum``: "vehicle_centre" (the mesh's own origin) or "rear_axle" (the reports' datum,
-    :func:`rigopt.coverage.packaging.report_origin`: the vehicle's centre where its axles are unknown)."""
-    from rigopt.coverage.packaging import report_origin
+def view_datum(vehicle: Vehicle, datum: str = "vehicle_centre"):
+    """The origin a view is drawn from, a :class:`rigopt.coverage.packaging.ReportDatum` (its point (3,) m in the
+    vehicle-centre frame and its words). ``datum``: "vehicle_centre" (the mesh's own origin) or "rear_axle" (the
+    reports' datum, :func:`rigopt.coverage.packaging.report_origin`: the vehicle's centre where its axles are
+    unknown)."""
+    from rigopt.coverage.packaging import ReportDatum, report_origin
 
     if datum not in DATUMS:
         raise RigoptError(f"unknown view datum {datum!r}; use one of {', '.join(DATUMS)}")
     if datum == "vehicle_centre":
-        return np.zeros(3), "origin at the vehicle's centre on the ground"
-    chosen = report_origin(vehicle)
-    return chosen.point, chosen.origin
+        return ReportDatum(np.zeros(3), "origin at the vehicle's centre on the ground")
+    return report_origin(vehicle)
 
 
 def frame_text(vehicle: Vehicle, datum: str = "vehicle_centre") -> str:
     """The words naming the frame a view is drawn in (:data:`FRAME_TEXT` for the vehicle centre)."""
-    return f"ISO 8855 vehicle frame: x forward, y left, z up, metres, {view_datum(vehicle, datum)[1]}"
+    return f"ISO 8855 vehicle frame: x forward, y left, z up, metres, {view_datum(vehicle, datum).origin}"
 
 
 def _translate(traces: list, offset: np.ndarray) -> None:
@@ -459,13 +459,12 @@ def scene_figure(vehicle: Vehicle, rig: Rig | None = None, *, regions: Sequence[
     The view opens framed on the vehicle (:func:`framed_scene`), the legend beside the scene."""
     import plotly.graph_objects as go
 
-    from rigopt.coverage.packaging import CENTRE_DATUM, report_origin
     from rigopt.report.palette import zone_colours
 
     if not frustum_range > 0:
         raise RigoptError(f"the frustum range must be positive (m), got {frustum_range}")
-    origin, _ = view_datum(vehicle, datum)
-    origin_text = (report_origin(vehicle) if datum == "rear_axle" else CENTRE_DATUM).axis_text
+    drawn_from = view_datum(vehicle, datum)
+    origin, origin_text = drawn_from.point, drawn_from.axis_text
     triangles, labels, missing = body_triangles(vehicle, max_faces)
     colours = {name: "rgb({:.0f}, {:.0f}, {:.0f})".format(*(255 * np.array(c[:3])))
                for name, c in zone_colours(vehicle).items()}

@@ -18,11 +18,12 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-import time
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
 DESIGNS = HERE / "designs"
+sys.path.insert(0, str(HERE.parent))  # studies/: the studies' shared code (studylib)
+from studylib.logs import timestamped_log  # noqa: E402
 
 
 def measured_rigs(vehicle_name: str):
@@ -72,47 +73,41 @@ def main(argv=None) -> int:
                         help="instead: the design against the height-matched copy given the same height search "
                              "(exploratory; designs/<vehicle>_heights_copy.json)")
     args = parser.parse_args(argv)
-    from rigopt.validation.detectors.shipped import measure, paired_differences, shipped_detector, without_resamples
+    from rigopt.validation.detectors.shipped import shipped_detector
 
     detector = shipped_detector("lss", "R1")
     for vehicle_name in args.vehicles:
-        log = open(DESIGNS / f"{vehicle_name}_heights.log", "a")
+        with timestamped_log(DESIGNS / f"{vehicle_name}_heights.log") as progress:
+            measure_vehicle(vehicle_name, args, detector, progress)
+    return 0
 
-        def progress(message: str) -> None:
-            line = f"{time.strftime('%H:%M:%S')} {message}"
-            print(line, flush=True)
-            log.write(line + "\n")
-            log.flush()
 
-        if args.searched_copy:
-            design, copy = searched_copy(vehicle_name)
-            progress(f"{vehicle_name}: {design.name} and {copy.name} (heights {copy.positions[:, 2].round(2)})")
-            entries = measure([design, copy], detector, args.cache, "cpu", args.workers, progress)
-            result = {"vehicle": vehicle_name, "note": searched_copy.__doc__.split(". An")[0],
-                      "copy_positions": copy.positions.round(3).tolist(),
-                      "rigs": [without_resamples(entry) for entry in entries],
-                      "design_minus_searched_copy": paired_differences(entries[0], entries[1])}
-            _write(DESIGNS / f"{vehicle_name}_heights_copy.json", result, progress)
-            log.close()
-            continue
+def measure_vehicle(vehicle_name: str, args, detector, progress) -> None:
+    """Measure one vehicle's rigs as :func:`main`'s ``args`` say (the pre-registered four, or with
+    ``--searched-copy`` the diagnostic's two) and write its JSON, whole or not at all."""
+    from rigopt.output import write_text_atomic
+    from rigopt.validation.detectors.shipped import measure, paired_differences, without_resamples
+
+    if args.searched_copy:
+        design, copy = searched_copy(vehicle_name)
+        progress(f"{vehicle_name}: {design.name} and {copy.name} (heights {copy.positions[:, 2].round(2)})")
+        entries = measure([design, copy], detector, args.cache, "cpu", args.workers, progress)
+        out = DESIGNS / f"{vehicle_name}_heights_copy.json"
+        result = {"vehicle": vehicle_name, "note": searched_copy.__doc__.split(". An")[0],
+                  "copy_positions": copy.positions.round(3).tolist(),
+                  "rigs": [without_resamples(entry) for entry in entries],
+                  "design_minus_searched_copy": paired_differences(entries[0], entries[1])}
+    else:
         rigs = measured_rigs(vehicle_name)
         progress(f"{vehicle_name}: {', '.join(rig.name for _, rig in rigs)}")
         entries = measure([rig for _, rig in rigs], detector, args.cache, "cpu", args.workers, progress)
+        out = DESIGNS / f"{vehicle_name}_heights.json"
         result = {"vehicle": vehicle_name, "rigs": [{"role": role, "positions": rig.positions.round(3).tolist(),
                                                       **without_resamples(entry)}
                                                      for (role, rig), entry in zip(rigs, entries)],
                   "design_minus": [{"role": role, **paired_differences(entries[0], entry)}
                                    for (role, _), entry in zip(rigs[1:], entries[1:])]}
-        _write(DESIGNS / f"{vehicle_name}_heights.json", result, progress)
-        log.close()
-    return 0
-
-
-def _write(out: Path, result: dict, progress) -> None:
-    """``result`` as JSON into ``out``, whole or not at all."""
-    temporary = out.with_suffix(".tmp")
-    temporary.write_text(json.dumps(result, indent=1))
-    temporary.replace(out)
+    write_text_atomic(out, json.dumps(result, indent=1))
     progress(f"wrote {out}")
 
 

@@ -17,11 +17,12 @@ import argparse
 import dataclasses
 import json
 import sys
-import time
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
 DESIGNS = HERE / "designs"
+sys.path.insert(0, str(HERE.parent))  # studies/: the studies' shared code (studylib)
+from studylib.logs import timestamped_log  # noqa: E402
 
 
 def swap_rigs(vehicle_name: str):
@@ -49,33 +50,24 @@ def main(argv=None) -> int:
     parser.add_argument("--cache", type=Path, default=None, help="renderings (default: rigopt validate's cache)")
     parser.add_argument("--workers", type=int, default=2)
     args = parser.parse_args(argv)
+    from rigopt.output import write_text_atomic
     from rigopt.validation.detectors.shipped import measure, paired_differences, shipped_detector, without_resamples
 
     detector = shipped_detector("lss", "R1")
     for vehicle_name in args.vehicles:
-        log = open(DESIGNS / f"{vehicle_name}_swaps.log", "a")
-
-        def progress(message: str) -> None:
-            line = f"{time.strftime('%H:%M:%S')} {message}"
-            print(line, flush=True)
-            log.write(line + "\n")
-            log.flush()
-
-        copy, swaps = swap_rigs(vehicle_name)
-        progress(f"{vehicle_name}: {copy.name} and {len(swaps)} swaps")
-        entries = measure([copy] + [rig for _, rig in swaps], detector, args.cache, "cpu", args.workers, progress)
-        result = {"vehicle": vehicle_name, "copy": without_resamples(entries[0]), "swaps": []}
-        for (camera_id, rig), entry in zip(swaps, entries[1:]):
-            moved = next(c for c in rig.cameras if c.id == camera_id)
-            result["swaps"].append({"camera": camera_id, "position": moved.position.round(3).tolist(),
-                                    "fov": moved.fov, **without_resamples(entry),
-                                    "minus_copy": paired_differences(entry, entries[0])})
-        out = DESIGNS / f"{vehicle_name}_swaps.json"
-        temporary = out.with_suffix(".tmp")
-        temporary.write_text(json.dumps(result, indent=1))
-        temporary.replace(out)
-        progress(f"wrote {out}")
-        log.close()
+        with timestamped_log(DESIGNS / f"{vehicle_name}_swaps.log") as progress:
+            copy, swaps = swap_rigs(vehicle_name)
+            progress(f"{vehicle_name}: {copy.name} and {len(swaps)} swaps")
+            entries = measure([copy] + [rig for _, rig in swaps], detector, args.cache, "cpu", args.workers,
+                              progress)
+            result = {"vehicle": vehicle_name, "copy": without_resamples(entries[0]), "swaps": []}
+            for (camera_id, rig), entry in zip(swaps, entries[1:]):
+                moved = next(c for c in rig.cameras if c.id == camera_id)
+                result["swaps"].append({"camera": camera_id, "position": moved.position.round(3).tolist(),
+                                        "fov": moved.fov, **without_resamples(entry),
+                                        "minus_copy": paired_differences(entry, entries[0])})
+            out = write_text_atomic(DESIGNS / f"{vehicle_name}_swaps.json", json.dumps(result, indent=1))
+            progress(f"wrote {out}")
     return 0
 
 

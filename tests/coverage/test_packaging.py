@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from box_car import BOX_BODY, BOX_ZONES, spec_text
+from box_car import BOX_BODY, BOX_WHEELS, BOX_ZONES, spec_text
 
 from rigopt.camera import Lens, focal_from_fov
 from rigopt.coverage import packaging
@@ -17,16 +17,6 @@ from rigopt.geometry import rotation_from_yaw_pitch_roll
 from rigopt.rig.model import Camera, Rig, RigOrigin
 from rigopt.vehicle.model import Vehicle
 from rigopt.vehicle.spec import read_spec
-
-WHEELS = """
-[[solids]]
-name = "wheels"
-type = "wheels"
-axles = [1.3, -1.3]
-radius = 0.35
-width = 0.25
-track = 1.6
-"""
 
 FRONT = np.array([2.04, 0.0, 1.0])  # 4 cm in front of the front face, in the front zone
 F_90 = float(focal_from_fov(90.0, 1280))  # 640 px
@@ -48,7 +38,7 @@ def box(tmp_path_factory) -> Vehicle:
 @pytest.fixture(scope="module")
 def wheeled(tmp_path_factory) -> Vehicle:
     path = tmp_path_factory.mktemp("wheeled") / "vehicle.toml"
-    path.write_text(spec_text("packwheels", BOX_BODY + WHEELS, BOX_ZONES))
+    path.write_text(spec_text("packwheels", BOX_BODY + BOX_WHEELS, BOX_ZONES))
     return Vehicle.from_spec(read_spec(path))
 
 

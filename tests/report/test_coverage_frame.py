@@ -11,7 +11,7 @@ import json
 
 import numpy as np
 import pytest
-from box_car import BOX_BODY, BOX_ZONES, front_and_left_rig, spec_text
+from box_car import BOX_BODY, BOX_WHEELS, BOX_ZONES, front_and_left_rig, spec_text
 from in_process import run_rigopt
 
 from rigopt.coverage.measures import CoverageSettings, coverage_report
@@ -22,16 +22,6 @@ from rigopt.report.design_report import camera_rows, frame_dict
 from rigopt.rig.pccr_format import write_rig
 from rigopt.vehicle.model import Vehicle
 from rigopt.vehicle.spec import read_spec
-
-WHEELS = """
-[[solids]]
-name = "wheels"
-type = "wheels"
-axles = [1.3, -1.3]
-radius = 0.35
-width = 0.25
-track = 1.6
-"""
 
 FRAME = "ISO 8855, origin on the ground below the rear axle's centre"
 #: What the design report's tables give for front_and_left_rig on the wheeled box car (m, from the rear axle).
@@ -50,7 +40,7 @@ def _vehicle_file(folder, name: str, solids: str):
 def run(tmp_path_factory):
     """(the vehicle, the rig, stdout JSON, coverage.json, the page, the terminal tables, {png name: Figure})."""
     root = tmp_path_factory.mktemp("coverage_frame")
-    spec = _vehicle_file(root / "home" / "vehicles", "framecar", BOX_BODY + WHEELS)
+    spec = _vehicle_file(root / "home" / "vehicles", "framecar", BOX_BODY + BOX_WHEELS)
     rig = front_and_left_rig("vehicle.test.framecar", "framerig")
     rig_file, out, env = write_rig(rig, root / "framerig.json"), root / "out", {"RIGOPT_HOME": str(root / "home")}
     drawn, save = {}, coverage_figures._save

@@ -10,7 +10,7 @@ import re
 
 import numpy as np
 import pytest
-from box_car import BOX_BODY, BOX_ZONES, spec_text
+from box_car import BOX_BODY, BOX_WHEELS, BOX_ZONES, spec_text
 
 from rigopt.coverage.packaging import REAR_AXLE_ORIGIN, rig_packaging
 from rigopt.geometry import rotation_from_yaw_pitch_roll
@@ -21,16 +21,6 @@ from rigopt.rig.model import Camera, Rig, RigOrigin
 from rigopt.vehicle.model import Vehicle
 from rigopt.vehicle.spec import read_spec
 
-WHEELS = """
-[[solids]]
-name = "wheels"
-type = "wheels"
-axles = [1.3, -1.3]
-radius = 0.35
-width = 0.25
-track = 1.6
-"""
-
 FRAME = "ISO 8855, origin on the ground below the rear axle's centre"
 
 
@@ -38,7 +28,7 @@ FRAME = "ISO 8855, origin on the ground below the rear axle's centre"
 def car(tmp_path_factory) -> Vehicle:
     """The box car on wheels: its rear axle at x = -1.3 m."""
     path = tmp_path_factory.mktemp("reportcar") / "vehicle.toml"
-    path.write_text(spec_text("reportcar", BOX_BODY + WHEELS, BOX_ZONES))
+    path.write_text(spec_text("reportcar", BOX_BODY + BOX_WHEELS, BOX_ZONES))
     return Vehicle.from_spec(read_spec(path))
 
 

@@ -7,7 +7,7 @@ import re
 
 import numpy as np
 import pytest
-from box_car import BOX_BODY, BOX_ZONES, spec_text
+from box_car import BOX_BODY, BOX_WHEELS, BOX_ZONES, spec_text
 
 from rigopt.camera import Lens, vertical_fov
 from rigopt.errors import RigoptError
@@ -18,16 +18,6 @@ from rigopt.report.scene_3d import BODY, REGION_HEIGHT_M, WHEELS, body_triangles
 from rigopt.rig.model import Camera, Rig, RigOrigin
 from rigopt.vehicle.model import Vehicle
 from rigopt.vehicle.spec import read_spec
-
-WHEEL_SOLIDS = """
-[[solids]]
-name = "wheels"
-type = "wheels"
-axles = [1.3, -1.3]
-radius = 0.35
-width = 0.25
-track = 1.6
-"""
 
 KEEP_OUTS = """
 [[keep_out]]
@@ -65,7 +55,7 @@ def vehicle_from(tmp_path_factory, name: str, solids: str, zones: str) -> Vehicl
 @pytest.fixture(scope="module")
 def car(tmp_path_factory) -> Vehicle:
     """The box car on four wheel solids, with a mirrored keep-out and an optional one."""
-    return vehicle_from(tmp_path_factory, "wheelbox", BOX_BODY + WHEEL_SOLIDS, BOX_ZONES + KEEP_OUTS)
+    return vehicle_from(tmp_path_factory, "wheelbox", BOX_BODY + BOX_WHEELS, BOX_ZONES + KEEP_OUTS)
 
 
 @pytest.fixture(scope="module")
