@@ -15,6 +15,7 @@ from rigopt.cli.app import app, console, note, note_fallback, print_json, print_
 from rigopt.cli.bench_commands import bench_app
 from rigopt.cli.metric_commands import METRIC_HELP
 from rigopt.errors import RigoptError
+from rigopt.validation.detectors.measuring import DEFAULT_PROTOCOL, protocol_named
 
 MODEL_HELP = ("Detector family, a name in the registry (rigopt.validation.detectors.families): lss (lift-splat, BEVDet-like), "
               "petr (3D position embeddings, PETR-like), ...; an unknown name lists them.")
@@ -207,6 +208,9 @@ def validate_command(
     cache: Optional[Path] = typer.Option(None, "--cache", help="Without --data: where the renderings are kept "
                                          "(default $RIGOPT_HOME/cache/validate, ~/.rigopt/cache/validate)."),
     workers: int = typer.Option(0, "--workers", min=0, help="Without --data: rendering processes (0: one per core)."),
+    protocol: str = typer.Option(DEFAULT_PROTOCOL.name, "--protocol", help="Without --data: full (every frame of the "
+                                 "reference's test scenes) or quick (every 4th frame, a quarter of the time; its "
+                                 "agreement with full measured in studies/validation/protocol)."),
     compare: bool = typer.Option(False, "--compare", help="Without --data: also measure the hand-designed rigs of "
                                  "the rig's vehicle and the naive and height-matched transfers of the reference "
                                  "(as --data always does)."),
@@ -233,6 +237,8 @@ def validate_command(
     if data is None and runs is not None:
         raise RigoptError("--runs names trained runs of a --data folder: add --data, or leave --runs out to use the "
                           "shipped models")
+    if data is not None and protocol_named(protocol) != DEFAULT_PROTOCOL:
+        raise RigoptError("--protocol is for the shipped models (no --data); with --data every test sample is scored")
     if data is not None and (cache is not None or compare):
         raise RigoptError(f"--{'cache' if cache is not None else 'compare'} is for the shipped models (no --data); "
                           "with --data the renderings go into that folder and the comparison rigs are always measured")
@@ -243,7 +249,8 @@ def validate_command(
     note_fallback(calibration)
     resolve_device(device)
     if data is None:
-        _validate_shipped(rig, ref, family, calibration, weights, device, cache, workers, compare, out, as_json)
+        _validate_shipped(rig, ref, family, calibration, weights, device, cache, workers, protocol_named(protocol),
+                          compare, out, as_json)
         return
     with status_console.status("validating") as status:
         result = validate_design(rig, ref, family, data, calibration, runs, device, status.update)
@@ -272,7 +279,7 @@ def validate_command(
 
 
 def _validate_shipped(rig, ref: str, family: str, calibration, weights: str, device: str, cache, workers: int,
-                      compare: bool, out, as_json: bool) -> None:
+                      protocol, compare: bool, out, as_json: bool) -> None:
     """validate without --data: the shipped models, the reference's test scenes rendered into the cache."""
     import json
     import os
@@ -304,13 +311,16 @@ def _validate_shipped(rig, ref: str, family: str, calibration, weights: str, dev
         raise RigoptError(f"rig names must differ from each other: {names}")
     workers = workers or os.cpu_count() or 1
     with status_console.status("validating") as status:
-        measured = measure([r for _, r in rigs], detector, cache, device, workers, status.update)
+        measured = measure([r for _, r in rigs], detector, cache, device, workers, status.update, protocol)
     predictions = predict_transfer(reference, [r for _, r in rigs], calibration)
     card = detector.card
     result = {"reference": reference.name, "model": family, "models": "shipped", "detector": detector.folder.name,
               "seeds": detector.seeds, "epochs": card["recipe"]["epochs"],
-              "reference_mAP": {s: card["seeds"][str(s)]["mAP"] for s in detector.seeds},
-              "reference_mAP_visible": {s: card["seeds"][str(s)]["mAP_visible"] for s in detector.seeds},
+              "protocol": {"name": protocol.name, "frame_stride": protocol.frame_stride,
+                           "samples": protocol.samples(card["test_data"]), "description": protocol.describe(card["test_data"])},
+              "reference_mAP": {s: measured[0]["seeds"][str(s)]["reference_mAP"] for s in detector.seeds},
+              "reference_mAP_visible": {s: measured[0]["seeds"][str(s)]["reference_mAP_visible"]
+                                        for s in detector.seeds},
               "test_scenes": card["test_data"]["scenes"], "image_size": card["test_data"]["image_size"],
               "cache": str(cache or default_cache()), "metric": calibration.metric, "weights": calibration.name,
               "interval_note": "95 % intervals over resampled test scenes: the noise of the test, not uncertainty "
@@ -335,7 +345,7 @@ def _validate_shipped(rig, ref: str, family: str, calibration, weights: str, dev
              _predicted_interval(e), "yes" if e["extrapolation"] else "-"] for e in result["rigs"]]
     own = " / ".join(_number(v) for v in result["reference_mAP"].values())
     print_table(f"{family} trained on {reference.name}, shipped ({len(detector.seeds)} seeds, {result['epochs']} "
-                f"epochs; own mAP {own}), {result['test_scenes']} test scenes; predicted with {calibration.metric}, "
+                f"epochs; own mAP {own}), {protocol.describe(card['test_data'])}; predicted with {calibration.metric}, "
                 f"{weights} weights",
                 ["role", "rig", "cameras", "drop per seed", "mean drop", "95 % interval (test scenes)",
                  "visible-only drop", "predicted drop", "90 % prediction interval", "extrapolates"], rows)

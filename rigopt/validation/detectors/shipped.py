@@ -14,18 +14,25 @@ Shipped layout (``detectors/<family>-<reference>/``, found by :func:`rigopt.reso
   blocks; arrays ``seed<k>_mAP`` and ``seed<k>_mAP_visible``), so that a rig's drop is resampled paired with the
   reference without rendering the reference again.
 
-Cache: ``<cache>/<rig name>-<geometry key>/test/``, a benchmark split as ``rigopt bench generate`` writes it;
-the key hashes the rig as rendered (cameras, lenses, vehicle, frame), so a changed rig file never reuses old
-renderings, and an interrupted rendering resumes.
+A rig is measured under a protocol (:mod:`rigopt.validation.detectors.measuring`: ``full``, every frame of the
+test scenes, or ``quick``, every fourth); a pack holds the reference's own scores under each (:func:`pack`, or
+:func:`add_protocol` for an older pack).
+
+Cache: ``<cache>/<rig name>-<geometry key>[-<protocol>]/test/``, a benchmark split as ``rigopt bench generate``
+writes it (no suffix for ``full``); the key hashes the rig as rendered (cameras, lenses, vehicle, frame), so a
+changed rig file never reuses old renderings, and an interrupted rendering resumes. Beside the split,
+``scores/<detector>-<checkpoint digest>.npz`` keeps each model's scores on it, so a rerun scores nothing twice.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import json
 import os
 import re
 from dataclasses import dataclass
+from functools import lru_cache
 from pathlib import Path
 from typing import Callable, Sequence
 
@@ -34,9 +41,11 @@ import numpy as np
 from rigopt.errors import DataError
 from rigopt.resources import data_dir
 from rigopt.rig.model import Rig
+from rigopt.validation.detectors.measuring import FULL, PROTOCOLS, Protocol
 
 CARD = "card.json"
 BOOTSTRAP = "bootstrap.npz"
+SCORES = "scores"
 
 
 def default_cache() -> Path:
@@ -110,75 +119,112 @@ def rig_key(rig: Rig) -> str:
     return hashlib.sha256(text.encode()).hexdigest()[:12]
 
 
-def cache_name(rig: Rig) -> str:
-    """The cache folder of a rig: its name (letters, digits, ._- kept) and :func:`rig_key`."""
+def cache_name(rig: Rig, protocol: Protocol = FULL) -> str:
+    """The cache folder of a rig: its name (letters, digits, ._- kept), :func:`rig_key` and, but for ``full``,
+    the protocol's name."""
     safe = re.sub(r"[^A-Za-z0-9._-]+", "_", rig.name).strip("._") or "rig"
-    return f"{safe[:60]}-{rig_key(rig)}"
+    return f"{safe[:60]}-{rig_key(rig)}" + ("" if protocol == FULL else f"-{protocol.name}")
 
 
-def test_scenes(detector: ShippedDetector):
-    """The reference's test scenes the shipped models were scored on."""
+def test_scenes(detector: ShippedDetector, protocol: Protocol = FULL):
+    """The reference's test scenes the shipped models were scored on, with the frames ``protocol`` scores."""
     from rigopt.validation.synthetic.scenes import split_scenes
 
     test = detector.card["test_data"]
-    return split_scenes(test["split"], test["scenes"], test["frames"], test["seed_offset"])
+    scenes = split_scenes(test["split"], test["scenes"], test["frames"], test["seed_offset"])
+    return [dataclasses.replace(scene, frames=scene.frames[::protocol.frame_stride]) for scene in scenes]
 
 
 def render_cached(rigs: Sequence[Rig], detector: ShippedDetector, cache: Path, workers: int = 1,
-                  progress: Callable[[str], None] = lambda message: None) -> list[str]:
-    """Render the reference's test scenes under each rig into ``cache`` (what is there is kept); returns the
-    rigs' folder names there."""
-    import dataclasses
-
+                  progress: Callable[[str], None] = lambda message: None, protocol: Protocol = FULL) -> list[str]:
+    """Render the reference's test scenes (the frames of ``protocol``) under each rig into ``cache`` (what is
+    there is kept); returns the rigs' folder names there."""
     from rigopt.validation.synthetic.generate import ego_body_lookup, generate_split
     from rigopt.validation.synthetic.render import render_rig
 
-    named = [dataclasses.replace(rig, name=cache_name(rig)) for rig in rigs]
+    named = [dataclasses.replace(rig, name=cache_name(rig, protocol)) for rig in rigs]
     size = tuple(detector.card["test_data"]["image_size"])
-    generate_split(named, test_scenes(detector), cache, size, render_rig, ego_body_lookup(progress), progress,
-                   workers=workers)
+    generate_split(named, test_scenes(detector, protocol), cache, size, render_rig, ego_body_lookup(progress),
+                   progress, workers=workers)
     return [rig.name for rig in named]
 
 
 def measure(rigs: Sequence[Rig], detector: ShippedDetector, cache: Path | None = None, device: str = "cpu",
-            workers: int = 1, progress: Callable[[str], None] = lambda message: None) -> list[dict]:
-    """Each rig's measured drop with every shipped seed: a list (one per rig) of JSON-ready dicts.
+            workers: int = 1, progress: Callable[[str], None] = lambda message: None,
+            protocol: Protocol = FULL) -> list[dict]:
+    """Each rig's measured drop with every shipped seed under ``protocol``: a list (one per rig) of JSON-ready dicts.
 
-    Per seed: ``mAP`` and ``mAP_visible`` on the reference's test scenes rendered under the rig, the reference's
-    own (from the card), the relative drops and their 95 % intervals over the card's scene resamples (paired
-    with the reference's scores under the same resamples: test noise only). Over the seeds: the mean drops and
-    the interval of the mean drop over the same resamples. Each seed's entry keeps its (resamples,) fixed-set
-    drops under those resamples (``resampled_drops``, an array: :func:`paired_differences` pairs two rigs by
-    them; :func:`without_resamples` before writing JSON). Rendering runs in ``workers`` processes, and so does
-    scoring on the CPU (one seed's model per process, the cores shared among them; on a GPU one process).
+    Per seed: ``mAP`` and ``mAP_visible`` on the reference's test scenes (the protocol's frames) rendered under the
+    rig, the reference's own on the same frames, the relative drops and their 95 % intervals over the card's
+    scene resamples (paired with the reference's scores under the same resamples: test noise only). Over the
+    seeds: the mean drops and the interval of the mean drop over the same resamples. Each seed's entry keeps its
+    (resamples,) fixed-set drops under those resamples (``resampled_drops``, an array: :func:`paired_differences`
+    pairs two rigs by them; :func:`without_resamples` before writing JSON). Rendering runs in ``workers``
+    processes, and so does scoring on the CPU: one pool for every (rig, seed), each process loading a model
+    once, the cores shared among them (on a GPU one process). ``progress`` hears of each rig as it is scored.
     """
-    from rigopt.validation.synthetic.evaluation import interval
     from rigopt.validation.synthetic.cluster import run_tasks
 
     cache = Path(cache) if cache is not None else default_cache()
-    folders = render_cached(rigs, detector, cache, workers, progress)
-    # On the CPU with workers > 1, one process per seed, the cores shared among them: on 2 cores three
-    # one-thread processes finish sooner than two (the third seed would run alone on one core) or than one
+    references = reference_scores(detector, protocol)  # a pack without this protocol fails before any work
+    folders = render_cached(rigs, detector, cache, workers, progress, protocol)
+    # On the CPU with workers > 1, as many one-thread processes as seeds, the cores shared among them: on 2 cores
+    # three one-thread processes finish sooner than two (the third seed would run alone on one core) or than one
     # two-thread process in turn (a second thread speeds a small network up 1.75x, not 2x).
     scorers = 1 if device != "cpu" or workers <= 1 else len(detector.seeds)
-    threads = max(1, (os.cpu_count() or 1) // scorers)
-    results = []
-    for rig, folder in zip(rigs, folders):
-        progress(f"{rig.name}: scoring {len(detector.seeds)} {detector.family} model(s)"
-                 + (f" in {scorers} processes" if scorers > 1 else ""))
-        calls = {seed: (detector, seed, cache, folder, device, threads if scorers > 1 else None)
-                 for seed in detector.seeds}
-        scored = dict(run_tasks(score_seed, calls, workers=scorers, what="scoring seed"))
-        seeds = {str(seed): {**scored[seed][0], "resampled_drops": scored[seed][1]} for seed in detector.seeds}
-        resampled_drops = [scored[seed][1] for seed in detector.seeds]
-        resampled_visible = [scored[seed][2] for seed in detector.seeds]
-        results.append({
-            "rig": rig.name, "n_cameras": len(rig), "cache": str(cache / folder), "seeds": seeds,
+    threads = max(1, (os.cpu_count() or 1) // scorers) if scorers > 1 else None
+    calls = {(k, seed): (detector, seed, cache, folder, protocol, device, threads)
+             for k, folder in enumerate(folders) for seed in detector.seeds}
+    progress(f"scoring {len(rigs)} rig(s) with {len(detector.seeds)} {detector.family} model(s)"
+             + (f" in {scorers} processes" if scorers > 1 else ""))
+    scores, left = {}, {k: len(detector.seeds) for k in range(len(rigs))}
+    for (k, seed), scored in run_tasks(score_seed, calls, workers=scorers, what="scoring (rig, seed)"):
+        scores[k, seed] = scored
+        left[k] -= 1
+        if not left[k]:
+            progress(f"{rigs[k].name}: scored ({sum(not n for n in left.values())} of {len(rigs)} rigs)")
+    return [_rig_entry(rig, protocol, cache / folder, {seed: scores[k, seed] for seed in detector.seeds}, references)
+            for k, (rig, folder) in enumerate(zip(rigs, folders))]
+
+
+def _rig_entry(rig: Rig, protocol: Protocol, folder: Path, scores: dict[int, dict],
+               references: dict[int, dict]) -> dict:
+    """One rig's :func:`measure` entry from each seed's :func:`score_seed` and the reference's scores."""
+    from rigopt.validation.synthetic.evaluation import interval
+
+    seeds, resampled = {}, {"": [], "_visible": []}
+    for seed, scored in scores.items():
+        entry = {"mAP": scored["mAP"], "mAP_visible": scored["mAP_visible"]}
+        for key in ("", "_visible"):
+            own = references[seed][f"mAP{key}"]
+            drops = (references[seed][f"resampled{key}"] - scored[f"resampled{key}"]) / references[seed][f"resampled{key}"]
+            resampled[key].append(drops)
+            entry.update({f"reference_mAP{key}": own, f"drop{key}": (own - scored[f"mAP{key}"]) / own,
+                          f"drop{key}_ci": interval(drops)})
+        seeds[str(seed)] = {**entry, "resampled_drops": resampled[""][-1]}
+    return {"rig": rig.name, "n_cameras": len(rig), "protocol": protocol.name, "cache": str(folder), "seeds": seeds,
             "drop": float(np.mean([s["drop"] for s in seeds.values()])),
-            "drop_ci": interval(np.mean(resampled_drops, axis=0)),
+            "drop_ci": interval(np.mean(resampled[""], axis=0)),
             "drop_visible": float(np.mean([s["drop_visible"] for s in seeds.values()])),
-            "drop_visible_ci": interval(np.mean(resampled_visible, axis=0))})
-    return results
+            "drop_visible_ci": interval(np.mean(resampled["_visible"], axis=0))}
+
+
+def reference_scores(detector: ShippedDetector, protocol: Protocol = FULL) -> dict[int, dict]:
+    """The reference's own scores under ``protocol``, per seed: ``mAP``, ``mAP_visible`` and their (resamples,)
+    values under the card's scene resamples (``resampled``, ``resampled_visible``). A DataError for a pack made
+    without that protocol."""
+    if protocol == FULL:
+        own, path = detector.card["seeds"], detector.folder / BOOTSTRAP
+    else:
+        entry = detector.card.get("protocols", {}).get(protocol.name)
+        if entry is None or entry.get("frame_stride") != protocol.frame_stride:
+            raise DataError(f"{detector.folder}: the pack has no reference scores for protocol {protocol.name}; add "
+                            f"them with rigopt.validation.detectors.shipped.add_protocol, or use --protocol full")
+        own, path = entry["seeds"], detector.folder / f"bootstrap-{protocol.name}.npz"
+    with np.load(path) as stored:
+        return {seed: {"mAP": own[str(seed)]["mAP"], "mAP_visible": own[str(seed)]["mAP_visible"],
+                       "resampled": stored[f"seed{seed}_mAP"], "resampled_visible": stored[f"seed{seed}_mAP_visible"]}
+                for seed in detector.seeds}
 
 
 def without_resamples(entry: dict) -> dict:
@@ -202,43 +248,70 @@ def paired_differences(first: dict, other: dict) -> dict:
             "ci": interval(np.mean(resampled, axis=0))}
 
 
-def score_seed(detector: ShippedDetector, seed: int, cache: Path, folder: str, device: str = "cpu",
-               threads: int | None = None) -> tuple[dict, np.ndarray, np.ndarray]:
-    """One shipped model (``seed``) scored on the rendering ``cache/folder``: its JSON-ready entry (mAPs, the
-    reference's, drops and their intervals) and its (resamples,) drops under the card's scene resamples, fixed
-    set and visible only. ``threads``: torch's CPU threads (None: as set)."""
-    import torch
-
+def score_seed(detector: ShippedDetector, seed: int, cache: Path, folder: str, protocol: Protocol = FULL,
+               device: str = "cpu", threads: int | None = None) -> dict:
+    """One shipped model (``seed``) scored on the rendering ``cache/folder`` (made under ``protocol``): ``mAP``
+    and ``mAP_visible``, and their (resamples,) values under the card's scene resamples (``resampled``,
+    ``resampled_visible``). Kept in ``cache/folder/scores/`` and read from there when scored before.
+    ``threads``: torch's CPU threads (None: as set)."""
     from rigopt.validation.detectors.data import RigSplit
     from rigopt.validation.detectors.inference import match_split
-    from rigopt.validation.detectors.models import load_checkpoint, model_from_checkpoint
     from rigopt.validation.detectors.protocol import TEST_SPLIT
-    from rigopt.validation.synthetic.evaluation import interval, sample_blocks
-    from rigopt.validation.synthetic.evaluation import resampled_maps
+    from rigopt.validation.synthetic.evaluation import sample_blocks
+    from rigopt.output import atomic_file
 
-    if threads is not None:
-        torch.set_num_threads(threads)
+    boot = detector.card["bootstrap"]
+    checkpoint = detector.checkpoint(seed)
+    digest = hashlib.sha256(checkpoint.read_bytes() + f"{boot['resamples']}/{boot['seed']}".encode()).hexdigest()[:16]
+    kept = Path(cache) / folder / SCORES / f"{detector.folder.name}-seed{seed}-{digest}.npz"
+    if kept.is_file():
+        with np.load(kept) as stored:
+            return {key: stored[key] if stored[key].ndim else float(stored[key]) for key in stored.files}
     split = RigSplit(cache, folder, TEST_SPLIT, None, depths=False)
     blocks = sample_blocks(split.samples)
-    boot = detector.card["bootstrap"]
-    if len(blocks) != boot["blocks"] or len(split) != detector.card["test_data"]["samples"]:
-        raise DataError(f"{cache / folder}: {len(split)} samples in {len(blocks)} scenes, not the "
-                        f"{detector.card['test_data']['samples']} in {boot['blocks']} the shipped models were "
-                        "scored on; delete that folder and run again")
-    model = model_from_checkpoint(load_checkpoint(detector.checkpoint(seed), detector.family))[0]
-    matched = match_split(model, split, device)
-    own = detector.card["seeds"][str(seed)]
-    entry = {"mAP": matched.evaluation().map, "mAP_visible": matched.evaluation(visible_only=True).map}
-    with np.load(detector.folder / BOOTSTRAP) as stored:
-        reference_maps = {key: stored[f"seed{seed}_mAP{key}"] for key in ("", "_visible")}
-    drops = []
+    expected = protocol.samples(detector.card["test_data"])
+    if len(blocks) != boot["blocks"] or len(split) != expected:
+        raise DataError(f"{Path(cache) / folder}: {len(split)} samples in {len(blocks)} scenes, not the {expected} in "
+                        f"{boot['blocks']} that protocol {protocol.name} scores; delete that folder and run again")
+    if threads is not None:
+        import torch
+
+        torch.set_num_threads(threads)
+    matched = match_split(_loaded_model(checkpoint, detector.family), split, device)
+    scores = scores_on_frames(matched, blocks, FULL, boot["resamples"], boot["seed"])
+    with atomic_file(kept) as work:
+        with open(work, "wb") as handle:
+            np.savez(handle, **scores)
+    return scores
+
+
+@lru_cache(maxsize=8)
+def _loaded_model(checkpoint: Path, family: str):
+    """The model of a shipped checkpoint, loaded once per process."""
+    from rigopt.validation.detectors.models import load_checkpoint, model_from_checkpoint
+
+    return model_from_checkpoint(load_checkpoint(checkpoint, family))[0]
+
+
+def scores_on_frames(matched, blocks: Sequence[np.ndarray], protocol: Protocol, resamples: int,
+                     bootstrap_seed: int) -> dict:
+    """A matched run's scores on ``protocol``'s frames of its scenes: ``mAP``, ``mAP_visible`` and their
+    (resamples,) values under ``resamples`` scene resamples (``resampled``, ``resampled_visible``).
+
+    ``matched`` : MatchedDetections over the full frames of the scenes; blocks : each scene's sample indices in
+    frame order (``sample_blocks``). The protocol's frames weigh 1, the others 0: the scores of a split rendered
+    with only those frames (a sample is matched within itself), to rounding."""
+    from rigopt.validation.synthetic.evaluation import resampled_maps
+
+    groups = [np.asarray(block)[::protocol.frame_stride] for block in blocks]
+    weights = np.zeros(len(matched.samples), dtype=int)
+    weights[np.concatenate(groups)] = 1
+    scores = {}
     for key, visible in (("", False), ("_visible", True)):
-        maps = resampled_maps([matched], blocks, boot["resamples"], boot["seed"], visible_only=visible)[:, 0]
-        drops.append((reference_maps[key] - maps) / reference_maps[key])
-        entry[f"reference_mAP{key}"] = own[f"mAP{key}"]
-        entry[f"drop{key}"] = (own[f"mAP{key}"] - entry[f"mAP{key}"]) / own[f"mAP{key}"]
-        entry[f"drop{key}_ci"] = interval(drops[-1])
-    return entry, drops[0], drops[1]
+        scores[f"mAP{key}"] = matched.evaluation(weights, visible_only=visible).map
+        scores[f"resampled{key}"] = resampled_maps([matched], groups, resamples, bootstrap_seed,
+                                                   visible_only=visible)[:, 0]
+    return scores
 
 
 def pack(runs: dict[int, Path], data: Path, out: Path, recipe: dict, train_data: dict,
@@ -256,7 +329,6 @@ def pack(runs: dict[int, Path], data: Path, out: Path, recipe: dict, train_data:
     )
     from rigopt.validation.detectors.protocol import TEST_SPLIT
     from rigopt.validation.synthetic.evaluation import sample_blocks
-    from rigopt.validation.synthetic.evaluation import resampled_maps
     from rigopt.validation.synthetic.generate import split_layout
     from rigopt.output import atomic_folder
 
@@ -271,7 +343,7 @@ def pack(runs: dict[int, Path], data: Path, out: Path, recipe: dict, train_data:
                           "seed_offset": _seed_offset(scenes), "image_size": list(size), "samples": len(split)},
             "bootstrap": {"resamples": resamples, "seed": bootstrap_seed, "blocks": len(blocks), "unit": "scene"},
             "seeds": {}}
-    resampled = {}
+    matched = {}
     with atomic_folder(out, force=True) as work:
         for seed, state in states.items():
             if (state["family"], state["rig"]) != (family, reference):
@@ -281,22 +353,71 @@ def pack(runs: dict[int, Path], data: Path, out: Path, recipe: dict, train_data:
             path = work / f"seed{seed}.pt"
             save_checkpoint(path, slim)
             progress(f"scoring seed {seed} on {reference}'s test split")
-            model = model_from_checkpoint(load_checkpoint(path, family))[0]
-            matched = match_split(model, split, device)
-            if not matched.evaluation().map > 0:
+            matched[seed] = match_split(model_from_checkpoint(load_checkpoint(path, family))[0], split, device)
+            if not matched[seed].evaluation().map > 0:
                 raise DataError(f"{runs[seed]}: seed {seed} scores mAP 0 on {reference}'s test split; a drop needs a "
                                 "model that detects something: train it longer")
             card["seeds"][str(seed)] = {
                 "file": path.name, "epochs": state["epoch"], "steps": state["step"],
-                "training_minutes": round(training_seconds(Path(runs[seed]) / "train_log.csv") / 60, 1),
-                "mAP": matched.evaluation().map, "mAP_visible": matched.evaluation(visible_only=True).map}
-            for key, visible in (("", False), ("_visible", True)):
-                resampled[f"seed{seed}_mAP{key}"] = resampled_maps([matched], blocks, resamples, bootstrap_seed,
-                                                                   visible_only=visible)[:, 0]
-        np.savez(work / BOOTSTRAP, **resampled)
+                "training_minutes": round(training_seconds(Path(runs[seed]) / "train_log.csv") / 60, 1)}
+        for protocol in PROTOCOLS.values():
+            _write_protocol(card, work, protocol, matched, blocks)
         card["size_bytes"] = sum((work / f"seed{seed}.pt").stat().st_size for seed in states)
         (work / CARD).write_text(json.dumps(card, indent=1) + "\n")
     return ShippedDetector(Path(out), card)
+
+
+def add_protocol(detector: ShippedDetector, protocol: Protocol, cache: Path, device: str = "cpu", workers: int = 1,
+                 progress: Callable[[str], None] = lambda message: None) -> ShippedDetector:
+    """Add the reference's own scores under ``protocol`` to an existing pack (its card and
+    ``bootstrap-<protocol>.npz``, the card rewritten whole): the reference's full test split rendered into
+    ``cache`` and scored with every seed, the protocol's frames taken by weight (:func:`scores_on_frames`). The
+    full protocol's scores are measured on the way and must equal the card's (a DataError otherwise)."""
+    from rigopt.validation.detectors.data import RigSplit
+    from rigopt.validation.detectors.inference import match_split
+    from rigopt.validation.detectors.protocol import TEST_SPLIT
+    from rigopt.validation.synthetic.evaluation import sample_blocks
+    from rigopt.output import write_text_atomic
+    from rigopt.rig.library import load_rig
+
+    folder = render_cached([load_rig(detector.reference)], detector, cache, workers, progress)[0]
+    split = RigSplit(cache, folder, TEST_SPLIT, None, depths=False)
+    blocks = sample_blocks(split.samples)
+    matched = {}
+    for seed in detector.seeds:
+        progress(f"scoring seed {seed} on {detector.reference}'s test split")
+        matched[seed] = match_split(_loaded_model(detector.checkpoint(seed), detector.family), split, device)
+        own = detector.card["seeds"][str(seed)]
+        if not np.isclose(matched[seed].evaluation().map, own["mAP"], rtol=0, atol=1e-12):
+            raise DataError(f"{detector.folder}: seed {seed} scores {matched[seed].evaluation().map} on "
+                            f"{detector.reference}'s test split, its card {own['mAP']}: not the pack's test data")
+    card = json.loads(json.dumps(detector.card))
+    _write_protocol(card, detector.folder, protocol, matched, blocks)
+    write_text_atomic(detector.folder / CARD, json.dumps(card, indent=1) + "\n")
+    return ShippedDetector(detector.folder, card)
+
+
+def _write_protocol(card: dict, folder: Path, protocol: Protocol, matched: dict, blocks) -> None:
+    """Put the reference's scores under ``protocol`` into ``card`` (the full protocol's in its seeds, another's
+    under ``protocols``) and write their resamples (``bootstrap[-<protocol>].npz`` in ``folder``, whole)."""
+    from rigopt.output import atomic_file
+
+    boot = card["bootstrap"]
+    scores = {seed: scores_on_frames(m, blocks, protocol, boot["resamples"], boot["seed"]) for seed, m in matched.items()}
+    own = {str(seed): {"mAP": s["mAP"], "mAP_visible": s["mAP_visible"]} for seed, s in scores.items()}
+    if protocol == FULL:
+        for seed, values in own.items():
+            card["seeds"][seed].update(values)
+        name = BOOTSTRAP
+    else:
+        samples = sum(len(np.asarray(block)[::protocol.frame_stride]) for block in blocks)
+        card.setdefault("protocols", {})[protocol.name] = {"frame_stride": protocol.frame_stride, "samples": samples,
+                                                           "seeds": own}
+        name = f"bootstrap-{protocol.name}.npz"
+    with atomic_file(folder / name) as work:
+        with open(work, "wb") as handle:
+            np.savez(handle, **{f"seed{seed}_mAP{key}": s[f"resampled{key}"] for seed, s in scores.items()
+                                for key in ("", "_visible")})
 
 
 def training_seconds(log: Path) -> float:

@@ -1,0 +1,56 @@
+"""The protocols of measuring a rig's transfer with shipped models: which frames of the reference's test scenes
+are rendered and scored. Plain data (no numpy, no torch): the command line's ``--protocol`` reads it.
+
+``full`` scores every frame of the reference's test scenes (the pack's card and ``bootstrap.npz``). ``quick``
+scores every fourth frame of the same scenes, a quarter of the work, its drops relative to the reference's own
+scores on those frames (the card's ``protocols`` entry and ``bootstrap-quick.npz``). Every protocol keeps all the
+test scenes, so the bootstrap's scene resamples draw the same scenes under each. The agreement of ``quick``
+with ``full`` was pre-registered and measured in studies/validation/protocol/.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from rigopt.errors import unknown_name
+
+
+@dataclass(frozen=True)
+class Protocol:
+    """A measurement protocol.
+
+    name : str, as ``--protocol`` takes it; frame_stride : int, every ``frame_stride``-th frame of each test
+    scene from its first (1: all).
+    """
+
+    name: str
+    frame_stride: int
+
+    def frames(self, test_data: dict) -> int:
+        """Frames of each test scene scored; ``test_data`` a pack card's (``scenes``, ``frames``)."""
+        return len(range(0, int(test_data["frames"]), self.frame_stride))
+
+    def samples(self, test_data: dict) -> int:
+        """Samples scored in all."""
+        return int(test_data["scenes"]) * self.frames(test_data)
+
+    def describe(self, test_data: dict) -> str:
+        """What the protocol scores, for every output that uses it."""
+        frames = ("every frame" if self.frame_stride == 1 else
+                  f"every {self.frame_stride}th frame ({self.frames(test_data)} of {test_data['frames']})")
+        return f"protocol {self.name}: {frames} of the {test_data['scenes']} test scenes, {self.samples(test_data)} samples"
+
+
+FULL = Protocol("full", 1)
+QUICK = Protocol("quick", 4)
+#: The protocols by name.
+PROTOCOLS: dict[str, Protocol] = {p.name: p for p in (FULL, QUICK)}
+#: What ``rigopt validate`` and :func:`rigopt.validation.detectors.shipped.measure` use unless told.
+DEFAULT_PROTOCOL = FULL
+
+
+def protocol_named(name: str) -> Protocol:
+    """The protocol ``name`` (case-insensitive); a RigoptError listing the names otherwise."""
+    if str(name).lower() not in PROTOCOLS:
+        raise unknown_name("measurement protocol", name, tuple(PROTOCOLS))
+    return PROTOCOLS[str(name).lower()]
