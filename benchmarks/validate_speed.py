@@ -1,9 +1,9 @@
-"""``rigopt validate RIG --ref R1 --model lss`` without --data, from an empty cache: the time of the whole
-command for one rig, split into rendering and scoring, beside the plain way of measuring the same drops
-(render the reference's test split too, then score each checkpoint on both rigs separately, as ``--data``
-does). Both give the same drops; the figures are seconds and their ratio.
+"""``rigopt validate RIG --ref R1 --model lss`` without --data, from an empty cache, under each measurement
+protocol: the whole command's time for one rig (the installed console script, start to exit) under ``quick`` (every
+4th frame of the test scenes) beside ``full`` (every frame, the reference), their drops and the ratio of the
+times. The figures are seconds.
 
-Usage: python benchmarks/validate_speed.py [--rig R1-c10] [--workers 2] [--skip-plain]
+Usage: python benchmarks/validate_speed.py [--rig R4] [--workers 2] [--skip-full]
 Needs the shipped detectors (detectors/lss-R1). Results are recorded in docs/benchmarks.md.
 """
 
@@ -19,46 +19,34 @@ import time
 from pathlib import Path
 
 
+def timed_validate(rig: str, protocol: str, workers: int, home: Path) -> tuple[float, dict]:
+    """Seconds of one ``rigopt validate`` run from an empty ``$RIGOPT_HOME`` and its rig entry."""
+    started = time.perf_counter()
+    process = subprocess.run([str(Path(sys.executable).parent / "rigopt"), "validate", rig, "--ref", "R1", "--model",
+                              "lss", "--json", "--workers", str(workers), "--protocol", protocol],
+                             capture_output=True, text=True, env={**os.environ, "RIGOPT_HOME": str(home)})
+    seconds = time.perf_counter() - started
+    if process.returncode:
+        raise SystemExit(process.stderr)
+    return seconds, json.loads(process.stdout)["rigs"][0]
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--rig", default="R3", help="the rig measured (default R3; R1's geometry would be a no-op)")
+    parser.add_argument("--rig", default="R4", help="the rig measured (default R4; R1's geometry would be a no-op)")
     parser.add_argument("--workers", type=int, default=2)
-    parser.add_argument("--skip-plain", action="store_true", help="time only the command")
+    parser.add_argument("--skip-full", action="store_true", help="time only the quick protocol")
     args = parser.parse_args(argv)
-    from rigopt.validation.detectors.protocol import evaluate_on_rigs
-    from rigopt.validation.detectors.shipped import render_cached, shipped_detector
-    from rigopt.rig.library import load_rig
-
-    detector = shipped_detector("lss", "R1")
-    rig = load_rig(args.rig)
     with tempfile.TemporaryDirectory() as scratch:
-        home = Path(scratch) / "home"
-        started = time.perf_counter()
-        process = subprocess.run([str(Path(sys.executable).parent / "rigopt"), "validate", args.rig, "--ref", "R1",
-                                  "--model", "lss", "--json", "--workers", str(args.workers)],
-                                 capture_output=True, text=True, env={**os.environ, "RIGOPT_HOME": str(home)})
-        command = time.perf_counter() - started
-        if process.returncode:
-            raise SystemExit(process.stderr)
-        result = json.loads(process.stdout)["rigs"][0]
-        started = time.perf_counter()
-        render_cached([rig], detector, Path(scratch) / "again", args.workers)
-        render = time.perf_counter() - started
-        print(f"{args.rig} ({len(rig)} cameras), {detector.card['test_data']['samples']} samples, "
-              f"{len(detector.seeds)} models: validate {command:.1f} s (rendering alone {render:.1f} s, so "
-              f"scoring and start-up {command - render:.1f} s); drop {result['drop']:.3f}")
-        if args.skip_plain:
+        quick, entry = timed_validate(args.rig, "quick", args.workers, Path(scratch) / "quick")
+        seeds = " / ".join(f"{s['drop']:.3f}" for s in entry["seeds"].values())
+        print(f"{args.rig} ({entry['n_cameras']} cameras), quick: {quick:.1f} s, drop {entry['drop']:.3f} ({seeds})")
+        if args.skip_full:
             return 0
-        plain = Path(scratch) / "plain"
-        started = time.perf_counter()
-        names = render_cached([load_rig(detector.reference), rig], detector, plain, args.workers)
-        drops = []
-        for seed in detector.seeds:
-            maps = evaluate_on_rigs(detector.checkpoint(seed), plain, names, family="lss")
-            drops.append((maps[names[0]]["mAP"] - maps[names[1]]["mAP"]) / maps[names[0]]["mAP"])
-        plain_seconds = time.perf_counter() - started
-        print(f"plain way (render both rigs, score each checkpoint on each): {plain_seconds:.1f} s, drop "
-              f"{sum(drops) / len(drops):.3f}; validate / plain = {command / plain_seconds:.2f}")
+        full, reference = timed_validate(args.rig, "full", args.workers, Path(scratch) / "full")
+        seeds = " / ".join(f"{s['drop']:.3f}" for s in reference["seeds"].values())
+        print(f"{args.rig}, full: {full:.1f} s, drop {reference['drop']:.3f} ({seeds}); quick / full = "
+              f"{quick / full:.2f} of the time, drop difference {entry['drop'] - reference['drop']:+.3f}")
     return 0
 
 

@@ -169,6 +169,11 @@ def design_command(
                                               help="Vehicle the reference rigs were mounted on, for rigs whose own "
                                                    "vehicle rigopt does not know (imported rigs) or to override it; "
                                                    "origins are converted to its centre."),
+    measure: bool = typer.Option(False, "--measure", help="Also measure the design and R1's naive and "
+                                 "height-matched copies with the shipped detectors (rigopt validate, no data needed) "
+                                 "and show measured beside predicted, saying where they disagree."),
+    protocol: str = typer.Option("quick", "--protocol", help="With --measure: quick (every 4th frame of the test "
+                                 "scenes) or full (rigopt validate --protocol)."),
     out: Optional[Path] = typer.Option(None, help="Output folder (default: design-<vehicle>-<ref>)."),
     force: bool = typer.Option(False, "--force", help=FORCE_HELP),
     as_json: bool = typer.Option(False, "--json", help="Print the JSON summary."),
@@ -233,15 +238,20 @@ def design_command(
         if pareto and near_field:
             raise RigoptError("--pareto sweeps one camera set; leave out --near-field or add --single-set "
                               "(or leave out --pareto)")
+        if pareto and measure:
+            raise RigoptError("--measure measures one design: leave out --pareto (or --measure)")
         if pareto:
             _pareto(target, references, calibration, settings, out, force, as_json, status)
             return
+        if measure:
+            _check_measurable(references[0].rig.name, protocol)
         with status.status(f"designing a rig on {target.name} from {label}") as spinner:
             result = design_rig(target, references, calibration, settings, compare_with=benchmark_rigs(target),
                                 progress=lambda message: spinner.update(message) or status.print(f"  {message}"),
                                 background=background)
+        measured = _measured(result, references, calibration, protocol, status) if measure else None
         with atomic_folder(out, force=force) as work:
-            files, summary = write_design_report(result, work, background)
+            files, summary = write_design_report(result, work, background, measured)
             files = published(files, work, out)
         background.close()  # its work is done
         summary = {**summary, "rig_file": str(files[0])}  # as written: the report names it relative to its folder
@@ -291,12 +301,49 @@ def design_command(
               file=sys.stderr)
         for line in summary["notes"]:
             print(line)
+        if measured is not None:
+            _print_measured(measured)
         print(f"wrote {', '.join(str(f) for f in files)}")
         print_next(f"open {out / 'report.html'} (the design for a packaging review: cameras, fields, 3D view)",
                    *(f"in {out}: {command} ({why})" for command, why in NEXT_STEPS))
 
     finally:
         background.close()
+
+
+def _check_measurable(reference: str, protocol: str) -> None:
+    """--measure before any design work: torch installed, the protocol known, models shipped for the reference."""
+    from rigopt.cli.detector_commands import require_torch
+    from rigopt.validation.detectors.measuring import protocol_named
+    from rigopt.validation.detectors.shipped import reference_scores, shipped_detector
+
+    require_torch()
+    reference_scores(shipped_detector("lss", reference), protocol_named(protocol))
+
+
+def _measured(result, references, calibration, protocol: str, status) -> dict:
+    """--measure: the design and its copies measured with the shipped detectors of the first reference."""
+    import os
+
+    from rigopt.validation.designs import measure_design
+    from rigopt.validation.detectors.measuring import protocol_named
+
+    chosen = protocol_named(protocol)
+    if len(references) > 1:
+        note(f"--measure measures against the first reference, {references[0].rig.name}, alone")
+    with status.status("measuring the design and its copies with the shipped detectors") as spinner:
+        return measure_design(result.design.rig, references[0].rig, calibration, chosen,
+                              workers=os.cpu_count() or 1, progress=spinner.update)
+
+
+def _print_measured(measured: dict) -> None:
+    print_table(f"measured with {measured['detector']} ({measured['protocol']}) beside the predicted drop "
+                f"({measured['predicted_by']})",
+                ["rig", "cameras", "predicted drop", "measured drop", "95 % interval (test scenes)"],
+                [[r["role"], r["n_cameras"], f"{r['predicted_drop']:.3f}", f"{r['measured_drop']:.3f}",
+                  "[{:.3f}, {:.3f}]".format(*r["measured_drop_ci"])] for r in measured["rigs"]])
+    for line in measured["contradictions"]:
+        note(f"prediction and measurement disagree: {line}")
 
 
 def _excluded_text(region: dict) -> str:

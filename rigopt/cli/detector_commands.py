@@ -194,7 +194,9 @@ def matrix_command(
 
 @app.command("validate")
 def validate_command(
-    design: Path = typer.Argument(..., help="The rig: a rig file, the report.json of rigopt design or a library rig."),
+    designs: List[Path] = typer.Argument(..., metavar="RIG", help="The rigs: rig files, report.json files of "
+                                         "rigopt design or library rigs (several share the loaded models; one with "
+                                         "--data or --compare)."),
     ref: str = typer.Option(..., "--ref", help="Reference rig the detector was trained on."),
     model: str = typer.Option(..., "--model", help=MODEL_HELP),
     data: Optional[Path] = typer.Option(None, "--data", help="Benchmark folder with the reference's test split and a "
@@ -217,7 +219,7 @@ def validate_command(
     out: Optional[Path] = typer.Option(None, "--out", help="Also write the result as JSON here."),
     as_json: bool = typer.Option(False, "--json", help="Print JSON instead of a table."),
 ):
-    """Measure a rig's transfer drop with a reference-trained detector, beside the predicted drop."""
+    """Measure rigs' transfer drops with a reference-trained detector, beside the predicted drops."""
     require_torch()
     import json
 
@@ -232,8 +234,12 @@ def validate_command(
 
     if out is not None:
         check_out_file(out, suffixes=(".json",))
-    if not (not design.exists() and str(design) in rig_names()):
-        existing_file(design, "design file (a rig file, the report.json of rigopt design, or a library rig's name)")
+    for design in designs:
+        if not (not design.exists() and str(design) in rig_names()):
+            existing_file(design, "design file (a rig file, the report.json of rigopt design, or a library rig's name)")
+    if len(designs) > 1 and (data is not None or compare):
+        raise RigoptError(f"--{'data' if data is not None else 'compare'} validates one rig at a time; give one RIG "
+                          f"(got {len(designs)})")
     if data is None and runs is not None:
         raise RigoptError("--runs names trained runs of a --data folder: add --data, or leave --runs out to use the "
                           "shipped models")
@@ -245,13 +251,15 @@ def validate_command(
     if data is not None:
         check_data(data)
     check_runs(runs, must_exist=True)
-    family, calibration, rig = model_config(model).family, load_weights(weights, metric), load_design(design)
+    family, calibration = model_config(model).family, load_weights(weights, metric)
+    rigs = [load_design(design) for design in designs]
     note_fallback(calibration)
     resolve_device(device)
     if data is None:
-        _validate_shipped(rig, ref, family, calibration, weights, device, cache, workers, protocol_named(protocol),
+        _validate_shipped(rigs, ref, family, calibration, weights, device, cache, workers, protocol_named(protocol),
                           compare, out, as_json)
         return
+    rig = rigs[0]
     with status_console.status("validating") as status:
         result = validate_design(rig, ref, family, data, calibration, runs, device, status.update)
     if "near_field" in result:  # the note of the shipped path: what the detector was fed, what was kept
@@ -278,8 +286,8 @@ def validate_command(
                 f"scenes", ["difference", "other rig's role", "value", "95 % interval"], rows)
 
 
-def _validate_shipped(rig, ref: str, family: str, calibration, weights: str, device: str, cache, workers: int,
-                      protocol, compare: bool, out, as_json: bool) -> None:
+def _validate_shipped(measured_rigs: list, ref: str, family: str, calibration, weights: str, device: str, cache,
+                      workers: int, protocol, compare: bool, out, as_json: bool) -> None:
     """validate without --data: the shipped models, the reference's test scenes rendered into the cache."""
     import json
     import os
@@ -301,11 +309,15 @@ def _validate_shipped(rig, ref: str, family: str, calibration, weights: str, dev
     reference = load_rig(detector.reference)
     if cache is not None and cache.exists():
         existing_folder(cache, "renderings of the reference's test scenes (made by rigopt validate)", option="--cache")
-    rigs, near_field = fed_rigs(rig, "rig", family)  # the perception cameras fed, the whole rig for the record
-    if near_field is not None:
-        note(near_field["note"])
+    rigs, records = [], []
+    for rig in measured_rigs:  # the perception cameras fed, the whole rig for the record
+        rows, record = fed_rigs(rig, "rig", family)
+        rigs += rows
+        if record is not None:
+            note(record["note"])
+            records.append(record)
     if compare:
-        rigs += comparison_rigs(rig, reference, calibration)[1:]
+        rigs += comparison_rigs(measured_rigs[0], reference, calibration)[1:]
     names = [r.name for _, r in rigs]
     if len(set(names)) != len(names):
         raise RigoptError(f"rig names must differ from each other: {names}")
@@ -330,8 +342,8 @@ def _validate_shipped(rig, ref: str, family: str, calibration, weights: str, dev
                         "interval_informative": prediction.interval_informative,
                         "extrapolation": prediction.to_dict()["extrapolation"], "rigcd": prediction.rigcd}
                        for (role, _), entry, prediction in zip(rigs, measured, predictions)]}
-    if near_field is not None:
-        result["near_field"] = near_field
+    if records:  # one rig: its record; several: the records of those with near_field cameras
+        result["near_field"] = records[0] if len(measured_rigs) == 1 else records
     if compare:  # the rig (its perception cameras) against each yardstick, on the same scene resamples
         result["paired"] = [{"role": role, **paired_differences(measured[0], entry)}
                             for (role, _), entry in zip(rigs[1:], measured[1:]) if role != WHOLE_ROLE]

@@ -145,6 +145,21 @@ def breakdown_note(summary: dict) -> str:
             + escape("; ".join(f"{k} {v:.3f}" for k, v in values.items())) + ".</p>")
 
 
+def measured_section(measured: dict) -> list[str]:
+    """``rigopt design --measure``'s measurements beside the predictions, and every disagreement said in words."""
+    rows = [[escape(r["role"]), str(r["n_cameras"]), num(r["predicted_drop"], 3), num(r["measured_drop"], 3),
+             escape("[{:.3f}, {:.3f}]".format(*r["measured_drop_ci"])),
+             escape(" / ".join(f"{v:.3f}" for v in r["measured_per_seed"]))] for r in measured["rigs"]]
+    notes = measured["contradictions"] or ["the prediction and the measurement agree on every rig and every order"]
+    return ["<h2>Measured with the shipped detectors</h2>",
+            f'<p class="note">{escape(measured["detector"])} models trained on {escape(measured["reference"])}, '
+            f'{escape(measured["protocol"])}; predicted with {escape(measured["predicted_by"])}. Measured drops '
+            "with 95 % intervals over resampled test scenes (test noise only).</p>",
+            table(["rig", "cameras", "predicted drop", "measured drop", "95 % interval", "per seed"], rows),
+            "<p>Where the prediction and the measurement disagree:</p>", "<ul>",
+            *(f"<li>{escape(line)}</li>" for line in notes), "</ul>"]
+
+
 def render_design_html(summary: dict, figures: dict[str, bytes], scene: str | None = None,
                        compared: str | None = None) -> str:
     """The page for ``summary`` (the ``design_dict`` of a result) and PNG ``figures`` by name; ``scene``: the
@@ -174,6 +189,8 @@ def render_design_html(summary: dict, figures: dict[str, bytes], scene: str | No
                 "yes" if r[6] else "no", escape(r[7])] for r in rows]),
         *(f'<p class="note">{escape(line)}.</p>' for line in summary.get("notes", ())),
     ]
+    if summary.get("measured"):
+        parts += measured_section(summary["measured"])
     if len(summary["per_reference"]) > 1:
         parts += ["<h2>Each reference rig</h2>",
                   table(["reference", "predicted drop", f"{summary['metric']} ({summary['weights']} weights)"],

@@ -252,11 +252,14 @@ def write_design_pictures(vehicle, reference, design: Rig, naive: Rig | None, re
     return pictures
 
 
-def write_design_report(result: DesignResult, out_dir, background: Background = INLINE) -> tuple[list[Path], dict]:
+def write_design_report(result: DesignResult, out_dir, background: Background = INLINE,
+                        measured: dict | None = None) -> tuple[list[Path], dict]:
     """Write rig.json (benchmark format), report.json, the pictures (:func:`write_design_pictures`, in the
     ``background`` worker when there is one, while the report and the 3D view are written here) and report.html
     (with the interactive 3D view of the design on its vehicle, the fields on the ground and the reference rig in
     grey when it sits on the same vehicle) into ``out_dir``. Returns (the files, the report's :func:`design_dict`).
+    ``measured``: the design and its copies measured (:func:`rigopt.validation.designs.measure_design`), kept as
+    report.json's ``measured`` and shown beside the predictions.
     The reports name the rig file relative to their folder (``rig.json``), so that a report holds no machine
     path and stays valid where the folder is moved.
     """
@@ -270,6 +273,8 @@ def write_design_report(result: DesignResult, out_dir, background: Background = 
                                  naive.rig if naive is not None else None, result.regions, out_dir)
     rig_file = write_rig(result.design.rig, out_dir / "rig.json")
     summary = design_dict(result, Path(rig_file.name))  # named relative to the report's folder: no machine paths
+    if measured is not None:
+        summary["measured"] = measured
     report = out_dir / "report.json"
     report.write_text(json.dumps(json_ready(summary), indent=2) + "\n")
     compared = next((r.rig for r in result.references if r.vehicle.name == vehicle.name), None)

@@ -203,3 +203,58 @@ def validate_design(design: Rig, reference: str, family: str, data, calibration:
     return result
 
 
+
+
+def measure_design(design: Rig, reference: Rig, calibration: Calibration, protocol, cache=None, workers: int = 1,
+                   progress: Callable[[str], None] = lambda message: None) -> dict:
+    """A design's perception cameras, R1's naive and height-matched transfers to its vehicle
+    (:func:`comparison_rigs`) measured with the shipped lss models trained on ``reference`` under ``protocol``
+    (:func:`rigopt.validation.detectors.shipped.measure`), each beside its predicted drop; JSON-ready.
+
+    ``rigs``: per rig its role, predicted drop and interval, measured drop and 95 % scene interval; ``paired``:
+    the design minus each copy, per seed and on the mean, with paired intervals; ``contradictions``: a line for
+    each place where the prediction and the measurement disagree (a measured drop outside an informative
+    predicted interval; two rigs ordered one way by the prediction and the other by a measurement whose paired
+    interval excludes 0), so that a report never shows both without saying so.
+    """
+    from rigopt.metrics.ranking import predict_transfer
+    from rigopt.validation.detectors.shipped import measure, paired_differences, shipped_detector, without_resamples
+
+    detector = shipped_detector("lss", reference.name)
+    copies = [(role, rig) for role, rig in comparison_rigs(design, reference, calibration)[1:]
+              if role in ("naive transfer", "height-matched transfer")]
+    rigs = [("design", dataclasses.replace(design.perception(), name=f"{design.name}_perception"))] + copies
+    measured = measure([rig for _, rig in rigs], detector, cache, "cpu", workers, progress, protocol)
+    predictions = predict_transfer(reference, [rig for _, rig in rigs], calibration)
+    rows = [{"role": role, "rig": rig.name, "n_cameras": len(rig), "predicted_drop": p.predicted_drop,
+             "predicted_interval": p.to_dict()["interval"], "interval_informative": p.interval_informative,
+             "measured_drop": m["drop"], "measured_drop_ci": m["drop_ci"],
+             "measured_per_seed": [s["drop"] for s in m["seeds"].values()]}
+            for (role, rig), p, m in zip(rigs, predictions, measured)]
+    paired = [{"role": role, **paired_differences(measured[0], entry)} for (role, _), entry in zip(rigs[1:], measured[1:])]
+    return {"detector": detector.folder.name, "reference": reference.name,
+            "protocol": protocol.describe(detector.card["test_data"]),
+            "predicted_by": f"{calibration.metric}, {calibration.name} weights", "rigs": rows, "paired": paired,
+            "contradictions": contradictions(rows, paired), "measured": [without_resamples(m) for m in measured]}
+
+
+def contradictions(rows: list[dict], paired: list[dict]) -> list[str]:
+    """Lines saying where predicted and measured drops disagree (see :func:`measure_design`)."""
+    lines = []
+    for row in rows:
+        low, high = row["predicted_interval"] or (None, None)
+        if row["interval_informative"] and low is not None and not low <= row["measured_drop"] <= high:
+            lines.append(f"{row['role']}: measured {row['measured_drop']:.3f}, outside the predicted interval "
+                         f"[{low:.3f}, {high:.3f}] (predicted {row['predicted_drop']:.3f})")
+        elif abs(row["measured_drop"] - row["predicted_drop"]) > 0.15:
+            lines.append(f"{row['role']}: predicted {row['predicted_drop']:.3f}, measured {row['measured_drop']:.3f}: "
+                         f"the prediction is off by {abs(row['measured_drop'] - row['predicted_drop']):.3f}")
+    design = rows[0]
+    for pair, row in zip(paired, rows[1:]):
+        predicted = design["predicted_drop"] - row["predicted_drop"]
+        low, high = pair["ci"]
+        if (predicted > 0 and high < 0) or (predicted < 0 and low > 0):
+            lines.append(f"the prediction orders the design and the {row['role']} one way ({predicted:+.3f}), the "
+                         f"measurement the other ({pair['difference']:+.3f} [{low:.3f}, {high:.3f}], design minus "
+                         f"{row['role']})")
+    return lines

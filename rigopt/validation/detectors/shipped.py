@@ -380,15 +380,19 @@ def add_protocol(detector: ShippedDetector, protocol: Protocol, cache: Path, dev
     from rigopt.output import write_text_atomic
     from rigopt.rig.library import load_rig
 
+    import torch
+
     folder = render_cached([load_rig(detector.reference)], detector, cache, workers, progress)[0]
     split = RigSplit(cache, folder, TEST_SPLIT, None, depths=False)
     blocks = sample_blocks(split.samples)
     matched = {}
+    torch.set_num_threads(1)  # as measure's scoring processes run on the CPU
     for seed in detector.seeds:
         progress(f"scoring seed {seed} on {detector.reference}'s test split")
         matched[seed] = match_split(_loaded_model(detector.checkpoint(seed), detector.family), split, device)
         own = detector.card["seeds"][str(seed)]
-        if not np.isclose(matched[seed].evaluation().map, own["mAP"], rtol=0, atol=1e-12):
+        # another thread count sums a convolution in another order: a score moves by about 1e-7, no more
+        if not np.isclose(matched[seed].evaluation().map, own["mAP"], rtol=0, atol=1e-6):
             raise DataError(f"{detector.folder}: seed {seed} scores {matched[seed].evaluation().map} on "
                             f"{detector.reference}'s test split, its card {own['mAP']}: not the pack's test data")
     card = json.loads(json.dumps(detector.card))

@@ -26,10 +26,9 @@ STUDY = HERE.parent
 RESULTS = HERE / "results"
 sys.path.insert(0, str(STUDY.parent))  # studies/: the studies' shared code (studylib)
 from studylib.logs import timestamped_log  # noqa: E402
+from studylib.measuring import measure_to_lines  # noqa: E402
 from studylib.tables import markdown  # noqa: E402
 
-#: Rigs measured per call (the scoring processes started once per chunk).
-CHUNK = 8
 #: The pre-registered decision rule.
 MAX_MEAN_ABS, MIN_RHO, MAX_ABS = 0.025, 0.97, 0.08
 
@@ -37,24 +36,12 @@ MAX_MEAN_ABS, MIN_RHO, MAX_ABS = 0.025, 0.97, 0.08
 def measure_quick(cache: Path | None, workers: int) -> None:
     from rigopt.rig.library import load_rig
     from rigopt.validation.detectors.measuring import QUICK
-    from rigopt.validation.detectors.shipped import measure, shipped_detector, without_resamples
 
-    detector = shipped_detector("lss", "R1")
     with open(STUDY / "rigs" / "index.csv", newline="") as handle:
         names = [row["rig"] for row in csv.DictReader(handle)]
-    RESULTS.mkdir(exist_ok=True)
-    lines = RESULTS / "quick.jsonl"
-    done = {json.loads(line)["rig"] for line in lines.read_text().splitlines()} if lines.is_file() else set()
-    todo = [name for name in names if name not in done]
     with timestamped_log(RESULTS / "measure.log") as progress:
-        progress(f"{len(done)} of {len(names)} rigs measured before; {len(todo)} to go")
-        for start in range(0, len(todo), CHUNK):
-            rigs = [load_rig(STUDY / "rigs" / f"{name}.json") for name in todo[start:start + CHUNK]]
-            entries = measure(rigs, detector, cache, "cpu", workers, progress, QUICK)
-            with open(lines, "a") as handle:
-                for entry in entries:
-                    handle.write(json.dumps(without_resamples(entry)) + "\n")
-                    progress(f"{entry['rig']}: quick drop {entry['drop']:.3f}")
+        measure_to_lines([load_rig(STUDY / "rigs" / f"{name}.json") for name in names], RESULTS / "quick.jsonl",
+                         QUICK, cache, workers, progress)
 
 
 def full_drops() -> dict[str, dict[str, float]]:

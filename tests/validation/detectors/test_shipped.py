@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from console import run_console
+from in_process import run_rigopt
 
 torch = pytest.importorskip("torch")
 
@@ -91,6 +92,26 @@ def test_the_reference_measured_against_itself_loses_nothing_and_a_rerun_renders
 
 
 @pytest.mark.slow
+def test_under_the_quick_protocol_the_reference_loses_nothing_and_scores_are_kept(use_packed, tmp_path):
+    """The pack's quick denominators (taken by weight from the full matching) equal the scores of a rendering of
+    the quick frames alone; a second call reads every score from the cache."""
+    from rigopt.validation.detectors.measuring import QUICK
+
+    detector = shipped.shipped_detector("lss", "R1")
+    assert detector.card["protocols"]["quick"]["samples"] == 1  # frame 0 of the one 4-frame scene
+    first = shipped.measure([load_rig("R1"), load_rig("R5")], detector, tmp_path / "cache", protocol=QUICK)
+    assert first[0]["protocol"] == "quick" and first[0]["cache"].endswith("-quick")
+    for seed in ("0", "1"):
+        assert first[0]["seeds"][seed]["drop"] == pytest.approx(0, abs=1e-12)
+    kept = sorted((Path(first[1]["cache"]) / shipped.SCORES).glob("*.npz"))
+    assert len(kept) == 2
+    stamps = [path.stat().st_mtime_ns for path in kept]
+    again = shipped.measure([load_rig("R5")], detector, tmp_path / "cache", protocol=QUICK)[0]
+    assert [path.stat().st_mtime_ns for path in kept] == stamps  # read, not scored and written again
+    assert shipped.without_resamples(again) == shipped.without_resamples(first[1])
+
+
+@pytest.mark.slow
 def test_scoring_the_seeds_in_two_processes_gives_what_one_gives(use_packed, tmp_path):
     detector = shipped.shipped_detector("lss", "R1")
     rig = load_rig("R5")
@@ -147,6 +168,39 @@ def test_validate_without_data_through_the_console_script(packed, tmp_path):
     assert entry["drop"] == pytest.approx(np.mean([s["drop"] for s in entry["seeds"].values()]))
     assert entry["predicted_drop"] is not None
     assert Path(entry["cache"]).parent == tmp_path / "home" / "cache" / "validate"
+
+
+@pytest.mark.slow
+def test_validate_several_rigs_in_one_call_gives_what_separate_calls_give(use_packed, tmp_path):
+    home = {"RIGOPT_HOME": str(tmp_path / "home")}
+    both = run_rigopt("validate", "R5", "R4", "--ref", "R1", "--model", "lss", "--protocol", "quick", "--json",
+                      "--workers", "1", env=home)
+    assert both.returncode == 0, both.stderr
+    result = json.loads(both.stdout)
+    assert [e["rig"] for e in result["rigs"]] == ["R5", "R4"] and result["protocol"]["name"] == "quick"
+    for name, entry in zip(("R5", "R4"), result["rigs"]):
+        alone = run_rigopt("validate", name, "--ref", "R1", "--model", "lss", "--protocol", "quick", "--json",
+                           "--workers", "1", env={"RIGOPT_HOME": str(tmp_path / f"home-{name}")})
+        assert json.loads(alone.stdout)["rigs"][0]["seeds"] == entry["seeds"]
+
+
+@pytest.mark.slow
+def test_design_measure_through_the_console_script(packed, tmp_path):
+    """rigopt design --measure: the design and the two copies measured under the named protocol beside their
+    predictions, in report.json and the JSON printed; stdout JSON only."""
+    _, root = packed
+    env = {**os.environ, "RIGOPT_DETECTORS": str(root), "RIGOPT_HOME": str(tmp_path / "home")}
+    process = run_console("design", "--vehicle", "tt", "--ref", "R1", "--measure", "--out", str(tmp_path / "d"),
+                          "--json", env=env, timeout=900)
+    assert process.returncode == 0, process.stderr
+    measured = json.loads(process.stdout)["measured"]
+    assert [r["role"] for r in measured["rigs"]] == ["design", "naive transfer", "height-matched transfer"]
+    assert measured["protocol"].startswith("protocol quick") and measured["detector"] == "lss-R1"
+    for entry, rig in zip(measured["measured"], measured["rigs"]):
+        assert rig["measured_drop"] == pytest.approx(entry["drop"]) and entry["protocol"] == "quick"
+    assert isinstance(measured["contradictions"], list)
+    assert json.loads((tmp_path / "d" / "report.json").read_text())["measured"] == measured
+    assert "Measured with the shipped detectors" in (tmp_path / "d" / "report.html").read_text()
 
 
 @pytest.mark.parametrize("args, message", [

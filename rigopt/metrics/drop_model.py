@@ -1,0 +1,194 @@
+"""A model of a shipped detector's measured transfer drop from the geometry of the reference and the candidate rig.
+
+RigCD weighs every camera offset alike and was calibrated on the benchmark's hand-designed rigs; a lifting
+detector instead depends on what each camera's image rows mean in depth (its height and pitch), less on where
+in plan it sits. This model's terms follow that, and it is fitted on drops measured with the shipped detectors
+(studies/predictor/: pre-registered, leave-one-vehicle-out).
+
+Terms of a matched camera pair (reference camera r, candidate camera c; ``PAIR_FEATURES``), both rigs measured
+from their vehicle's centre on the ground (ISO 8855; :func:`rigopt.vehicle.placement.in_vehicle_frame`):
+
+- ``depth_prior`` (log-m): the mean |ln d_c - ln d_r| over a grid of image places, d the optical-axis depth at
+  which that place's ray meets the ground (:func:`rigopt.metrics.lifting.ground_depths`);
+- ``raise``, ``lower`` (m): the height difference z_c - z_r where positive, z_r - z_c where positive;
+- ``tilt_down``, ``tilt_up`` (rad): the pitch difference, c pitched more down than r, or more up;
+- ``roll``, ``yaw`` (rad): |roll difference|, |yaw difference| (wrapped);
+- ``plan`` (m): the horizontal distance of the two lenses;
+- ``zoom``: |ln(tan(hfov_c / 2) / tan(hfov_r / 2))|, the lens's scale change;
+- ``centre``: |cx_c / w_c - cx_r / w_r| + |cy_c / h_c - cy_r / h_r|, the principal point's move (image fractions).
+
+Terms of the whole rig (``RIG_FEATURES``): ``count`` = |N_c - N_r| / max(N_c, N_r) and ``uncovered``, the share
+of the reference's horizontal view (1-degree sectors of azimuth round the vehicle, each camera's horizontal FOV
+about its yaw) that no candidate camera's covers.
+
+The score of a candidate is s = w . x, x the pair terms averaged over the matched pairs (min(N_r, N_c) of them,
+the assignment minimising the sum of the pair costs w_pair . phi) followed by the rig terms, w >= 0; the
+predicted drop is 1 - exp(-s). The pair cost is a sum over matched pairs plus terms of the whole rig, so the
+score can stand as a MILP's objective (the link is monotone).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+from scipy.optimize import least_squares, linear_sum_assignment
+
+from rigopt.camera import CameraModel
+from rigopt.geometry import yaw_pitch_roll_from_rotation
+from rigopt.metrics.lifting import ground_depths
+from rigopt.rig.model import Rig
+
+PAIR_FEATURES = ("depth_prior", "raise", "lower", "tilt_down", "tilt_up", "roll", "yaw", "plan", "zoom", "centre")
+RIG_FEATURES = ("count", "uncovered")
+FEATURES = PAIR_FEATURES + RIG_FEATURES
+#: Rounds of fit -> rematch -> refit at most (the fit stops early when the matching no longer changes).
+FIT_ROUNDS = 5
+#: Starting weights of the least-squares fit (every term alike).
+START_WEIGHT = 0.1
+
+
+@dataclass(frozen=True, eq=False)
+class CameraGeometry:
+    """What the terms read of N cameras, vehicle frame from the centre on the ground.
+
+    plan : (N, 2) float m; height : (N,) float m; yaw, pitch, roll : (N,) float rad (ISO 8855);
+    depths : (N, G) float ln m of the ground depth grid; half_tan : (N,) float tan(hfov / 2);
+    centre : (N, 2) float principal point over image size.
+    """
+
+    plan: np.ndarray
+    height: np.ndarray
+    yaw: np.ndarray
+    pitch: np.ndarray
+    roll: np.ndarray
+    depths: np.ndarray
+    half_tan: np.ndarray
+    centre: np.ndarray
+
+    @classmethod
+    def of(cls, rig: Rig) -> CameraGeometry:
+        model = CameraModel.of_cameras(rig.cameras)
+        yaw, pitch, roll = yaw_pitch_roll_from_rotation(rig.rotations)
+        return cls(rig.positions[:, :2], rig.positions[:, 2], yaw, pitch, roll, ground_depths(rig.cameras),
+                   np.tan(np.radians(np.asarray(model.hfov, dtype=float)) / 2),
+                   np.stack([np.asarray(model.cx) / np.asarray(model.width),
+                             np.asarray(model.cy) / np.asarray(model.height)], axis=-1))
+
+
+def pair_features(reference: CameraGeometry, candidate: CameraGeometry) -> np.ndarray:
+    """(N_r, N_c, len(PAIR_FEATURES)) float: every term between each reference and each candidate camera."""
+    r, c = np.s_[:, None], np.s_[None, :]
+    dz = candidate.height[c] - reference.height[r]
+    dpitch = candidate.pitch[c] - reference.pitch[r]
+    wrap = lambda angle: np.abs(np.angle(np.exp(1j * angle)))  # noqa: E731
+    return np.stack([
+        np.abs(candidate.depths[None, :, :] - reference.depths[:, None, :]).mean(axis=-1),
+        np.maximum(dz, 0.0), np.maximum(-dz, 0.0),
+        np.maximum(-dpitch, 0.0), np.maximum(dpitch, 0.0),
+        wrap(candidate.roll[c] - reference.roll[r]), wrap(candidate.yaw[c] - reference.yaw[r]),
+        np.linalg.norm(candidate.plan[c] - reference.plan[r], axis=-1),
+        np.abs(np.log(candidate.half_tan[c] / reference.half_tan[r])),
+        np.abs(candidate.centre[c] - reference.centre[r]).sum(axis=-1)], axis=-1)
+
+
+def azimuth_cover(geometry: CameraGeometry, sectors: int = 360) -> np.ndarray:
+    """(sectors,) bool: the 1-degree sectors of azimuth (from 0 = ahead, counter-clockwise) inside some camera's
+    horizontal FOV about its yaw."""
+    centres = (np.arange(sectors) + 0.5) * 2 * np.pi / sectors
+    half = np.arctan(geometry.half_tan)
+    gap = np.abs(np.angle(np.exp(1j * (centres[None, :] - geometry.yaw[:, None]))))
+    return (gap <= half[:, None]).any(axis=0)
+
+
+def rig_features(reference: CameraGeometry, candidate: CameraGeometry) -> np.ndarray:
+    """(len(RIG_FEATURES),) float: the count term and the uncovered share of the reference's view."""
+    n_r, n_c = len(reference.height), len(candidate.height)
+    seen = azimuth_cover(reference)
+    uncovered = float((seen & ~azimuth_cover(candidate)).sum() / max(seen.sum(), 1))
+    return np.array([abs(n_r - n_c) / max(n_r, n_c), uncovered])
+
+
+def match(pairs: np.ndarray, pair_weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(rows, cols): the min(N_r, N_c) matched pairs minimising the summed pair cost ``pairs @ pair_weights``."""
+    return linear_sum_assignment(pairs @ pair_weights)
+
+
+def features(pairs: np.ndarray, rig_terms: np.ndarray, pair_weights: np.ndarray) -> np.ndarray:
+    """(len(FEATURES),) float: the pair terms averaged over the matching under ``pair_weights``, then the rig terms."""
+    rows, cols = match(pairs, pair_weights)
+    return np.concatenate([pairs[rows, cols].mean(axis=0), rig_terms])
+
+
+@dataclass(frozen=True)
+class PairTerms:
+    """One (reference, candidate) pair's terms before matching: ``pairs`` (N_r, N_c, len(PAIR_FEATURES)) and
+    ``rig`` (len(RIG_FEATURES),)."""
+
+    pairs: np.ndarray
+    rig: np.ndarray
+
+    @classmethod
+    def of(cls, reference: Rig, candidate: Rig) -> PairTerms:
+        """Both rigs measured from their vehicle's centre on the ground (the callers' job:
+        :func:`rigopt.vehicle.placement.in_vehicle_frame`)."""
+        a, b = CameraGeometry.of(reference), CameraGeometry.of(candidate)
+        return cls(pair_features(a, b), rig_features(a, b))
+
+
+def link(score: np.ndarray) -> np.ndarray:
+    """Predicted drop of a score s >= 0: 1 - exp(-s)."""
+    return -np.expm1(-np.asarray(score, dtype=float))
+
+
+def fit_weights(terms: Sequence[PairTerms], drops: np.ndarray, rounds: int = FIT_ROUNDS) -> np.ndarray:
+    """(len(FEATURES),) float >= 0: the weights whose predicted drops best fit ``drops`` (least squares on the
+    drop scale, scipy's bounded trust-region solver from START_WEIGHT), fit -> rematch -> refit until the
+    matchings stop changing or ``rounds`` fits are done. The first matching is under unit pair weights."""
+    drops = np.asarray(drops, dtype=float)
+    pair_weights = np.ones(len(PAIR_FEATURES))
+    weights, matched = None, None
+    for _ in range(rounds):
+        matchings = [match(t.pairs, pair_weights) for t in terms]
+        key = [tuple(map(tuple, m)) for m in matchings]
+        if key == matched:
+            break
+        matched = key
+        x = np.array([np.concatenate([t.pairs[m].mean(axis=0), t.rig]) for t, m in zip(terms, matchings)])
+        start = np.full(x.shape[1], START_WEIGHT) if weights is None else weights
+        solution = least_squares(lambda w: link(x @ w) - drops, start, bounds=(0.0, np.inf), method="trf")
+        weights = solution.x
+        pair_weights = weights[:len(PAIR_FEATURES)] + 1e-9  # a zero weight still breaks ties by the others
+    return weights
+
+
+def predict(weights: np.ndarray, terms: Sequence[PairTerms]) -> np.ndarray:
+    """(P,) float: the predicted drops of ``terms`` under ``weights``."""
+    pair_weights = np.asarray(weights[:len(PAIR_FEATURES)]) + 1e-9
+    return link(np.array([features(t.pairs, t.rig, pair_weights) @ weights for t in terms]))
+
+
+#: Upper edges of the predicted-drop bins whose intervals are set apart (the last bin is open above).
+INTERVAL_BINS = (0.15, 0.4)
+INTERVAL_LEVEL = 0.9
+
+
+def interval_bin(predicted: np.ndarray) -> np.ndarray:
+    """(P,) int: the bin of each predicted drop (0: below 0.15, 1: below 0.4, 2: the rest)."""
+    return np.searchsorted(np.asarray(INTERVAL_BINS), np.asarray(predicted, dtype=float), side="right")
+
+
+def interval_halfwidths(predicted: np.ndarray, measured: np.ndarray, level: float = INTERVAL_LEVEL) -> np.ndarray:
+    """(len(INTERVAL_BINS) + 1,) float: per bin of predicted drop, the split-conformal half-width at ``level`` from
+    held-out predictions: the ceil((n + 1) level)-th smallest |measured - predicted| of the n in the bin (inf where
+    n is too small for that rank)."""
+    predicted, measured = np.asarray(predicted, dtype=float), np.asarray(measured, dtype=float)
+    bins = interval_bin(predicted)
+    widths = np.full(len(INTERVAL_BINS) + 1, np.inf)
+    for b in range(len(widths)):
+        residuals = np.sort(np.abs(measured - predicted)[bins == b])
+        rank = int(np.ceil((len(residuals) + 1) * level))
+        if 0 < rank <= len(residuals):
+            widths[b] = residuals[rank - 1]
+    return widths

@@ -1,0 +1,35 @@
+"""Many rigs measured with the shipped R1 detectors, resumably: each chunk's entries appended to a JSON-lines file
+as it is done, the rigs already there skipped on a rerun (the renderings and scores are cached besides)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Callable, Sequence
+
+#: Rigs measured per call of ``measure`` (its scoring processes start once per chunk).
+CHUNK = 8
+
+
+def measured_names(lines: Path) -> set[str]:
+    """The rigs whose entries ``lines`` (JSON lines) holds."""
+    return {json.loads(line)["rig"] for line in lines.read_text().splitlines()} if lines.is_file() else set()
+
+
+def measure_to_lines(rigs: Sequence, lines: Path, protocol, cache: Path | None, workers: int,
+                     progress: Callable[[str], None], extra: Callable[[str], dict] = lambda name: {}) -> None:
+    """Measure every rig of ``rigs`` not yet in ``lines`` under ``protocol`` and append its entry (without the
+    resamples; ``extra(rig name)`` merged in) as soon as its chunk is done."""
+    from rigopt.validation.detectors.shipped import measure, shipped_detector, without_resamples
+
+    detector = shipped_detector("lss", "R1")
+    done = measured_names(lines)
+    todo = [rig for rig in rigs if rig.name not in done]
+    progress(f"{len(done)} rigs measured before; {len(todo)} to go ({protocol.describe(detector.card['test_data'])})")
+    lines.parent.mkdir(parents=True, exist_ok=True)
+    for start in range(0, len(todo), CHUNK):
+        entries = measure(todo[start:start + CHUNK], detector, cache, "cpu", workers, progress, protocol)
+        with open(lines, "a") as handle:
+            for entry in entries:
+                handle.write(json.dumps({**extra(entry["rig"]), **without_resamples(entry)}) + "\n")
+                progress(f"{entry['rig']}: drop {entry['drop']:.3f} [{entry['drop_ci'][0]:.3f}, {entry['drop_ci'][1]:.3f}]")

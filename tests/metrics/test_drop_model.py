@@ -1,0 +1,109 @@
+"""The drop model's terms (rigopt/metrics/drop_model.py): closed forms of each term on moved copies of one camera,
+invariances, the fit recovering known weights, and the conformal half-widths' ranks."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from rigopt.geometry import rotation_from_yaw_pitch_roll, yaw_pitch_roll_from_rotation
+from rigopt.metrics import drop_model as dm
+from rigopt.rig.library import load_rig
+from rigopt.rig.model import Camera, Rig
+
+
+def one_camera(z=1.5, yaw=0.0, pitch=0.0, roll=0.0, fov=65.0, xy=(2.0, 0.0)) -> Rig:
+    rotation = rotation_from_yaw_pitch_roll(np.radians(yaw), np.radians(pitch), np.radians(roll))
+    return Rig("one", "vehicle.audi.etron", (Camera.pinhole("CAM", np.array([*xy, z]), rotation, fov),))
+
+
+def terms(a: Rig, b: Rig) -> dict[str, float]:
+    t = dm.PairTerms.of(a, b)
+    return dict(zip(dm.FEATURES, dm.features(t.pairs, t.rig, np.ones(len(dm.PAIR_FEATURES)))))
+
+
+def test_a_rig_against_itself_has_no_term_and_loses_nothing():
+    r1 = load_rig("R1")
+    t = dm.PairTerms.of(r1, r1)
+    assert np.allclose(dm.features(t.pairs, t.rig, np.ones(10)), 0, atol=1e-12)
+    assert dm.predict(np.ones(len(dm.FEATURES)), [t])[0] == pytest.approx(0, abs=1e-12)
+
+
+@pytest.mark.parametrize("moved, expected", [
+    ({"z": 2.0}, {"raise": 0.5, "lower": 0.0}),
+    ({"z": 1.2}, {"raise": 0.0, "lower": 0.3}),
+    ({"pitch": -10.0}, {"tilt_down": np.radians(10), "tilt_up": 0.0}),
+    ({"pitch": 4.0}, {"tilt_up": np.radians(4), "tilt_down": 0.0}),
+    ({"roll": -6.0}, {"roll": np.radians(6)}),
+    ({"yaw": 200.0}, {"yaw": np.radians(160)}),
+    ({"xy": (2.0, 1.0)}, {"plan": 1.0}),
+    ({"fov": 90.0}, {"zoom": abs(np.log(np.tan(np.radians(45)) / np.tan(np.radians(32.5))))}),
+])
+def test_each_term_of_one_moved_camera_has_its_closed_form(moved, expected):
+    found = terms(one_camera(), one_camera(**moved))
+    for name, value in expected.items():
+        assert found[name] == pytest.approx(value, abs=1e-9), name
+    untouched = set(dm.PAIR_FEATURES) - set(expected) - {"depth_prior"}
+    assert all(found[name] == pytest.approx(0, abs=1e-9) for name in untouched)
+
+
+def test_a_camera_pitched_down_or_lowered_sees_the_ground_nearer_so_the_depth_prior_moves():
+    base = one_camera()
+    assert terms(base, one_camera(pitch=-10.0))["depth_prior"] > 0.05
+    # a level camera: the lower half of the grid meets the ground at depths in ratio 1.5 (within range), the
+    # upper half never (the far end for both)
+    assert 0.1 < terms(base, one_camera(z=1.0))["depth_prior"] < 0.5 * np.log(1.5) + 1e-9
+    assert terms(base, one_camera(xy=(0.0, 1.0), yaw=90.0))["depth_prior"] == pytest.approx(0, abs=1e-12)
+
+
+def test_terms_do_not_depend_on_the_order_of_the_cameras():
+    r1, r6 = load_rig("R1"), load_rig("R6")
+    shuffled = dataclasses.replace(r6, cameras=tuple(reversed(r6.cameras)))
+    np.testing.assert_allclose(list(terms(r1, r6).values()), list(terms(r1, shuffled).values()), atol=1e-12)
+
+
+def test_the_count_and_uncovered_terms_of_a_front_camera_alone():
+    r1 = load_rig("R1")
+    front = dataclasses.replace(r1, cameras=r1.cameras[:1])
+    found = terms(r1, front)
+    assert found["count"] == pytest.approx(7 / 8)
+    yaw = yaw_pitch_roll_from_rotation(r1.cameras[0].rotation)[0]
+    own = dm.azimuth_cover(dm.CameraGeometry.of(front))
+    seen = dm.azimuth_cover(dm.CameraGeometry.of(r1))
+    assert found["uncovered"] == pytest.approx((seen & ~own).sum() / seen.sum())
+    assert abs(yaw) < 0.01 and 60 <= own.sum() <= 70  # a 65 degree lens covers about 65 one-degree sectors
+
+
+def test_the_fit_recovers_weights_that_made_the_drops():
+    """Drops made by the model itself from known weights on 40 moved copies of R1 are fitted back."""
+    r1 = load_rig("R1")
+    rng = np.random.default_rng(0)
+    candidates = []
+    for _ in range(40):
+        dz, pitch, yaw = rng.uniform(-0.3, 0.8), rng.uniform(-12, 4), rng.uniform(-20, 20)
+        cameras = []
+        for camera in r1.cameras:
+            y, p, r = yaw_pitch_roll_from_rotation(camera.rotation)
+            cameras.append(dataclasses.replace(camera, position=camera.position + [0, 0, dz],
+                                               rotation=rotation_from_yaw_pitch_roll(y + np.radians(yaw),
+                                                                                     p + np.radians(pitch), r)))
+        candidates.append(dataclasses.replace(r1, cameras=tuple(cameras)))
+    truth = np.zeros(len(dm.FEATURES))
+    truth[[dm.FEATURES.index("raise"), dm.FEATURES.index("tilt_down"), dm.FEATURES.index("yaw")]] = [1.2, 4.0, 0.3]
+    t = [dm.PairTerms.of(r1, c) for c in candidates]
+    drops = dm.predict(truth, t)
+    weights = dm.fit_weights(t, drops)
+    assert (weights >= 0).all()
+    np.testing.assert_allclose(dm.predict(weights, t), drops, atol=1e-4)
+
+
+def test_conformal_halfwidths_take_the_rank_of_the_level():
+    predicted = np.array([0.1] * 9 + [0.3] * 8)
+    measured = predicted + np.r_[np.arange(1, 10) / 10, np.arange(1, 9) / 100]
+    widths = dm.interval_halfwidths(predicted, measured, 0.9)
+    assert widths[0] == pytest.approx(0.9)  # ceil(10 x 0.9) = 9th of 9
+    assert widths[1] == np.inf  # the 9th of 8 does not exist
+    assert widths[2] == np.inf  # no prediction in the bin
+    np.testing.assert_array_equal(dm.interval_bin([0.0, 0.15, 0.39, 0.4, 0.9]), [0, 1, 1, 2, 2])
