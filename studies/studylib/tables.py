@@ -43,3 +43,15 @@ def markdown(table: list[list]) -> str:
     header = table[0]
     lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
     return "\n".join(lines + ["| " + " | ".join(cell(c, v) for c, v in zip(header, row)) + " |" for row in table[1:]])
+
+
+def write_rig_index(path: Path, columns: list[str], rows: list[dict]) -> None:
+    """Write a rig set's index: one row per rig (a dict with at least ``rig``) under ``columns``; a repeated rig
+    name is an error (SystemExit naming them), as two rigs would share one file."""
+    names = [row["rig"] for row in rows]
+    if len(set(names)) != len(names):
+        raise SystemExit(f"rig names repeat: {sorted({n for n in names if names.count(n) > 1})}")
+    with Path(path).open("w", newline="") as handle:
+        writer = csv.DictWriter(handle, columns)
+        writer.writeheader()
+        writer.writerows(rows)

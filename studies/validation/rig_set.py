@@ -32,7 +32,6 @@ R8).
 
 from __future__ import annotations
 
-import csv
 import sys
 from dataclasses import replace
 from pathlib import Path
@@ -52,6 +51,8 @@ from rigopt.vehicle.library import load_vehicle
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
 OUT = HERE / "rigs"
+sys.path.insert(0, str(HERE.parent))  # studies/: the studies' shared code (studylib)
+from studylib.tables import write_rig_index  # noqa: E402
 
 VEHICLES = ("firetruck", "hgv", "tt")
 HEIGHT_OFFSETS = (0.0, 0.3, 0.6, 1.2)  # m
@@ -185,14 +186,8 @@ def main() -> int:
     for vehicle_name, kind, rig in other_rigs():
         write_rig(rig, OUT / f"{rig.name}.json")
         rows.append({"rig": rig.name, "vehicle": vehicle_name, "kind": kind, "cameras": len(rig)})
-    names = [row["rig"] for row in rows]
-    if len(set(names)) != len(names):
-        raise SystemExit(f"test rig names repeat: {sorted(n for n in names if names.count(n) > 1)}")
     columns = ["rig", "vehicle", "kind", "height_offset_m", "pitch_deg", "fov_deg", "cameras", "plan_offset_m"]
-    with open(OUT / "index.csv", "w", newline="") as handle:
-        writer = csv.DictWriter(handle, columns)
-        writer.writeheader()
-        writer.writerows(rows)
+    write_rig_index(OUT / "index.csv", columns, rows)
     print(f"{len(rows)} test rigs in {OUT.relative_to(ROOT)} ({sum(r['kind'] == 'factorial' for r in rows)} factorial)")
     return 0
 
