@@ -84,12 +84,14 @@ class RigCheck:
 
 def housing_fits(vehicle: Vehicle, feet, normals, rules: MountRules = MountRules()) -> np.ndarray:
     """(n,) bool: a housing with its back face at each foot point (n, 3) on a surface of normal (n, 3) sinks
-    no deeper than ``rules.penetration_tolerance`` into the body (the housing rule, for mount points)."""
+    no deeper than ``rules.penetration_tolerance`` into the body (the housing rule, for mount points). A foot on a
+    degenerate face (a zero normal: meshes carry a few zero-area faces) has no surface to sit on: it does not fit."""
     body = vehicle.collision_object
     feet, normals = np.atleast_2d(feet), np.atleast_2d(normals)
     forward = np.array([1.0, 0.0, 0.0])
-    return np.array([not collides(housing_object(foot, normal, forward, rules.housing, rules.penetration_tolerance),
-                                   body) for foot, normal in zip(feet, normals)], dtype=bool)
+    return np.array([bool(np.linalg.norm(normal) > 0.5) and not collides(
+        housing_object(foot, normal, forward, rules.housing, rules.penetration_tolerance), body)
+        for foot, normal in zip(feet, normals)], dtype=bool)
 
 
 @dataclass(frozen=True)

@@ -280,3 +280,18 @@ def test_two_cameras_20cm_apart_are_valid(box_car):
     # different lenses: the same lens looking the same way this close would duplicate A (test_features.py)
     result = check(box_car, camera("A", FRONT), camera("B", [2.03, 0.2, 1.0], fov=90.0))
     assert result.valid
+
+
+def test_a_foot_on_a_degenerate_face_has_no_surface_and_no_housing_fits(badge_5mm):
+    """A zero normal (a zero-area face of the mesh) gives no housing frame: the foot does not fit, it is not
+    checked with a NaN box."""
+    import warnings
+
+    from rigopt.mounting.rules import housing_fits
+
+    foot = np.array([[2.0, 0.0, 1.0], [2.0, 0.0, 1.0]])
+    normals = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 0.0]])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        fits = housing_fits(badge_5mm, foot, normals)
+    assert fits.tolist() == [True, False]
