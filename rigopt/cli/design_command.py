@@ -315,10 +315,15 @@ def _check_measurable(reference: str, protocol: str) -> None:
     """--measure before any design work: torch installed, the protocol known, models shipped for the reference."""
     from rigopt.cli.detector_commands import require_torch
     from rigopt.validation.detectors.measuring import protocol_named
-    from rigopt.validation.detectors.shipped import reference_scores, shipped_detector
+    from rigopt.validation.detectors.shipped import reference_scores, shipped_detector, shipped_names
 
     require_torch()
-    reference_scores(shipped_detector("lss", reference), protocol_named(protocol))
+    chosen = protocol_named(protocol)
+    if f"lss-{reference}" not in shipped_names():
+        raise RigoptError(f"--measure needs the shipped lss models trained on {reference}, and rigopt ships "
+                          f"{', '.join(shipped_names()) or 'none'}: design from R1, or leave out --measure and "
+                          "measure with rigopt validate RIG --ref REF --model lss --data DIR")
+    reference_scores(shipped_detector("lss", reference), chosen)
 
 
 def _measured(result, references, calibration, protocol: str, status) -> dict:

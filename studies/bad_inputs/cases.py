@@ -619,4 +619,18 @@ CASES: list[tuple[str, list[str], str]] = [
                                   f"{T}/bench"], "is a folder; give the design file"),
     ("bench show data a file", ["bench", "show", f"{T}/file.txt", "--rig", "R1", "--out", f"{T}/s.png"],
      "is a file; give the folder holding"),
+    # --- measurement protocols, several rigs, design --measure (issue 42) ---
+    ("validate unknown --protocol", ["validate", "R5", "--ref", "R1", "--model", "lss", "--protocol", "fast"],
+     "unknown measurement protocol"),
+    ("validate --protocol with --data", ["validate", "R5", "--ref", "R1", "--model", "lss", "--protocol", "quick",
+                                         "--data", f"{T}/bench"], "--protocol is for the shipped models"),
+    ("validate several rigs with --compare", ["validate", "R5", "R4", "--ref", "R1", "--model", "lss", "--compare"],
+     "--compare validates one rig at a time"),
+    ("design --measure with --pareto", ["design", "--vehicle", "tt", "--ref", "R1", "--measure", "--pareto", "--out",
+                                        f"{T}/dm"], "--measure measures one design"),
+    ("design --measure unknown --protocol", ["design", "--vehicle", "tt", "--ref", "R1", "--measure", "--protocol",
+                                             "fast", "--out", f"{T}/dm"], "unknown measurement protocol"),
+    ("design --measure from a reference without shipped models", ["design", "--vehicle", "tt", "--ref", "R6",
+                                                                  "--measure", "--out", f"{T}/dm"],
+     "--measure needs the shipped lss models trained on R6"),
 ]
