@@ -47,6 +47,8 @@ FEATURES = PAIR_FEATURES + RIG_FEATURES
 FIT_ROUNDS = 5
 #: Starting weights of the least-squares fit (every term alike).
 START_WEIGHT = 0.1
+#: A term whose largest value over the fitting rigs is at most this is not fitted (weight 0).
+INFORMATIVE = 1e-6
 
 
 @dataclass(frozen=True, eq=False)
@@ -145,7 +147,8 @@ def link(score: np.ndarray) -> np.ndarray:
 def fit_weights(terms: Sequence[PairTerms], drops: np.ndarray, rounds: int = FIT_ROUNDS) -> np.ndarray:
     """(len(FEATURES),) float >= 0: the weights whose predicted drops best fit ``drops`` (least squares on the
     drop scale, scipy's bounded trust-region solver from START_WEIGHT), fit -> rematch -> refit until the
-    matchings stop changing or ``rounds`` fits are done. The first matching is under unit pair weights."""
+    matchings stop changing or ``rounds`` fits are done. The first matching is under unit pair weights. A term no
+    fitting rig has (at most INFORMATIVE everywhere) gets weight 0."""
     drops = np.asarray(drops, dtype=float)
     pair_weights = np.ones(len(PAIR_FEATURES))
     weights, matched = None, None
@@ -156,9 +159,13 @@ def fit_weights(terms: Sequence[PairTerms], drops: np.ndarray, rounds: int = FIT
             break
         matched = key
         x = np.array([np.concatenate([t.pairs[m].mean(axis=0), t.rig]) for t, m in zip(terms, matchings)])
-        start = np.full(x.shape[1], START_WEIGHT) if weights is None else weights
-        solution = least_squares(lambda w: link(x @ w) - drops, start, bounds=(0.0, np.inf), method="trf")
-        weights = solution.x
+        # a term that no fitting rig has (rounding noise at most) carries no information: its weight is 0, not
+        # whatever the solver drifts it to (a huge weight on 1e-16 noise would blow up on a rig that has it)
+        used = x.max(axis=0) > INFORMATIVE
+        start = np.full(used.sum(), START_WEIGHT) if weights is None else weights[used]
+        solution = least_squares(lambda w: link(x[:, used] @ w) - drops, start, bounds=(0.0, np.inf), method="trf")
+        weights = np.zeros(x.shape[1])
+        weights[used] = solution.x
         pair_weights = weights[:len(PAIR_FEATURES)] + 1e-9  # a zero weight still breaks ties by the others
     return weights
 

@@ -107,3 +107,15 @@ def test_conformal_halfwidths_take_the_rank_of_the_level():
     assert widths[1] == np.inf  # the 9th of 8 does not exist
     assert widths[2] == np.inf  # no prediction in the bin
     np.testing.assert_array_equal(dm.interval_bin([0.0, 0.15, 0.39, 0.4, 0.9]), [0, 1, 1, 2, 2])
+
+
+def test_a_term_no_fitting_rig_has_gets_no_weight():
+    """Roll and the principal point never move in these rigs (rounding noise at most): their weights are 0, so a
+    later rig that has them is not predicted from a weight the fit never saw evidence for."""
+    r1 = load_rig("R1")
+    candidates = [dataclasses.replace(r1, cameras=tuple(dataclasses.replace(c, position=c.position + [0, 0, dz])
+                                                        for c in r1.cameras)) for dz in (0.1, 0.3, 0.5, 0.9)]
+    t = [dm.PairTerms.of(r1, c) for c in candidates]
+    weights = dm.fit_weights(t, np.array([0.05, 0.2, 0.35, 0.6]))
+    for name in ("roll", "centre", "tilt_down", "tilt_up", "yaw", "zoom", "count", "uncovered", "lower"):
+        assert weights[dm.FEATURES.index(name)] == 0, name
