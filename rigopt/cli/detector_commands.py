@@ -210,9 +210,10 @@ def validate_command(
     cache: Optional[Path] = typer.Option(None, "--cache", help="Without --data: where the renderings are kept "
                                          "(default $RIGOPT_HOME/cache/validate, ~/.rigopt/cache/validate)."),
     workers: int = typer.Option(0, "--workers", min=0, help="Without --data: rendering processes (0: one per core)."),
-    protocol: str = typer.Option(DEFAULT_PROTOCOL.name, "--protocol", help="Without --data: full (every frame of the "
-                                 "reference's test scenes) or quick (every 4th frame, a quarter of the time; its "
-                                 "agreement with full measured in studies/validation/protocol)."),
+    protocol: Optional[str] = typer.Option(None, "--protocol", help="Without --data: full (every frame of the "
+                                           "reference's test scenes) or quick (every 4th frame, a quarter of the "
+                                           "time; its agreement with full measured in studies/validation/protocol); "
+                                           f"default {DEFAULT_PROTOCOL.name}."),
     compare: bool = typer.Option(False, "--compare", help="Without --data: also measure the hand-designed rigs of "
                                  "the rig's vehicle and the naive and height-matched transfers of the reference "
                                  "(as --data always does)."),
@@ -243,8 +244,9 @@ def validate_command(
     if data is None and runs is not None:
         raise RigoptError("--runs names trained runs of a --data folder: add --data, or leave --runs out to use the "
                           "shipped models")
-    if data is not None and protocol_named(protocol) != DEFAULT_PROTOCOL:
+    if data is not None and protocol is not None:
         raise RigoptError("--protocol is for the shipped models (no --data); with --data every test sample is scored")
+    chosen = protocol_named(protocol) if protocol is not None else DEFAULT_PROTOCOL
     if data is not None and (cache is not None or compare):
         raise RigoptError(f"--{'cache' if cache is not None else 'compare'} is for the shipped models (no --data); "
                           "with --data the renderings go into that folder and the comparison rigs are always measured")
@@ -256,8 +258,8 @@ def validate_command(
     note_fallback(calibration)
     resolve_device(device)
     if data is None:
-        _validate_shipped(rigs, ref, family, calibration, weights, device, cache, workers, protocol_named(protocol),
-                          compare, out, as_json)
+        _validate_shipped(rigs, ref, family, calibration, weights, device, cache, workers, chosen, compare, out,
+                          as_json)
         return
     rig = rigs[0]
     with status_console.status("validating") as status:
