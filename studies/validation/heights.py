@@ -87,11 +87,12 @@ def measure_vehicle(vehicle_name: str, args, detector, progress) -> None:
     ``--searched-copy`` the diagnostic's two) and write its JSON, whole or not at all."""
     from rigopt.output import write_text_atomic
     from rigopt.validation.detectors.shipped import measure, paired_differences, without_resamples
+    from rigopt.validation.detectors.measuring import FULL  # the protocol this study was measured under
 
     if args.searched_copy:
         design, copy = searched_copy(vehicle_name)
         progress(f"{vehicle_name}: {design.name} and {copy.name} (heights {copy.positions[:, 2].round(2)})")
-        entries = measure([design, copy], detector, args.cache, "cpu", args.workers, progress)
+        entries = measure([design, copy], detector, args.cache, "cpu", args.workers, progress, FULL)
         out = DESIGNS / f"{vehicle_name}_heights_copy.json"
         result = {"vehicle": vehicle_name, "note": searched_copy.__doc__.split(". An")[0],
                   "copy_positions": copy.positions.round(3).tolist(),
@@ -100,7 +101,7 @@ def measure_vehicle(vehicle_name: str, args, detector, progress) -> None:
     else:
         rigs = measured_rigs(vehicle_name)
         progress(f"{vehicle_name}: {', '.join(rig.name for _, rig in rigs)}")
-        entries = measure([rig for _, rig in rigs], detector, args.cache, "cpu", args.workers, progress)
+        entries = measure([rig for _, rig in rigs], detector, args.cache, "cpu", args.workers, progress, FULL)
         out = DESIGNS / f"{vehicle_name}_heights.json"
         result = {"vehicle": vehicle_name, "rigs": [{"role": role, "positions": rig.positions.round(3).tolist(),
                                                       **without_resamples(entry)}

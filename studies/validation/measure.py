@@ -39,6 +39,7 @@ def main(argv=None) -> int:
     parser.add_argument("--only", nargs="*", default=None, help="measure only these rigs")
     args = parser.parse_args(argv)
     from rigopt.validation.detectors.shipped import measure, shipped_detector, without_resamples
+    from rigopt.validation.detectors.measuring import FULL  # the protocol this study was measured under
     from rigopt.rig.library import load_rig
 
     detector = shipped_detector("lss", "R1")
@@ -52,7 +53,7 @@ def main(argv=None) -> int:
     for k, row in enumerate(todo, start=1):
         started = time.perf_counter()
         rig = load_rig(HERE / "rigs" / f"{row['rig']}.json")
-        entry = without_resamples(measure([rig], detector, args.cache, args.device, args.workers)[0])
+        entry = without_resamples(measure([rig], detector, args.cache, args.device, args.workers, protocol=FULL)[0])
         seconds = time.perf_counter() - started
         fresh = not table.is_file()
         with open(table, "a", newline="") as handle:

@@ -52,6 +52,7 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     from rigopt.output import write_text_atomic
     from rigopt.validation.detectors.shipped import measure, paired_differences, shipped_detector, without_resamples
+    from rigopt.validation.detectors.measuring import FULL  # the protocol this study was measured under
 
     detector = shipped_detector("lss", "R1")
     for vehicle_name in args.vehicles:
@@ -59,7 +60,7 @@ def main(argv=None) -> int:
             copy, swaps = swap_rigs(vehicle_name)
             progress(f"{vehicle_name}: {copy.name} and {len(swaps)} swaps")
             entries = measure([copy] + [rig for _, rig in swaps], detector, args.cache, "cpu", args.workers,
-                              progress)
+                              progress, FULL)
             result = {"vehicle": vehicle_name, "copy": without_resamples(entries[0]), "swaps": []}
             for (camera_id, rig), entry in zip(swaps, entries[1:]):
                 moved = next(c for c in rig.cameras if c.id == camera_id)

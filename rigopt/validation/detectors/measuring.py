@@ -5,7 +5,8 @@ are rendered and scored. Plain data (no numpy, no torch): the command line's ``-
 scores every fourth frame of the same scenes, a quarter of the work, its drops relative to the reference's own
 scores on those frames (the card's ``protocols`` entry and ``bootstrap-quick.npz``). Every protocol keeps all the
 test scenes, so the bootstrap's scene resamples draw the same scenes under each. The agreement of ``quick``
-with ``full`` was pre-registered and measured in studies/validation/protocol/.
+with ``full`` was pre-registered and measured in studies/validation/protocol/; it passed, and quick is the
+default.
 """
 
 from __future__ import annotations
@@ -45,8 +46,10 @@ FULL = Protocol("full", 1)
 QUICK = Protocol("quick", 4)
 #: The protocols by name.
 PROTOCOLS: dict[str, Protocol] = {p.name: p for p in (FULL, QUICK)}
-#: What ``rigopt validate`` and :func:`rigopt.validation.detectors.shipped.measure` use unless told.
-DEFAULT_PROTOCOL = FULL
+#: What ``rigopt validate``, ``rigopt design --measure`` and :func:`rigopt.validation.detectors.shipped.measure` use
+#: unless told: quick, since its pre-registered agreement with full passed (studies/validation/protocol: on 63 rigs
+#: mean |quick - full| 0.0047, Spearman rho 0.9986, largest difference 0.030).
+DEFAULT_PROTOCOL = QUICK
 
 
 def protocol_named(name: str) -> Protocol:

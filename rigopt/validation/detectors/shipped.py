@@ -41,7 +41,7 @@ import numpy as np
 from rigopt.errors import DataError
 from rigopt.resources import data_dir
 from rigopt.rig.model import Rig
-from rigopt.validation.detectors.measuring import FULL, PROTOCOLS, Protocol
+from rigopt.validation.detectors.measuring import DEFAULT_PROTOCOL, FULL, PROTOCOLS, Protocol
 
 CARD = "card.json"
 BOOTSTRAP = "bootstrap.npz"
@@ -151,7 +151,7 @@ def render_cached(rigs: Sequence[Rig], detector: ShippedDetector, cache: Path, w
 
 def measure(rigs: Sequence[Rig], detector: ShippedDetector, cache: Path | None = None, device: str = "cpu",
             workers: int = 1, progress: Callable[[str], None] = lambda message: None,
-            protocol: Protocol = FULL) -> list[dict]:
+            protocol: Protocol = DEFAULT_PROTOCOL) -> list[dict]:
     """Each rig's measured drop with every shipped seed under ``protocol``: a list (one per rig) of JSON-ready dicts.
 
     Per seed: ``mAP`` and ``mAP_visible`` on the reference's test scenes (the protocol's frames) rendered under the

@@ -132,7 +132,9 @@ def test_a_rig_scores_as_the_data_path_scores_it(use_packed, tmp_path):
     data, _ = use_packed
     detector = shipped.shipped_detector("lss", "R1")
     rig = load_rig("R5")
-    measured = shipped.measure([rig], detector, tmp_path / "cache")[0]
+    from rigopt.validation.detectors.measuring import FULL
+
+    measured = shipped.measure([rig], detector, tmp_path / "cache", protocol=FULL)[0]
     copy = tmp_path / "data"
     shutil.copytree(data / "R1", copy / "R1")
     scenes, size = split_layout(copy / "R1" / "test")
