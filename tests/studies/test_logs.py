@@ -20,3 +20,10 @@ def test_each_message_is_printed_and_appended_with_its_time(tmp_path, capsys):
     assert [line[9:] for line in lines] == ["first run", "second run"]
     assert all(re.fullmatch(r"\d\d:\d\d:\d\d", line[:8]) for line in lines)
     assert capsys.readouterr().out.splitlines() == lines
+
+
+def test_a_log_in_a_folder_not_made_yet_makes_it(tmp_path, capsys):
+    path = tmp_path / "results" / "new" / "study.log"
+    with timestamped_log(path) as progress:
+        progress("started")
+    assert path.read_text().endswith(" started\n")
