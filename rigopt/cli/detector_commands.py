@@ -227,7 +227,7 @@ def validate_command(
 
     from rigopt.validation.detectors.config import model_config
     from rigopt.validation.detectors.models import resolve_device
-    from rigopt.validation.designs import load_design, validate_design
+    from rigopt.validation.designs import contradictions, load_design, validate_design
     from rigopt.metrics.calibration import load_weights
     from rigopt.report.json_values import json_ready
 
@@ -265,6 +265,7 @@ def validate_command(
     rig = rigs[0]
     with status_console.status("validating") as status:
         result = validate_design(rig, ref, family, data, calibration, runs, device, status.update)
+    result["contradictions"] = contradictions(result["rigs"], result["design_minus"], name=lambda row: row["rig"])
     if "near_field" in result:  # the note of the shipped path: what the detector was fed, what was kept
         note(result["near_field"]["note"])
     if out is not None:
@@ -282,6 +283,7 @@ def validate_command(
                 ["role", "rig", "cameras", "mAP", "measured drop", "95 % interval", "visible mAP", "visible drop",
                  "predicted drop", "90 % prediction interval", "extrapolates", "RigCD"], rows)
     _note_uninformative(result["rigs"], calibration)
+    _note_contradictions(result["contradictions"])
     rows = [[f"design - {e['rig']}", e["role"], _number(e["difference"]), _interval(e["ci"])]
             for e in result["design_minus"]]
     print_table(f"measured drop of the design minus the others (below 0: the design loses less); intervals from "
@@ -302,7 +304,7 @@ def _validate_shipped(measured_rigs: list, ref: str, family: str, calibration, w
         shipped_detector,
         without_resamples,
     )
-    from rigopt.validation.designs import WHOLE_ROLE, comparison_rigs, fed_rigs
+    from rigopt.validation.designs import WHOLE_ROLE, comparison_rigs, contradictions, fed_rigs
     from rigopt.metrics.ranking import predict_transfer
     from rigopt.output import existing_folder, write_text_atomic
     from rigopt.report.json_values import json_ready
@@ -350,6 +352,8 @@ def _validate_shipped(measured_rigs: list, ref: str, family: str, calibration, w
     if compare:  # the rig (its perception cameras) against each yardstick, on the same scene resamples
         result["paired"] = [{"role": role, **paired_differences(measured[0], entry)}
                             for (role, _), entry in zip(rigs[1:], measured[1:]) if role != WHOLE_ROLE]
+    result["contradictions"] = contradictions([{**e, "measured_drop": e["drop"]} for e in result["rigs"]],
+                                              result.get("paired", []), name=lambda row: row["rig"])
     if out is not None:
         write_text_atomic(out, json.dumps(json_ready(result), indent=1) + "\n")
     if as_json:
@@ -365,6 +369,7 @@ def _validate_shipped(measured_rigs: list, ref: str, family: str, calibration, w
                 ["role", "rig", "cameras", "drop per seed", "mean drop", "95 % interval (test scenes)",
                  "visible-only drop", "predicted drop", "90 % prediction interval", "extrapolates"], rows)
     _note_uninformative(result["rigs"], calibration)
+    _note_contradictions(result["contradictions"])
     if result.get("paired"):
         print_table(f"{rigs[0][1].name} minus each: below 0 it loses less (* the paired 95 % interval excludes 0)",
                     ["role", "rig", "difference per seed", "mean difference", "95 % interval (test scenes)"],
@@ -388,6 +393,12 @@ def _note_uninformative(entries: list, calibration) -> None:
     if any(e.get("interval_informative") is False for e in entries):
         note(f"predicted drops: {UNINFORMATIVE_TEXT} with the {calibration.name} calibration's "
              f"{calibration.interval.level:.0%} interval (+-{calibration.interval.halfwidth:.2f}); --json keeps the numbers")
+
+
+def _note_contradictions(lines: list) -> None:
+    """Say where a predicted drop and the measured one beside it disagree (JSON ``contradictions``)."""
+    for line in lines:
+        note(f"prediction and measurement disagree: {line}")
 
 
 def _visible_maps(out: Path, family: str, names: List[str]) -> dict:

@@ -238,23 +238,30 @@ def measure_design(design: Rig, reference: Rig, calibration: Calibration, protoc
             "contradictions": contradictions(rows, paired), "measured": [without_resamples(m) for m in measured]}
 
 
-def contradictions(rows: list[dict], paired: list[dict]) -> list[str]:
-    """Lines saying where predicted and measured drops disagree (see :func:`measure_design`)."""
+def contradictions(rows: list[dict], paired: list[dict], name: Callable[[dict], str] = lambda row: row["role"]) -> list[str]:
+    """Lines saying where predicted and measured drops disagree (see :func:`measure_design`).
+
+    rows : each with ``rig``, ``predicted_drop``, ``predicted_interval``, ``interval_informative`` and
+    ``measured_drop`` (None: not measured, skipped); paired : the first row's rig minus another rig, each with
+    ``rig`` (the other's name), ``difference`` and its paired ``ci``; name : how a row is called in the lines."""
     lines = []
-    for row in rows:
+    measured = [row for row in rows if row["measured_drop"] is not None and row["predicted_drop"] is not None]
+    for row in measured:
         low, high = row["predicted_interval"] or (None, None)
         if row["interval_informative"] and low is not None and not low <= row["measured_drop"] <= high:
-            lines.append(f"{row['role']}: measured {row['measured_drop']:.3f}, outside the predicted interval "
+            lines.append(f"{name(row)}: measured {row['measured_drop']:.3f}, outside the predicted interval "
                          f"[{low:.3f}, {high:.3f}] (predicted {row['predicted_drop']:.3f})")
         elif abs(row["measured_drop"] - row["predicted_drop"]) > 0.15:
-            lines.append(f"{row['role']}: predicted {row['predicted_drop']:.3f}, measured {row['measured_drop']:.3f}: "
+            lines.append(f"{name(row)}: predicted {row['predicted_drop']:.3f}, measured {row['measured_drop']:.3f}: "
                          f"the prediction is off by {abs(row['measured_drop'] - row['predicted_drop']):.3f}")
-    design = rows[0]
-    for pair, row in zip(paired, rows[1:]):
-        predicted = design["predicted_drop"] - row["predicted_drop"]
-        low, high = pair["ci"]
+    first, by_rig = rows[0], {row["rig"]: row for row in rows}
+    for pair in paired:
+        other, (low, high) = by_rig.get(pair["rig"]), pair["ci"]
+        if other is None or None in (low, high, first["predicted_drop"], other["predicted_drop"]):
+            continue
+        predicted = first["predicted_drop"] - other["predicted_drop"]
         if (predicted > 0 and high < 0) or (predicted < 0 and low > 0):
-            lines.append(f"the prediction orders the design and the {row['role']} one way ({predicted:+.3f}), the "
-                         f"measurement the other ({pair['difference']:+.3f} [{low:.3f}, {high:.3f}], design minus "
-                         f"{row['role']})")
+            lines.append(f"the prediction orders {name(first)} and {name(other)} one way ({predicted:+.3f}), the "
+                         f"measurement the other ({pair['difference']:+.3f} [{low:.3f}, {high:.3f}], {name(first)} "
+                         f"minus {name(other)})")
     return lines

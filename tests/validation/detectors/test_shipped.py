@@ -170,6 +170,9 @@ def test_validate_without_data_through_the_console_script(packed, tmp_path):
     assert entry["drop"] == pytest.approx(np.mean([s["drop"] for s in entry["seeds"].values()]))
     assert entry["predicted_drop"] is not None
     assert Path(entry["cache"]).parent == tmp_path / "home" / "cache" / "validate"
+    off = abs(entry["drop"] - entry["predicted_drop"]) > 0.15 and not entry["interval_informative"]
+    assert (f"R5: predicted {entry['predicted_drop']:.3f}, measured {entry['drop']:.3f}: the prediction is off by "
+            f"{abs(entry['drop'] - entry['predicted_drop']):.3f}" in result["contradictions"]) == off
 
 
 @pytest.mark.slow
