@@ -173,7 +173,7 @@ def design_command(
                                  "height-matched copies with the shipped detectors (rigopt validate, no data needed) "
                                  "and show measured beside predicted, saying where they disagree."),
     protocol: str = typer.Option("quick", "--protocol", help="With --measure: quick (every 4th frame of the test "
-                                 "scenes) or full (rigopt validate --protocol)."),
+                                 "scenes), full or quick-s1 (new scenes), as rigopt validate --protocol."),
     out: Optional[Path] = typer.Option(None, help="Output folder (default: design-<vehicle>-<ref>)."),
     force: bool = typer.Option(False, "--force", help=FORCE_HELP),
     as_json: bool = typer.Option(False, "--json", help="Print the JSON summary."),

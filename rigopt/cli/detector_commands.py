@@ -213,7 +213,8 @@ def validate_command(
     protocol: Optional[str] = typer.Option(None, "--protocol", help="Without --data: full (every frame of the "
                                            "reference's test scenes) or quick (every 4th frame, a quarter of the "
                                            "time; mean |quick - full| 0.005 on 63 rigs, "
-                                           "studies/validation/protocol); "
+                                           "studies/validation/protocol) or quick-s1 (quick's frames of 16 new "
+                                           "scenes, to replicate a finding); "
                                            f"default {DEFAULT_PROTOCOL.name}."),
     compare: bool = typer.Option(False, "--compare", help="Without --data: also measure the hand-designed rigs of "
                                  "the rig's vehicle and the naive and height-matched transfers of the reference "

@@ -131,7 +131,7 @@ def test_scenes(detector: ShippedDetector, protocol: Protocol = FULL):
     from rigopt.validation.synthetic.scenes import split_scenes
 
     test = detector.card["test_data"]
-    scenes = split_scenes(test["split"], test["scenes"], test["frames"], test["seed_offset"])
+    scenes = split_scenes(test["split"], test["scenes"], test["frames"], protocol.seed_offset(test))
     return [dataclasses.replace(scene, frames=scene.frames[::protocol.frame_stride]) for scene in scenes]
 
 
@@ -217,7 +217,8 @@ def reference_scores(detector: ShippedDetector, protocol: Protocol = FULL) -> di
         own, path = detector.card["seeds"], detector.folder / BOOTSTRAP
     else:
         entry = detector.card.get("protocols", {}).get(protocol.name)
-        if entry is None or entry.get("frame_stride") != protocol.frame_stride:
+        if entry is None or (entry.get("frame_stride"), entry.get("scene_offset")) != (protocol.frame_stride,
+                                                                                         protocol.scene_offset):
             raise DataError(f"{detector.folder}: the pack has no reference scores for protocol {protocol.name}; add "
                             f"them with rigopt.validation.detectors.shipped.add_protocol, or use --protocol full")
         own, path = entry["seeds"], detector.folder / f"bootstrap-{protocol.name}.npz"
@@ -361,7 +362,8 @@ def pack(runs: dict[int, Path], data: Path, out: Path, recipe: dict, train_data:
                 "file": path.name, "epochs": state["epoch"], "steps": state["step"],
                 "training_minutes": round(training_seconds(Path(runs[seed]) / "train_log.csv") / 60, 1)}
         for protocol in PROTOCOLS.values():
-            _write_protocol(card, work, protocol, matched, blocks)
+            if protocol.scene_offset is None:  # the test split at hand; new scenes: add_protocol
+                _write_protocol(card, work, protocol, matched, blocks)
         card["size_bytes"] = sum((work / f"seed{seed}.pt").stat().st_size for seed in states)
         (work / CARD).write_text(json.dumps(card, indent=1) + "\n")
     return ShippedDetector(Path(out), card)
@@ -370,9 +372,11 @@ def pack(runs: dict[int, Path], data: Path, out: Path, recipe: dict, train_data:
 def add_protocol(detector: ShippedDetector, protocol: Protocol, cache: Path, device: str = "cpu", workers: int = 1,
                  progress: Callable[[str], None] = lambda message: None) -> ShippedDetector:
     """Add the reference's own scores under ``protocol`` to an existing pack (its card and
-    ``bootstrap-<protocol>.npz``, the card rewritten whole): the reference's full test split rendered into
-    ``cache`` and scored with every seed, the protocol's frames taken by weight (:func:`scores_on_frames`). The
-    full protocol's scores are measured on the way and must equal the card's (a DataError otherwise)."""
+    ``bootstrap-<protocol>.npz``, the card rewritten whole), rendering into ``cache`` and scoring every seed.
+
+    On the card's scenes the reference's full test split is rendered and scored, its full scores must equal the
+    card's (a DataError otherwise), and the protocol's frames are taken by weight (:func:`scores_on_frames`); on
+    new scenes (``protocol.scene_offset``) the reference is rendered under the protocol and scored as it is."""
     from rigopt.validation.detectors.data import RigSplit
     from rigopt.validation.detectors.inference import match_split
     from rigopt.validation.detectors.protocol import TEST_SPLIT
@@ -382,41 +386,51 @@ def add_protocol(detector: ShippedDetector, protocol: Protocol, cache: Path, dev
 
     import torch
 
-    folder = render_cached([load_rig(detector.reference)], detector, cache, workers, progress)[0]
+    known_scenes = protocol.scene_offset is None
+    rendered = FULL if known_scenes else protocol
+    folder = render_cached([load_rig(detector.reference)], detector, cache, workers, progress, rendered)[0]
     split = RigSplit(cache, folder, TEST_SPLIT, None, depths=False)
     blocks = sample_blocks(split.samples)
     matched = {}
     torch.set_num_threads(1)  # as measure's scoring processes run on the CPU
     for seed in detector.seeds:
-        progress(f"scoring seed {seed} on {detector.reference}'s test split")
+        progress(f"scoring seed {seed} on {detector.reference}'s test split ({rendered.name})")
         matched[seed] = match_split(_loaded_model(detector.checkpoint(seed), detector.family), split, device)
         own = detector.card["seeds"][str(seed)]
         # another thread count sums a convolution in another order: a score moves by about 1e-7, no more
-        if not np.isclose(matched[seed].evaluation().map, own["mAP"], rtol=0, atol=1e-6):
+        if known_scenes and not np.isclose(matched[seed].evaluation().map, own["mAP"], rtol=0, atol=1e-6):
             raise DataError(f"{detector.folder}: seed {seed} scores {matched[seed].evaluation().map} on "
                             f"{detector.reference}'s test split, its card {own['mAP']}: not the pack's test data")
+        if not known_scenes and not matched[seed].evaluation().map > 0:
+            raise DataError(f"{detector.folder}: seed {seed} scores mAP 0 on {detector.reference}'s {protocol.name} "
+                            "scenes; a drop needs a model that detects something there")
     card = json.loads(json.dumps(detector.card))
-    _write_protocol(card, detector.folder, protocol, matched, blocks)
+    _write_protocol(card, detector.folder, protocol, matched, blocks, taken=protocol if known_scenes else FULL)
     write_text_atomic(detector.folder / CARD, json.dumps(card, indent=1) + "\n")
     return ShippedDetector(detector.folder, card)
 
 
-def _write_protocol(card: dict, folder: Path, protocol: Protocol, matched: dict, blocks) -> None:
+def _write_protocol(card: dict, folder: Path, protocol: Protocol, matched: dict, blocks,
+                    taken: Protocol | None = None) -> None:
     """Put the reference's scores under ``protocol`` into ``card`` (the full protocol's in its seeds, another's
-    under ``protocols``) and write their resamples (``bootstrap[-<protocol>].npz`` in ``folder``, whole)."""
+    under ``protocols``) and write their resamples (``bootstrap[-<protocol>].npz`` in ``folder``, whole).
+    ``matched`` : each seed's matched run; ``taken`` : the protocol whose frames are taken from it (default
+    ``protocol``: the runs hold every frame; FULL: they hold only the protocol's)."""
     from rigopt.output import atomic_file
 
     boot = card["bootstrap"]
-    scores = {seed: scores_on_frames(m, blocks, protocol, boot["resamples"], boot["seed"]) for seed, m in matched.items()}
+    taken = protocol if taken is None else taken
+    scores = {seed: scores_on_frames(m, blocks, taken, boot["resamples"], boot["seed"]) for seed, m in matched.items()}
     own = {str(seed): {"mAP": s["mAP"], "mAP_visible": s["mAP_visible"]} for seed, s in scores.items()}
     if protocol == FULL:
         for seed, values in own.items():
             card["seeds"][seed].update(values)
         name = BOOTSTRAP
     else:
-        samples = sum(len(np.asarray(block)[::protocol.frame_stride]) for block in blocks)
-        card.setdefault("protocols", {})[protocol.name] = {"frame_stride": protocol.frame_stride, "samples": samples,
-                                                           "seeds": own}
+        samples = sum(len(np.asarray(block)[::taken.frame_stride]) for block in blocks)
+        card.setdefault("protocols", {})[protocol.name] = {"frame_stride": protocol.frame_stride,
+                                                           "scene_offset": protocol.scene_offset,
+                                                           "samples": samples, "seeds": own}
         name = f"bootstrap-{protocol.name}.npz"
     with atomic_file(folder / name) as work:
         with open(work, "wb") as handle:

@@ -20,6 +20,18 @@ from rigopt.validation.synthetic.scene_model import CLASSES
 TEST_DATA = {"split": "test", "scenes": 3, "frames": 10, "seed_offset": 0}
 
 
+def test_the_new_scenes_protocol_takes_other_seeds_and_says_so():
+    from rigopt.validation.detectors.measuring import QUICK_NEW_SCENES
+    from rigopt.validation.synthetic.scenes import SEED_OFFSET_STEP
+
+    detector = shipped.ShippedDetector(Path("."), {"test_data": TEST_DATA})
+    known, new = shipped.test_scenes(detector, QUICK), shipped.test_scenes(detector, QUICK_NEW_SCENES)
+    assert [s.seed + SEED_OFFSET_STEP for s in known] == [s.seed for s in new]
+    assert len(new[0].frames) == 3
+    assert QUICK_NEW_SCENES.describe(TEST_DATA) == ("protocol quick-s1: every 4th frame (3 of 10) of 3 new test "
+                                                    "scenes (seed offset 1), 9 samples")
+
+
 def test_protocols_count_their_frames_and_samples():
     assert [FULL.frames(TEST_DATA), QUICK.frames(TEST_DATA)] == [10, 3]  # frames 0, 4, 8
     assert [FULL.samples(TEST_DATA), QUICK.samples(TEST_DATA)] == [30, 9]
@@ -28,7 +40,7 @@ def test_protocols_count_their_frames_and_samples():
 
 
 def test_a_protocol_is_found_by_name_and_an_unknown_one_is_refused_with_the_names():
-    assert protocol_named("QUICK") is QUICK and set(PROTOCOLS) == {"full", "quick"}
+    assert protocol_named("QUICK") is QUICK and set(PROTOCOLS) == {"full", "quick", "quick-s1"}
     with pytest.raises(RigoptError, match="full.*quick"):
         protocol_named("fast")
 

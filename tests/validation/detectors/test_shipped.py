@@ -19,6 +19,7 @@ torch = pytest.importorskip("torch")
 from rigopt.validation.detectors import shipped  # noqa: E402
 from rigopt.cli import INPUT_ERROR, run  # noqa: E402
 from rigopt.rig.library import load_rig  # noqa: E402
+from rigopt.errors import DataError  # noqa: E402
 
 SIZE, FRAMES = (64, 36), 4
 
@@ -109,6 +110,34 @@ def test_under_the_quick_protocol_the_reference_loses_nothing_and_scores_are_kep
     again = shipped.measure([load_rig("R5")], detector, tmp_path / "cache", protocol=QUICK)[0]
     assert [path.stat().st_mtime_ns for path in kept] == stamps  # read, not scored and written again
     assert shipped.without_resamples(again) == shipped.without_resamples(first[1])
+
+
+@pytest.mark.slow
+def test_a_protocol_on_named_scenes_is_added_to_a_pack_as_its_frames_score_there(packed, tmp_path, monkeypatch):
+    """add_protocol's path for a protocol with its own scenes (rendered under the protocol, scored as it is), here
+    pointed at the card's own scenes (seed offset 0) with quick's frames: the same reference scores as quick's,
+    which the pack took by weight from the full matching; the reference then loses nothing under it. The tiny
+    models detect nothing on really new scenes, which is refused."""
+    from rigopt.validation.detectors.measuring import QUICK, QUICK_NEW_SCENES, Protocol
+
+    root = tmp_path / "detectors"
+    shutil.copytree(packed[1], root)
+    monkeypatch.setenv("RIGOPT_DETECTORS", str(root))
+    named = Protocol("quick-s0", 4, scene_offset=0)
+    detector = shipped.shipped_detector("lss", "R1")
+    with pytest.raises(DataError, match="no reference scores for protocol quick-s0"):
+        shipped.measure([load_rig("R5")], detector, tmp_path / "cache", protocol=named)
+    detector = shipped.add_protocol(detector, named, tmp_path / "cache")
+    assert shipped.shipped_detector("lss", "R1").card == detector.card  # written to the pack
+    assert detector.card["protocols"]["quick-s0"]["scene_offset"] == 0
+    for seed, own in detector.card["protocols"]["quick"]["seeds"].items():
+        assert detector.card["protocols"]["quick-s0"]["seeds"][seed] == pytest.approx(own, abs=1e-12)
+    reference = shipped.measure([load_rig("R1")], detector, tmp_path / "cache", protocol=named)[0]
+    assert reference["drop"] == pytest.approx(0, abs=1e-12) and reference["cache"].endswith("-quick-s0")
+    with pytest.raises(DataError, match="scores mAP 0 on R1's quick-s1 scenes"):
+        shipped.add_protocol(detector, QUICK_NEW_SCENES, tmp_path / "cache")
+    assert "quick-s1" not in shipped.shipped_detector("lss", "R1").card["protocols"]
+    assert QUICK.scene_offset is None
 
 
 @pytest.mark.slow
