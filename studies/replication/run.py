@@ -1,0 +1,120 @@
+"""The designer's claim where it was not tuned (pre-registered in ``preregistration.md``): the default design against
+R1's naive, height-matched and searched copies on five held-out vehicles, on R1's test scenes and on new scenes.
+
+    python studies/replication/run.py [--cache DIR] [--workers 2] [--analyse-only]
+
+Each vehicle's four rigs (``studies/predictor/rigs/``) are measured under ``quick`` and ``quick-s1`` as ``rigopt
+validate`` does (renderings and scores cached: a rerun scores nothing). Per vehicle and scene set the paired
+differences go to ``results/<vehicle>_<protocol>.json`` as soon as they are measured (a rerun skips those files);
+the pre-registered statistics and decision to ``results/results.md`` and ``results/results.json``; the log to
+``results/run.log``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+RIGS = HERE.parent / "predictor" / "rigs"
+RESULTS = HERE / "results"
+sys.path.insert(0, str(HERE.parent))  # studies/: the studies' shared code (studylib)
+from studylib.logs import timestamped_log  # noqa: E402
+from studylib.tables import markdown  # noqa: E402
+
+VEHICLES = ("tt", "renault_zoe", "ford_fusion_hybrid", "chrysler_pacifica_hybrid", "citybus")
+PROTOCOLS = ("quick", "quick-s1")
+YARDSTICKS = {"naive copy": "{v}_naive_{v}_from_R1", "height-matched copy": "{v}_height_matched_{v}_from_R1",
+              "searched copy": "{v}_height_matched_{v}_from_R1_searched"}
+RESAMPLES, SEED, LEVEL = 2000, 0, 1 - 0.05 / len(YARDSTICKS)
+
+
+def measure_vehicle(vehicle: str, protocol_name: str, cache, workers: int, progress) -> dict:
+    from rigopt.rig.library import load_rig
+    from rigopt.validation.detectors.measuring import protocol_named
+    from rigopt.validation.detectors.shipped import measure, paired_differences, shipped_detector, without_resamples
+
+    names = [f"{vehicle}_from_R1_default", *(pattern.format(v=vehicle) for pattern in YARDSTICKS.values())]
+    rigs = [load_rig(RIGS / f"{name}.json") for name in names]
+    entries = measure(rigs, shipped_detector("lss", "R1"), cache, "cpu", workers, progress, protocol_named(protocol_name))
+    return {"vehicle": vehicle, "protocol": protocol_name, "rigs": [without_resamples(e) for e in entries],
+            "design_minus": {role: paired_differences(entries[0], entry)
+                             for role, entry in zip(YARDSTICKS, entries[1:])}}
+
+
+def analyse(found: dict) -> dict:
+    rng = np.random.default_rng(SEED)
+    draws = rng.integers(len(VEHICLES), size=(RESAMPLES, len(VEHICLES)))
+    out = {"level": LEVEL, "scene_sets": {}}
+    for protocol in PROTOCOLS:
+        per = {}
+        for role in YARDSTICKS:
+            values = np.array([found[(v, protocol)]["design_minus"][role]["difference"] for v in VEHICLES])
+            means = values[draws].mean(axis=1)
+            per[role] = {"per_vehicle": dict(zip(VEHICLES, values.tolist())), "mean": float(values.mean()),
+                         "ci95": [float(np.percentile(means, 2.5)), float(np.percentile(means, 97.5))],
+                         "ci_bonferroni": [float(np.percentile(means, 100 * (1 - LEVEL) / 2)),
+                                           float(np.percentile(means, 100 * (1 + LEVEL) / 2))],
+                         "vehicles_wholly_above_0": [v for v in VEHICLES
+                                                     if found[(v, protocol)]["design_minus"][role]["ci"][0] > 0]}
+        out["scene_sets"][protocol] = per
+    out["beats"] = {role: all(out["scene_sets"][p][role]["ci_bonferroni"][1] < 0
+                              and not out["scene_sets"][p][role]["vehicles_wholly_above_0"] for p in PROTOCOLS)
+                    for role in YARDSTICKS}
+    return out
+
+
+def report(found: dict, result: dict) -> str:
+    rows = [["vehicle", "scenes", "design", *YARDSTICKS, *(f"design - {r}" for r in YARDSTICKS)]]
+    for v in VEHICLES:
+        for p in PROTOCOLS:
+            entry = found[(v, p)]
+            minus = entry["design_minus"]
+            rows.append([v, p, *(f"{r['drop']:.3f}" for r in entry["rigs"]),
+                         *(f"{minus[r]['difference']:+.3f} [{minus[r]['ci'][0]:.3f}, {minus[r]['ci'][1]:.3f}]"
+                           for r in YARDSTICKS)])
+    summary = [["scenes", "yardstick", "mean design - yardstick", "95 % over vehicles",
+                f"{100 * LEVEL:.1f} % (Bonferroni)", "vehicles wholly above 0"]]
+    for p, per in result["scene_sets"].items():
+        for role, s in per.items():
+            summary.append([p, role, f"{s['mean']:+.3f}", "[{:.3f}, {:.3f}]".format(*s["ci95"]),
+                            "[{:.3f}, {:.3f}]".format(*s["ci_bonferroni"]), ", ".join(s["vehicles_wholly_above_0"]) or "-"])
+    verdict = "; ".join(f"{role}: {'beaten' if won else 'not beaten'}" for role, won in result["beats"].items())
+    return (f"# The designer's claim on held-out vehicles and new scenes\n\n{markdown(rows)}\n\n{markdown(summary)}\n\n"
+            f"**Decision (pre-registered rule): {verdict}.**\n")
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--cache", type=Path, default=None, help="renderings (default: rigopt validate's cache)")
+    parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--analyse-only", action="store_true")
+    args = parser.parse_args(argv)
+    from rigopt.output import write_text_atomic
+
+    found = {}
+    with timestamped_log(RESULTS / "run.log") as progress:
+        for protocol in PROTOCOLS:
+            for vehicle in VEHICLES:
+                path = RESULTS / f"{vehicle}_{protocol}.json"
+                if not path.is_file() and not args.analyse_only:
+                    write_text_atomic(path, json.dumps(measure_vehicle(vehicle, protocol, args.cache, args.workers,
+                                                                       progress), indent=1) + "\n")
+                if path.is_file():
+                    found[(vehicle, protocol)] = json.loads(path.read_text())
+    if len(found) < len(VEHICLES) * len(PROTOCOLS):
+        print(f"{len(found)} of {len(VEHICLES) * len(PROTOCOLS)} (vehicle, scenes) measured; analysis waits")
+        return 0
+    result = analyse(found)
+    write_text_atomic(RESULTS / "results.json", json.dumps(result, indent=1) + "\n")
+    write_text_atomic(RESULTS / "results.md", report(found, result))
+    print(report(found, result))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
