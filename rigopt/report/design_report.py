@@ -206,7 +206,7 @@ def near_field_dict(stage) -> dict | None:
 
 
 #: What the designs measured with the shipped detectors showed of RigCD's predictions (studies/validation/designs).
-RIGCD_ON_DESIGNS = ("the predicted drops are RigCD's, calibrated on the benchmark's hand-designed rigs; on the "
+RIGCD_ON_DESIGNS = ("The predicted drops are RigCD's, calibrated on the benchmark's hand-designed rigs; on the "
                     "designs measured with rigopt's shipped detectors it ordered design and naive copy the wrong way "
                     "(design and naive copy, fire truck: predicted 0.809 and 0.615, measured 0.136 and 0.660; hgv: "
                     "predicted 0.893 and 0.833, measured 0.283 and 0.633; studies/validation/designs): --measure "
@@ -217,7 +217,7 @@ def comparison_notes(summary: dict) -> list[str]:
     """Lines a reader of the comparison table needs: what RigCD's predictions are worth on designs, and why the
     design is predicted to lose more than the naive transfer when it is (``summary`` is :func:`design_dict`
     without its notes)."""
-    notes = [RIGCD_ON_DESIGNS[0].upper() + RIGCD_ON_DESIGNS[1:]] if summary["metric"].startswith("rigcd") else []
+    notes = [RIGCD_ON_DESIGNS] if summary["metric"].startswith("rigcd") else []
     naive = summary["comparisons"]["naive_transfer"]
     if naive is None or naive["predicted_drop"] >= summary["predicted_drop"]:
         return notes

@@ -22,7 +22,7 @@ RESULTS = HERE / "results"
 AGREEMENT = HERE.parent / "validation" / "protocol" / "results" / "agreement.json"
 sys.path.insert(0, str(HERE.parent))  # studies/: the studies' shared code (studylib)
 from studylib.logs import timestamped_log  # noqa: E402
-from studylib.measuring import measure_to_lines  # noqa: E402
+from studylib.measuring import add_measuring_options, measure_to_lines  # noqa: E402
 
 
 def study_protocol():
@@ -36,8 +36,7 @@ def study_protocol():
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--cache", type=Path, default=None, help="renderings (default: rigopt validate's cache)")
-    parser.add_argument("--workers", type=int, default=2)
+    add_measuring_options(parser)
     parser.add_argument("--vehicles", nargs="*", default=None, help="only these vehicles' rigs")
     args = parser.parse_args(argv)
     from rigopt.rig.library import load_rig

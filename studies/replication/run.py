@@ -24,6 +24,7 @@ RIGS = HERE.parent / "predictor" / "rigs"
 RESULTS = HERE / "results"
 sys.path.insert(0, str(HERE.parent))  # studies/: the studies' shared code (studylib)
 from studylib.logs import timestamped_log  # noqa: E402
+from studylib.measuring import add_measuring_options  # noqa: E402
 from studylib.tables import markdown  # noqa: E402
 
 VEHICLES = ("tt", "renault_zoe", "ford_fusion_hybrid", "chrysler_pacifica_hybrid", "citybus")
@@ -90,8 +91,7 @@ def report(found: dict, result: dict) -> str:
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--cache", type=Path, default=None, help="renderings (default: rigopt validate's cache)")
-    parser.add_argument("--workers", type=int, default=2)
+    add_measuring_options(parser)
     parser.add_argument("--analyse-only", action="store_true")
     args = parser.parse_args(argv)
     from rigopt.output import write_text_atomic

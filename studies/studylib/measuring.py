@@ -33,3 +33,9 @@ def measure_to_lines(rigs: Sequence, lines: Path, protocol, cache: Path | None, 
             for entry in entries:
                 handle.write(json.dumps({**extra(entry["rig"]), **without_resamples(entry)}) + "\n")
                 progress(f"{entry['rig']}: drop {entry['drop']:.3f} [{entry['drop_ci'][0]:.3f}, {entry['drop_ci'][1]:.3f}]")
+
+
+def add_measuring_options(parser) -> None:
+    """The options every measuring study script takes: --cache (the renderings) and --workers."""
+    parser.add_argument("--cache", type=Path, default=None, help="renderings (default: rigopt validate's cache)")
+    parser.add_argument("--workers", type=int, default=2)

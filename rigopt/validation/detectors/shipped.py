@@ -15,13 +15,13 @@ Shipped layout (``detectors/<family>-<reference>/``, found by :func:`rigopt.reso
   reference without rendering the reference again.
 
 A rig is measured under a protocol (:mod:`rigopt.validation.detectors.measuring`: ``full``, every frame of the
-test scenes, or ``quick``, every fourth); a pack holds the reference's own scores under each (:func:`pack`, or
+test scenes, ``quick``, every fourth, or ``quick-s1``, quick's frames of new scenes); a pack holds the reference's own scores under each (:func:`pack`, or
 :func:`add_protocol` for an older pack).
 
 Cache: ``<cache>/<rig name>-<geometry key>[-<protocol>]/test/``, a benchmark split as ``rigopt bench generate``
 writes it (no suffix for ``full``); the key hashes the rig as rendered (cameras, lenses, vehicle, frame), so a
 changed rig file never reuses old renderings, and an interrupted rendering resumes. Beside the split,
-``scores/<detector>-<checkpoint digest>.npz`` keeps each model's scores on it, so a rerun scores nothing twice.
+``scores/<detector>-seed<k>-<digest>.npz`` keeps each model's scores on it, so a rerun scores nothing twice.
 """
 
 from __future__ import annotations

@@ -26,7 +26,7 @@ STUDY = HERE.parent
 RESULTS = HERE / "results"
 sys.path.insert(0, str(STUDY.parent))  # studies/: the studies' shared code (studylib)
 from studylib.logs import timestamped_log  # noqa: E402
-from studylib.measuring import measure_to_lines  # noqa: E402
+from studylib.measuring import add_measuring_options, measure_to_lines  # noqa: E402
 from studylib.tables import markdown  # noqa: E402
 
 #: The pre-registered decision rule.
@@ -102,8 +102,7 @@ def write_report(result: dict) -> None:
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--cache", type=Path, default=None, help="renderings (default: rigopt validate's cache)")
-    parser.add_argument("--workers", type=int, default=2)
+    add_measuring_options(parser)
     parser.add_argument("--analyse-only", action="store_true")
     args = parser.parse_args(argv)
     if not args.analyse_only:
