@@ -10,7 +10,7 @@ import typer
 
 from rigopt.cli.app import (FORCE_HELP, MIN_HEIGHT_HELP, NO_TRAILER_HELP, app, finite, more_than, mount_rules, note,
                             note_fallback, print_json, print_next, print_table)
-from rigopt.cli.metric_commands import METRIC_HELP
+from rigopt.cli.metric_commands import METRIC_HELP, PREDICTOR_HELP
 from rigopt.cli.parsing import image_size_text, parse_image_size
 from rigopt.benchmark import BENCHMARK_IMAGE_SIZE
 from rigopt.design.defaults import DEFAULT_FOVS, DEFAULT_MAX_NODES, DEFAULT_PITCHES_DEG, DEFAULT_YAW_STEP_DEG, POSES
@@ -75,8 +75,10 @@ def design_command(
     vehicle: str = typer.Option(..., help="Vehicle to design for: name, alias or CARLA blueprint."),
     ref: str = typer.Option(..., help="Reference rig the detector was trained on: library name or rig file; "
                                       "several, comma-separated, for a fleet (minimise the worst predicted drop)."),
-    weights: str = typer.Option("joint", help="Calibrated weights: BEVDet, BEVFusion, Fast-BEV, PETR, joint, or a file."),
+    weights: Optional[str] = typer.Option(None, help="Calibrated RigCD weights the designer minimises: BEVDet, "
+                                          "BEVFusion, Fast-BEV, PETR, joint (default), or a file."),
     metric: str = typer.Option("rigcd", "--metric", help=METRIC_HELP),
+    predictor: str = typer.Option("auto", "--predictor", help=PREDICTOR_HELP + " It predicts; RigCD designs."),
     cameras: Optional[str] = typer.Option(None, help="Camera count or range (e.g. 6-10); default: the reference's."),
     fov: str = typer.Option(numbers_text(DEFAULT_FOVS), help="Lens catalogue: horizontal FOVs in degrees of "
                                                                 "pinholes at --image-size, or a continuous range "
@@ -184,6 +186,8 @@ def design_command(
     from rigopt.background import INLINE, Background
     from rigopt.coverage.regulations import parse_require
     from rigopt.design.designer import design_rig
+    from rigopt.design.result import predicted_by
+    from rigopt.metrics.drop_model import choose_model
     from rigopt.design.problem import benchmark_rigs
     from rigopt.design.settings import DesignSettings, pinhole_catalogue, read_catalogue
     from rigopt.metrics.calibration import load_weights
@@ -228,10 +232,12 @@ def design_command(
         references = [_reference(name.strip(), ref_vehicle) for name in ref.split(",") if name.strip()]
         if not references:
             raise RigoptError("--ref needs at least one rig")
-        target, calibration = load_vehicle(vehicle), load_weights(weights, metric)
+        target, calibration = load_vehicle(vehicle), load_weights(weights or "joint", metric)
+        drop_model = choose_model(predictor, references[0].rig, weights is not None or metric != "rigcd")
         if require is not None:
             parse_require(require, target)  # a bad --require is an error before any work
-        note_fallback(calibration)
+        if drop_model is None:
+            note_fallback(calibration)
         label = "+".join(r.rig.name for r in references)
         out = check_out_folder(out or Path(f"design-{target.name}-{label}"), force=force)
         status = Console(stderr=True)
@@ -249,7 +255,8 @@ def design_command(
             result = design_rig(target, references, calibration, settings, compare_with=benchmark_rigs(target),
                                 progress=lambda message: spinner.update(message) or status.print(f"  {message}"),
                                 background=background)
-        measured = _measured(result, references, calibration, protocol, status) if measure else None
+        result = predicted_by(result, drop_model)
+        measured = _measured(result, references, calibration, drop_model, protocol, status) if measure else None
         with atomic_folder(out, force=force) as work:
             files, summary = write_design_report(result, work, background, measured)
             files = published(files, work, out)
@@ -270,9 +277,10 @@ def design_command(
                              entry["coverage"], "yes" if entry["meets_coverage_requirements"] else "no",
                              "yes" if entry["extrapolation"] else "-"])
                 flagged += [name] if entry["extrapolation"] else []
-        print_table(f"{label} -> {target.name} ({calibration.metric}, {weights} weights); reference coverage "
+        print_table(f"{label} -> {target.name} (predicted by {summary['predictor']}); reference coverage "
                     f"{summary['reference_coverage']:.3f}", ["rig", "predicted drop", "interval",
-                                                               f"{calibration.metric} ({weights} weights)", "cameras",
+                                                               f"{calibration.metric} ({calibration.name} weights)",
+                                                               "cameras",
                                                                "coverage", "meets coverage", "extrapolates"], rows)
         if uninformative:
             from rigopt.metrics.prediction import UNINFORMATIVE_TEXT
@@ -280,7 +288,8 @@ def design_command(
             print(f"rigopt: note: {', '.join(uninformative)}: {UNINFORMATIVE_TEXT}; the predicted drops are point "
                   "estimates only (report.json keeps the numbers)", file=sys.stderr)
         if flagged:
-            print(f"rigopt: note: {', '.join(flagged)}: beyond the calibration pairs (see report.json 'extrapolation'); "
+            print(f"rigopt: note: {', '.join(flagged)}: beyond the {'fitting rigs' if drop_model else 'calibration pairs'}"
+                  " (see report.json 'extrapolation'); "
                   "their predicted drops are less certain than the intervals say", file=sys.stderr)
         solver = summary["solver"]
         print(f"{summary['symmetry']['describe']}", file=sys.stderr)
@@ -326,7 +335,7 @@ def _check_measurable(reference: str, protocol: str) -> None:
     reference_scores(shipped_detector("lss", reference), chosen)
 
 
-def _measured(result, references, calibration, protocol: str, status) -> dict:
+def _measured(result, references, calibration, drop_model, protocol: str, status) -> dict:
     """--measure: the design and its copies measured with the shipped detectors of the first reference."""
     import os
 
@@ -338,7 +347,7 @@ def _measured(result, references, calibration, protocol: str, status) -> dict:
         note(f"--measure measures against the first reference, {references[0].rig.name}, alone")
     with status.status("measuring the design and its copies with the shipped detectors") as spinner:
         return measure_design(result.design.rig, references[0].rig, calibration, chosen,
-                              workers=os.cpu_count() or 1, progress=spinner.update)
+                              workers=os.cpu_count() or 1, progress=spinner.update, drop_model=drop_model)
 
 
 def _print_measured(measured: dict) -> None:

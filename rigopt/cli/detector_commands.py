@@ -13,7 +13,7 @@ import typer
 
 from rigopt.cli.app import app, console, note, note_fallback, print_json, print_table, status_console
 from rigopt.cli.bench_commands import bench_app
-from rigopt.cli.metric_commands import METRIC_HELP
+from rigopt.cli.metric_commands import METRIC_HELP, PREDICTOR_HELP
 from rigopt.errors import RigoptError
 from rigopt.validation.detectors.measuring import DEFAULT_PROTOCOL, protocol_named
 
@@ -203,8 +203,10 @@ def validate_command(
                                         "trained run (rigopt bench generate, bench train). Without it, the models "
                                         "rigopt ships score the rig on the reference's test scenes, rendered into "
                                         "--cache."),
-    weights: str = typer.Option("joint", "--weights", help="Calibrated weights for the predicted drops."),
+    weights: Optional[str] = typer.Option(None, "--weights", help="Calibrated RigCD weights for the predicted drops "
+                                          "(default joint)."),
     metric: str = typer.Option("rigcd", "--metric", help=METRIC_HELP),
+    predictor: str = typer.Option("auto", "--predictor", help=PREDICTOR_HELP),
     device: str = typer.Option("cpu", "--device", help=DEVICE_HELP),
     runs: Optional[Path] = typer.Option(None, "--runs", help=RUNS_HELP + " Needs --data."),
     cache: Optional[Path] = typer.Option(None, "--cache", help="Without --data: where the renderings are kept "
@@ -230,10 +232,11 @@ def validate_command(
     from rigopt.validation.detectors.models import resolve_device
     from rigopt.validation.designs import contradictions, load_design, validate_design
     from rigopt.metrics.calibration import load_weights
+    from rigopt.metrics.drop_model import choose_model
     from rigopt.report.json_values import json_ready
 
     from rigopt.output import check_out_file, existing_file, write_text_atomic
-    from rigopt.rig.library import rig_names
+    from rigopt.rig.library import load_rig, rig_names
 
     if out is not None:
         check_out_file(out, suffixes=(".json",))
@@ -255,17 +258,19 @@ def validate_command(
     if data is not None:
         check_data(data)
     check_runs(runs, must_exist=True)
-    family, calibration = model_config(model).family, load_weights(weights, metric)
+    family, calibration = model_config(model).family, load_weights(weights or "joint", metric)
+    drop_model = choose_model(predictor, load_rig(ref).perception(), weights is not None or metric != "rigcd")
     rigs = [load_design(design) for design in designs]
-    note_fallback(calibration)
+    if drop_model is None:
+        note_fallback(calibration)
     resolve_device(device)
     if data is None:
-        _validate_shipped(rigs, ref, family, calibration, weights, device, cache, workers, chosen, compare, out,
+        _validate_shipped(rigs, ref, family, calibration, drop_model, device, cache, workers, chosen, compare, out,
                           as_json)
         return
     rig = rigs[0]
     with status_console.status("validating") as status:
-        result = validate_design(rig, ref, family, data, calibration, runs, device, status.update)
+        result = validate_design(rig, ref, family, data, calibration, runs, device, status.update, drop_model=drop_model)
     result["contradictions"] = contradictions(result["rigs"], result["design_minus"], name=lambda row: row["rig"])
     if "near_field" in result:  # the note of the shipped path: what the detector was fed, what was kept
         note(result["near_field"]["note"])
@@ -280,10 +285,10 @@ def validate_command(
              "yes" if e["extrapolation"] else "-", e["rigcd"]] for e in result["rigs"]]
     print_table(f"{family} trained on {result['reference']} (own mAP {_number(result['reference_mAP'])}, "
                 f"visible-only {_number(result['reference_mAP_visible'])}), {result['test_scenes']} test scenes; "
-                f"predicted with {calibration.metric}, {weights} weights",
+                f"predicted by {result['predicted_by']}",
                 ["role", "rig", "cameras", "mAP", "measured drop", "95 % interval", "visible mAP", "visible drop",
                  "predicted drop", "90 % prediction interval", "extrapolates", "RigCD"], rows)
-    _note_uninformative(result["rigs"], calibration)
+    _note_uninformative(result["rigs"], result["predicted_by"])
     _note_contradictions(result["contradictions"])
     rows = [[f"design - {e['rig']}", e["role"], _number(e["difference"]), _interval(e["ci"])]
             for e in result["design_minus"]]
@@ -292,7 +297,7 @@ def validate_command(
                 f"scenes", ["difference", "other rig's role", "value", "95 % interval"], rows)
 
 
-def _validate_shipped(measured_rigs: list, ref: str, family: str, calibration, weights: str, device: str, cache,
+def _validate_shipped(measured_rigs: list, ref: str, family: str, calibration, drop_model, device: str, cache,
                       workers: int, protocol, compare: bool, out, as_json: bool) -> None:
     """validate without --data: the shipped models, the reference's test scenes rendered into the cache."""
     import json
@@ -330,7 +335,7 @@ def _validate_shipped(measured_rigs: list, ref: str, family: str, calibration, w
     workers = workers or os.cpu_count() or 1
     with status_console.status("validating") as status:
         measured = measure([r for _, r in rigs], detector, cache, device, workers, status.update, protocol)
-    predictions = predict_transfer(reference, [r for _, r in rigs], calibration)
+    predictions = predict_transfer(reference, [r for _, r in rigs], calibration, drop_model)
     card = detector.card
     result = {"reference": reference.name, "model": family, "models": "shipped", "detector": detector.folder.name,
               "seeds": detector.seeds, "epochs": card["recipe"]["epochs"],
@@ -341,6 +346,7 @@ def _validate_shipped(measured_rigs: list, ref: str, family: str, calibration, w
                                         for s in detector.seeds},
               "test_scenes": card["test_data"]["scenes"], "image_size": card["test_data"]["image_size"],
               "cache": str(cache or default_cache()), "metric": calibration.metric, "weights": calibration.name,
+              "predicted_by": predictions[0].predictor,
               "interval_note": "95 % intervals over resampled test scenes: the noise of the test, not uncertainty "
                                "over rigs or trainings",
               "rigs": [{"role": role, **without_resamples(entry), "predicted_drop": prediction.predicted_drop,
@@ -365,11 +371,10 @@ def _validate_shipped(measured_rigs: list, ref: str, family: str, calibration, w
              _predicted_interval(e), "yes" if e["extrapolation"] else "-"] for e in result["rigs"]]
     own = " / ".join(_number(v) for v in result["reference_mAP"].values())
     print_table(f"{family} trained on {reference.name}, shipped ({len(detector.seeds)} seeds, {result['epochs']} "
-                f"epochs; own mAP {own}), {protocol.describe(card['test_data'])}; predicted with {calibration.metric}, "
-                f"{weights} weights",
+                f"epochs; own mAP {own}), {protocol.describe(card['test_data'])}; predicted by {result['predicted_by']}",
                 ["role", "rig", "cameras", "drop per seed", "mean drop", "95 % interval (test scenes)",
                  "visible-only drop", "predicted drop", "90 % prediction interval", "extrapolates"], rows)
-    _note_uninformative(result["rigs"], calibration)
+    _note_uninformative(result["rigs"], result["predicted_by"])
     _note_contradictions(result["contradictions"])
     if result.get("paired"):
         print_table(f"{rigs[0][1].name} minus each: below 0 it loses less (* the paired 95 % interval excludes 0)",
@@ -388,12 +393,13 @@ def _predicted_interval(entry: dict) -> str:
     return _interval(entry["predicted_interval"])
 
 
-def _note_uninformative(entries: list, calibration) -> None:
+def _note_uninformative(entries: list, predicted_by: str) -> None:
     from rigopt.metrics.prediction import UNINFORMATIVE_TEXT
 
-    if any(e.get("interval_informative") is False for e in entries):
-        note(f"predicted drops: {UNINFORMATIVE_TEXT} with the {calibration.name} calibration's "
-             f"{calibration.interval.level:.0%} interval (+-{calibration.interval.halfwidth:.2f}); --json keeps the numbers")
+    wide = [e for e in entries if e.get("interval_informative") is False]
+    if wide:
+        note(f"predicted drops of {', '.join(e['rig'] for e in wide)}: {UNINFORMATIVE_TEXT} with the 90 % interval "
+             f"of {predicted_by}; --json keeps the numbers")
 
 
 def _note_contradictions(lines: list) -> None:

@@ -14,6 +14,9 @@ WEIGHTS_HELP = "Calibrated weights: a shipped name (BEVDet, BEVFusion, Fast-BEV,
 METRIC_HELP = ("Rig distance: rigcd (the published RigCD, default) or rigcd+ (RigCD+: matching under the calibrated "
                "weights; see docs/metrics.md for the evidence).")
 JSON_HELP = "Print JSON instead of a table."
+PREDICTOR_HELP = ("What predicts the drop: auto (default: the shipped model of the measured drop where the reference is "
+                  "its detector's training rig and its study found it better than RigCD, else RigCD under --weights), "
+                  "rigcd, or a drop model's name (lss-R1). See docs/metrics.md.")
 #: The calibration predictions use when none is named.
 DEFAULT_WEIGHTS = "joint"
 
@@ -47,6 +50,7 @@ def rigcd_command(
                                                   "it they have unit weights and the predicted drop a -> b uses the "
                                                   "joint calibration."),
     metric: str = typer.Option("rigcd", "--metric", help=METRIC_HELP + " Needs --weights for rigcd+."),
+    predictor: str = typer.Option("auto", "--predictor", help=PREDICTOR_HELP),
     vehicle: Optional[str] = typer.Option(None, "--vehicle", help=PLACE_HELP),
     as_json: bool = typer.Option(False, "--json", help=JSON_HELP),
 ):
@@ -55,6 +59,7 @@ def rigcd_command(
     Rigs measured from different origins (the benchmark's vehicle centre, a dataset's rear axle) are
     converted to their vehicles' centres first, and the conversion is reported."""
     from rigopt.metrics.calibration import check_metric, load_weights
+    from rigopt.metrics.drop_model import choose_model
     from rigopt.metrics.ranking import predict_transfer
 
     metric = check_metric(metric)
@@ -62,7 +67,8 @@ def rigcd_command(
         raise RigoptError("--metric rigcd+ matches cameras under calibrated weights: add --weights (e.g. joint)")
     calibration = load_weights(weights or DEFAULT_WEIGHTS, metric)
     (rig_a, rig_b), changes, left_out = _comparable([a, b], vehicle)
-    p = predict_transfer(rig_a, [rig_b], calibration)[0]
+    model = choose_model(predictor, rig_a, weights is not None or metric != "rigcd")
+    p = predict_transfer(rig_a, [rig_b], calibration, model)[0]
     if weights is None and calibration.lifting is None:  # RigCD's unit-weight distance, the default drop
         unit = predict_transfer(rig_a, [rig_b], None)[0]
         p = replace(p, rigcd=unit.rigcd, match=unit.match)
@@ -75,19 +81,20 @@ def rigcd_command(
         return
     distance = "unit weights" if weights is None and calibration.lifting is None else f"{calibration.name} weights"
     columns = [f"{metric} ({distance})", f"match ({distance})", "count", "t (m)", "r (rad)", "f (deg)",
-               f"predicted drop ({calibration.name})", "interval"]
+               f"predicted drop ({p.predictor})", "interval"]
     drop = "-" if p.predicted_drop is None else p.predicted_drop
     print_table(f"{'RigCD' if calibration.lifting is None else metric} {p.reference} -> {p.rig}", columns,
                 [[p.rigcd, p.match, p.count, p.t, p.r, p.f, drop, _interval(p)]])
-    _warn_prediction([p], calibration)
+    _warn_prediction([p], calibration, model)
 
 
 @app.command("rank")
 def rank_command(
     candidates: List[str] = typer.Argument(..., help="Candidate rigs: library names or rig files."),
     ref: str = typer.Option(..., "--ref", help="Reference rig the detector was trained on."),
-    weights: str = typer.Option(DEFAULT_WEIGHTS, help=WEIGHTS_HELP),
+    weights: Optional[str] = typer.Option(None, help=WEIGHTS_HELP + f" Default: {DEFAULT_WEIGHTS}."),
     metric: str = typer.Option("rigcd", "--metric", help=METRIC_HELP),
+    predictor: str = typer.Option("auto", "--predictor", help=PREDICTOR_HELP),
     vehicle: Optional[str] = typer.Option(None, "--vehicle", help=PLACE_HELP),
     as_json: bool = typer.Option(False, "--json", help=JSON_HELP),
 ):
@@ -95,21 +102,24 @@ def rank_command(
 
     Rigs measured from different origins are converted to their vehicles' centres first (reported)."""
     from rigopt.metrics.calibration import load_weights
-    from rigopt.metrics.ranking import rank_candidates
+    from rigopt.metrics.drop_model import choose_model
+    from rigopt.metrics.ranking import rank_candidates, rigcd_predictor
 
-    calibration = load_weights(weights, metric)
+    calibration = load_weights(weights or DEFAULT_WEIGHTS, metric)
     (reference, *others), changes, left_out = _comparable([ref, *candidates], vehicle)
-    ranked = rank_candidates(reference, others, calibration)
+    model = choose_model(predictor, reference, weights is not None or metric != "rigcd")
+    ranked = rank_candidates(reference, others, calibration, model)
     _note_changes((reference, *others), changes)
     if as_json:
         print_json([{**p.to_dict(), "near_field_left_out": left_out.get(p.rig, 0)} for p in ranked])
         return
-    print_table(f"Candidates ranked by predicted drop from {ref} ({calibration.metric}, {weights} weights)",
-                ["rank", "rig", "predicted drop", "interval", f"{calibration.metric} ({weights} weights)", "t (m)",
+    by = rigcd_predictor(calibration) if model is None else ranked[0].predictor
+    print_table(f"Candidates ranked by predicted drop from {ref} ({by})",
+                ["rank", "rig", "predicted drop", "interval", f"{calibration.metric} ({calibration.name} weights)", "t (m)",
                  "r (rad)", "f (deg)", "count", "extrapolates"],
                 [[k + 1, p.rig, p.predicted_drop, _interval(p), p.rigcd, p.t, p.r, p.f, p.count,
                   "yes" if p.extrapolation else "-"] for k, p in enumerate(ranked)])
-    _warn_prediction(ranked, calibration)
+    _warn_prediction(ranked, calibration, model)
 
 
 def _comparable(names: List[str], vehicle: Optional[str]):
@@ -153,11 +163,19 @@ def _interval(p) -> str:
     return "uninformative" if not p.interval_informative else f"[{p.interval[0]:.2f}, {p.interval[1]:.2f}]"
 
 
-def _warn_prediction(predictions, calibration) -> None:
-    """Notes under a table: uninformative intervals, pairs outside the calibration data, a fallback
-    calibration."""
+def _warn_prediction(predictions, calibration, model=None) -> None:
+    """Notes under a table: uninformative intervals, pairs outside the calibration data (or a drop ``model``'s
+    fitting rigs), a fallback calibration."""
     from rigopt.metrics.prediction import UNINFORMATIVE_TEXT
 
+    if model is not None:
+        note(f"predicted by the {model.name} drop model, a model of the shipped {model.detector} detectors' measured "
+             f"drop ({model.study}); RigCD under --weights is in its columns and with --predictor rigcd")
+        for p in predictions:
+            if p.extrapolation is not None:
+                note(f"{p.reference} -> {p.rig} lies beyond the model's fitting rigs: {p.extrapolation.describe()}; "
+                     "its predicted drop is less certain than the interval says")
+        return
     wide = [p for p in predictions if p.interval is not None and not p.interval_informative]
     if wide:
         pairs = "every pair" if len(wide) == len(predictions) > 1 else ", ".join(f"{p.reference} -> {p.rig}"

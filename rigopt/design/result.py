@@ -3,14 +3,15 @@ one ``DesignResult`` from which the report writers and the command line take eve
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from rigopt.mounting.rules import RigCheck
 from rigopt.design.problem import ReferenceRig
 from rigopt.design.selection import Selection
 from rigopt.design.settings import DesignSettings
 from rigopt.metrics.calibration import Calibration
-from rigopt.metrics.ranking import TransferPrediction
+from rigopt.metrics.drop_model import DropModel
+from rigopt.metrics.ranking import TransferPrediction, predict_transfer
 from rigopt.rig.model import Rig
 from rigopt.vehicle.model import Vehicle
 
@@ -124,5 +125,30 @@ class DesignResult:
     near_field_mirrored: bool = False
     height_moves: tuple = ()
     """The height search's moves (:class:`rigopt.design.heights.HeightMove`), in camera order."""
+    drop_model: DropModel | None = None
+    """The drop model whose predictions the summaries carry (:func:`predicted_by`), None for RigCD's."""
     """Whether the near-field cameras were placed in mirrored pairs (with the perception cameras or, under
     ``perception_symmetric=False``, without them)."""
+
+
+def predicted_by(result: DesignResult, model: DropModel | None) -> DesignResult:
+    """``result`` with every rig's predicted drop (design, refinement, comparisons) that of the drop ``model`` from
+    each reference it was fitted from, RigCD's under the result's calibration from the others; the design
+    itself, chosen on RigCD's distance, does not change. ``model`` None: ``result`` as it is."""
+    if model is None:
+        return result
+    references = [r.rig for r in result.references]
+    models = [model if model.applies_to(rig) else None for rig in references]
+
+    def again(summary: RigSummary | None) -> RigSummary | None:
+        if summary is None:
+            return None
+        return replace(summary, predictions=tuple(
+            predict_transfer(reference, [summary.rig.perception()], result.calibration, m)[0] if m else kept
+            for reference, m, kept in zip(references, models, summary.predictions)))
+
+    comparisons = replace(result.comparisons, naive_transfer=again(result.comparisons.naive_transfer),
+                          rigs=tuple(map(again, result.comparisons.rigs)))
+    refinement = replace(result.refinement, refined=again(result.refinement.refined))
+    return replace(result, design=again(result.design), comparisons=comparisons, refinement=refinement,
+                   drop_model=model)

@@ -199,3 +199,147 @@ def interval_halfwidths(predicted: np.ndarray, measured: np.ndarray, level: floa
         if 0 < rank <= len(residuals):
             widths[b] = residuals[rank - 1]
     return widths
+
+
+#: Units of the terms, for the notes that flag a prediction beyond the fitting rigs.
+FEATURE_UNITS = {"depth_prior": "ln m", "raise": "m", "lower": "m", "tilt_down": "rad", "tilt_up": "rad",
+                 "roll": "rad", "yaw": "rad", "plan": "m", "zoom": "-", "centre": "-", "count": "-", "uncovered": "-"}
+#: How far a reference's cameras may lie from the model's reference and still count as it (m, rad, deg).
+SAME_REFERENCE = {"position": 1e-3, "angle": 1e-4, "hfov": 1e-3}
+#: The folder of the shipped models, under the metrics data folder.
+MODELS_FOLDER = "drop_models"
+
+
+@dataclass(frozen=True, eq=False)
+class DropModel:
+    """A fitted model of one detector's measured drop from one reference rig (shipped under ``metrics/drop_models``).
+
+    name : what the outputs call it (e.g. "lss-R1"); detector : the shipped detector folder whose drops it was
+    fitted on; reference : the reference rig's name; reference_cameras : (N, 6) float of the reference's
+    perception cameras, vehicle frame from the centre on the ground: x, y, z (m), yaw, pitch, roll (rad), and
+    hfov (deg) in a 7th column, i.e. (N, 7); weights : (len(FEATURES),) float >= 0; halfwidths :
+    (len(INTERVAL_BINS) + 1,) float, the 90 % interval's half-width per predicted-drop bin; ranges :
+    (len(FEATURES), 2) float, each term's range over the fitting rigs; default : whether its study found it
+    better than RigCD, so that commands print it by default; study : where its evidence is (one line).
+    """
+
+    name: str
+    detector: str
+    reference: str
+    reference_cameras: np.ndarray
+    weights: np.ndarray
+    halfwidths: np.ndarray
+    ranges: np.ndarray
+    default: bool
+    study: str
+    level: float = INTERVAL_LEVEL
+
+    @classmethod
+    def from_dict(cls, data: dict) -> DropModel:
+        if list(data["features"]) != list(FEATURES) or list(data["interval"]["bins"]) != list(INTERVAL_BINS):
+            raise ValueError("the model's terms or interval bins are not this rigopt's")
+        return cls(data["name"], data["detector"], data["reference"], np.array(data["reference_cameras"], float),
+                   np.array(data["weights"], float), np.array(data["interval"]["halfwidths"], float),
+                   np.array(data["ranges"], float), bool(data["default"]), data["study"],
+                   float(data["interval"]["level"]))
+
+    def to_dict(self) -> dict:
+        return {"name": self.name, "detector": self.detector, "reference": self.reference,
+                "reference_cameras": self.reference_cameras.tolist(), "features": list(FEATURES),
+                "weights": self.weights.tolist(), "ranges": self.ranges.tolist(), "default": self.default,
+                "study": self.study, "interval": {"level": self.level, "bins": list(INTERVAL_BINS),
+                                                  "halfwidths": self.halfwidths.tolist()}}
+
+    def applies_to(self, reference: Rig) -> bool:
+        """Whether ``reference`` (its perception cameras, from its vehicle's centre on the ground) is the model's
+        reference: the same cameras in the same order within SAME_REFERENCE."""
+        return _same_cameras(camera_table(reference), self.reference_cameras)
+
+    def terms(self, reference: Rig, candidates: Sequence[Rig]) -> np.ndarray:
+        """(P, len(FEATURES)) float: each candidate's terms under the model's matching."""
+        a = CameraGeometry.of(reference)
+        pair_weights = self.weights[:len(PAIR_FEATURES)] + 1e-9
+        return np.array([features(pair_features(a, b), rig_features(a, b), pair_weights)
+                         for b in map(CameraGeometry.of, candidates)]).reshape(len(candidates), len(FEATURES))
+
+    def predict(self, reference: Rig, candidates: Sequence[Rig]) -> tuple[np.ndarray, np.ndarray, list[dict]]:
+        """Predicted drops (P,), interval half-widths (P,) and, per candidate, {term: (value, low, high)} of the
+        terms beyond the fitting rigs' range (empty inside). Rigs from their vehicle's centre on the ground."""
+        x = self.terms(reference, candidates)
+        drops = link(x @ self.weights)
+        weighted = self.weights > 0  # a term the model gives no weight cannot carry it beyond its data
+        beyond = [{name: (float(v), float(lo), float(hi))
+                   for name, v, (lo, hi), used in zip(FEATURES, row, self.ranges, weighted) if used and v > hi + 1e-9}
+                  for row in x]
+        return drops, self.halfwidths[interval_bin(drops)], beyond
+
+
+def camera_table(rig: Rig) -> np.ndarray:
+    """(N, 7) float: x, y, z (m), yaw, pitch, roll (rad), hfov (deg) of each camera, in the rig's frame."""
+    yaw, pitch, roll = yaw_pitch_roll_from_rotation(rig.rotations)
+    hfov = np.asarray(CameraModel.of_cameras(rig.cameras).hfov, dtype=float)
+    return np.column_stack([rig.positions, yaw, pitch, roll, hfov])
+
+
+def _same_cameras(a: np.ndarray, b: np.ndarray) -> bool:
+    if a.shape != b.shape:
+        return False
+    turn = np.abs(np.angle(np.exp(1j * (a[:, 3:6] - b[:, 3:6]))))
+    return bool(np.all(np.abs(a[:, :3] - b[:, :3]) <= SAME_REFERENCE["position"])
+                and np.all(turn <= SAME_REFERENCE["angle"])
+                and np.all(np.abs(a[:, 6] - b[:, 6]) <= SAME_REFERENCE["hfov"]))
+
+
+def shipped_drop_models() -> list[str]:
+    """Names of the shipped drop models."""
+    from rigopt.resources import data_dir
+
+    folder = data_dir("metrics") / MODELS_FOLDER
+    return sorted(p.stem for p in folder.glob("*.json")) if folder.is_dir() else []
+
+
+def load_drop_model(name: str) -> DropModel:
+    """The shipped drop model ``name`` (case-insensitive)."""
+    import json
+
+    from rigopt.errors import unknown_name
+    from rigopt.resources import data_dir
+
+    by_lower = {n.lower(): n for n in shipped_drop_models()}
+    if name.lower() not in by_lower:
+        raise unknown_name("drop model", name, sorted(by_lower.values()))
+    path = data_dir("metrics") / MODELS_FOLDER / f"{by_lower[name.lower()]}.json"
+    return DropModel.from_dict(json.loads(path.read_text()))
+
+
+#: ``--predictor`` values besides a model's name: the default model where it applies (RigCD elsewhere), RigCD.
+AUTO, RIGCD = "auto", "rigcd"
+
+
+def choose_model(option: str, reference: Rig, weights_given: bool = False) -> DropModel | None:
+    """The drop model that predicts transfers from ``reference`` (perception cameras, from its vehicle's centre on
+    the ground) under ``--predictor option``; None means RigCD's calibrated prediction.
+
+    ``auto``: the shipped model marked default whose reference ``reference`` is, unless RigCD weights were named
+    (``weights_given``: the user asked for RigCD under them); ``rigcd``: None; a model's name: that model, refused
+    for a reference it was not fitted from."""
+    from rigopt.errors import RigoptError
+
+    key = option.lower()
+    if key == RIGCD:
+        return None
+    if key == AUTO:
+        if weights_given:
+            return None
+        models = (load_drop_model(name) for name in shipped_drop_models())
+        return next((m for m in models if m.default and m.applies_to(reference)), None)
+    model = load_drop_model(option) if key in {n.lower() for n in shipped_drop_models()} else None
+    if model is None:
+        from rigopt.errors import unknown_name
+
+        raise unknown_name("predictor", option, [AUTO, RIGCD, *shipped_drop_models()])
+    if not model.applies_to(reference):
+        raise RigoptError(f"the {model.name} drop model predicts transfers from {model.reference} (its detector's "
+                          f"training rig), and {reference.name} is another rig: pass --ref {model.reference} or "
+                          f"--predictor {RIGCD}")
+    return model

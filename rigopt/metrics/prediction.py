@@ -27,10 +27,13 @@ from typing import Callable, Sequence
 import numpy as np
 
 from rigopt.errors import DataError
+from rigopt.metrics.drop_model import FEATURE_UNITS
 
 #: Features of a pair, in order, with their units.
 TERMS = ("t", "r", "f", "count")
 TERM_UNITS = {"t": "m", "r": "rad", "f": "deg", "count": "-"}
+#: Units of every term a prediction can be flagged on: the calibration's and a drop model's.
+UNITS = {**TERM_UNITS, **FEATURE_UNITS}
 
 #: Link shapes: ``exp`` 1 - exp(-a s); ``hill`` s^b / (c^b + s^b) (a log-logistic in s).
 LINKS = ("exp", "hill")
@@ -188,7 +191,7 @@ class Extrapolation:
         return bool(self.terms) or self.hull_distance > HULL_TOLERANCE
 
     def to_dict(self) -> dict:
-        return {"terms": [{"term": t, "value": v, "low": lo, "high": hi, "unit": TERM_UNITS[t],
+        return {"terms": [{"term": t, "value": v, "low": lo, "high": hi, "unit": UNITS[t],
                            "beyond": v - hi if v > hi else v - lo} for t, (v, lo, hi) in self.terms.items()],
                 "hull_distance": self.hull_distance}
 

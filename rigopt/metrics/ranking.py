@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Sequence
 
 import numpy as np
 
 from rigopt.metrics.calibration import Calibration
+from rigopt.metrics.drop_model import DropModel
 from rigopt.metrics.lifting import lifting_terms
 from rigopt.metrics.prediction import Extrapolation, interval_informative
 from rigopt.metrics.rigcd import DEFAULT_ALPHA, DEFAULT_LAMBDAS, rigcd_matrix, tie_broken_lambdas
@@ -25,7 +26,9 @@ class TransferPrediction:
     without a calibration; ``linear_drop``: the benchmark's linear prediction K x calibrated RigCD
     (unbounded); ``interval``: (low, high) prediction interval of the drop, None without one;
     ``extrapolation``: how the pair lies outside the calibration pairs (None when inside or unknown);
-    ``fallback``: the calibration kept no geometric term (Fast-BEV), its predictions ignore geometry's weights.
+    ``fallback``: the calibration kept no geometric term (Fast-BEV), its predictions ignore geometry's weights;
+    ``predictor``: what gave ``predicted_drop`` and its interval ("RigCD (joint)", or a measured-drop model's
+    "lss-R1 drop model", :mod:`rigopt.metrics.drop_model`), None without a calibration.
     """
 
     reference: str
@@ -42,6 +45,7 @@ class TransferPrediction:
     extrapolation: Extrapolation | None = None
     fallback: bool = False
     interval_halfwidth: float | None = None
+    predictor: str | None = None
 
     @property
     def interval_informative(self) -> bool | None:
@@ -53,8 +57,9 @@ class TransferPrediction:
 
     def to_dict(self) -> dict:
         """JSON form: rig, reference, predicted_drop, interval, interval_informative, linear_drop, rigcd, match, t,
-        r, f, count, extrapolation (null or {terms: [...], hull_distance}), fallback."""
+        r, f, count, extrapolation (null or {terms: [...], hull_distance}), fallback, predictor."""
         return {"reference": self.reference, "rig": self.rig, "predicted_drop": self.predicted_drop,
+                "predictor": self.predictor,
                 "interval": list(self.interval) if self.interval is not None else None,
                 "interval_informative": self.interval_informative,
                 "linear_drop": self.linear_drop, "rigcd": self.rigcd, "match": self.match, "t": self.t, "r": self.r,
@@ -63,10 +68,18 @@ class TransferPrediction:
                 "fallback": self.fallback}
 
 
-def predict_transfer(reference: Rig, candidates: Sequence[Rig],
-                     calibration: Calibration | None = None) -> list[TransferPrediction]:
+def predict_transfer(reference: Rig, candidates: Sequence[Rig], calibration: Calibration | None = None,
+                     model: DropModel | None = None) -> list[TransferPrediction]:
     """One prediction per candidate, in the candidates' order. A lifting metric's pairs (its per-pair terms need
-    heights above the ground) must be measured from their vehicle's centre on the ground, as RigCD's."""
+    heights above the ground) must be measured from their vehicle's centre on the ground, as RigCD's and a drop
+    model's. With a ``model`` the predicted drop, its interval and extrapolation flags are the model's; the RigCD
+    fields stay the calibration's."""
+    predictions = _rigcd_predictions(reference, candidates, calibration)
+    return predictions if model is None else _model_predictions(reference, candidates, predictions, model)
+
+
+def _rigcd_predictions(reference: Rig, candidates: Sequence[Rig],
+                       calibration: Calibration | None) -> list[TransferPrediction]:
     if calibration is not None and calibration.lifting is not None:
         return _lifting_predictions(reference, candidates, calibration)
     match_lambdas = calibration.match_lambdas if calibration is not None else DEFAULT_LAMBDAS
@@ -89,9 +102,33 @@ def predict_transfer(reference: Rig, candidates: Sequence[Rig],
         TransferPrediction(reference.name, rig.name, float(weighted.rigcd[0, k]), float(weighted.match[0, k]),
                            float(x[k, 3]), float(x[k, 0]), float(x[k, 1]), float(x[k, 2]), drops[k], linear[k],
                            intervals[k], flags[k], fallback,
-                           calibration.interval.halfwidth if intervals[k] is not None else None)
+                           calibration.interval.halfwidth if intervals[k] is not None else None,
+                           rigcd_predictor(calibration))
         for k, rig in enumerate(candidates)
     ]
+
+
+def rigcd_predictor(calibration: Calibration | None) -> str | None:
+    """The name a RigCD prediction goes by: "RigCD (joint)", "RigCD+ (BEVDet)"; None without a calibration."""
+    if calibration is None:
+        return None
+    metric = {"rigcd": "RigCD", "rigcd+": "RigCD+"}.get(calibration.metric, calibration.metric)
+    return f"{metric} ({calibration.name})"
+
+
+def model_predictor(model: DropModel) -> str:
+    """The name a drop model's prediction goes by: "lss-R1 drop model"."""
+    return f"{model.name} drop model"
+
+
+def _model_predictions(reference: Rig, candidates: Sequence[Rig], predictions: list[TransferPrediction],
+                       model: DropModel) -> list[TransferPrediction]:
+    """``predictions`` with the drop, interval (clipped to [0, 1]) and extrapolation flags of ``model``."""
+    drops, halfwidths, beyond = model.predict(reference, candidates)
+    return [replace(p, predicted_drop=float(d), linear_drop=None, fallback=False, interval_halfwidth=float(h),
+                    interval=(float(max(d - h, 0.0)), float(min(d + h, 1.0))) if np.isfinite(h) else None,
+                    extrapolation=Extrapolation(flags, 0.0) if flags else None, predictor=model_predictor(model))
+            for p, d, h, flags in zip(predictions, drops, halfwidths, beyond)]
 
 
 def _lifting_predictions(reference: Rig, candidates: Sequence[Rig], calibration: Calibration) -> list[TransferPrediction]:
@@ -106,13 +143,15 @@ def _lifting_predictions(reference: Rig, candidates: Sequence[Rig], calibration:
     drops = calibration.bounded_drop(t, r, f, count, terms[:, 4:])
     return [
         TransferPrediction(reference.name, rig.name, float(distance[k]), float(match[k]), float(count[k]),
-                           float(t[k]), float(r[k]), float(f[k]), float(drops[k]), float(linear[k]))
+                           float(t[k]), float(r[k]), float(f[k]), float(drops[k]), float(linear[k]),
+                           predictor=rigcd_predictor(calibration))
         for k, rig in enumerate(candidates)
     ]
 
 
-def rank_candidates(reference: Rig, candidates: Sequence[Rig], calibration: Calibration) -> list[TransferPrediction]:
-    """Candidates sorted by predicted drop, smallest first (ties keep the given order)."""
-    predictions = predict_transfer(reference, candidates, calibration)
+def rank_candidates(reference: Rig, candidates: Sequence[Rig], calibration: Calibration,
+                    model: DropModel | None = None) -> list[TransferPrediction]:
+    """Candidates sorted by predicted drop (``predict_transfer``'s), smallest first (ties keep the given order)."""
+    predictions = predict_transfer(reference, candidates, calibration, model)
     order = np.argsort([p.predicted_drop for p in predictions], kind="stable")
     return [predictions[k] for k in order]

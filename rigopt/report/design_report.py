@@ -24,7 +24,7 @@ def prediction_extras(p) -> dict:
     false when it spans the range a drop can take), the linear prediction, the extrapolation flags (null
     when the pair lies within the calibration pairs) and whether the calibration is a fallback."""
     return {key: value for key, value in p.to_dict().items()
-            if key in ("interval", "interval_informative", "linear_drop", "extrapolation", "fallback")}
+            if key in ("interval", "interval_informative", "linear_drop", "extrapolation", "fallback", "predictor")}
 
 
 def summary_dict(summary: RigSummary, vehicle=None) -> dict:
@@ -156,6 +156,7 @@ def design_dict(result: DesignResult, rig_file: Path | None) -> dict:
         "reference": ",".join(r.rig.name for r in result.references),
         "metric": result.calibration.metric,
         "weights": result.calibration.name,
+        "predictor_evidence": result.drop_model.study if result.drop_model is not None else None,
         "predicted_drop": design.prediction.predicted_drop,
         **prediction_extras(design.prediction),
         "rigcd": design.prediction.rigcd,
@@ -217,7 +218,11 @@ def comparison_notes(summary: dict) -> list[str]:
     """Lines a reader of the comparison table needs: what RigCD's predictions are worth on designs, and why the
     design is predicted to lose more than the naive transfer when it is (``summary`` is :func:`design_dict`
     without its notes)."""
-    notes = [RIGCD_ON_DESIGNS] if summary["metric"].startswith("rigcd") else []
+    if summary["predictor_evidence"] is not None:
+        notes = [f"The predicted drops are the {summary['predictor']}'s, a model of the shipped detectors' measured "
+                 f"drop ({summary['predictor_evidence']}); RigCD is in its column"]
+    else:
+        notes = [RIGCD_ON_DESIGNS] if summary["metric"].startswith("rigcd") else []
     naive = summary["comparisons"]["naive_transfer"]
     if naive is None or naive["predicted_drop"] >= summary["predicted_drop"]:
         return notes

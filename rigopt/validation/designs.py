@@ -128,7 +128,7 @@ def comparison_rigs(design: Rig, reference: Rig, calibration: Calibration | None
 
 def validate_design(design: Rig, reference: str, family: str, data, calibration: Calibration, runs=None,
                     device: str = "cpu", progress: Callable[[str], None] = lambda message: None,
-                    resamples: int = DEFAULT_BOOTSTRAP, seed: int = DEFAULT_SEED) -> dict:
+                    resamples: int = DEFAULT_BOOTSTRAP, seed: int = DEFAULT_SEED, drop_model=None) -> dict:
     """Measured and predicted drops of the reference-trained ``family`` detector on the design and its
     comparison rigs. Renders missing test splits into ``data``; returns a JSON-ready dict.
 
@@ -140,6 +140,8 @@ def validate_design(design: Rig, reference: str, family: str, data, calibration:
     A design with near_field cameras is measured as :func:`fed_rigs` says: the detector is fed its perception
     cameras (the row that stands for the design, in ``design_minus`` too), the whole design is kept for the
     record where the family takes its lenses; ``near_field`` holds what was measured (absent without them).
+    The predicted drops are ``drop_model``'s where one is given (:mod:`rigopt.metrics.drop_model`), else RigCD's
+    under ``calibration``; ``predicted_by`` names which.
     """
     from rigopt.validation.synthetic.generate import ego_body_lookup, generate_split, split_layout
     from rigopt.validation.synthetic.render import render_rig
@@ -172,7 +174,7 @@ def validate_design(design: Rig, reference: str, family: str, data, calibration:
     resampled_visible = resampled_maps(runs_matched, blocks, resamples, seed, visible_only=True)
     drops, resampled_drops = relative_drops(maps), relative_drops(resampled)
     drops_visible, resampled_drops_visible = relative_drops(maps_visible), relative_drops(resampled_visible)
-    predictions = predict_transfer(reference_rig, [rig for _, rig in rigs], calibration)
+    predictions = predict_transfer(reference_rig, [rig for _, rig in rigs], calibration, drop_model)
     entries = []
     for k, ((role, rig), prediction) in enumerate(zip(rigs, predictions), start=1):
         predicted = prediction.to_dict()
@@ -190,7 +192,8 @@ def validate_design(design: Rig, reference: str, family: str, data, calibration:
     design_minus = [{"rig": names[k - 1], "role": rigs[k - 1][0], "difference": finite_or_none(drops[1] - drops[k]),
                      "ci": interval(resampled_drops[:, 1] - resampled_drops[:, k])} for k in others]
     result = {"reference": reference_rig.name, "model": family, "checkpoint": str(checkpoint),
-              "metric": calibration.metric, "weights": calibration.name, "reference_mAP": finite_or_none(maps[0]),
+              "metric": calibration.metric, "weights": calibration.name, "predicted_by": predictions[0].predictor,
+              "reference_mAP": finite_or_none(maps[0]),
               "reference_mAP_visible": finite_or_none(maps_visible[0]),
               "test_scenes": len(scenes), "image_size": list(size), "rigs": entries,
               "design_minus": design_minus,
@@ -206,7 +209,7 @@ def validate_design(design: Rig, reference: str, family: str, data, calibration:
 
 
 def measure_design(design: Rig, reference: Rig, calibration: Calibration, protocol, cache=None, workers: int = 1,
-                   progress: Callable[[str], None] = lambda message: None) -> dict:
+                   progress: Callable[[str], None] = lambda message: None, drop_model=None) -> dict:
     """A design's perception cameras, R1's naive and height-matched transfers to its vehicle
     (:func:`comparison_rigs`) measured with the shipped lss models trained on ``reference`` under ``protocol``
     (:func:`rigopt.validation.detectors.shipped.measure`), each beside its predicted drop; JSON-ready.
@@ -215,7 +218,8 @@ def measure_design(design: Rig, reference: Rig, calibration: Calibration, protoc
     the design minus each copy, per seed and on the mean, with paired intervals; ``contradictions``: a line for
     each place where the prediction and the measurement disagree (a measured drop outside an informative
     predicted interval; two rigs ordered one way by the prediction and the other by a measurement whose paired
-    interval excludes 0), so that a report never shows both without saying so.
+    interval excludes 0), so that a report never shows both without saying so. The predicted drops are
+    ``drop_model``'s where one is given, else RigCD's under ``calibration`` (``predicted_by``).
     """
     from rigopt.metrics.ranking import predict_transfer
     from rigopt.validation.detectors.shipped import measure, paired_differences, shipped_detector, without_resamples
@@ -225,7 +229,7 @@ def measure_design(design: Rig, reference: Rig, calibration: Calibration, protoc
               if role in ("naive transfer", "height-matched transfer")]
     rigs = [("design", dataclasses.replace(design.perception(), name=f"{design.name}_perception"))] + copies
     measured = measure([rig for _, rig in rigs], detector, cache, "cpu", workers, progress, protocol)
-    predictions = predict_transfer(reference, [rig for _, rig in rigs], calibration)
+    predictions = predict_transfer(reference, [rig for _, rig in rigs], calibration, drop_model)
     rows = [{"role": role, "rig": rig.name, "n_cameras": len(rig), "predicted_drop": p.predicted_drop,
              "predicted_interval": p.to_dict()["interval"], "interval_informative": p.interval_informative,
              "measured_drop": m["drop"], "measured_drop_ci": m["drop_ci"],
@@ -234,7 +238,7 @@ def measure_design(design: Rig, reference: Rig, calibration: Calibration, protoc
     paired = [{"role": role, **paired_differences(measured[0], entry)} for (role, _), entry in zip(rigs[1:], measured[1:])]
     return {"detector": detector.folder.name, "reference": reference.name,
             "protocol": protocol.describe(detector.card["test_data"]),
-            "predicted_by": f"{calibration.metric}, {calibration.name} weights", "rigs": rows, "paired": paired,
+            "predicted_by": predictions[0].predictor, "rigs": rows, "paired": paired,
             "contradictions": contradictions(rows, paired), "measured": [without_resamples(m) for m in measured]}
 
 

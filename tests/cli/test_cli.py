@@ -109,11 +109,12 @@ def test_rigv_with_weights_uses_their_lambdas():
 
 
 def test_rigcd_json_keys_and_the_joint_drop_without_weights():
-    data = invoke_json("rigcd", "R1", "R6", "--json")
+    # from R3, a reference no shipped drop model was fitted from, the default prediction is RigCD's (joint)
+    data = invoke_json("rigcd", "R3", "R6", "--json")
     assert set(data) == {"a", "b", "rigcd", "match", "count", "t", "r", "f", "predicted_drop", "interval",
                          "interval_informative", "linear_drop", "extrapolation", "fallback", "weights",
-                         "origin_changes", "near_field_left_out"}
-    assert (data["a"], data["b"]) == ("R1", "R6")
+                         "origin_changes", "near_field_left_out", "predictor"}
+    assert (data["a"], data["b"], data["predictor"]) == ("R3", "R6", "RigCD (joint)")
     w = shipped_weights("joint")
     assert data["weights"] == "joint (default)" and data["fallback"] is False
     assert data["linear_drop"] == pytest.approx(formula(w, data["t"], data["r"], data["f"], data["count"]), rel=1e-12)
@@ -184,14 +185,14 @@ def test_rank_json_is_sorted_with_documented_keys():
     rows = invoke_json("rank", "--ref", "R1", "R6", "R4", "R1-f", "--json")
     assert [set(r) for r in rows] == [{"reference", "rig", "predicted_drop", "interval", "interval_informative",
                                        "linear_drop", "rigcd", "match", "t", "r", "f", "count", "extrapolation",
-                                       "fallback", "near_field_left_out"}] * 3
+                                       "fallback", "near_field_left_out", "predictor"}] * 3
     assert sorted(r["rig"] for r in rows) == ["R1-f", "R4", "R6"]
     drops = [r["predicted_drop"] for r in rows]
     assert drops == sorted(drops)
 
 
-def test_rank_uses_joint_weights_by_default():
-    rows = invoke_json("rank", "--ref", "R1", "R6", "R4", "R1-f", "--json")
+def test_rank_uses_joint_weights_by_default_from_a_reference_no_drop_model_was_fitted_from():
+    rows = invoke_json("rank", "--ref", "R3", "R6", "R4", "R1-f", "--json")
     w = shipped_weights("joint")
     for r in rows:
         assert r["linear_drop"] == pytest.approx(formula(w, r["t"], r["r"], r["f"], r["count"]), rel=1e-12)

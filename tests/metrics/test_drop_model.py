@@ -119,3 +119,91 @@ def test_a_term_no_fitting_rig_has_gets_no_weight():
     weights = dm.fit_weights(t, np.array([0.05, 0.2, 0.35, 0.6]))
     for name in ("roll", "centre", "tilt_down", "tilt_up", "yaw", "zoom", "count", "uncovered", "lower"):
         assert weights[dm.FEATURES.index(name)] == 0, name
+
+
+def a_model(weights=None, default=True, ranges=(0.0, 1.0)) -> dm.DropModel:
+    reference = load_rig("R1")
+    n = len(dm.FEATURES)
+    return dm.DropModel("test", "lss-R1", "R1", dm.camera_table(reference),
+                        np.full(n, 0.2) if weights is None else np.asarray(weights, float), np.array([0.05, 0.1, 0.2]),
+                        np.tile(ranges, (n, 1)), default, "a test model")
+
+
+def test_a_model_predicts_what_its_weights_and_matching_say():
+    model, r1 = a_model(), load_rig("R1")
+    raised = dataclasses.replace(r1, cameras=tuple(dataclasses.replace(c, position=c.position + [0, 0, 0.5])
+                                                   for c in r1.cameras))
+    drops, halfwidths, beyond = model.predict(r1, [r1, raised])
+    t = dm.PairTerms.of(r1, raised)
+    assert drops[0] == pytest.approx(0, abs=1e-12)
+    assert drops[1] == pytest.approx(dm.predict(model.weights, [t])[0], abs=1e-12)
+    assert drops[1] == pytest.approx(1 - np.exp(-0.2 * 0.5 - 0.2 * terms(r1, raised)["depth_prior"]), abs=1e-9)
+    assert halfwidths.tolist() == [0.05, model.halfwidths[dm.interval_bin(drops[1:])[0]]]
+    assert beyond == [{}, {}]
+
+
+def test_a_term_beyond_the_fitting_rigs_is_flagged_only_where_it_has_weight():
+    r1 = load_rig("R1")
+    raised = dataclasses.replace(r1, cameras=tuple(dataclasses.replace(c, position=c.position + [0, 0, 2.0])
+                                                   for c in r1.cameras))
+    flagged = a_model().predict(r1, [raised])[2][0]
+    assert flagged["raise"] == pytest.approx((2.0, 0.0, 1.0)) and "lower" not in flagged
+    weights = np.full(len(dm.FEATURES), 0.2)
+    weights[dm.FEATURES.index("raise")] = 0.0
+    assert "raise" not in a_model(weights).predict(r1, [raised])[2][0]
+
+
+def test_a_model_applies_to_its_reference_only():
+    model, r1 = a_model(), load_rig("R1")
+    assert model.applies_to(r1)
+    assert not model.applies_to(load_rig("R2"))
+    nudged = dataclasses.replace(r1, cameras=(dataclasses.replace(r1.cameras[0], position=r1.cameras[0].position
+                                                                  + [0.01, 0, 0]), *r1.cameras[1:]))
+    assert not model.applies_to(nudged)
+    assert not model.applies_to(dataclasses.replace(r1, cameras=r1.cameras[:-1]))
+
+
+def test_a_model_survives_its_json_form():
+    model = a_model()
+    again = dm.DropModel.from_dict(model.to_dict())
+    assert again.to_dict() == model.to_dict()
+    data = model.to_dict()
+    data["features"] = data["features"][::-1]
+    with pytest.raises(ValueError, match="terms"):
+        dm.DropModel.from_dict(data)
+
+
+def test_the_predictor_option_picks_the_default_model_for_its_reference_and_rigcd_elsewhere(monkeypatch):
+    from rigopt.errors import RigoptError, UnknownNameError
+
+    monkeypatch.setattr(dm, "shipped_drop_models", lambda: ["test"])
+    monkeypatch.setattr(dm, "load_drop_model", lambda name: a_model(default=True))
+    r1, r2 = load_rig("R1"), load_rig("R2")
+    assert dm.choose_model("auto", r1).name == "test"
+    assert dm.choose_model("auto", r1, weights_given=True) is None  # named RigCD weights: RigCD
+    assert dm.choose_model("auto", r2) is None
+    assert dm.choose_model("rigcd", r1) is None
+    assert dm.choose_model("TEST", r1).name == "test"
+    with pytest.raises(RigoptError, match="predicts transfers from R1"):
+        dm.choose_model("test", r2)
+    with pytest.raises(UnknownNameError, match="auto, rigcd, test"):
+        dm.choose_model("nope", r1)
+    monkeypatch.setattr(dm, "load_drop_model", lambda name: a_model(default=False))
+    assert dm.choose_model("auto", r1) is None  # a model its study did not find better prints only when named
+
+
+def test_transfer_predictions_carry_the_model_and_keep_rigcd():
+    from rigopt.metrics.calibration import load_weights
+    from rigopt.metrics.ranking import predict_transfer
+
+    r1, r2 = load_rig("R1"), load_rig("R2")
+    calibration = load_weights("joint")
+    plain = predict_transfer(r1, [r2], calibration)[0]
+    model = a_model()
+    modelled = predict_transfer(r1, [r2], calibration, model)[0]
+    drop, halfwidth = model.predict(r1, [r2])[0][0], model.predict(r1, [r2])[1][0]
+    assert plain.predictor == "RigCD (joint)" and modelled.predictor == "test drop model"
+    assert modelled.predicted_drop == pytest.approx(drop)
+    assert modelled.interval == pytest.approx((max(drop - halfwidth, 0), min(drop + halfwidth, 1)))
+    assert (modelled.rigcd, modelled.t, modelled.count) == (plain.rigcd, plain.t, plain.count)
+    assert modelled.linear_drop is None and modelled.to_dict()["predictor"] == "test drop model"
