@@ -78,7 +78,11 @@ def design_command(
     weights: Optional[str] = typer.Option(None, help="Calibrated RigCD weights the designer minimises: BEVDet, "
                                           "BEVFusion, Fast-BEV, PETR, joint (default), or a file."),
     metric: str = typer.Option("rigcd", "--metric", help=METRIC_HELP),
-    predictor: str = typer.Option("auto", "--predictor", help=PREDICTOR_HELP + " It predicts; RigCD designs."),
+    predictor: str = typer.Option("auto", "--predictor", help=PREDICTOR_HELP + " It predicts; --objective designs."),
+    objective: str = typer.Option("rigcd", "--objective", help="What the MILP minimises: rigcd (the calibrated "
+                                  "RigCD under --weights, default) or a model of the measured drop (a shipped name, "
+                                  "lss-R1, or a drop model JSON file) fitted from REF; the continuous stage is then "
+                                  "off."),
     cameras: Optional[str] = typer.Option(None, help="Camera count or range (e.g. 6-10); default: the reference's."),
     fov: str = typer.Option(numbers_text(DEFAULT_FOVS), help="Lens catalogue: horizontal FOVs in degrees of "
                                                                 "pinholes at --image-size, or a continuous range "
@@ -224,7 +228,7 @@ def design_command(
         pitches_deg=pitches, yaw_step_deg=yaw_step, spacing=spacing,
         min_coverage=min_coverage, min_overlap=min_overlap, max_nodes=max_nodes, accept_gap=accept_gap,
         rules=mount_rules(min_height, no_trailer), symmetric=False if asymmetric else None, cost_weight=cost_weight,
-        require=require, near_field=two_roles, **pose_settings)
+        require=require, near_field=two_roles, drop_model=_objective(objective, ref), **pose_settings)
     # a worker process beside this one (with a second core): the near-field stage and the pictures go there
     background = INLINE if pareto else Background(later_imports=("rigopt.report.vehicle_figures",
                                                                  "rigopt.report.coverage_figures"))
@@ -318,6 +322,21 @@ def design_command(
 
     finally:
         background.close()
+
+
+def _objective(objective: str, ref: str):
+    """--objective: None for RigCD, else the drop model, refused unless fitted from the (one) reference."""
+    from rigopt.metrics.drop_model import RIGCD, load_drop_model
+    from rigopt.rig.library import load_rig
+
+    if objective.lower() == RIGCD:
+        return None
+    model = load_drop_model(objective)
+    names = [name.strip() for name in ref.split(",") if name.strip()]
+    if len(names) != 1 or not model.applies_to(load_rig(names[0]).perception()):
+        raise RigoptError(f"--objective {objective}: the {model.name} drop model was fitted from {model.reference}; "
+                          f"design from --ref {model.reference} alone, or leave out --objective")
+    return model
 
 
 def _check_measurable(reference: str, protocol: str) -> None:

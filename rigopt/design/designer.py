@@ -48,6 +48,7 @@ from rigopt.design.settings import DesignSettings
 from rigopt.errors import RigoptError
 from rigopt.geometry import yaw_pitch_roll_from_rotation
 from rigopt.metrics.calibration import Calibration
+from rigopt.metrics.drop_model import FEATURES as DROP_MODEL_FEATURES, DropModel
 from rigopt.metrics.lifting import pair_terms
 from rigopt.metrics.ranking import predict_transfer
 from rigopt.metrics.rigcd import camera_costs
@@ -120,7 +121,7 @@ def prepare(vehicle: Vehicle, references: Sequence[Rig], calibration: Calibratio
     candidates = mount_candidates(vehicle, settings, spacing)
     model = candidates.model()
     raw = tuple(calibrated_costs(candidates.positions, candidates.rotations, candidates.fovs, rig, calibration,
-                                 None, model) for rig in references)
+                                 None, model, drop_model=settings.drop_model) for rig in references)
     gaps = tuple(tolerance_gaps(candidates.positions, candidates.rotations, candidates.fovs, rig, settings)
                  for rig in references)
     # beyond the tolerance a camera costs EXCESS_COST per tolerance: chosen only where the body offers no mount
@@ -182,7 +183,8 @@ def select_valid(prepared: Prepared, vehicle: Vehicle, calibration: Calibration,
     for repairs in range(MAX_REPAIRS + 1):
         keep = np.array([k for k, c in enumerate(offered) if c not in excluded], dtype=int)
         best = _best_selection([c[offered[keep]] for c in prepared.costs], sees[keep], needed,
-                               candidates.mount[offered[keep]], candidates.mount_points, counts, calibration.alpha,
+                               candidates.mount[offered[keep]], candidates.mount_points, counts,
+                               milp_alpha(calibration, settings),
                                settings, progress, local_mirror(candidates, offered[keep]),
                                prepared.mount_cost[offered[keep]])
         chosen = offered[keep][best.chosen]
@@ -270,7 +272,7 @@ def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRi
                        f"{', '.join(p.key for p in requirements.presets)} ({reasons[-1]}); they are reported, not "
                        "required" if auto_fields and not with_fields else None)
 
-    refines = settings.refine and len(rigs) == 1 and calibration.lifting is None
+    refines = settings.refine and len(rigs) == 1 and calibration.lifting is None and settings.drop_model is None
     naive = naive_transfer(vehicle, reference, prepared.candidates, settings)
     progress("validating the design: mount checks, coverage, RigCD")
     matched = np.sort(milp.selection.matched[milp.selection.matched >= 0])  # the rig's cameras come in this order
@@ -287,7 +289,8 @@ def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRi
                                "this should not happen: please report it")
     refinement = RefinementReport(  # the continuous stage's objective has RigCD's terms only
         f"off ({calibration.metric}: the continuous stage weighs RigCD's terms only)" if calibration.lifting is not None
-        else "off" if len(rigs) == 1 else "off (fleet design)")
+        else "off (the MILP minimised a drop model; the continuous stage weighs RigCD's terms only)"
+        if settings.drop_model is not None else "off" if len(rigs) == 1 else "off (fleet design)")
     if refines:
         progress("continuous refinement (casadi + IPOPT)")
         refinement = _refined(design, vehicle, reference, calibration, requirements, prepared.spacing, settings)
@@ -656,11 +659,16 @@ def pose_violations(rig: Rig, reference: Rig, calibration: Calibration, settings
 
 def calibrated_costs(positions: np.ndarray, rotations: np.ndarray, fovs: np.ndarray, reference: Rig,
                      calibration: Calibration, settings: DesignSettings | None = None,
-                     model: CameraModel | None = None, widen: np.ndarray | None = None) -> np.ndarray:
+                     model: CameraModel | None = None, widen: np.ndarray | None = None,
+                     drop_model: DropModel | None = None) -> np.ndarray:
     """(n, R) float: the calibrated raw-unit cost of matching each camera (positions (n, 3) m, vehicle frame;
     rotations (n, 3, 3); fovs (n,) deg; lenses ``model`` of batch (n,), needed by a lifting metric's depth
-    prior) to each reference camera; OUT_OF_TOLERANCE_COST for the pairs outside ``settings``' pose tolerance
-    (None: no tolerance), widened per reference camera by ``widen`` (R,) (see `matched_widening`)."""
+    prior and a drop model) to each reference camera, or ``drop_model``'s pair cost when one is given;
+    OUT_OF_TOLERANCE_COST for the pairs outside ``settings``' pose tolerance (None: no tolerance), widened per
+    reference camera by ``widen`` (R,) (see `matched_widening`)."""
+    if drop_model is not None:
+        costs = drop_model.pair_costs(positions, rotations, model, reference)
+        return _tolerated(costs, positions, rotations, fovs, reference, settings, widen)
     lt, lr, lf = calibration.lambdas
     t, r, f = camera_costs(positions, rotations, fovs, reference.positions, reference.rotations, reference.fovs)
     costs = lt * t + lr * r + lf * f
@@ -722,7 +730,17 @@ def rig_costs(rig: Rig, reference: Rig, calibration: Calibration, settings: Desi
               widen: np.ndarray | None = None) -> np.ndarray:
     """(len(rig), R) float: :func:`calibrated_costs` of ``rig``'s cameras to the reference's."""
     return calibrated_costs(rig.positions, rig.rotations, rig.fovs, reference, calibration, settings,
-                            CameraModel.of_cameras(rig.cameras), widen)
+                            CameraModel.of_cameras(rig.cameras), widen,
+                            drop_model=settings.drop_model if settings is not None else None)
+
+
+def milp_alpha(calibration: Calibration, settings: DesignSettings) -> float:
+    """The MILP's weight of the mean matched cost against the count term: the calibration's alpha, or under a
+    drop model 1 / (1 + its count weight), so that the MILP's objective is the model's score over 1 + that weight
+    (the same minimiser)."""
+    if settings.drop_model is None:
+        return calibration.alpha
+    return 1.0 / (1.0 + float(settings.drop_model.weights[DROP_MODEL_FEATURES.index("count")]))
 
 
 #: Heights (m) closer than this count as the same for the height-matched transfer.

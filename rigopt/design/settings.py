@@ -29,6 +29,7 @@ from rigopt.rig.model import Camera
 if TYPE_CHECKING:
     from rigopt.mounting.rules import MountRules
     from rigopt.coverage.measures import CoverageSettings
+    from rigopt.metrics.drop_model import DropModel
 
 
 def _design_coverage() -> CoverageSettings:
@@ -269,6 +270,10 @@ class DesignSettings:
     """With near-field cameras: the perception cameras keep the reference's coverage only on the rings at least
     this far (m) from the body (``--perception-range``; 0: every ring); the nearer rings are the near-field
     cameras' ground."""
+    drop_model: DropModel | None = None
+    """The model of the measured drop whose pair cost the MILP minimises instead of the calibrated RigCD's
+    (:meth:`rigopt.metrics.drop_model.DropModel.pair_costs`, its count weight setting the MILP's alpha); the
+    continuous stage, whose objective has RigCD's terms only, is then off. None: RigCD."""
     near_field: bool = True
     """Two roles (the default): the perception cameras are designed for the reference alone (no fields asked
     of them), then near_field fisheyes (:mod:`rigopt.design.near_field`) see the required fields and the near

@@ -37,7 +37,7 @@ from scipy.optimize import least_squares, linear_sum_assignment
 
 from rigopt.camera import CameraModel
 from rigopt.geometry import yaw_pitch_roll_from_rotation
-from rigopt.metrics.lifting import ground_depths
+from rigopt.metrics.lifting import depths_on_ground
 from rigopt.rig.model import Rig
 
 PAIR_FEATURES = ("depth_prior", "raise", "lower", "tilt_down", "tilt_up", "roll", "yaw", "plan", "zoom", "centre")
@@ -71,12 +71,20 @@ class CameraGeometry:
 
     @classmethod
     def of(cls, rig: Rig) -> CameraGeometry:
-        model = CameraModel.of_cameras(rig.cameras)
-        yaw, pitch, roll = yaw_pitch_roll_from_rotation(rig.rotations)
-        return cls(rig.positions[:, :2], rig.positions[:, 2], yaw, pitch, roll, ground_depths(rig.cameras),
-                   np.tan(np.radians(np.asarray(model.hfov, dtype=float)) / 2),
+        return cls.of_cameras(rig.positions, rig.rotations, CameraModel.of_cameras(rig.cameras))
+
+    @classmethod
+    def of_cameras(cls, positions: np.ndarray, rotations: np.ndarray, model: CameraModel) -> CameraGeometry:
+        """N cameras given as positions (N, 3) m, rotations (N, 3, 3) (body to vehicle frame) and their lenses
+        ``model`` (batch (N,))."""
+        positions = np.asarray(positions, dtype=float)
+        yaw, pitch, roll = yaw_pitch_roll_from_rotation(rotations)
+        return cls(positions[:, :2], positions[:, 2], yaw, pitch, roll,
+                   depths_on_ground(model, rotations, positions[:, 2]),
+                   np.tan(np.radians(np.broadcast_to(np.asarray(model.hfov, dtype=float), len(positions))) / 2),
                    np.stack([np.asarray(model.cx) / np.asarray(model.width),
-                             np.asarray(model.cy) / np.asarray(model.height)], axis=-1))
+                             np.asarray(model.cy) / np.asarray(model.height)], axis=-1)
+                   * np.ones((len(positions), 1)))
 
 
 def pair_features(reference: CameraGeometry, candidate: CameraGeometry) -> np.ndarray:
@@ -238,10 +246,17 @@ class DropModel:
     def from_dict(cls, data: dict) -> DropModel:
         if list(data["features"]) != list(FEATURES) or list(data["interval"]["bins"]) != list(INTERVAL_BINS):
             raise ValueError("the model's terms or interval bins are not this rigopt's")
-        return cls(data["name"], data["detector"], data["reference"], np.array(data["reference_cameras"], float),
-                   np.array(data["weights"], float), np.array(data["interval"]["halfwidths"], float),
-                   np.array(data["ranges"], float), bool(data["default"]), data["study"],
-                   float(data["interval"]["level"]))
+        model = cls(str(data["name"]), str(data["detector"]), str(data["reference"]),
+                    np.array(data["reference_cameras"], float), np.array(data["weights"], float),
+                    np.array(data["interval"]["halfwidths"], float), np.array(data["ranges"], float),
+                    bool(data["default"]), str(data["study"]), float(data["interval"]["level"]))
+        n = len(FEATURES)
+        if (model.weights.shape != (n,) or not np.all(np.isfinite(model.weights)) or np.any(model.weights < 0)
+                or model.reference_cameras.ndim != 2 or model.reference_cameras.shape[1] != 7
+                or model.halfwidths.shape != (len(INTERVAL_BINS) + 1,) or model.ranges.shape != (n, 2)):
+            raise ValueError(f"weights must be {n} finite numbers >= 0, reference_cameras rows of 7, halfwidths "
+                             f"{len(INTERVAL_BINS) + 1} and ranges {n} pairs")
+        return model
 
     def to_dict(self) -> dict:
         return {"name": self.name, "detector": self.detector, "reference": self.reference,
@@ -261,6 +276,22 @@ class DropModel:
         pair_weights = self.weights[:len(PAIR_FEATURES)] + 1e-9
         return np.array([features(pair_features(a, b), rig_features(a, b), pair_weights)
                          for b in map(CameraGeometry.of, candidates)]).reshape(len(candidates), len(FEATURES))
+
+    def pair_costs(self, positions: np.ndarray, rotations: np.ndarray, model: CameraModel, reference: Rig,
+                   chunk: int = 4096) -> np.ndarray:
+        """(n, R) float: the model's cost w_pair . phi of matching each of n cameras (positions (n, 3) m, rotations
+        (n, 3, 3), lenses ``model`` of batch (n,); from the vehicle's centre on the ground) to each camera of
+        ``reference``: the pair part of its score, whose mean over the matched pairs plus the rig terms is the
+        score (a designer's MILP objective). Computed ``chunk`` cameras at a time."""
+        ref = CameraGeometry.of(reference)
+        pair_weights = self.weights[:len(PAIR_FEATURES)]
+        out = np.empty((len(positions), len(reference)))
+        for start in range(0, len(positions), chunk):
+            part = np.s_[start:start + chunk]
+            index = np.arange(start, min(start + chunk, len(positions)))
+            geometry = CameraGeometry.of_cameras(positions[index], rotations[index], model.take(index))
+            out[part] = (pair_features(ref, geometry) @ pair_weights).T
+        return out
 
     def predict(self, reference: Rig, candidates: Sequence[Rig]) -> tuple[np.ndarray, np.ndarray, list[dict]]:
         """Predicted drops (P,), interval half-widths (P,) and, per candidate, {term: (value, low, high)} of the
@@ -298,18 +329,32 @@ def shipped_drop_models() -> list[str]:
     return sorted(p.stem for p in folder.glob("*.json")) if folder.is_dir() else []
 
 
-def load_drop_model(name: str) -> DropModel:
-    """The shipped drop model ``name`` (case-insensitive)."""
+def load_drop_model(name_or_path) -> DropModel:
+    """The shipped drop model of that name (case-insensitive) or a drop model JSON file (``DropModel.to_dict``)."""
     import json
+    from pathlib import Path
 
-    from rigopt.errors import unknown_name
+    from rigopt.errors import DataError, not_utf8, unknown_name
     from rigopt.resources import data_dir
 
+    text = str(name_or_path)
     by_lower = {n.lower(): n for n in shipped_drop_models()}
-    if name.lower() not in by_lower:
-        raise unknown_name("drop model", name, sorted(by_lower.values()))
-    path = data_dir("metrics") / MODELS_FOLDER / f"{by_lower[name.lower()]}.json"
-    return DropModel.from_dict(json.loads(path.read_text()))
+    if text.lower() in by_lower:
+        path = data_dir("metrics") / MODELS_FOLDER / f"{by_lower[text.lower()]}.json"
+    elif text.lower().endswith(".json"):
+        path = Path(text)
+        if not path.is_file():
+            raise DataError(f"{path}: no such drop model file; give a shipped name ({', '.join(by_lower.values())}) "
+                            "or a drop model JSON file")
+    else:
+        raise unknown_name("drop model", text, sorted(by_lower.values()))
+    try:
+        return DropModel.from_dict(json.loads(path.read_text()))
+    except UnicodeDecodeError as error:
+        raise not_utf8(path, "drop model file", error) from None
+    except (OSError, ValueError, KeyError, TypeError) as error:
+        raise DataError(f"{path}: not a drop model file ({type(error).__name__}: {error}); rigopt writes them as "
+                        "studies/predictor/ship.py does") from None
 
 
 #: ``--predictor`` values besides a model's name: the default model where it applies (RigCD elsewhere), RigCD.

@@ -166,6 +166,8 @@ def design_dict(result: DesignResult, rig_file: Path | None) -> dict:
         "reference_coverage": result.reference_coverage,
         "mounting_cost": rig_mounting_cost(design.rig, result.vehicle),
         "cost_weight": result.settings.cost_weight,
+        "objective": ("rigcd" if result.settings.drop_model is None
+                      else f"{result.settings.drop_model.name} drop model ({result.settings.drop_model.study})"),
         "pose_tolerance": {"height_m": result.settings.match_height_m, "pitch_deg": result.settings.match_pitch_deg,
                            "yaw_deg": result.settings.match_yaw_deg, "fov_deg": result.settings.match_fov_deg,
                            "lifted_for": [k for k, f in result.tolerance_widened if not np.isfinite(f)],

@@ -206,7 +206,9 @@ def read_rig(path, name: str | None = None) -> Rig:
 
 def write_rig(rig: Rig, path) -> Path:
     """Write ``rig`` as a benchmark rig file; returns the path."""
+    from rigopt.output import write_text_atomic
+
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps(rig_to_dict(rig), indent=2) + "\n")
+    write_text_atomic(path, json.dumps(rig_to_dict(rig), indent=2) + "\n")  # whole or not at all
     return path
