@@ -2,8 +2,8 @@
 
 A sector point is the ring point (see ``footprint.py``) at the centre azimuth of one of ``sectors`` equal
 azimuth sectors, for every ring distance and height of the settings; a candidate *covers* a sector when it
-sees that point (frustum and body occlusion, ``visibility.py``). One vectorised call handles thousands of
-candidates.
+sees that point (frustum, and occlusion by the body and the keep-outs in force that block views, such as a coupled
+trailer: ``visibility.py``). One vectorised call handles thousands of candidates.
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ from rigopt.vehicle.footprint import Footprint
 from rigopt.coverage.measures import CoverageSettings
 from rigopt.benchmark import BENCHMARK_IMAGE_SIZE
 from rigopt.camera import CameraModel
-from rigopt.coverage.visibility import visible_by
+from rigopt.coverage.visibility import occluders, visible_by
 from rigopt.rig.model import Rig
 from rigopt.vehicle.model import Vehicle
 
@@ -59,7 +59,8 @@ def coverage_matrix(vehicle: Vehicle, positions, rotations, fovs=None, image_siz
             image_sizes = np.tile(BENCHMARK_IMAGE_SIZE, (len(positions), 1))
         model = CameraModel.from_fov(fovs, image_sizes)
     points, distance, height, sector, azimuth = sector_points(vehicle.footprint, settings)
-    sees = visible_by(vehicle.caster(settings.backend), model, positions, rotations, points, settings.max_range)
+    sees = visible_by(vehicle.caster(settings.backend), model, positions, rotations, points, settings.max_range,
+                      occluders(vehicle, settings.lifted))
     return CoverageMatrix(sees, distance, height, sector, azimuth, points)
 
 

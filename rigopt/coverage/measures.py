@@ -9,8 +9,14 @@ azimuths in radians counter-clockwise from +x around the footprint's centre; see
   ``bev_height``, how many cameras see the cell centre (-1 inside the footprint);
 - blind zone: per azimuth, the smallest distance at which the ground (h = 0) is seen by some camera
   (inf if not within ``blind_search``); and the unseen ground area within ``blind_radius`` of the body;
-- per camera: ``self_occluded_frac``, the fraction of its image (a grid of pixel rays) that sees the body;
-  ``overlap_deg``, for every other camera, the degrees of the ``overlap_ring`` both see.
+- per camera: ``self_occluded_frac``, the fraction of its image (a grid of pixel rays from the lens) that sees
+  the vehicle within ``max_range``: its body or a keep-out that blocks views (a coupled trailer); all of it for a
+  lens inside the body or facing into it from its skin; ``overlap_deg``, for every other camera, the degrees of
+  the ``overlap_ring`` both see.
+
+What blocks a view (``visibility.py``): the body, a solid, wherever the lens stands, and the keep-outs in force
+that occlude (a coupled trailer; ``CoverageSettings.lifted`` names optional ones switched off). A point inside
+one of those is not seen.
 """
 
 from __future__ import annotations
@@ -22,14 +28,17 @@ import numpy as np
 from rigopt.vehicle.footprint import Footprint
 from rigopt.errors import RigoptError
 from rigopt.camera import CameraModel, Lens
-from rigopt.coverage.visibility import DEFAULT_MAX_RANGE, visible_by
+from rigopt.coverage.visibility import DEFAULT_MAX_RANGE, occluders, visible_by
+from rigopt.mounting.practice import segments_hit_boxes
 from rigopt.rig.model import Rig
 from rigopt.vehicle.model import Vehicle
 
 
 @dataclass(frozen=True)
 class CoverageSettings:
-    """Every parameter of the coverage measures; lengths in metres."""
+    """Every parameter of the coverage measures; lengths in metres. ``lifted``: names of optional keep-outs
+    switched off (``("trailer",)``: a tractor without its trailer), as ``MountPractice.lifted``; the others that
+    occlude block views."""
 
     ring_distances: tuple[float, ...] = (2.0, 5.0, 10.0, 20.0, 50.0)
     ring_heights: tuple[float, ...] = (0.0, 0.8)
@@ -46,6 +55,7 @@ class CoverageSettings:
     image_grid: tuple[int, int] = (64, 36)
     overlap_ring: tuple[float, float] = (10.0, 0.8)
     backend: str = "auto"
+    lifted: tuple[str, ...] = ()
 
     def azimuths(self, count: int | None = None) -> np.ndarray:
         """(count,) float rad: centres of ``count`` (default ``ring_samples``) equal azimuth bins from -pi."""
@@ -135,8 +145,9 @@ class RingReport:
 
 
 def _seen(vehicle: Vehicle, rig: Rig, points: np.ndarray, settings: CoverageSettings) -> np.ndarray:
+    """(c, p) bool: ``points`` (p, 3) m seen by each camera of ``rig`` (body and occluders in force block)."""
     return visible_by(vehicle.caster(settings.backend), CameraModel.of_cameras(rig.cameras), rig.positions,
-                      rig.rotations, points, settings.max_range)
+                      rig.rotations, points, settings.max_range, occluders(vehicle, settings.lifted))
 
 
 def ring_coverage(vehicle: Vehicle, rig: Rig, settings: CoverageSettings, footprint: Footprint):
@@ -184,14 +195,17 @@ def camera_coverage(vehicle: Vehicle, rig: Rig, settings: CoverageSettings, foot
     distance, height = settings.overlap_ring
     ring = _seen(vehicle, rig, footprint.ring_points(settings.azimuths(), distance, height), settings)
     degrees = 360.0 / ring.shape[1]
+    boxes = occluders(vehicle, settings.lifted)
     out = []
     for k, camera in enumerate(rig.cameras):
         rays = CameraModel.of_camera(camera).grid_rays(settings.image_grid) @ camera.rotation.T
-        hits = vehicle.caster(settings.backend).first_hit_distance(
-            np.repeat(camera.position[None], len(rays), axis=0), rays)
+        lens = np.broadcast_to(camera.position, rays.shape)
+        blocked = vehicle.caster(settings.backend).blocked_distance(lens, rays) <= settings.max_range
+        if boxes:
+            blocked |= segments_hit_boxes(lens, rays, settings.max_range, boxes)
         overlap = {other.id: float((ring[k] & ring[j]).sum() * degrees)
                    for j, other in enumerate(rig.cameras) if j != k and (ring[k] & ring[j]).any()}
-        out.append(CameraCoverage(camera.id, float(np.mean(hits <= settings.max_range)), camera.lens, overlap))
+        out.append(CameraCoverage(camera.id, float(np.mean(blocked)), camera.lens, overlap))
     return tuple(out)
 
 

@@ -294,7 +294,7 @@ def nearest_visible_ground(camera: Camera, vehicle: Vehicle, footprint: Footprin
     if len(rays) == 0:
         return None, None
     along = height / -rays[:, 2]  # m along each ray to the ground
-    body = vehicle.caster(backend).first_hit_distance(np.repeat(camera.position[None], len(rays), axis=0), rays)
+    body = vehicle.caster(backend).blocked_distance(np.repeat(camera.position[None], len(rays), axis=0), rays)
     seen = body >= along
     if not seen.any():
         return None, None
@@ -306,9 +306,9 @@ def nearest_visible_ground(camera: Camera, vehicle: Vehicle, footprint: Footprin
 
 def blocked_fraction(camera: Camera, vehicle: Vehicle, grid=BLOCKED_GRID, backend: str = "auto") -> float:
     """The share of the image the body blocks: rays through the centres of ``grid`` (columns, rows) image cells
-    that meet the body mesh, in [0, 1]."""
+    that the body, a solid, blocks (:meth:`rigopt.raycast.RayCaster.blocked_distance`), in [0, 1]."""
     rays = CameraModel.of_camera(camera).grid_rays(grid) @ camera.rotation.T
-    hits = vehicle.caster(backend).first_hit_distance(np.repeat(camera.position[None], len(rays), axis=0), rays)
+    hits = vehicle.caster(backend).blocked_distance(np.repeat(camera.position[None], len(rays), axis=0), rays)
     return float(np.mean(np.isfinite(hits)))
 
 

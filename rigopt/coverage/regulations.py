@@ -26,7 +26,7 @@ import numpy as np
 import shapely
 
 from rigopt.camera import CameraModel
-from rigopt.coverage.visibility import DEFAULT_MAX_RANGE, visible_by
+from rigopt.coverage.visibility import DEFAULT_MAX_RANGE, occluders, visible_by
 from rigopt.errors import RigoptError
 from rigopt.mounting.practice import keep_out_boxes
 from rigopt.rig.model import Rig
@@ -519,9 +519,10 @@ def region_coverage(rig: Rig, vehicle: Vehicle, presets, spacing: float = 0.1, b
                     max_range: float = DEFAULT_MAX_RANGE, lifted=()) -> tuple[RegionCoverage, ...]:
     """Coverage of each of ``presets`` by ``rig`` (positions in ``vehicle``'s frame) on ``vehicle``: every
     required point (:func:`required_mask`) of the region's grid and boundary at ``spacing`` m, at every height,
-    tested for occlusion-aware visibility (:func:`rigopt.coverage.visibility.visible_by`) by each camera.
-    ``lifted`` names keep-outs lifted (a trailer not coupled): they neither hide points nor place R151's lines."""
-    model = CameraModel.of_cameras(rig.cameras)
+    tested for occlusion-aware visibility (:func:`rigopt.coverage.visibility.visible_by`: the body and the keep-outs
+    in force that block views, a coupled trailer) by each camera. ``lifted`` names keep-outs lifted (a trailer not
+    coupled): they neither hide points, nor block views, nor place R151's lines."""
+    model, boxes = CameraModel.of_cameras(rig.cameras), occluders(vehicle, lifted)
     out = []
     for preset in presets:
         polygon = preset.polygon(vehicle, lifted)
@@ -532,7 +533,7 @@ def region_coverage(rig: Rig, vehicle: Vehicle, presets, spacing: float = 0.1, b
         by_camera = np.zeros((len(rig.cameras), len(points)), dtype=bool)
         if needed.any():
             by_camera[:, needed] = visible_by(vehicle.caster(backend), model, rig.positions, rig.rotations,
-                                              points[needed], max_range)
+                                              points[needed], max_range, boxes)
         count = by_camera.sum(axis=0)
         seen = (count > 0) | ~needed
         per_height = len(ground)

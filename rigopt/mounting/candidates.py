@@ -3,9 +3,11 @@
 Mount points are lens positions sampled on the zones (:mod:`rigopt.mounting.sampling`). For a grid of yaw
 and pitch angles (ISO: yaw > 0 left of forward, pitch > 0 up, radians) a direction is *clear* when every
 probe ray of the checked frustum (centre, edge midpoints and corners of the image with each half-angle shrunk by
-``MountRules.frustum_margin``) travels from ``near`` to ``frustum_range`` without meeting the body (nor a
+``MountRules.frustum_margin``) travels from the lens to ``frustum_range`` without meeting the body (nor a
 keep-out that blocks views, such as a coupled trailer, nor the space its front swings through): the
-ray-cast counterpart of the fcl frustum rule, vectorised over all candidates at once.
+ray-cast counterpart of the fcl frustum rule, vectorised over all candidates at once. The body is a solid
+(:meth:`rigopt.raycast.RayCaster.blocked_distance`), and so are the keep-outs and the swing: a lens facing into
+any of them, however close, is blocked, even where its whole frustum lies inside it.
 """
 
 from __future__ import annotations
@@ -53,27 +55,31 @@ def probe_directions(lens: Lens, rules: MountRules = MountRules()) -> np.ndarray
 
 
 def clear_directions(vehicle: Vehicle, points, yaws, pitches, lens: Lens, rules: MountRules = MountRules()):
-    """(n, k, m) bool: the checked frustum of a camera with ``lens`` at ``points`` (n, 3) facing
-    (pitches[k], yaws[m]) meets no body surface between ``rules.near`` and ``rules.frustum_range``."""
+    """(n, k, m) bool: the probe rays of the checked frustum of a camera with ``lens`` at ``points`` (n, 3) m facing
+    (pitches[k], yaws[m]) rad are not blocked within ``rules.frustum_range`` m of the lens (:func:`rays_blocked`)."""
     points = np.atleast_2d(points)
     yaw_grid, pitch_grid = np.meshgrid(yaws, pitches)  # (k, m)
     rotations = rotation_from_yaw_pitch_roll(yaw_grid, pitch_grid, np.zeros_like(yaw_grid))  # (k, m, 3, 3)
     rays = np.einsum("kmij,rj->kmri", rotations, probe_directions(lens, rules))  # (k, m, r, 3)
     n, shape = len(points), rays.shape[:3]
-    origins = points[:, None, None, None, :] + rules.near * rays[None]  # (n, k, m, r, 3)
+    origins = np.broadcast_to(points[:, None, None, None, :], (n, *rays.shape))  # (n, k, m, r, 3)
     directions = np.broadcast_to(rays[None], origins.shape)
-    distance = vehicle.ray_caster.first_hit_distance(origins.reshape(-1, 3), directions.reshape(-1, 3))
-    hit = distance <= rules.frustum_range - rules.near
-    # keep-outs that block views, e.g. a coupled trailer
+    hit = rays_blocked(vehicle, origins.reshape(-1, 3), directions.reshape(-1, 3), rules)
+    return ~hit.reshape(n, *shape).any(axis=-1)
+
+
+def rays_blocked(vehicle: Vehicle, origins, directions, rules: MountRules = MountRules()) -> np.ndarray:
+    """(n,) bool: rays from lenses ``origins`` (n, 3) m along unit ``directions`` (n, 3) that meet, within
+    ``rules.frustum_range`` m, the body (a solid: a lens inside it or facing into it from its skin is blocked at
+    once), a keep-out that blocks views (a coupled trailer) or the space its front swings through."""
+    hit = vehicle.ray_caster.blocked_distance(origins, directions) <= rules.frustum_range
     blockers = keep_out_boxes(vehicle, rules.practice.lifted, occluding_only=True) if rules.practice.enabled else []
     if blockers:
-        hit |= segments_hit_boxes(origins.reshape(-1, 3), directions.reshape(-1, 3), rules.frustum_range - rules.near,
-                                  blockers)
+        hit |= segments_hit_boxes(origins, directions, rules.frustum_range, blockers)
     swings = trailer_swings(vehicle, rules.practice.lifted) if rules.practice.feature_rules else []
-    if swings:  # and the space a coupled trailer's front swings through
-        hit |= segments_hit_swings(origins.reshape(-1, 3), directions.reshape(-1, 3), rules.frustum_range - rules.near,
-                                   swings)
-    return ~hit.reshape(n, *shape).any(axis=-1)
+    if swings:
+        hit |= segments_hit_swings(origins, directions, rules.frustum_range, swings)
+    return hit
 
 
 def mount_candidates(vehicle: Vehicle, spacing: float = DEFAULT_SPACING, lens: Lens | None = None, zones=None,
@@ -96,12 +102,12 @@ BODY_RANGE_M = 30.0
 
 def body_fraction(vehicle: Vehicle, positions, rotations, model: CameraModel, grid=BODY_GRID) -> np.ndarray:
     """(n,) float: the share of each camera's image that shows the ego body, estimated on a ``grid`` of image
-    cells (rays through their centres from the lens, body within BODY_RANGE_M).
+    cells (rays through their centres from the lens, the body a solid within BODY_RANGE_M).
 
     positions : (n, 3) m; rotations : (n, 3, 3) R_vehicle_cam; model : CameraModel of batch shape (n,).
     """
     rays = model.grid_rays(grid)  # (n, g, 3) camera body frame
     directions = np.einsum("nij,ngj->ngi", np.asarray(rotations, dtype=float), rays)
-    origins = np.asarray(positions, dtype=float)[:, None, :] + 0.02 * directions
-    distance = vehicle.ray_caster.first_hit_distance(origins.reshape(-1, 3), directions.reshape(-1, 3))
+    origins = np.broadcast_to(np.asarray(positions, dtype=float)[:, None, :], directions.shape)
+    distance = vehicle.ray_caster.blocked_distance(origins.reshape(-1, 3), directions.reshape(-1, 3))
     return (distance.reshape(directions.shape[:2]) <= BODY_RANGE_M).mean(axis=1)

@@ -8,7 +8,9 @@ A camera is valid on a vehicle when
      than ``penetration_tolerance``;
   3. its near view frustum (from ``near`` to ``frustum_range`` metres, the image shrunk by
      ``frustum_margin`` of each half-angle; a near_field camera's central 60-degree cone, since a surround-view
-     fisheye sees its own body at its edges) does not intersect the body;
+     fisheye sees its own body at its edges) does not intersect the body, a solid: neither its surface (fcl)
+     nor its inside, which the frustum's probe rays find from the lens (a lens facing into the body from its
+     skin has its whole frustum inside it, where fcl's surface mesh meets nothing);
   4. its foot point and surface normal lie in one of the vehicle's zones;
   5. its housing does not collide with another camera's housing (cameras of one module, ``Camera.module``,
      share a housing and do not clash with each other);
@@ -29,6 +31,9 @@ axis, and a *post* stands under it: a box of the housing's footprint (width x he
 the housing's back face. Rules 2-5 apply with the housing where the camera is; the post counts as part of
 the body for every camera's view frustum (its own included) and housing (rules 3 and 5); it is not tested
 against the body it stands on.
+
+The keep-outs, a trailer's swing and the posts are fcl boxes and cylinders, solids: a frustum wholly inside one
+collides with it.
 """
 
 from __future__ import annotations
@@ -39,7 +44,8 @@ import numpy as np
 
 from rigopt.mounting.features import trailer_swings
 from rigopt.mounting.practice import DEFAULT_HOUSING, MountPractice, duplicates, keep_out_boxes, practice_problems
-from rigopt.mounting.shapes import box_object, collides, frustum_object, housing_object, post_object, swing_object
+from rigopt.mounting.shapes import (box_object, collides, frustum_object, housing_object, post_object, probe_rays,
+                                    swing_object)
 from rigopt.rig.model import Camera, Rig
 from rigopt.vehicle.model import Vehicle, Zone
 
@@ -160,7 +166,7 @@ def check_rig(rig: Rig, vehicle: Vehicle, rules: MountRules = MountRules()) -> R
         if distance >= 0 and collides(sunk, body):
             problems.append(f"housing penetrates the body by more than {rules.penetration_tolerance * 100:.0f} cm")
         frustum = frustum_object(camera, rules)
-        if collides(frustum, body):
+        if collides(frustum, body) or _body_blocks_probes(vehicle, camera, rules):
             problems.append(f"the body is in its view within {rules.frustum_range:g} m")
         blocked = dict.fromkeys(label for box, label in blockers if collides(frustum, box))
         for label in blocked:
@@ -181,6 +187,14 @@ def check_rig(rig: Rig, vehicle: Vehicle, rules: MountRules = MountRules()) -> R
             problems.append(duplicated[k])
         checks.append(CameraCheck(camera.id, not problems, distance, zone, tuple(problems)))
     return RigCheck(rig.name, vehicle.name, tuple(checks))
+
+
+def _body_blocks_probes(vehicle: Vehicle, camera: Camera, rules: MountRules) -> bool:
+    """True when the body, a solid, blocks a probe ray of the camera's checked frustum within
+    ``rules.frustum_range`` m of its lens (:meth:`rigopt.raycast.RayCaster.blocked_distance`)."""
+    rays = probe_rays(camera, rules)
+    origins = np.broadcast_to(camera.position, rays.shape)
+    return bool((vehicle.ray_caster.blocked_distance(origins, rays) <= rules.frustum_range).any())
 
 
 def _one_module(a: Camera, b: Camera) -> bool:

@@ -53,14 +53,24 @@ def housing_object(foot: np.ndarray, normal: np.ndarray, forward: np.ndarray, si
 NEAR_FIELD_CLEAR_CONE_DEG = 60.0
 
 
-def frustum_vertices(camera: Camera, rules: MountRules) -> np.ndarray:
-    """(8, 3) float: near-plane then far-plane corners of the checked frustum, vehicle frame, metres (for a
-    near_field camera, the central NEAR_FIELD_CLEAR_CONE_DEG cone of its image's aspect)."""
-    model = CameraModel.of_camera(camera)
+def checked_model(camera: Camera) -> CameraModel:
+    """The camera model whose view the frustum rule checks: the camera's own, or for a near_field camera the
+    central NEAR_FIELD_CLEAR_CONE_DEG cone of its image's aspect."""
     if camera.role == "near_field":
-        model = CameraModel.from_fov(NEAR_FIELD_CLEAR_CONE_DEG, camera.image_size)
-    local = model.frustum_corners(rules.near, rules.frustum_range, 1.0 - rules.frustum_margin)
+        return CameraModel.from_fov(NEAR_FIELD_CLEAR_CONE_DEG, camera.image_size)
+    return CameraModel.of_camera(camera)
+
+
+def frustum_vertices(camera: Camera, rules: MountRules) -> np.ndarray:
+    """(8, 3) float: near-plane then far-plane corners of the checked frustum, vehicle frame, metres."""
+    local = checked_model(camera).frustum_corners(rules.near, rules.frustum_range, 1.0 - rules.frustum_margin)
     return camera.position + local @ camera.rotation.T
+
+
+def probe_rays(camera: Camera, rules: MountRules) -> np.ndarray:
+    """(9, 3) float unit rays, vehicle frame, from the lens along the axis and to the edge midpoints and corners
+    of the checked frustum (:meth:`rigopt.camera.CameraModel.probe_rays`)."""
+    return checked_model(camera).probe_rays(1.0 - rules.frustum_margin) @ camera.rotation.T
 
 
 # Faces of the frustum hexahedron over frustum_vertices' order, outward-facing.

@@ -242,15 +242,17 @@ def comparison_notes(summary: dict) -> list[str]:
                     + ("; --require none designs without the fields" if fields else "")]
 
 
-def write_design_pictures(vehicle, reference, design: Rig, naive: Rig | None, regions, out_dir) -> dict[str, Path]:
+def write_design_pictures(vehicle, reference, design: Rig, naive: Rig | None, regions, out_dir,
+                          lifted=()) -> dict[str, Path]:
     """The design's pictures in ``out_dir``: design.png, reference.png (``reference``, a ReferenceRig, on its own
     vehicle), naive_transfer.png (``naive``, when there is one), coverage.png (the design's rings beside the
     reference's) and, with ``regions`` (RegionCoverage), fields.png (the regulation fields over the near-field
     blind zones). Positions are drawn in the tables' frame (:func:`frame_dict`: from the datum of
     :func:`rigopt.coverage.packaging.report_origin`), the reference on its own vehicle from that vehicle's datum.
-    Returns {picture name: path}. A module-level function of picklable values: it may run in a background
-    worker."""
-    from rigopt.coverage.measures import ring_report
+    ``lifted``: the optional keep-outs the design lifted (``MountPractice.lifted``), which hide nothing on the
+    design's rings. Returns {picture name: path}. A module-level function of picklable values: it may run in a
+    background worker."""
+    from rigopt.coverage.measures import CoverageSettings, ring_report
     from rigopt.coverage.packaging import report_origin
     from rigopt.report.coverage_figures import write_regions_figure, write_rings_figure
     from rigopt.report.vehicle_figures import write_vehicle_figure
@@ -262,7 +264,7 @@ def write_design_pictures(vehicle, reference, design: Rig, naive: Rig | None, re
                                                   report_origin(reference.vehicle))}
     if naive is not None:
         pictures["naive_transfer"] = write_vehicle_figure(vehicle, out_dir / "naive_transfer.png", naive, datum)
-    design_coverage = ring_report(design, vehicle)
+    design_coverage = ring_report(design, vehicle, CoverageSettings(lifted=tuple(lifted)))
     reference_coverage = ring_report(reference.rig, reference.vehicle)
     pictures["coverage"] = write_rings_figure(design_coverage, out_dir / "coverage.png", compare=reference_coverage)
     if regions:
@@ -288,7 +290,8 @@ def write_design_report(result: DesignResult, out_dir, background: Background = 
     out_dir.mkdir(parents=True, exist_ok=True)
     vehicle, naive = result.vehicle, result.comparisons.naive_transfer
     pictures = background.submit(write_design_pictures, vehicle, result.references[0], result.design.rig,
-                                 naive.rig if naive is not None else None, result.regions, out_dir)
+                                 naive.rig if naive is not None else None, result.regions, out_dir,
+                                 result.settings.rules.practice.lifted)
     rig_file = write_rig(result.design.rig, out_dir / "rig.json")
     summary = design_dict(result, Path(rig_file.name))  # named relative to the report's folder: no machine paths
     if measured is not None:

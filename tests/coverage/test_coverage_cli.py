@@ -23,4 +23,7 @@ def test_a_rig_that_sees_only_its_own_body_is_an_error_naming_the_check(tmp_path
     assert result.returncode == 2 and result.stdout == ""
     assert "sees nothing on any ring" in result.stderr and "rigopt check" in result.stderr
     assert "the body is in its view" in result.stderr  # check's reason, per camera
+    # one error line, naming every camera: the two within 1.2 cm of the skin too (their frustums lie in the body)
+    assert result.stderr.count("rigopt: error:") == 1
+    assert all(f"{c.id} (the body is in its view" in result.stderr for c in r1.cameras)
     assert run_rigopt("coverage", "R1", "--json").returncode == 0  # the same cameras facing out are fine
