@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import os
 import signal
+import sys
 from typing import Any, Callable
 
 #: The environment variable that turns the worker off (``0``) or on (``1``); unset: on with two cores or more.
@@ -33,10 +34,32 @@ def wanted() -> bool:
     return available_cores() >= 2
 
 
-def _worker_setup() -> None:
-    """In the worker: the main process handles Ctrl-C (and ends the worker); nothing reaches its stdout."""
+def worker_setup() -> None:
+    """In a worker process: the main process handles Ctrl-C and ends its workers (:func:`end_workers`); a worker
+    whose main process dies (SIGTERM, SIGKILL) gets SIGTERM and ends too (Linux); nothing reaches its stdout."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    if sys.platform.startswith("linux"):
+        import ctypes
+
+        ctypes.CDLL(None).prctl(PR_SET_PDEATHSIG, signal.SIGTERM)
+        if os.getppid() == 1:  # the main process died before the line above: end now
+            os._exit(1)
     os.dup2(2, 1)
+
+
+#: prctl's option that sends a signal to this process when its parent dies (linux/prctl.h).
+PR_SET_PDEATHSIG = 1
+
+
+def end_workers(pool) -> None:
+    """End a ProcessPoolExecutor's workers now, whatever they are doing (their results are not needed): no
+    waiting for a running call, no orphan left behind."""
+    processes = list((getattr(pool, "_processes", None) or {}).values())
+    pool.shutdown(wait=False, cancel_futures=True)
+    for process in processes:
+        process.terminate()
+    for process in processes:
+        process.join()
 
 
 def _import(modules: tuple[str, ...]) -> None:
@@ -83,7 +106,7 @@ class Background:
             import multiprocessing
             from concurrent.futures import ProcessPoolExecutor
 
-            self._pool = ProcessPoolExecutor(1, multiprocessing.get_context("spawn"), initializer=_worker_setup)
+            self._pool = ProcessPoolExecutor(1, multiprocessing.get_context("spawn"), initializer=worker_setup)
 
     @property
     def parallel(self) -> bool:
@@ -102,12 +125,7 @@ class Background:
     def close(self) -> None:
         """End the worker (whatever it is doing: results not asked for are not needed)."""
         if self._pool is not None:
-            processes = list(getattr(self._pool, "_processes", {}).values())
-            self._pool.shutdown(wait=False, cancel_futures=True)
-            for process in processes:  # a call still running is not needed: end it now
-                process.terminate()
-            for process in processes:
-                process.join()
+            end_workers(self._pool)  # a call still running is not needed: end it now
             self._pool = None
 
     def __enter__(self) -> "Background":

@@ -23,6 +23,27 @@ from rigopt.errors import RigoptError
 INPUT_ERROR = 2
 #: Exit code after Ctrl-C (128 + SIGINT).
 INTERRUPTED = 130
+#: Exit code after SIGTERM (128 + SIGTERM).
+TERMINATED = 143
+
+
+#: Set by the SIGTERM handler (:func:`main` installs it), which raises KeyboardInterrupt so that partial
+#: outputs are removed and worker processes ended on the way out, as after Ctrl-C.
+_terminated = []
+
+
+def _terminate(signum, frame) -> None:
+    _terminated.append(signum)
+    raise KeyboardInterrupt
+
+
+def _interrupted() -> int:
+    """Say how the run was stopped (SIGTERM or Ctrl-C) and return its exit code."""
+    if _terminated:
+        print("rigopt: terminated", file=sys.stderr)
+        return TERMINATED
+    print("rigopt: interrupted", file=sys.stderr)
+    return INTERRUPTED
 
 
 class _CStdoutToStderr:
@@ -105,8 +126,7 @@ def run(argv: list[str] | None = None) -> int:
         print(f"rigopt: error: {' '.join(error.format_message().split())}", file=sys.stderr)
         return INPUT_ERROR
     except (typer.Abort, KeyboardInterrupt):
-        print("rigopt: interrupted", file=sys.stderr)
-        return INTERRUPTED
+        return _interrupted()
     except BrokenPipeError:
         return 0  # the reader of stdout closed it (rigopt ... | head): not an error of rigopt's
     except MemoryError:
@@ -116,20 +136,27 @@ def run(argv: list[str] | None = None) -> int:
         print(f"rigopt: error: {_os_message(error)}", file=sys.stderr)
         return INPUT_ERROR
     if result == INTERRUPTED:  # typer turns Ctrl-C inside a command into this exit code
-        print("rigopt: interrupted", file=sys.stderr)
+        return _interrupted()
     return result if isinstance(result, int) else 0
 
 
 def main() -> None:
     """The console script: run the CLI with C-level stdout diverted to stderr, exit with its code.
 
-    After Ctrl-C the process ends at once (``os._exit``) once its streams are flushed: a native library's
+    SIGTERM is handled as Ctrl-C is (exit 143, "rigopt: terminated"). After either the process ends at once
+    (``os._exit``) once its streams are flushed: a native library's
     worker threads (the ray caster's, a solver's) may still be running, and tearing the interpreter down under
     them can abort it ("Fatal Python error: PyThreadState_Get"). Partial outputs are already gone by then
     (``rigopt.output`` removes them as the interrupt passes)."""
+    import signal
+
+    signal.signal(signal.SIGTERM, _terminate)
+    # the semaphores of worker pools ended by an interrupt are freed by multiprocessing's tracker process, which
+    # would warn about each: it takes its warning options from this process's
+    sys.warnoptions.append("ignore::UserWarning:multiprocessing.resource_tracker")
     with _CStdoutToStderr():
         code = run()
-    if code == INTERRUPTED:
+    if code in (INTERRUPTED, TERMINATED):
         for stream in (sys.stdout, sys.stderr):
             try:
                 stream.flush()

@@ -30,28 +30,33 @@ def process_tasks(workers: int, function: Callable, calls: dict[Hashable, tuple]
                   what: str = "task") -> Iterator[tuple[Hashable, object]]:
     """Run ``function(*calls[key])`` in a pool of ``workers`` fresh (spawned) processes on this machine; yields
     (key, result) as the jobs finish. A job's RigoptError is raised again as itself; any other failure as a
-    DataError naming the ``what`` of its key. Spawned, not forked: a worker may use CUDA."""
+    DataError naming the ``what`` of its key. Spawned, not forked: a worker may use CUDA. The workers ignore
+    Ctrl-C and end with this process: on any exception here (an interrupt too) they are terminated at once, and
+    one whose parent dies gets SIGTERM (:func:`rigopt.background.worker_setup`)."""
     import multiprocessing
     from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 
+    from rigopt.background import end_workers, worker_setup
+
     context = multiprocessing.get_context("spawn")
-    with ProcessPoolExecutor(max_workers=min(workers, len(calls)), mp_context=context) as pool:
+    pool = ProcessPoolExecutor(max_workers=min(workers, len(calls)), mp_context=context, initializer=worker_setup)
+    try:
         pending = {pool.submit(function, *arguments): key for key, arguments in calls.items()}
-        try:
-            while pending:
-                done, _ = wait(pending, return_when=FIRST_COMPLETED)
-                for future in done:
-                    key = pending.pop(future)
-                    try:
-                        result = future.result()
-                    except RigoptError:
-                        raise
-                    except Exception as error:
-                        raise DataError(f"{what} {key} failed in a worker process: {error}") from None
-                    yield key, result
-        finally:
-            for future in pending:
-                future.cancel()
+        while pending:
+            done, _ = wait(pending, return_when=FIRST_COMPLETED)
+            for future in done:
+                key = pending.pop(future)
+                try:
+                    result = future.result()
+                except RigoptError:
+                    raise
+                except Exception as error:
+                    raise DataError(f"{what} {key} failed in a worker process: {error}") from None
+                yield key, result
+    except BaseException:  # Ctrl-C, SIGTERM, a failed job, the caller stopping early: end the workers now
+        end_workers(pool)
+        raise
+    pool.shutdown()
 
 
 def ray_tasks(address: str, function: Callable, calls: dict[Hashable, tuple], gpus: float = 0,
