@@ -49,6 +49,9 @@ FIT_ROUNDS = 5
 START_WEIGHT = 0.1
 #: A term whose largest value over the fitting rigs is at most this is not fitted (weight 0).
 INFORMATIVE = 1e-6
+#: The widest horizontal FOV (deg) the terms read: a fisheye of 180 deg or more counts as this (tan(hfov / 2) has
+#: no value at 180 deg); no fitting rig came near it, so its zoom term is flagged as beyond them.
+WIDEST_HFOV = 179.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -56,7 +59,7 @@ class CameraGeometry:
     """What the terms read of N cameras, vehicle frame from the centre on the ground.
 
     plan : (N, 2) float m; height : (N,) float m; yaw, pitch, roll : (N,) float rad (ISO 8855);
-    depths : (N, G) float ln m of the ground depth grid; half_tan : (N,) float tan(hfov / 2);
+    depths : (N, G) float ln m of the ground depth grid; half_tan : (N,) float tan(min(hfov, WIDEST_HFOV) / 2);
     centre : (N, 2) float principal point over image size.
     """
 
@@ -79,9 +82,9 @@ class CameraGeometry:
         ``model`` (batch (N,))."""
         positions = np.asarray(positions, dtype=float)
         yaw, pitch, roll = yaw_pitch_roll_from_rotation(rotations)
+        hfov = np.minimum(np.broadcast_to(np.asarray(model.hfov, dtype=float), len(positions)), WIDEST_HFOV)
         return cls(positions[:, :2], positions[:, 2], yaw, pitch, roll,
-                   depths_on_ground(model, rotations, positions[:, 2]),
-                   np.tan(np.radians(np.broadcast_to(np.asarray(model.hfov, dtype=float), len(positions))) / 2),
+                   depths_on_ground(model, rotations, positions[:, 2]), np.tan(np.radians(hfov) / 2),
                    np.stack([np.asarray(model.cx) / np.asarray(model.width),
                              np.asarray(model.cy) / np.asarray(model.height)], axis=-1)
                    * np.ones((len(positions), 1)))

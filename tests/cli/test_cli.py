@@ -123,14 +123,14 @@ def test_rigcd_json_keys_and_the_joint_drop_without_weights():
 
 
 def test_a_pair_beyond_the_calibration_pairs_is_flagged_with_its_terms_and_one_inside_is_not():
-    far = invoke_json("rigcd", "R1", "R6", "--json")
+    far = invoke_json("rigcd", "R1", "R6", "--predictor", "rigcd", "--json")  # RigCD's calibration domain
     w = shipped_weights("joint")
     control_t = max(point[0] for point in w["domain"]["points"])
     assert [t["term"] for t in far["extrapolation"]["terms"]] == ["t"]  # the fire truck's cameras, metres away
     assert far["extrapolation"]["terms"][0]["beyond"] == pytest.approx(far["t"] - control_t)
     low, high = far["interval"]
     assert low <= far["predicted_drop"] <= high and high - low > 0
-    near = invoke_json("rigcd", "R1", "R1-r", "--json")  # both control rigs: a calibration pair itself
+    near = invoke_json("rigcd", "R1", "R1-r", "--predictor", "rigcd", "--json")  # a calibration pair itself
     assert near["extrapolation"] is None
 
 

@@ -37,7 +37,7 @@ def test_rank_with_rigcd_plus_uses_the_rigcd_plus_weights():
     for p in ranked:
         assert p["linear_drop"] == pytest.approx(plus.K * p["rigcd"], rel=1e-9)
         assert p["predicted_drop"] == pytest.approx(float(plus.link(p["linear_drop"])), rel=1e-9)
-    default = invoke_json("rank", *CANDIDATES, "--ref", "R1", "--json")
+    default = invoke_json("rank", *CANDIDATES, "--ref", "R1", "--predictor", "rigcd", "--json")
     expected = {p.rig: p.predicted_drop for p in predict_transfer(load_rig("R1"), [load_rig(c) for c in CANDIDATES],
                                                                   load_weights("joint"))}
     assert {p["rig"]: p["predicted_drop"] for p in default} == pytest.approx(expected, rel=1e-12)
