@@ -355,8 +355,11 @@ def load_drop_model(name_or_path) -> DropModel:
         return DropModel.from_dict(json.loads(path.read_text()))
     except UnicodeDecodeError as error:
         raise not_utf8(path, "drop model file", error) from None
-    except (OSError, ValueError, KeyError, TypeError) as error:
-        raise DataError(f"{path}: not a drop model file ({type(error).__name__}: {error}); rigopt writes them as "
+    except KeyError as error:
+        raise DataError(f"{path}: not a drop model file (no {error} key); rigopt writes them as "
+                        "studies/predictor/ship.py does") from None
+    except (OSError, ValueError, TypeError) as error:
+        raise DataError(f"{path}: not a drop model file ({error}); rigopt writes them as "
                         "studies/predictor/ship.py does") from None
 
 

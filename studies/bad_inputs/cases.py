@@ -633,4 +633,14 @@ CASES: list[tuple[str, list[str], str]] = [
     ("design --measure from a reference without shipped models", ["design", "--vehicle", "tt", "--ref", "R6",
                                                                   "--measure", "--out", f"{T}/dm"],
      "--measure needs the shipped lss models trained on R6"),
+    # --- predictors and the drop-model objective (issue 42) ---
+    ("rank unknown --predictor", ["rank", "R6", "--ref", "R1", "--predictor", "nope"], "unknown predictor 'nope'"),
+    ("rank --predictor of another reference", ["rank", "R1", "--ref", "R2", "--predictor", "lss-R1"],
+     "predicts transfers from R1"),
+    ("design --objective missing file", [*DESIGN, "--objective", f"{T}/none.json", "--out", f"{T}/dobj"],
+     "no such drop model file"),
+    ("design --objective not a model", [*DESIGN, "--objective", f"{T}/weights_beta_null.json", "--out", f"{T}/dobj"],
+     "not a drop model file"),
+    ("design --objective of another reference", ["design", "--vehicle", "tt", "--ref", "R2", "--objective", "lss-R1",
+                                                 "--out", f"{T}/dobj"], "fitted from R1"),
 ]
