@@ -251,7 +251,7 @@ def design_command(
         if pareto and measure:
             raise RigoptError("--measure measures one design: leave out --pareto (or --measure)")
         if pareto:
-            _pareto(target, references, calibration, settings, out, force, as_json, status)
+            _pareto(target, references, calibration, drop_model, settings, out, force, as_json, status)
             return
         if measure:
             _check_measurable(references[0].rig.name, protocol)
@@ -401,7 +401,7 @@ def _reference(name: str, vehicle: Optional[str]):
     return ReferenceRig(rig, on)
 
 
-def _pareto(target, references, calibration, settings, out: Path, force: bool, as_json: bool,
+def _pareto(target, references, calibration, drop_model, settings, out: Path, force: bool, as_json: bool,
             status: Console) -> None:
     from dataclasses import asdict
 
@@ -411,7 +411,8 @@ def _pareto(target, references, calibration, settings, out: Path, force: bool, a
     counts = settings.cameras or sweep_counts(references)
     with status.status("sweeping camera counts and coverage levels") as spinner:
         points = pareto_designs(target, references, calibration, settings, counts,
-                                progress=lambda message: spinner.update(message) or status.print(f"  {message}"))
+                                progress=lambda message: spinner.update(message) or status.print(f"  {message}"),
+                                drop_model=drop_model)
     if not any(p.feasible for p in points):
         count = str(counts[0]) if counts[0] == counts[1] else f"{counts[0]}-{counts[1]}"
         raise RigoptError(f"no design of {count} camera(s) on {target.name} is feasible at any coverage "
@@ -422,7 +423,9 @@ def _pareto(target, references, calibration, settings, out: Path, force: bool, a
     if as_json:
         print_json([{k: v for k, v in asdict(p).items() if k != "rig"} for p in points])
         return
-    print_table(f"designs for {target.name}: predicted drop against the near field and the mounting cost",
+    by = (f"the {drop_model.name} drop model" if drop_model is not None
+          else f"{calibration.metric} under {calibration.name} weights")
+    print_table(f"designs for {target.name}: predicted drop ({by}) against the near field and the mounting cost",
                 ["cameras", "coverage level", "predicted drop", "rigcd", "coverage", "2 m ring ground",
                  "unseen within 5 m (m²)", "fields seen (min)", "mounting cost", "frontier"],
                 [[p.n_cameras, p.level, p.predicted_drop, p.rigcd, p.coverage, p.ring_2m_ground, p.blind_area_m2,

@@ -19,6 +19,7 @@ from typing import Callable, Sequence
 from rigopt.design.designer import no_progress, prepare, select_valid, summarise
 from rigopt.design.requirements import design_requirements, fleet_requirements
 from rigopt.design.problem import ReferenceRig
+from rigopt.design.result import repredicted
 from rigopt.design.selection import DesignInfeasible
 from rigopt.design.settings import DesignSettings
 from rigopt.metrics.calibration import Calibration
@@ -54,9 +55,10 @@ class ParetoPoint:
 
 def pareto_designs(vehicle: Vehicle, references: Sequence[ReferenceRig], calibration: Calibration,
                    settings: DesignSettings, counts: tuple[int, int], levels: Sequence[str] = tuple(LEVELS),
-                   progress: Callable[[str], None] = no_progress) -> list[ParetoPoint]:
+                   progress: Callable[[str], None] = no_progress, drop_model=None) -> list[ParetoPoint]:
     """Solve every camera count in ``counts`` (inclusive range) at every coverage level, for the references
-    each on its own vehicle."""
+    each on its own vehicle; each point's predicted drop is ``drop_model``'s from the references it was fitted
+    from (:func:`rigopt.design.result.repredicted`), else RigCD's under ``calibration``."""
     rigs = [r.rig for r in references]
     base = design_requirements(references, vehicle, settings)
     if settings.require is None:  # the sweep requires fields only when named; the category's are reported
@@ -76,6 +78,8 @@ def pareto_designs(vehicle: Vehicle, references: Sequence[ReferenceRig], calibra
                 points.append(ParetoPoint(n, level, False, reason=str(error)))
                 continue
             summary = summarise(rig, vehicle, rigs, calibration, needed, level_settings)
+            if drop_model is not None:
+                summary = repredicted(summary, rigs, calibration, drop_model)
             ring, blind, fields, cost = near_field(rig, vehicle, level_settings)
             points.append(ParetoPoint(n, level, True, summary.prediction.predicted_drop, summary.prediction.rigcd,
                                       summary.coverage, ring, blind, fields, cost, rig=rig))

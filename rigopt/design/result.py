@@ -4,6 +4,7 @@ one ``DesignResult`` from which the report writers and the command line take eve
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from typing import Sequence
 
 from rigopt.mounting.rules import RigCheck
 from rigopt.design.problem import ReferenceRig
@@ -131,21 +132,27 @@ class DesignResult:
     ``perception_symmetric=False``, without them)."""
 
 
+def repredicted(summary: RigSummary | None, references: Sequence[Rig], calibration: Calibration,
+                model: DropModel) -> RigSummary | None:
+    """``summary`` with its prediction from each reference that ``model`` was fitted from made by the model (the
+    others kept: RigCD's under ``calibration``); None stays None."""
+    if summary is None:
+        return None
+    return replace(summary, predictions=tuple(
+        predict_transfer(reference, [summary.rig.perception()], calibration, model)[0] if model.applies_to(reference)
+        else kept for reference, kept in zip(references, summary.predictions)))
+
+
 def predicted_by(result: DesignResult, model: DropModel | None) -> DesignResult:
     """``result`` with every rig's predicted drop (design, refinement, comparisons) that of the drop ``model`` from
-    each reference it was fitted from, RigCD's under the result's calibration from the others; the design
-    itself, chosen on RigCD's distance, does not change. ``model`` None: ``result`` as it is."""
+    each reference it was fitted from, RigCD's under the result's calibration from the others
+    (:func:`repredicted`); the design itself, chosen before, does not change. ``model`` None: ``result`` as it is."""
     if model is None:
         return result
     references = [r.rig for r in result.references]
-    models = [model if model.applies_to(rig) else None for rig in references]
 
     def again(summary: RigSummary | None) -> RigSummary | None:
-        if summary is None:
-            return None
-        return replace(summary, predictions=tuple(
-            predict_transfer(reference, [summary.rig.perception()], result.calibration, m)[0] if m else kept
-            for reference, m, kept in zip(references, models, summary.predictions)))
+        return repredicted(summary, references, result.calibration, model)
 
     comparisons = replace(result.comparisons, naive_transfer=again(result.comparisons.naive_transfer),
                           rigs=tuple(map(again, result.comparisons.rigs)))
