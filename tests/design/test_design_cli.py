@@ -102,18 +102,23 @@ def test_a_small_design_has_the_documented_keys_and_its_rig_file(small_run):
 
 
 @pytest.mark.slow
-def test_each_predicted_drop_has_its_interval_and_the_far_benchmark_rig_is_flagged(design_run):
-    from rigopt.metrics.calibration import load_weights
+def test_each_predicted_drop_is_the_drop_models_with_its_interval(design_run):
+    """From R1 the report's predictions are the shipped drop model's: each drop with its bin's 90 % half-width
+    (clipped to [0, 1]), and RigCD's distance beside it."""
+    from rigopt.metrics.drop_model import interval_bin, load_drop_model
 
     summary, _, _ = design_run
-    joint = load_weights("joint")
-    for entry in (summary, summary["comparisons"]["naive_transfer"], *summary["comparisons"]["benchmark_rigs"]):
-        low, high = entry["interval"]
-        assert low == pytest.approx(entry["predicted_drop"] - joint.interval.halfwidth)
-        assert high == pytest.approx(min(1.0, entry["predicted_drop"] + joint.interval.halfwidth))
-        assert entry["predicted_drop"] == pytest.approx(float(joint.link(entry["linear_drop"])))
+    model = load_drop_model("lss-R1")
+    entries = (summary, summary["comparisons"]["naive_transfer"], *summary["comparisons"]["benchmark_rigs"])
+    for entry in entries:
+        halfwidth = model.halfwidths[interval_bin([entry["predicted_drop"]])[0]]
+        assert entry["predictor"] == "lss-R1 drop model" and entry["linear_drop"] is None
+        assert entry["interval"] == pytest.approx([max(0.0, entry["predicted_drop"] - halfwidth),
+                                                   min(1.0, entry["predicted_drop"] + halfwidth)])
+        assert entry["rigcd"] > 0
     r6 = summary["comparisons"]["benchmark_rig"]  # R6 on the fire truck, metres from R1's cameras
-    assert r6["name"] == "R6" and "t" in [term["term"] for term in r6["extrapolation"]["terms"]]
+    assert r6["name"] == "R6" and r6["predicted_drop"] > summary["predicted_drop"]
+    assert "lss-R1 drop model" in summary["notes"][0]
 
 
 @pytest.mark.slow

@@ -297,16 +297,22 @@ def test_a_rig_with_near_field_fisheyes_is_measured_whole_through_its_lenses(use
 
 @pytest.mark.slow
 def test_the_table_says_when_the_prediction_interval_is_uninformative(use_packed, tmp_path, capsys):
-    """The joint calibration's interval spans the whole range: the cell and a note say so, JSON keeps it."""
+    """The joint calibration's interval (RigCD's, on request) spans the whole range: the cell and a note say so,
+    JSON keeps it; the default prediction from R1, the drop model's, has an informative interval."""
     capsys.readouterr()
-    code = run(["validate", "R5", "--ref", "R1", "--model", "lss", "--workers", "1", "--cache", str(tmp_path / "c")])
+    base = ["validate", "R5", "--ref", "R1", "--model", "lss", "--workers", "1", "--cache", str(tmp_path / "c")]
+    code = run([*base, "--predictor", "rigcd"])
     captured = capsys.readouterr()
     assert code == 0, captured.err
     assert "uninformative" in captured.out and "interval uninformative (wider than the range" in captured.err
-    code = run(["validate", "R5", "--ref", "R1", "--model", "lss", "--workers", "1", "--cache", str(tmp_path / "c"),
-                "--json"])
-    entry = json.loads(capsys.readouterr().out)["rigs"][0]
+    code = run([*base, "--predictor", "rigcd", "--json"])
+    result = json.loads(capsys.readouterr().out)
+    entry = result["rigs"][0]
     assert entry["interval_informative"] is False and len(entry["predicted_interval"]) == 2
+    assert result["predicted_by"] == "RigCD (joint)"
+    code = run([*base, "--json"])
+    result = json.loads(capsys.readouterr().out)
+    assert result["predicted_by"] == "lss-R1 drop model" and result["rigs"][0]["interval_informative"] is True
 
 
 @pytest.mark.slow
