@@ -123,17 +123,16 @@ def test_milp_objective_is_the_rigcd_of_the_rig_it_chose(firetruck):
 
 
 @pytest.mark.slow
-def test_design_rigcd_equals_the_milp_objective_unless_refined(firetruck):
+def test_the_refinement_lowers_the_milps_rigcd_and_its_rig_is_the_design(firetruck):
+    """The library's default settings on the fire truck: IPOPT moves all 8 perception cameras and lowers RigCD
+    (1.892 -> 1.860), so the refined rig is the design."""
     objective, value = firetruck.result.milp.selection.objective, firetruck.design.prediction.rigcd
     refinement = firetruck.result.refinement
-    if refinement.accepted:
-        assert value < objective  # the refinement is kept only when it lowers the RigCD
-        assert refinement.status.startswith("accepted")
-        assert same_poses(firetruck.design.rig.perception(), refinement.refined.rig)
-        assert 0 < refinement.cameras_moved <= len(firetruck.design.rig.perception())
-    else:
-        assert abs(value - objective) <= 1e-6
-        assert same_poses(firetruck.design.rig.perception(), firetruck.milp_rig)
+    assert refinement.accepted and refinement.status.startswith("accepted: IPOPT Solve_Succeeded")
+    assert value < objective - 1e-3  # kept because it lowers the RigCD
+    assert same_poses(firetruck.design.rig.perception(), refinement.refined.rig)
+    assert refinement.cameras_moved == len(firetruck.design.rig.perception()) == 8
+    assert not same_poses(firetruck.design.rig.perception(), firetruck.milp_rig)
 
 
 def same_poses(a: Rig, b: Rig) -> bool:
@@ -148,7 +147,7 @@ def test_milp_solved_to_optimality(firetruck):
     assert milp.status == milp.selection.status == "optimal"
     assert 0.0 <= milp.gap <= DesignSettings().mip_gap
     assert 0 < milp.n_offered <= milp.n_candidates
-    assert milp.check.valid and milp.repairs >= 0
+    assert milp.check.valid and milp.repairs == 0  # no selected camera failed the mount checks
 
 
 @pytest.mark.slow
