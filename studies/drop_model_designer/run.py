@@ -18,7 +18,6 @@ The user vehicle ``citybus`` must be added first (``studies/predictor/README.md`
 
 from __future__ import annotations
 
-import argparse
 import json
 import subprocess
 import sys
@@ -31,8 +30,7 @@ HERE = Path(__file__).resolve().parent
 PREDICTOR = HERE.parent / "predictor"
 RESULTS, MODELS, RIGS = HERE / "results", HERE / "models", HERE / "rigs"
 sys.path.insert(0, str(HERE.parent))  # studies/: the studies' shared code (studylib)
-from studylib.logs import timestamped_log  # noqa: E402
-from studylib.measuring import add_measuring_options  # noqa: E402
+from studylib.paired import run_cells, vehicle_draws, vehicle_mean  # noqa: E402
 from studylib.tables import markdown  # noqa: E402
 
 VEHICLES = ("tt", "renault_zoe", "ford_fusion_hybrid", "chrysler_pacifica_hybrid", "citybus")
@@ -104,22 +102,12 @@ def measure_vehicle(vehicle: str, protocol_name: str, cache, workers: int, progr
 
 
 def analyse(found: dict) -> dict:
-    rng = np.random.default_rng(SEED)
-    draws = rng.integers(len(VEHICLES), size=(RESAMPLES, len(VEHICLES)))
+    draws = vehicle_draws(len(VEHICLES), RESAMPLES, SEED)
     out = {"level": LEVEL, "arms": {}}
     for arm in ARMS:
-        per = {}
-        for protocol in PROTOCOLS:
-            for role in YARDSTICKS:
-                values = np.array([found[(v, protocol)]["minus"][arm][role]["difference"] for v in VEHICLES])
-                means = values[draws].mean(axis=1)
-                per[f"{protocol} / {role}"] = {
-                    "per_vehicle": dict(zip(VEHICLES, values.tolist())), "mean": float(values.mean()),
-                    "ci95": [float(np.percentile(means, 2.5)), float(np.percentile(means, 97.5))],
-                    "ci_bonferroni": [float(np.percentile(means, 100 * (1 - LEVEL) / 2)),
-                                      float(np.percentile(means, 100 * (1 + LEVEL) / 2))],
-                    "vehicles_wholly_above_0": [v for v in VEHICLES
-                                                if found[(v, protocol)]["minus"][arm][role]["ci"][0] > 0]}
+        per = {f"{protocol} / {role}": vehicle_mean([found[(v, protocol)]["minus"][arm][role] for v in VEHICLES],
+                                                    VEHICLES, draws, LEVEL)
+               for protocol in PROTOCOLS for role in YARDSTICKS}
         beats = {role: all(per[f"{p} / {role}"]["ci_bonferroni"][1] < 0 and not per[f"{p} / {role}"]["vehicles_wholly_above_0"]
                            for p in PROTOCOLS) for role in YARDSTICKS}
         out["arms"][arm] = {"differences": per, "beats": beats}
@@ -153,30 +141,7 @@ def report(found: dict, result: dict) -> str:
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    add_measuring_options(parser)
-    parser.add_argument("--analyse-only", action="store_true")
-    args = parser.parse_args(argv)
-    from rigopt.output import write_text_atomic
-
-    found = {}
-    with timestamped_log(RESULTS / "run.log") as progress:
-        for protocol in PROTOCOLS:
-            for vehicle in VEHICLES:
-                path = RESULTS / f"{vehicle}_{protocol}.json"
-                if not path.is_file() and not args.analyse_only:
-                    write_text_atomic(path, json.dumps(measure_vehicle(vehicle, protocol, args.cache, args.workers,
-                                                                       progress), indent=1) + "\n")
-                if path.is_file():
-                    found[(vehicle, protocol)] = json.loads(path.read_text())
-    if len(found) < len(VEHICLES) * len(PROTOCOLS):
-        print(f"{len(found)} of {len(VEHICLES) * len(PROTOCOLS)} (vehicle, scenes) measured; analysis waits")
-        return 0
-    result = analyse(found)
-    write_text_atomic(RESULTS / "results.json", json.dumps(result, indent=1) + "\n")
-    write_text_atomic(RESULTS / "results.md", report(found, result))
-    print(report(found, result))
-    return 0
+    return run_cells(argv, __doc__.splitlines()[0], RESULTS, VEHICLES, PROTOCOLS, measure_vehicle, analyse, report)
 
 
 if __name__ == "__main__":
