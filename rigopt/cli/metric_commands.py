@@ -103,7 +103,7 @@ def rank_command(
     Rigs measured from different origins are converted to their vehicles' centres first (reported)."""
     from rigopt.metrics.calibration import load_weights
     from rigopt.metrics.drop_model import choose_model
-    from rigopt.metrics.ranking import rank_candidates, rigcd_predictor
+    from rigopt.metrics.ranking import model_predictor, rank_candidates, rigcd_predictor
 
     calibration = load_weights(weights or DEFAULT_WEIGHTS, metric)
     (reference, *others), changes, left_out = _comparable([ref, *candidates], vehicle)
@@ -113,7 +113,7 @@ def rank_command(
     if as_json:
         print_json([{**p.to_dict(), "near_field_left_out": left_out.get(p.rig, 0)} for p in ranked])
         return
-    by = rigcd_predictor(calibration) if model is None else ranked[0].predictor
+    by = rigcd_predictor(calibration) if model is None else model_predictor(model)
     print_table(f"Candidates ranked by predicted drop from {ref} ({by})",
                 ["rank", "rig", "predicted drop", "interval", f"{calibration.metric} ({calibration.name} weights)", "t (m)",
                  "r (rad)", "f (deg)", "count", "extrapolates"],

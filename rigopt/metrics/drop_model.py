@@ -36,6 +36,7 @@ import numpy as np
 from scipy.optimize import least_squares, linear_sum_assignment
 
 from rigopt.camera import CameraModel
+from rigopt.errors import DataError, RigoptError, not_utf8, unknown_name
 from rigopt.geometry import yaw_pitch_roll_from_rotation
 from rigopt.metrics.lifting import depths_on_ground
 from rigopt.rig.model import Rig
@@ -177,13 +178,19 @@ def fit_weights(terms: Sequence[PairTerms], drops: np.ndarray, rounds: int = FIT
         solution = least_squares(lambda w: link(x[:, used] @ w) - drops, start, bounds=(0.0, np.inf), method="trf")
         weights = np.zeros(x.shape[1])
         weights[used] = solution.x
-        pair_weights = weights[:len(PAIR_FEATURES)] + 1e-9  # a zero weight still breaks ties by the others
+        pair_weights = matching_weights(weights)
     return weights
+
+
+def matching_weights(weights: np.ndarray) -> np.ndarray:
+    """(len(PAIR_FEATURES),) float: the pair weights the matching is made under, each raised by 1e-9 so that a term
+    of weight 0 still breaks ties between matchings the others leave equal."""
+    return np.asarray(weights[:len(PAIR_FEATURES)], dtype=float) + 1e-9
 
 
 def predict(weights: np.ndarray, terms: Sequence[PairTerms]) -> np.ndarray:
     """(P,) float: the predicted drops of ``terms`` under ``weights``."""
-    pair_weights = np.asarray(weights[:len(PAIR_FEATURES)]) + 1e-9
+    pair_weights = matching_weights(weights)
     return link(np.array([features(t.pairs, t.rig, pair_weights) @ weights for t in terms]))
 
 
@@ -226,9 +233,8 @@ class DropModel:
     """A fitted model of one detector's measured drop from one reference rig (shipped under ``metrics/drop_models``).
 
     name : what the outputs call it (e.g. "lss-R1"); detector : the shipped detector folder whose drops it was
-    fitted on; reference : the reference rig's name; reference_cameras : (N, 6) float of the reference's
-    perception cameras, vehicle frame from the centre on the ground: x, y, z (m), yaw, pitch, roll (rad), and
-    hfov (deg) in a 7th column, i.e. (N, 7); weights : (len(FEATURES),) float >= 0; halfwidths :
+    fitted on; reference : the reference rig's name; reference_cameras : (N, 7) float, :func:`camera_table` of the
+    reference's perception cameras, vehicle frame from the centre on the ground; weights : (len(FEATURES),) float >= 0; halfwidths :
     (len(INTERVAL_BINS) + 1,) float, the 90 % interval's half-width per predicted-drop bin; ranges :
     (len(FEATURES), 2) float, each term's range over the fitting rigs; default : whether its study found it
     better than RigCD, so that commands print it by default; study : where its evidence is (one line).
@@ -276,7 +282,7 @@ class DropModel:
     def terms(self, reference: Rig, candidates: Sequence[Rig]) -> np.ndarray:
         """(P, len(FEATURES)) float: each candidate's terms under the model's matching."""
         a = CameraGeometry.of(reference)
-        pair_weights = self.weights[:len(PAIR_FEATURES)] + 1e-9
+        pair_weights = matching_weights(self.weights)
         return np.array([features(pair_features(a, b), rig_features(a, b), pair_weights)
                          for b in map(CameraGeometry.of, candidates)]).reshape(len(candidates), len(FEATURES))
 
@@ -290,9 +296,8 @@ class DropModel:
         pair_weights = self.weights[:len(PAIR_FEATURES)]
         out = np.empty((len(positions), len(reference)))
         for start in range(0, len(positions), chunk):
-            part = np.s_[start:start + chunk]
-            index = np.arange(start, min(start + chunk, len(positions)))
-            geometry = CameraGeometry.of_cameras(positions[index], rotations[index], model.take(index))
+            part = slice(start, start + chunk)
+            geometry = CameraGeometry.of_cameras(positions[part], rotations[part], model.take(part))
             out[part] = (pair_features(ref, geometry) @ pair_weights).T
         return out
 
@@ -337,7 +342,6 @@ def load_drop_model(name_or_path) -> DropModel:
     import json
     from pathlib import Path
 
-    from rigopt.errors import DataError, not_utf8, unknown_name
     from rigopt.resources import data_dir
 
     text = str(name_or_path)
@@ -374,8 +378,6 @@ def choose_model(option: str, reference: Rig, weights_given: bool = False) -> Dr
     ``auto``: the shipped model marked default whose reference ``reference`` is, unless RigCD weights were named
     (``weights_given``: the user asked for RigCD under them); ``rigcd``: None; a model's name: that model, refused
     for a reference it was not fitted from."""
-    from rigopt.errors import RigoptError
-
     key = option.lower()
     if key == RIGCD:
         return None
@@ -384,11 +386,9 @@ def choose_model(option: str, reference: Rig, weights_given: bool = False) -> Dr
             return None
         models = (load_drop_model(name) for name in shipped_drop_models())
         return next((m for m in models if m.default and m.applies_to(reference)), None)
-    model = load_drop_model(option) if key in {n.lower() for n in shipped_drop_models()} else None
-    if model is None:
-        from rigopt.errors import unknown_name
-
+    if key not in {name.lower() for name in shipped_drop_models()}:
         raise unknown_name("predictor", option, [AUTO, RIGCD, *shipped_drop_models()])
+    model = load_drop_model(option)
     if not model.applies_to(reference):
         raise RigoptError(f"the {model.name} drop model predicts transfers from {model.reference} (its detector's "
                           f"training rig), and {reference.name} is another rig: pass --ref {model.reference} or "

@@ -10,6 +10,7 @@ and prints only when asked for by name (``--predictor lss-R1``).
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import sys
 from pathlib import Path
@@ -30,19 +31,17 @@ def main() -> int:
     weights = np.array([analysis["weights_all"][name] for name in drop_model.FEATURES])
     reference = in_vehicle_frame(load_rig("R1"))[0].perception()
     rigs = [in_vehicle_frame(load_rig(HERE / "rigs" / f"{row['rig']}.json"))[0] for row in analysis["per_rig"]]
-    fitted = drop_model.DropModel("lss-R1", "lss-R1", "R1", drop_model.camera_table(reference), weights,
-                                  np.zeros(len(drop_model.INTERVAL_BINS) + 1), np.zeros((len(weights), 2)), False, "")
-    terms = fitted.terms(reference, rigs)
     held_out = np.array([row["predicted"] for row in analysis["per_rig"]])
     measured = np.array([row["measured"] for row in analysis["per_rig"]])
     p, r = analysis["predictor"], analysis["rigcd"]
     study = (f"studies/predictor (pre-registered): {analysis['rigs']} rigs on {len(analysis['vehicles'])} vehicles, "
              f"leave-one-vehicle-out mean within-vehicle rho {p['mean_within_rho']:.3f} (RigCD "
              f"{r['mean_within_rho']:.3f}), MAE {p['mae']:.3f} (RigCD {r['mae']:.3f})")
-    model = drop_model.DropModel("lss-R1", "lss-R1", "R1", fitted.reference_cameras, weights,
-                                 drop_model.interval_halfwidths(held_out, measured),
-                                 np.column_stack([terms.min(axis=0), terms.max(axis=0)]),
+    model = drop_model.DropModel("lss-R1", "lss-R1", "R1", drop_model.camera_table(reference), weights,
+                                 drop_model.interval_halfwidths(held_out, measured), np.zeros((len(weights), 2)),
                                  bool(analysis["replaces_rigcd"]), study)
+    terms = model.terms(reference, rigs)  # each term's range over the fitting rigs, under the model's matching
+    model = dataclasses.replace(model, ranges=np.column_stack([terms.min(axis=0), terms.max(axis=0)]))
     TARGET.parent.mkdir(parents=True, exist_ok=True)
     write_text_atomic(TARGET, json.dumps(model.to_dict(), indent=1) + "\n")
     print(f"{TARGET}: default {model.default}; {study}")
