@@ -15,13 +15,17 @@ from their vehicle's centre on the ground (ISO 8855; :func:`rigopt.vehicle.place
 - ``roll``, ``yaw`` (rad): |roll difference|, |yaw difference| (wrapped);
 - ``plan`` (m): the horizontal distance of the two lenses;
 - ``zoom``: |ln(tan(hfov_c / 2) / tan(hfov_r / 2))|, the lens's scale change;
-- ``centre``: |cx_c / w_c - cx_r / w_r| + |cy_c / h_c - cy_r / h_r|, the principal point's move (image fractions).
+- ``centre``: |cx_c / w_c - cx_r / w_r| + |cy_c / h_c - cy_r / h_r|, the principal point's move (image fractions);
+- ``body``: max(b_c - b_r, 0), b the share of the camera's image that shows its own vehicle's body (the renderer
+  draws the ego body; a camera that sees it sees less of the scene). The body is a vehicle's, which this layer
+  does not know: callers pass a ``body_share(rig, grid)`` function (:func:`rigopt.mounting.candidates.rig_body_share`).
 
 Terms of the whole rig (``RIG_FEATURES``): ``count`` = |N_c - N_r| / max(N_c, N_r) and ``uncovered``, the share
 of the reference's horizontal view (1-degree sectors of azimuth round the vehicle, each camera's horizontal FOV
 about its yaw) that no candidate camera's covers.
 
-The score of a candidate is s = w . x, x the pair terms averaged over the matched pairs (min(N_r, N_c) of them,
+A model names the terms it was fitted with (``DropModel.features``, a subset of FEATURES in their order; the
+first shipped model has no ``body`` term); the others weigh exactly 0. The score of a candidate is s = w . x, x the pair terms averaged over the matched pairs (min(N_r, N_c) of them,
 the assignment minimising the sum of the pair costs w_pair . phi) followed by the rig terms, w >= 0; the
 predicted drop is 1 - exp(-s). The pair cost is a sum over matched pairs plus terms of the whole rig, so the
 score can stand as a MILP's objective (the link is monotone).
@@ -30,7 +34,7 @@ score can stand as a MILP's objective (the link is monotone).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Sequence
+from typing import Callable, Sequence
 
 import numpy as np
 from scipy.optimize import least_squares, linear_sum_assignment
@@ -41,7 +45,11 @@ from rigopt.geometry import yaw_pitch_roll_from_rotation
 from rigopt.metrics.lifting import depths_on_ground
 from rigopt.rig.model import Rig
 
-PAIR_FEATURES = ("depth_prior", "raise", "lower", "tilt_down", "tilt_up", "roll", "yaw", "plan", "zoom", "centre")
+#: ``body_share(rig, grid)``: (N,) float, the share of each camera's image (estimated on a (columns, rows) grid)
+#: that shows the rig's vehicle's body; rig from the vehicle's centre on the ground.
+BodyShare = Callable[[Rig, tuple[int, int]], np.ndarray]
+PAIR_FEATURES = ("depth_prior", "raise", "lower", "tilt_down", "tilt_up", "roll", "yaw", "plan", "zoom", "centre",
+                 "body")
 RIG_FEATURES = ("count", "uncovered")
 FEATURES = PAIR_FEATURES + RIG_FEATURES
 #: Rounds of fit -> rematch -> refit at most (the fit stops early when the matching no longer changes).
@@ -53,6 +61,8 @@ INFORMATIVE = 1e-6
 #: The widest horizontal FOV (deg) the terms read: a fisheye of 180 deg or more counts as this (tan(hfov / 2) has
 #: no value at 180 deg); no fitting rig came near it, so its zoom term is flagged as beyond them.
 WIDEST_HFOV = 179.0
+#: Image grid (columns, rows) on which a camera's share of ego body is estimated for the ``body`` term.
+BODY_GRID = (16, 9)
 
 
 @dataclass(frozen=True, eq=False)
@@ -61,7 +71,8 @@ class CameraGeometry:
 
     plan : (N, 2) float m; height : (N,) float m; yaw, pitch, roll : (N,) float rad (ISO 8855);
     depths : (N, G) float ln m of the ground depth grid; half_tan : (N,) float tan(min(hfov, WIDEST_HFOV) / 2);
-    centre : (N, 2) float principal point over image size.
+    centre : (N, 2) float principal point over image size; body : (N,) float share of the image showing the ego
+    body (zeros when not given).
     """
 
     plan: np.ndarray
@@ -72,15 +83,19 @@ class CameraGeometry:
     depths: np.ndarray
     half_tan: np.ndarray
     centre: np.ndarray
+    body: np.ndarray
 
     @classmethod
-    def of(cls, rig: Rig) -> CameraGeometry:
-        return cls.of_cameras(rig.positions, rig.rotations, CameraModel.of_cameras(rig.cameras))
+    def of(cls, rig: Rig, body_share: BodyShare | None = None) -> CameraGeometry:
+        """The rig's cameras; their ego-body shares from ``body_share(rig, BODY_GRID)`` (zeros without it)."""
+        body = None if body_share is None else body_share(rig, BODY_GRID)
+        return cls.of_cameras(rig.positions, rig.rotations, CameraModel.of_cameras(rig.cameras), body)
 
     @classmethod
-    def of_cameras(cls, positions: np.ndarray, rotations: np.ndarray, model: CameraModel) -> CameraGeometry:
-        """N cameras given as positions (N, 3) m, rotations (N, 3, 3) (body to vehicle frame) and their lenses
-        ``model`` (batch (N,))."""
+    def of_cameras(cls, positions: np.ndarray, rotations: np.ndarray, model: CameraModel,
+                   body: np.ndarray | None = None) -> CameraGeometry:
+        """N cameras given as positions (N, 3) m, rotations (N, 3, 3) (body to vehicle frame), their lenses
+        ``model`` (batch (N,)) and their ego-body shares ``body`` (N,) (zeros when None)."""
         positions = np.asarray(positions, dtype=float)
         yaw, pitch, roll = yaw_pitch_roll_from_rotation(rotations)
         hfov = np.minimum(np.broadcast_to(np.asarray(model.hfov, dtype=float), len(positions)), WIDEST_HFOV)
@@ -88,7 +103,8 @@ class CameraGeometry:
                    depths_on_ground(model, rotations, positions[:, 2]), np.tan(np.radians(hfov) / 2),
                    np.stack([np.asarray(model.cx) / np.asarray(model.width),
                              np.asarray(model.cy) / np.asarray(model.height)], axis=-1)
-                   * np.ones((len(positions), 1)))
+                   * np.ones((len(positions), 1)),
+                   np.zeros(len(positions)) if body is None else np.asarray(body, dtype=float).reshape(len(positions)))
 
 
 def pair_features(reference: CameraGeometry, candidate: CameraGeometry) -> np.ndarray:
@@ -104,7 +120,8 @@ def pair_features(reference: CameraGeometry, candidate: CameraGeometry) -> np.nd
         wrap(candidate.roll[c] - reference.roll[r]), wrap(candidate.yaw[c] - reference.yaw[r]),
         np.linalg.norm(candidate.plan[c] - reference.plan[r], axis=-1),
         np.abs(np.log(candidate.half_tan[c] / reference.half_tan[r])),
-        np.abs(candidate.centre[c] - reference.centre[r]).sum(axis=-1)], axis=-1)
+        np.abs(candidate.centre[c] - reference.centre[r]).sum(axis=-1),
+        np.maximum(candidate.body[c] - reference.body[r], 0.0)], axis=-1)
 
 
 def azimuth_cover(geometry: CameraGeometry, sectors: int = 360) -> np.ndarray:
@@ -129,7 +146,7 @@ def match(pairs: np.ndarray, pair_weights: np.ndarray) -> tuple[np.ndarray, np.n
     return linear_sum_assignment(pairs @ pair_weights)
 
 
-def features(pairs: np.ndarray, rig_terms: np.ndarray, pair_weights: np.ndarray) -> np.ndarray:
+def matched_features(pairs: np.ndarray, rig_terms: np.ndarray, pair_weights: np.ndarray) -> np.ndarray:
     """(len(FEATURES),) float: the pair terms averaged over the matching under ``pair_weights``, then the rig terms."""
     rows, cols = match(pairs, pair_weights)
     return np.concatenate([pairs[rows, cols].mean(axis=0), rig_terms])
@@ -144,10 +161,10 @@ class PairTerms:
     rig: np.ndarray
 
     @classmethod
-    def of(cls, reference: Rig, candidate: Rig) -> PairTerms:
+    def of(cls, reference: Rig, candidate: Rig, body_share: BodyShare | None = None) -> PairTerms:
         """Both rigs measured from their vehicle's centre on the ground (the callers' job:
-        :func:`rigopt.vehicle.placement.in_vehicle_frame`)."""
-        a, b = CameraGeometry.of(reference), CameraGeometry.of(candidate)
+        :func:`rigopt.vehicle.placement.in_vehicle_frame`); the body term 0 without ``body_share``."""
+        a, b = CameraGeometry.of(reference, body_share), CameraGeometry.of(candidate, body_share)
         return cls(pair_features(a, b), rig_features(a, b))
 
 
@@ -156,13 +173,16 @@ def link(score: np.ndarray) -> np.ndarray:
     return -np.expm1(-np.asarray(score, dtype=float))
 
 
-def fit_weights(terms: Sequence[PairTerms], drops: np.ndarray, rounds: int = FIT_ROUNDS) -> np.ndarray:
+def fit_weights(terms: Sequence[PairTerms], drops: np.ndarray, features: Sequence[str] = FEATURES,
+                rounds: int = FIT_ROUNDS) -> np.ndarray:
     """(len(FEATURES),) float >= 0: the weights whose predicted drops best fit ``drops`` (least squares on the
     drop scale, scipy's bounded trust-region solver from START_WEIGHT), fit -> rematch -> refit until the
-    matchings stop changing or ``rounds`` fits are done. The first matching is under unit pair weights. A term no
-    fitting rig has (at most INFORMATIVE everywhere) gets weight 0."""
+    matchings stop changing or ``rounds`` fits are done. Only ``features`` are fitted (the others weigh 0 and do
+    not enter the matching). The first matching is under unit weights of the fitted pair terms. A term no fitting
+    rig has (at most INFORMATIVE everywhere) gets weight 0."""
     drops = np.asarray(drops, dtype=float)
-    pair_weights = np.ones(len(PAIR_FEATURES))
+    fitted = np.isin(FEATURES, features)
+    pair_weights = fitted[:len(PAIR_FEATURES)].astype(float)
     weights, matched = None, None
     for _ in range(rounds):
         matchings = [match(t.pairs, pair_weights) for t in terms]
@@ -173,25 +193,26 @@ def fit_weights(terms: Sequence[PairTerms], drops: np.ndarray, rounds: int = FIT
         x = np.array([np.concatenate([t.pairs[m].mean(axis=0), t.rig]) for t, m in zip(terms, matchings)])
         # a term that no fitting rig has (rounding noise at most) carries no information: its weight is 0, not
         # whatever the solver drifts it to (a huge weight on 1e-16 noise would blow up on a rig that has it)
-        used = x.max(axis=0) > INFORMATIVE
+        used = fitted & (x.max(axis=0) > INFORMATIVE)
         start = np.full(used.sum(), START_WEIGHT) if weights is None else weights[used]
         solution = least_squares(lambda w: link(x[:, used] @ w) - drops, start, bounds=(0.0, np.inf), method="trf")
         weights = np.zeros(x.shape[1])
         weights[used] = solution.x
-        pair_weights = matching_weights(weights)
+        pair_weights = matching_weights(weights, features)
     return weights
 
 
-def matching_weights(weights: np.ndarray) -> np.ndarray:
-    """(len(PAIR_FEATURES),) float: the pair weights the matching is made under, each raised by 1e-9 so that a term
-    of weight 0 still breaks ties between matchings the others leave equal."""
-    return np.asarray(weights[:len(PAIR_FEATURES)], dtype=float) + 1e-9
+def matching_weights(weights: np.ndarray, features: Sequence[str] = FEATURES) -> np.ndarray:
+    """(len(PAIR_FEATURES),) float: the pair weights the matching is made under, each of ``features`` raised by
+    1e-9 so that a term of weight 0 still breaks ties between matchings the others leave equal."""
+    return (np.asarray(weights[:len(PAIR_FEATURES)], dtype=float)
+            + 1e-9 * np.isin(PAIR_FEATURES, features))
 
 
-def predict(weights: np.ndarray, terms: Sequence[PairTerms]) -> np.ndarray:
-    """(P,) float: the predicted drops of ``terms`` under ``weights``."""
-    pair_weights = matching_weights(weights)
-    return link(np.array([features(t.pairs, t.rig, pair_weights) @ weights for t in terms]))
+def predict(weights: np.ndarray, terms: Sequence[PairTerms], features: Sequence[str] = FEATURES) -> np.ndarray:
+    """(P,) float: the predicted drops of ``terms`` under ``weights`` (a model of ``features``)."""
+    pair_weights = matching_weights(weights, features)
+    return link(np.array([matched_features(t.pairs, t.rig, pair_weights) @ weights for t in terms]))
 
 
 #: Upper edges of the predicted-drop bins whose intervals are set apart (the last bin is open above).
@@ -221,7 +242,8 @@ def interval_halfwidths(predicted: np.ndarray, measured: np.ndarray, level: floa
 
 #: Units of the terms, for the notes that flag a prediction beyond the fitting rigs.
 FEATURE_UNITS = {"depth_prior": "ln m", "raise": "m", "lower": "m", "tilt_down": "rad", "tilt_up": "rad",
-                 "roll": "rad", "yaw": "rad", "plan": "m", "zoom": "-", "centre": "-", "count": "-", "uncovered": "-"}
+                 "roll": "rad", "yaw": "rad", "plan": "m", "zoom": "-", "centre": "-", "body": "-", "count": "-",
+                 "uncovered": "-"}
 #: How far a reference's cameras may lie from the model's reference and still count as it (m, rad, deg).
 SAME_REFERENCE = {"position": 1e-3, "angle": 1e-4, "hfov": 1e-3}
 #: The folder of the shipped models, under the metrics data folder.
@@ -234,10 +256,11 @@ class DropModel:
 
     name : what the outputs call it (e.g. "lss-R1"); detector : the shipped detector folder whose drops it was
     fitted on; reference : the reference rig's name; reference_cameras : (N, 7) float, :func:`camera_table` of the
-    reference's perception cameras, vehicle frame from the centre on the ground; weights : (len(FEATURES),) float >= 0; halfwidths :
-    (len(INTERVAL_BINS) + 1,) float, the 90 % interval's half-width per predicted-drop bin; ranges :
-    (len(FEATURES), 2) float, each term's range over the fitting rigs; default : whether its study found it
-    better than RigCD, so that commands print it by default; study : where its evidence is (one line).
+    reference's perception cameras, vehicle frame from the centre on the ground; features : the terms it was
+    fitted with (FEATURES in order; the model file lists them); weights : (len(FEATURES),) float >= 0, 0 outside
+    ``features``; halfwidths : (len(INTERVAL_BINS) + 1,) float, the 90 % interval's half-width per predicted-drop
+    bin; ranges : (len(FEATURES), 2) float, each term's range over the fitting rigs; default : whether its study
+    found it better than RigCD, so that commands print it by default; study : where its evidence is (one line).
     """
 
     name: str
@@ -250,50 +273,69 @@ class DropModel:
     default: bool
     study: str
     level: float = INTERVAL_LEVEL
+    features: tuple[str, ...] = FEATURES
 
     @classmethod
     def from_dict(cls, data: dict) -> DropModel:
-        if list(data["features"]) != list(FEATURES) or list(data["interval"]["bins"]) != list(INTERVAL_BINS):
-            raise ValueError("the model's terms or interval bins are not this rigopt's")
+        features = tuple(map(str, data["features"]))
+        if [f for f in FEATURES if f in features] != list(features) or list(data["interval"]["bins"]) != list(INTERVAL_BINS):
+            raise ValueError(f"the model's terms must be some of {', '.join(FEATURES)} in that order, and its "
+                             f"interval bins {list(INTERVAL_BINS)}")
+        weights, ranges = np.array(data["weights"], float), np.array(data["ranges"], float)
+        n = len(features)
+        if (weights.shape != (n,) or not np.all(np.isfinite(weights)) or np.any(weights < 0)
+                or ranges.shape != (n, 2)):
+            raise ValueError(f"weights must be {n} finite numbers >= 0 and ranges {n} pairs, one per term")
+        fitted = np.isin(FEATURES, features)
+        all_weights, all_ranges = np.zeros(len(FEATURES)), np.zeros((len(FEATURES), 2))
+        all_weights[fitted], all_ranges[fitted] = weights, ranges
         model = cls(str(data["name"]), str(data["detector"]), str(data["reference"]),
-                    np.array(data["reference_cameras"], float), np.array(data["weights"], float),
-                    np.array(data["interval"]["halfwidths"], float), np.array(data["ranges"], float),
-                    bool(data["default"]), str(data["study"]), float(data["interval"]["level"]))
-        n = len(FEATURES)
-        if (model.weights.shape != (n,) or not np.all(np.isfinite(model.weights)) or np.any(model.weights < 0)
-                or model.reference_cameras.ndim != 2 or model.reference_cameras.shape[1] != 7
-                or model.halfwidths.shape != (len(INTERVAL_BINS) + 1,) or model.ranges.shape != (n, 2)):
-            raise ValueError(f"weights must be {n} finite numbers >= 0, reference_cameras rows of 7, halfwidths "
-                             f"{len(INTERVAL_BINS) + 1} and ranges {n} pairs")
+                    np.array(data["reference_cameras"], float), all_weights,
+                    np.array(data["interval"]["halfwidths"], float), all_ranges,
+                    bool(data["default"]), str(data["study"]), float(data["interval"]["level"]), features)
+        if (model.reference_cameras.ndim != 2 or model.reference_cameras.shape[1] != 7
+                or model.halfwidths.shape != (len(INTERVAL_BINS) + 1,)):
+            raise ValueError(f"reference_cameras must be rows of 7 and halfwidths {len(INTERVAL_BINS) + 1} numbers")
         return model
 
     def to_dict(self) -> dict:
+        fitted = np.isin(FEATURES, self.features)
         return {"name": self.name, "detector": self.detector, "reference": self.reference,
-                "reference_cameras": self.reference_cameras.tolist(), "features": list(FEATURES),
-                "weights": self.weights.tolist(), "ranges": self.ranges.tolist(), "default": self.default,
-                "study": self.study, "interval": {"level": self.level, "bins": list(INTERVAL_BINS),
-                                                  "halfwidths": self.halfwidths.tolist()}}
+                "reference_cameras": self.reference_cameras.tolist(), "features": list(self.features),
+                "weights": self.weights[fitted].tolist(), "ranges": self.ranges[fitted].tolist(),
+                "default": self.default, "study": self.study,
+                "interval": {"level": self.level, "bins": list(INTERVAL_BINS), "halfwidths": self.halfwidths.tolist()}}
+
+    @property
+    def needs_body(self) -> bool:
+        """Whether the model weighs the ``body`` term (its predictions then need a ``body_share`` function)."""
+        return bool(self.weights[FEATURES.index("body")] > 0)
 
     def applies_to(self, reference: Rig) -> bool:
         """Whether ``reference`` (its perception cameras, from its vehicle's centre on the ground) is the model's
         reference: the same cameras in the same order within SAME_REFERENCE."""
         return _same_cameras(camera_table(reference), self.reference_cameras)
 
-    def terms(self, reference: Rig, candidates: Sequence[Rig]) -> np.ndarray:
-        """(P, len(FEATURES)) float: each candidate's terms under the model's matching."""
-        a = CameraGeometry.of(reference)
-        pair_weights = matching_weights(self.weights)
-        return np.array([features(pair_features(a, b), rig_features(a, b), pair_weights)
-                         for b in map(CameraGeometry.of, candidates)]).reshape(len(candidates), len(FEATURES))
+    def terms(self, reference: Rig, candidates: Sequence[Rig], body_share: BodyShare | None = None) -> np.ndarray:
+        """(P, len(FEATURES)) float: each candidate's terms under the model's matching; ``body_share`` gives the
+        ego-body shares, required when the model weighs them (:attr:`needs_body`)."""
+        if self.needs_body and body_share is None:
+            raise ValueError(f"the {self.name} drop model weighs the ego body each camera sees: pass body_share")
+        a = CameraGeometry.of(reference, body_share)
+        pair_weights = matching_weights(self.weights, self.features)
+        return np.array([matched_features(pair_features(a, b), rig_features(a, b), pair_weights)
+                         for b in (CameraGeometry.of(c, body_share) for c in candidates)]
+                        ).reshape(len(candidates), len(FEATURES))
 
     def pair_costs(self, positions: np.ndarray, rotations: np.ndarray, model: CameraModel, reference: Rig,
                    chunk: int = 4096) -> np.ndarray:
         """(n, R) float: the model's cost w_pair . phi of matching each of n cameras (positions (n, 3) m, rotations
         (n, 3, 3), lenses ``model`` of batch (n,); from the vehicle's centre on the ground) to each camera of
         ``reference``: the pair part of its score, whose mean over the matched pairs plus the rig terms is the
-        score (a designer's MILP objective). Computed ``chunk`` cameras at a time."""
+        score (a designer's MILP objective). Computed ``chunk`` cameras at a time. The ``body`` term is left out:
+        a designer bounds each candidate's share of ego body instead (``DesignSettings.max_body_fraction``)."""
         ref = CameraGeometry.of(reference)
-        pair_weights = self.weights[:len(PAIR_FEATURES)]
+        pair_weights = np.where(np.equal(PAIR_FEATURES, "body"), 0.0, self.weights[:len(PAIR_FEATURES)])
         out = np.empty((len(positions), len(reference)))
         for start in range(0, len(positions), chunk):
             part = slice(start, start + chunk)
@@ -301,10 +343,12 @@ class DropModel:
             out[part] = (pair_features(ref, geometry) @ pair_weights).T
         return out
 
-    def predict(self, reference: Rig, candidates: Sequence[Rig]) -> tuple[np.ndarray, np.ndarray, list[dict]]:
+    def predict(self, reference: Rig, candidates: Sequence[Rig], body_share: BodyShare | None = None
+                ) -> tuple[np.ndarray, np.ndarray, list[dict]]:
         """Predicted drops (P,), interval half-widths (P,) and, per candidate, {term: (value, low, high)} of the
-        terms beyond the fitting rigs' range (empty inside). Rigs from their vehicle's centre on the ground."""
-        x = self.terms(reference, candidates)
+        terms beyond the fitting rigs' range (empty inside). Rigs from their vehicle's centre on the ground;
+        ``body_share`` as in :meth:`terms`."""
+        x = self.terms(reference, candidates, body_share)
         drops = link(x @ self.weights)
         weighted = self.weights > 0  # a term the model gives no weight cannot carry it beyond its data
         beyond = [{name: (float(v), float(lo), float(hi))

@@ -22,7 +22,9 @@ from rigopt.mounting.features import segments_hit_swings, trailer_swings
 from rigopt.mounting.practice import keep_out_boxes, segments_hit_boxes
 from rigopt.mounting.rules import MountRules
 from rigopt.mounting.sampling import DEFAULT_SPACING, sample_zone_points
+from rigopt.rig.model import Rig
 from rigopt.vehicle.model import Vehicle
+from rigopt.vehicle.placement import known_vehicle
 
 DEFAULT_YAWS_DEG = tuple(range(-180, 180, 10))
 DEFAULT_PITCHES_DEG = (-20, -10, 0, 10, 20)
@@ -111,3 +113,13 @@ def body_fraction(vehicle: Vehicle, positions, rotations, model: CameraModel, gr
     origins = np.broadcast_to(np.asarray(positions, dtype=float)[:, None, :], directions.shape)
     distance = vehicle.ray_caster.blocked_distance(origins.reshape(-1, 3), directions.reshape(-1, 3))
     return (distance.reshape(directions.shape[:2]) <= BODY_RANGE_M).mean(axis=1)
+
+
+def rig_body_share(rig: Rig, grid=BODY_GRID) -> np.ndarray:
+    """(N,) float: :func:`body_fraction` of each of ``rig``'s cameras on its vehicle (the rig measured from the
+    vehicle's centre on the ground); zeros on a vehicle rigopt has no mesh of, which the renderer draws no body of.
+    A :data:`rigopt.metrics.drop_model.BodyShare`."""
+    vehicle = known_vehicle(rig)
+    if vehicle is None:
+        return np.zeros(len(rig))
+    return body_fraction(vehicle, rig.positions, rig.rotations, CameraModel.of_cameras(rig.cameras), grid)

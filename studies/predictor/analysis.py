@@ -23,6 +23,9 @@ from studylib.tables import markdown  # noqa: E402
 DESIGNER_KINDS = ("design", "naive", "height_matched", "searched_copy", "swap")
 RESAMPLES, SEED = 2000, 0
 TARGETS = {"rho": 0.9, "mae": 0.08, "designer_rho": 0.8, "coverage": 0.85, "width": 0.35}
+#: The pre-registered terms: every term of rigopt.metrics.drop_model but the later ``body`` (studies/predictor_v2).
+TERMS = ("depth_prior", "raise", "lower", "tilt_down", "tilt_up", "roll", "yaw", "plan", "zoom", "centre", "count",
+         "uncovered")
 
 
 def load_measured() -> list[dict]:
@@ -116,14 +119,17 @@ def main() -> int:
     kinds = np.array([e["kind"] for e in entries])
     names = np.array([e["rig"] for e in entries])
     terms = [drop_model.PairTerms.of(reference, rig) for rig in rigs]
-    predicted = held_out(terms, measured, vehicles, drop_model.fit_weights, drop_model.predict)
-    widths = held_out_intervals(terms, measured, vehicles, drop_model.fit_weights, drop_model.predict, predicted)
+    fit = lambda t, d: drop_model.fit_weights(t, d, TERMS)  # noqa: E731
+    predict = lambda w, t: drop_model.predict(w, t, TERMS)  # noqa: E731
+    predicted = held_out(terms, measured, vehicles, fit, predict)
+    widths = held_out_intervals(terms, measured, vehicles, fit, predict, predicted)
     rigcd = np.array([p.predicted_drop for p in predict_transfer(reference, rigs, load_weights("joint"))])
     result = {"rigs": len(entries), "vehicles": sorted(set(vehicles.tolist())),
               "protocols": sorted({e["protocol"] for e in entries}),
               "predictor": statistics(predicted, measured, vehicles, kinds, names, widths),
               "rigcd": statistics(rigcd, measured, vehicles, kinds, names),
-              "weights_all": dict(zip(drop_model.FEATURES, drop_model.fit_weights(terms, measured).tolist())),
+              "weights_all": {name: float(w) for name, w in zip(drop_model.FEATURES, fit(terms, measured))
+                              if name in TERMS},
               "per_rig": [{"rig": n, "vehicle": v, "kind": k, "measured": float(m), "predicted": float(p),
                            "halfwidth": float(w), "rigcd": float(r)}
                           for n, v, k, m, p, w, r in zip(names, vehicles, kinds, measured, predicted, widths, rigcd)]}

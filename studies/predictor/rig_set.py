@@ -140,8 +140,10 @@ def variation(vehicle_name: str, outline: Outline, reference, values: dict, k: i
     return Rig(f"{vehicle_name}_variation_{k:02d}", load_vehicle(vehicle_name).blueprint, tuple(cameras))
 
 
-def vehicle_rigs(vehicle_name: str, work: Path) -> list[tuple[dict, object]]:
-    """(index row, rig) of every rig of one vehicle."""
+def vehicle_rigs(vehicle_name: str, work: Path, seed: int | None = None,
+                 variations: int = FACTORIAL_RIGS) -> list[tuple[dict, object]]:
+    """(index row, rig) of every rig of one vehicle; ``variations`` variations drawn with Sobol ``seed`` (default:
+    the vehicle's index in VEHICLES)."""
     from rigopt.metrics.calibration import load_weights
     from rigopt.rig.library import load_rig
     from rigopt.validation.designs import comparison_rigs, load_design
@@ -164,7 +166,8 @@ def vehicle_rigs(vehicle_name: str, work: Path) -> list[tuple[dict, object]]:
         out.append(({"kind": "searched_copy"}, searched_copy(copy, vehicle)))
         out += [({"kind": "swap"}, rig) for rig in swaps(copy, reports["default"])]
     outline = Outline(vehicle.mesh)
-    for k, values in enumerate(factor_draws(FACTORIAL_RIGS, seed=VEHICLES.index(vehicle_name))):
+    seed = VEHICLES.index(vehicle_name) if seed is None else seed
+    for k, values in enumerate(factor_draws(variations, seed)):
         out.append(({"kind": "variation", **values}, variation(vehicle_name, outline, reference, values, k)))
     for row, rig in out:
         row.update(rig=rig.name, vehicle=vehicle_name)
