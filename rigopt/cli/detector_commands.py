@@ -312,6 +312,7 @@ def _validate_shipped(measured_rigs: list, ref: str, family: str, calibration, d
     )
     from rigopt.validation.designs import WHOLE_ROLE, comparison_rigs, contradictions, fed_rigs
     from rigopt.metrics.ranking import predict_transfer
+    from rigopt.mounting.candidates import rig_body_share
     from rigopt.output import existing_folder, write_text_atomic
     from rigopt.report.json_values import json_ready
     from rigopt.rig.library import load_rig
@@ -335,7 +336,7 @@ def _validate_shipped(measured_rigs: list, ref: str, family: str, calibration, d
     workers = workers or os.cpu_count() or 1
     with status_console.status("validating") as status:
         measured = measure([r for _, r in rigs], detector, cache, device, workers, status.update, protocol)
-    predictions = predict_transfer(reference, [r for _, r in rigs], calibration, drop_model)
+    predictions = predict_transfer(reference, [r for _, r in rigs], calibration, drop_model, rig_body_share)
     card = detector.card
     result = {"reference": reference.name, "model": family, "models": "shipped", "detector": detector.folder.name,
               "seeds": detector.seeds, "epochs": card["recipe"]["epochs"],

@@ -61,6 +61,7 @@ def rigcd_command(
     from rigopt.metrics.calibration import check_metric, load_weights
     from rigopt.metrics.drop_model import choose_model
     from rigopt.metrics.ranking import predict_transfer
+    from rigopt.mounting.candidates import rig_body_share
 
     metric = check_metric(metric)
     if metric == "rigcd+" and not weights:
@@ -68,7 +69,7 @@ def rigcd_command(
     calibration = load_weights(weights or DEFAULT_WEIGHTS, metric)
     (rig_a, rig_b), changes, left_out = _comparable([a, b], vehicle)
     model = choose_model(predictor, rig_a, weights is not None or metric != "rigcd")
-    p = predict_transfer(rig_a, [rig_b], calibration, model)[0]
+    p = predict_transfer(rig_a, [rig_b], calibration, model, rig_body_share)[0]
     if weights is None and calibration.lifting is None:  # RigCD's unit-weight distance, the default drop
         unit = predict_transfer(rig_a, [rig_b], None)[0]
         p = replace(p, rigcd=unit.rigcd, match=unit.match)
@@ -104,11 +105,12 @@ def rank_command(
     from rigopt.metrics.calibration import load_weights
     from rigopt.metrics.drop_model import choose_model
     from rigopt.metrics.ranking import model_predictor, rank_candidates, rigcd_predictor
+    from rigopt.mounting.candidates import rig_body_share
 
     calibration = load_weights(weights or DEFAULT_WEIGHTS, metric)
     (reference, *others), changes, left_out = _comparable([ref, *candidates], vehicle)
     model = choose_model(predictor, reference, weights is not None or metric != "rigcd")
-    ranked = rank_candidates(reference, others, calibration, model)
+    ranked = rank_candidates(reference, others, calibration, model, rig_body_share)
     _note_changes((reference, *others), changes)
     if as_json:
         print_json([{**p.to_dict(), "near_field_left_out": left_out.get(p.rig, 0)} for p in ranked])

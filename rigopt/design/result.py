@@ -6,6 +6,7 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 from typing import Sequence
 
+from rigopt.mounting.candidates import rig_body_share
 from rigopt.mounting.rules import RigCheck
 from rigopt.design.problem import ReferenceRig
 from rigopt.design.selection import Selection
@@ -139,7 +140,8 @@ def repredicted(summary: RigSummary | None, references: Sequence[Rig], calibrati
     if summary is None:
         return None
     return replace(summary, predictions=tuple(
-        predict_transfer(reference, [summary.rig.perception()], calibration, model)[0] if model.applies_to(reference)
+        predict_transfer(reference, [summary.rig.perception()], calibration, model, rig_body_share)[0]
+        if model.applies_to(reference)
         else kept for reference, kept in zip(references, summary.predictions)))
 
 

@@ -8,7 +8,7 @@ from typing import Sequence
 import numpy as np
 
 from rigopt.metrics.calibration import Calibration
-from rigopt.metrics.drop_model import DropModel
+from rigopt.metrics.drop_model import BodyShare, DropModel
 from rigopt.metrics.lifting import lifting_terms
 from rigopt.metrics.prediction import Extrapolation, interval_informative
 from rigopt.metrics.rigcd import DEFAULT_ALPHA, DEFAULT_LAMBDAS, rigcd_matrix, tie_broken_lambdas
@@ -69,13 +69,15 @@ class TransferPrediction:
 
 
 def predict_transfer(reference: Rig, candidates: Sequence[Rig], calibration: Calibration | None = None,
-                     model: DropModel | None = None) -> list[TransferPrediction]:
+                     model: DropModel | None = None, body_share: BodyShare | None = None) -> list[TransferPrediction]:
     """One prediction per candidate, in the candidates' order. A lifting metric's pairs (its per-pair terms need
     heights above the ground) must be measured from their vehicle's centre on the ground, as RigCD's and a drop
     model's. With a ``model`` the predicted drop, its interval and extrapolation flags are the model's; the RigCD
-    fields stay the calibration's."""
+    fields stay the calibration's. ``body_share`` gives the share of ego body each camera sees, which a model with
+    that term needs (:func:`rigopt.mounting.candidates.rig_body_share`)."""
     predictions = _rigcd_predictions(reference, candidates, calibration)
-    return predictions if model is None else _model_predictions(reference, candidates, predictions, model)
+    return (predictions if model is None
+            else _model_predictions(reference, candidates, predictions, model, body_share))
 
 
 def _rigcd_predictions(reference: Rig, candidates: Sequence[Rig],
@@ -122,11 +124,13 @@ def model_predictor(model: DropModel) -> str:
 
 
 def _model_predictions(reference: Rig, candidates: Sequence[Rig], predictions: list[TransferPrediction],
-                       model: DropModel) -> list[TransferPrediction]:
-    """``predictions`` with the drop, interval (clipped to [0, 1]) and extrapolation flags of ``model``."""
-    drops, halfwidths, beyond = model.predict(reference, candidates)
+                       model: DropModel, body_share: BodyShare | None) -> list[TransferPrediction]:
+    """``predictions`` with the drop, interval and extrapolation flags of ``model``. The interval is capped at 1
+    (no rig loses more than everything) but not at 0: a rig can measure better than the reference (a negative
+    drop), and the model's interval, as its study's coverage, counts such a drop inside when within the width."""
+    drops, halfwidths, beyond = model.predict(reference, candidates, body_share)
     return [replace(p, predicted_drop=float(d), linear_drop=None, fallback=False, interval_halfwidth=float(h),
-                    interval=(float(max(d - h, 0.0)), float(min(d + h, 1.0))) if np.isfinite(h) else None,
+                    interval=(float(d - h), float(min(d + h, 1.0))) if np.isfinite(h) else None,
                     extrapolation=Extrapolation(flags, 0.0) if flags else None, predictor=model_predictor(model))
             for p, d, h, flags in zip(predictions, drops, halfwidths, beyond)]
 
@@ -150,8 +154,8 @@ def _lifting_predictions(reference: Rig, candidates: Sequence[Rig], calibration:
 
 
 def rank_candidates(reference: Rig, candidates: Sequence[Rig], calibration: Calibration,
-                    model: DropModel | None = None) -> list[TransferPrediction]:
+                    model: DropModel | None = None, body_share: BodyShare | None = None) -> list[TransferPrediction]:
     """Candidates sorted by predicted drop (``predict_transfer``'s), smallest first (ties keep the given order)."""
-    predictions = predict_transfer(reference, candidates, calibration, model)
+    predictions = predict_transfer(reference, candidates, calibration, model, body_share)
     order = np.argsort([p.predicted_drop for p in predictions], kind="stable")
     return [predictions[k] for k in order]

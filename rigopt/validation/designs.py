@@ -29,6 +29,7 @@ from rigopt.validation.detectors.protocol import TEST_SPLIT, match_on_rigs, run_
 from rigopt.errors import DataError, RigFileError
 from rigopt.metrics.calibration import Calibration
 from rigopt.metrics.reliability import DEFAULT_BOOTSTRAP, DEFAULT_SEED, finite_or_none
+from rigopt.mounting.candidates import rig_body_share
 from rigopt.rig.library import load_rig
 from rigopt.rig.model import Rig
 
@@ -174,7 +175,7 @@ def validate_design(design: Rig, reference: str, family: str, data, calibration:
     resampled_visible = resampled_maps(runs_matched, blocks, resamples, seed, visible_only=True)
     drops, resampled_drops = relative_drops(maps), relative_drops(resampled)
     drops_visible, resampled_drops_visible = relative_drops(maps_visible), relative_drops(resampled_visible)
-    predictions = predict_transfer(reference_rig, [rig for _, rig in rigs], calibration, drop_model)
+    predictions = predict_transfer(reference_rig, [rig for _, rig in rigs], calibration, drop_model, rig_body_share)
     entries = []
     for k, ((role, rig), prediction) in enumerate(zip(rigs, predictions), start=1):
         predicted = prediction.to_dict()
@@ -229,7 +230,7 @@ def measure_design(design: Rig, reference: Rig, calibration: Calibration, protoc
               if role in ("naive transfer", "height-matched transfer")]
     rigs = [("design", dataclasses.replace(design.perception(), name=f"{design.name}_perception"))] + copies
     measured = measure([rig for _, rig in rigs], detector, cache, "cpu", workers, progress, protocol)
-    predictions = predict_transfer(reference, [rig for _, rig in rigs], calibration, drop_model)
+    predictions = predict_transfer(reference, [rig for _, rig in rigs], calibration, drop_model, rig_body_share)
     rows = [{"role": role, "rig": rig.name, "n_cameras": len(rig), "predicted_drop": p.predicted_drop,
              "predicted_interval": p.to_dict()["interval"], "interval_informative": p.interval_informative,
              "measured_drop": m["drop"], "measured_drop_ci": m["drop_ci"],

@@ -21,13 +21,13 @@ def one_camera(z=1.5, yaw=0.0, pitch=0.0, roll=0.0, fov=65.0, xy=(2.0, 0.0)) -> 
 
 def terms(a: Rig, b: Rig) -> dict[str, float]:
     t = dm.PairTerms.of(a, b)
-    return dict(zip(dm.FEATURES, dm.features(t.pairs, t.rig, np.ones(len(dm.PAIR_FEATURES)))))
+    return dict(zip(dm.FEATURES, dm.matched_features(t.pairs, t.rig, np.ones(len(dm.PAIR_FEATURES)))))
 
 
 def test_a_rig_against_itself_has_no_term_and_loses_nothing():
     r1 = load_rig("R1")
     t = dm.PairTerms.of(r1, r1)
-    assert np.allclose(dm.features(t.pairs, t.rig, np.ones(10)), 0, atol=1e-12)
+    assert np.allclose(dm.matched_features(t.pairs, t.rig, np.ones(len(dm.PAIR_FEATURES))), 0, atol=1e-12)
     assert dm.predict(np.ones(len(dm.FEATURES)), [t])[0] == pytest.approx(0, abs=1e-12)
 
 
@@ -122,11 +122,13 @@ def test_a_term_no_fitting_rig_has_gets_no_weight():
 
 
 def a_model(weights=None, default=True, ranges=(0.0, 1.0)) -> dm.DropModel:
+    """A model of every term at 0.2 but ``body`` (0: it predicts without body shares), or of ``weights``."""
     reference = load_rig("R1")
     n = len(dm.FEATURES)
-    return dm.DropModel("test", "lss-R1", "R1", dm.camera_table(reference),
-                        np.full(n, 0.2) if weights is None else np.asarray(weights, float), np.array([0.05, 0.1, 0.2]),
-                        np.tile(ranges, (n, 1)), default, "a test model")
+    if weights is None:
+        weights = np.where(np.equal(dm.FEATURES, "body"), 0.0, 0.2)
+    return dm.DropModel("test", "lss-R1", "R1", dm.camera_table(reference), np.asarray(weights, float),
+                        np.array([0.05, 0.1, 0.2]), np.tile(ranges, (n, 1)), default, "a test model")
 
 
 def test_a_model_predicts_what_its_weights_and_matching_say():
@@ -148,7 +150,7 @@ def test_a_term_beyond_the_fitting_rigs_is_flagged_only_where_it_has_weight():
                                                    for c in r1.cameras))
     flagged = a_model().predict(r1, [raised])[2][0]
     assert flagged["raise"] == pytest.approx((2.0, 0.0, 1.0)) and "lower" not in flagged
-    weights = np.full(len(dm.FEATURES), 0.2)
+    weights = a_model().weights.copy()
     weights[dm.FEATURES.index("raise")] = 0.0
     assert "raise" not in a_model(weights).predict(r1, [raised])[2][0]
 
@@ -204,6 +206,61 @@ def test_transfer_predictions_carry_the_model_and_keep_rigcd():
     drop, halfwidth = model.predict(r1, [r2])[0][0], model.predict(r1, [r2])[1][0]
     assert plain.predictor == "RigCD (joint)" and modelled.predictor == "test drop model"
     assert modelled.predicted_drop == pytest.approx(drop)
-    assert modelled.interval == pytest.approx((max(drop - halfwidth, 0), min(drop + halfwidth, 1)))
+    assert modelled.interval == pytest.approx((drop - halfwidth, min(drop + halfwidth, 1)))
     assert (modelled.rigcd, modelled.t, modelled.count) == (plain.rigcd, plain.t, plain.count)
     assert modelled.linear_drop is None and modelled.to_dict()["predictor"] == "test drop model"
+
+
+def shares(values: dict[str, list[float]]):
+    """A body_share function that gives each rig (by name) its listed shares."""
+    return lambda rig, grid: np.asarray(values[rig.name], dtype=float)
+
+
+def test_the_body_term_is_the_candidates_extra_share_of_ego_body():
+    a, b = one_camera(), dataclasses.replace(one_camera(), name="two")
+    t = dm.PairTerms.of(a, b, shares({"one": [0.1], "two": [0.4]}))
+    assert t.pairs[0, 0, dm.PAIR_FEATURES.index("body")] == pytest.approx(0.3)
+    t = dm.PairTerms.of(a, b, shares({"one": [0.4], "two": [0.1]}))  # seeing less body than the reference: 0
+    assert t.pairs[0, 0, dm.PAIR_FEATURES.index("body")] == 0
+    assert dm.PairTerms.of(a, b).pairs[0, 0, dm.PAIR_FEATURES.index("body")] == 0  # no shares given: none
+
+
+def test_a_model_that_weighs_the_body_needs_the_shares_and_adds_their_weight():
+    r1 = load_rig("R1")
+    blinded = dataclasses.replace(r1, name="blinded")
+    weights = a_model().weights.copy()
+    weights[dm.FEATURES.index("body")] = 2.0
+    model = a_model(weights)
+    assert model.needs_body and not a_model().needs_body
+    with pytest.raises(ValueError, match="body_share"):
+        model.predict(r1, [blinded])
+    half = shares({"R1": [0.0] * 8, "blinded": [0.5] * 8})
+    drop = model.predict(r1, [blinded], half)[0][0]
+    assert drop == pytest.approx(1 - np.exp(-2.0 * 0.5), abs=1e-12)
+
+
+def test_a_model_file_of_fewer_terms_weighs_the_others_zero_and_keeps_its_form():
+    data = a_model().to_dict()
+    keep = [k for k, name in enumerate(data["features"]) if name != "body"]
+    data.update(features=[data["features"][k] for k in keep], weights=[data["weights"][k] for k in keep],
+                ranges=[data["ranges"][k] for k in keep])
+    model = dm.DropModel.from_dict(data)
+    assert model.features == tuple(data["features"]) and model.weights[dm.FEATURES.index("body")] == 0
+    assert model.to_dict() == data
+    data["weights"] = data["weights"][:-1]
+    with pytest.raises(ValueError, match="one per term"):
+        dm.DropModel.from_dict(data)
+
+
+def test_a_camera_facing_into_its_vehicle_sees_its_body_and_one_on_an_unknown_vehicle_none():
+    from rigopt.geometry import rot_z
+    from rigopt.mounting.candidates import rig_body_share
+    from rigopt.vehicle.placement import in_vehicle_frame
+
+    r1 = in_vehicle_frame(load_rig("R1"))[0]
+    assert np.all(rig_body_share(r1, dm.BODY_GRID) < 0.05)
+    inward = dataclasses.replace(r1, cameras=tuple(dataclasses.replace(c, rotation=rot_z(np.pi) @ c.rotation)
+                                                   for c in r1.cameras))
+    assert np.all(rig_body_share(inward, dm.BODY_GRID) > 0.5)
+    unknown = dataclasses.replace(inward, vehicle="a vehicle rigopt does not know")
+    assert np.all(rig_body_share(unknown, dm.BODY_GRID) == 0)
