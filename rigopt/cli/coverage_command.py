@@ -16,7 +16,7 @@ from rigopt.errors import RigoptError
 REQUIRE_HELP = ("Regulation fields every camera-visible point of which is checked, comma-separated: r158 (rear, "
                 "reversing), r151 (nearside blind spot), r159 (front, moving off), r46-ii, r46-iv, r46-v, r46-vi (R46 "
                 "classes II, IV, V, VI), dvs (London Direct Vision Standard); default (the vehicle category's: trucks "
-                "r151,r159,r158, cars r158) or none. Add :lht for left-hand traffic (nearside on the left), e.g. "
+                "and buses r151,r159,r158, cars and vans r158) or none. Add :lht for left-hand traffic (nearside on the left), e.g. "
                 "r151:lht. See docs/regulations.md.")
 
 

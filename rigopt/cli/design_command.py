@@ -113,8 +113,8 @@ def design_command(
     require: Optional[str] = typer.Option(None, "--require",
                                           help="Regulation fields the design must see: comma-separated r158, r151, "
                                                "r159, r46-iv, r46-v, r46-vi, dvs (':lht' for left-hand traffic), "
-                                               "'default' (the vehicle category's: trucks r151,r159,r158; cars "
-                                               "r158) or 'none'. Without it the category's fields are required "
+                                               "'default' (the vehicle category's: trucks and "
+                                               "buses r151,r159,r158; cars and vans r158) or 'none'. Without it the category's fields are required "
                                                "unless no design sees them all (then reported). See "
                                                "docs/regulations.md."),
     cost_weight: float = typer.Option(0.0, "--cost-weight", min=0.0, callback=finite(),

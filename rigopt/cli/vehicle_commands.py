@@ -69,14 +69,15 @@ def vehicles_command(as_json: bool = typer.Option(False, "--json", help="Print J
                        f"add {name} --mesh FILE --force", err=True)
             continue
         rows.append({"vehicle": v.name, "blueprint": v.blueprint, "aliases": list(v.spec.aliases),
-                     "length": float(v.size[0]), "width": float(v.size[1]), "height": float(v.size[2]),
-                     "zones": sorted({z.name for z in v.zones})})
+                     "category": v.category, "length": float(v.size[0]), "width": float(v.size[1]),
+                     "height": float(v.size[2]), "zones": sorted({z.name for z in v.zones})})
     if as_json:
         print_json(rows)
         return
-    print_table("vehicles", ["vehicle", "blueprint", "aliases", "length (m)", "width (m)", "height (m)", "zones"],
-                [[r["vehicle"], r["blueprint"], ", ".join(r["aliases"]), r["length"], r["width"], r["height"],
-                  len(r["zones"])] for r in rows])
+    print_table("vehicles", ["vehicle", "blueprint", "aliases", "category", "length (m)", "width (m)", "height (m)",
+                             "zones"],
+                [[r["vehicle"], r["blueprint"], ", ".join(r["aliases"]), r["category"], r["length"], r["width"],
+                  r["height"], len(r["zones"])] for r in rows])
 
 
 @vehicle_app.command("show")
@@ -163,13 +164,17 @@ def vehicle_add_command(
     pitch: Optional[float] = typer.Option(None, "--pitch", help="Grid spacing (m) that closes an open or "
                                           "multi-part mesh; default: length / 200 within 1-4 cm."),
     force: bool = typer.Option(False, "--force", help="Replace a stored vehicle of the same name (any case)."),
+    category: Optional[str] = typer.Option(None, "--category", help="UN vehicle category: M1, M2, M3 (carrying "
+                                           "people), N1, N2, N3 (goods); sets the regulation fields required by "
+                                           "default. Default: the one the shape suggests (stated, with why)."),
 ):
     """Check a mesh and store it as a vehicle so that --vehicle NAME works everywhere."""
+    from rigopt.coverage.regulations import CATEGORY_DEFAULTS
     from rigopt.vehicle.user import add_user_vehicle
 
     added = add_user_vehicle(name, mesh, zones, frame, force=force, scale=scale, length=length, forward=forward,
                              up=up, allow_size=allow_size, axles=_parse_axles(axles), roof_rack=roof_rack,
-                             ground=ground, pitch=pitch)
+                             ground=ground, pitch=pitch, category=category)
     for warning in added.warnings:
         typer.echo(f"rigopt: warning: {warning}", err=True)
     for message in added.notes:
@@ -185,6 +190,8 @@ def vehicle_add_command(
         console.print(f"keep-outs: {len(added.keep_outs)} narrow part(s) where no housing fits (rails, ladders, "
                       "bars): " + "; ".join(f"{k['name']} x {k['min'][0]:.2f}..{k['max'][0]:.2f} m, z "
                                             f"{k['min'][2]:.2f}..{k['max'][2]:.2f} m" for k in added.keep_outs))
+    console.print(f"category: {added.category}, {added.category_reason}; fields required by default: "
+                  f"{', '.join(CATEGORY_DEFAULTS[added.category])} (--category, or category in vehicle.toml, to change)")
     console.print(f"added vehicle {name!r}: {added.path}")
     print_next(f"rigopt vehicle show {name} --out {name}.png (its zones, wheels and keep-outs, to check them)",
                f"rigopt design --vehicle {name} --ref R1 (a rig on it that transfers from the benchmark's R1)")

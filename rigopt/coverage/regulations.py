@@ -403,13 +403,24 @@ PRESETS: dict[str, RegionPreset] = {p.key: p for p in (
 )}
 
 #: The presets each UN category asks for when none are named (``default``).
-CATEGORY_DEFAULTS = {"M1": ("r158",), "N1": ("r158",), "M2": ("r159", "r158"), "M3": ("r159", "r158"),
+#: The fields each category asks for by default. The EU General Safety Regulation ((EU) 2019/2144, Annex II) requires
+#: a blind-spot information system (UN R151) and a moving-off information system (UN R159) on M2, M3, N2 and N3,
+#: and a reversing detection (UN R158) on every M and N vehicle.
+CATEGORY_DEFAULTS = {"M1": ("r158",), "N1": ("r158",), "M2": ("r151", "r159", "r158"), "M3": ("r151", "r159", "r158"),
                      "N2": ("r151", "r159", "r158"), "N3": ("r151", "r159", "r158")}
 
 
+def category_dict(vehicle: Vehicle) -> dict:
+    """The vehicle's category in a report: ``category``, ``reason`` (stated in its spec, or the shape's suggestion
+    and why) and ``default_fields`` (the presets it asks for, CATEGORY_DEFAULTS)."""
+    reason = ("stated in its vehicle.toml" if vehicle.spec.category
+              else f"suggested by its shape: {vehicle.category_guess.reason}")
+    return {"category": vehicle.category, "reason": reason, "default_fields": list(CATEGORY_DEFAULTS[vehicle.category])}
+
+
 def default_presets(vehicle: Vehicle, traffic: str = "right") -> tuple[RegionPreset, ...]:
-    """The presets ``vehicle``'s category asks for (CATEGORY_DEFAULTS): trucks (N2, N3) r151, r159, r158; buses
-    (M2, M3) r159, r158; cars and vans (M1, N1) r158."""
+    """The presets ``vehicle``'s category asks for (CATEGORY_DEFAULTS): trucks and buses (N2, N3, M2, M3) r151,
+    r159, r158; cars and light vans (M1, N1) r158."""
     return tuple(PRESETS[key].with_traffic(traffic) for key in CATEGORY_DEFAULTS[vehicle.category])
 
 

@@ -144,6 +144,7 @@ def design_dict(result: DesignResult, rig_file: Path | None) -> dict:
     """The ``rigopt design --json`` object (and the body of report.json). Positions are in one frame, named by
     ``frame`` (ISO 8855 from the ground below the rear axle's centre, :func:`frame_dict`): the cameras'
     poses and the ``packaging`` sheets (:func:`packaging_rows`); CARLA's frame is only the rig file's."""
+    from rigopt.coverage.regulations import category_dict
     from rigopt.report.coverage_tables import regions_dict
 
     design, milp, comparisons = result.design, result.milp, result.comparisons
@@ -152,6 +153,7 @@ def design_dict(result: DesignResult, rig_file: Path | None) -> dict:
     summary = {
         "rig_file": str(rig_file) if rig_file else None,
         "vehicle": design.rig.vehicle,
+        "vehicle_category": category_dict(result.vehicle),
         **frame_dict(result.vehicle),
         "reference": ",".join(r.rig.name for r in result.references),
         "metric": result.calibration.metric,

@@ -18,17 +18,6 @@ from rigopt.vehicle.symmetry import MirrorSymmetry, mirror_symmetry
 
 #: Longest edge (m) of the subdivided mesh used for per-face zone queries.
 ZONE_QUERY_EDGE = 0.05
-#: A vehicle without a category in its spec counts as a heavy truck (N3) when longer or taller than these (m).
-HEAVY_LENGTH, HEAVY_HEIGHT = 6.0, 2.6
-
-
-def infer_category(size) -> str:
-    """The UN category assumed for a vehicle of ``size`` (length, width, height) m whose spec names none: N3 when
-    it is longer than HEAVY_LENGTH or taller than HEAVY_HEIGHT, else M1."""
-    length, _, height = (float(v) for v in size)
-    return "N3" if length > HEAVY_LENGTH or height > HEAVY_HEIGHT else "M1"
-
-
 def subdivide_to_size(vertices, faces, max_edge: float, max_iter: int = 10) -> tuple[np.ndarray, np.ndarray]:
     """``trimesh.remesh.subdivide_to_size`` (every edge longer than ``max_edge`` m bisected at one shared midpoint,
     until none is), the same vertices (j, 3) float and faces (q, 3) int in the same order, faster: each round
@@ -164,8 +153,16 @@ class Vehicle:
 
     @property
     def category(self) -> str:
-        """UN vehicle category (M1, M2, M3, N1, N2, N3): the spec's ``category``, else :func:`infer_category`."""
-        return self.spec.category or infer_category(self.size)
+        """UN vehicle category (M1, M2, M3, N1, N2, N3): the spec's ``category``, else the one its shape suggests
+        (:attr:`category_guess`)."""
+        return self.spec.category or self.category_guess.category
+
+    @cached_property
+    def category_guess(self):
+        """:func:`rigopt.vehicle.category.guess_category` of this vehicle: the category its shape suggests and why."""
+        from rigopt.vehicle.category import guess_category
+
+        return guess_category(self)
 
     @cached_property
     def zones(self) -> tuple[Zone, ...]:

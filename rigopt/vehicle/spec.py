@@ -10,7 +10,7 @@ vehicle origin on the ground). A spec file::
     box = [4.8557, 2.0328, 1.6494]         # CARLA bounding box length, width, height (m), for checks
     axles = [1.45, -1.48]                  # optional: x of each axle (m); default: the wheels solids' axles
     category = "M1"                        # optional: UN vehicle category (M1, M2, M3, N1, N2, N3); default:
-                                           # inferred from the size (rigopt.vehicle.model.infer_category)
+                                           # suggested by the shape (rigopt.vehicle.category)
 
     [[solids]]                              # intersection of a side profile extruded across y and a
     name = "body"                           # plan outline extruded along z

@@ -21,10 +21,10 @@ import trimesh
 from rigopt.errors import DataError, RigoptError
 from rigopt.output import atomic_folder
 from rigopt.vehicle.library import SPEC_FILE, broken_user_vehicles, find_spec, user_vehicles_dir
-from rigopt.vehicle.model import ZONE_QUERY_EDGE, expand_zones
+from rigopt.vehicle.model import ZONE_QUERY_EDGE, Vehicle, expand_zones
 from rigopt.vehicle.closing import SHELL_PITCHES, ClosingReport, close_mesh
 from rigopt.vehicle.orientation import PoseError, check_pose, frame_rotation
-from rigopt.vehicle.spec import read_toml, spec_from_dict
+from rigopt.vehicle.spec import CATEGORIES, read_toml, spec_from_dict
 from rigopt.vehicle.supports import narrow_keep_outs
 from rigopt.vehicle.wheels import FoundWheels, contact_height, find_wheels
 
@@ -63,7 +63,7 @@ class PreparedMesh:
 class AddedVehicle:
     """What ``add_user_vehicle`` stored: the spec ``path``, the ``axles`` (x m, front first), the
     ``wheels`` found, the ``closing`` report, the ``keep_outs`` made for narrow parts, ``warnings`` and
-    ``notes``."""
+    ``notes``; its UN ``category`` and why (``category_reason``: the shape's suggestion, or that it was given)."""
 
     path: Path
     axles: tuple[float, ...]
@@ -72,6 +72,8 @@ class AddedVehicle:
     warnings: tuple[str, ...]
     notes: tuple[str, ...] = ()
     keep_outs: tuple[dict, ...] = ()
+    category: str = "M1"
+    category_reason: str = ""
 
 
 def carla_mesh_to_iso(mesh: trimesh.Trimesh) -> trimesh.Trimesh:
@@ -256,11 +258,12 @@ def roof_rack_zone(bounds: np.ndarray, height: float) -> dict:
 def add_user_vehicle(name: str, mesh_path, zones_path=None, frame: str = "iso", *, force: bool = False,
                      scale: float | None = None, length: float | None = None, forward: str | None = None,
                      up: str | None = None, allow_size: bool = False, axles=None, roof_rack: float | None = None,
-                     ground: bool = False, pitch: float | None = None) -> AddedVehicle:
+                     ground: bool = False, pitch: float | None = None, category: str | None = None) -> AddedVehicle:
     """Check ``mesh_path``, store it as vehicle ``name`` with the zones of ``zones_path`` (a TOML file of
     ``[[zones]]``) or defaults from its box (plus a ``roof_rack`` raised zone of height ``roof_rack`` m, and
     keep-outs over its narrow parts: :mod:`rigopt.vehicle.supports`), its axles and wheels (found, or at
-    ``axles`` x m from the vehicle centre), and return what was stored.
+    ``axles`` x m from the vehicle centre), its UN ``category`` (None: the one its shape suggests,
+    :mod:`rigopt.vehicle.category`), and return what was stored.
 
     ``scale``, ``length``, ``forward``, ``up``, ``allow_size``, ``ground`` and ``pitch`` are the mesh flags of
     :func:`prepare_user_mesh`. A user vehicle of the same name (any case) is replaced only with ``force``;
@@ -275,6 +278,9 @@ def add_user_vehicle(name: str, mesh_path, zones_path=None, frame: str = "iso", 
         axles = sorted((float(x) for x in axles), reverse=True)
         if not axles or not all(np.isfinite(axles)):
             raise RigoptError("--axles needs the x (m, from the vehicle centre) of each axle, e.g. --axles 1.5,-1.4")
+    if category is not None and str(category).strip().upper() not in CATEGORIES:
+        raise RigoptError(f"--category {category!r} is not a UN vehicle category: give one of {', '.join(CATEGORIES)} "
+                          "(M: carrying people, N: goods; 1 light, 2 medium, 3 heavy)")
     folder = _store_folder(name, force)
     prepared = prepare_user_mesh(mesh_path, frame, scale=scale, length=length, forward=forward, up=up,
                                  allow_size=allow_size, axles=axles, ground=ground, pitch=pitch)
@@ -292,6 +298,11 @@ def add_user_vehicle(name: str, mesh_path, zones_path=None, frame: str = "iso", 
     # validated before anything is written; problems name the user's zones file (or the mesh for default zones)
     spec = spec_from_dict({k: v for k, v in data.items() if v != []}, str(zones_path or mesh_path))
     _check_zones_select_surface(spec, mesh)
+    if category is None:
+        guess = Vehicle(spec, mesh).category_guess
+        data["category"], reason = guess.category, guess.reason
+    else:
+        data["category"], reason = str(category).strip().upper(), "given (--category)"
     if not zones_path:
         # beyond the narrow part: its thickening and one grid pitch (an enclosed ladder is filled up to it)
         reach = (SHELL_PITCHES + 1) * prepared.closing.pitch + KEEP_OUT_CLEARANCE
@@ -303,7 +314,7 @@ def add_user_vehicle(name: str, mesh_path, zones_path=None, frame: str = "iso", 
     for old in [p for p in folder.parent.iterdir() if p.name.lower() == name.lower() and p.name != name]:
         shutil.rmtree(old, ignore_errors=True)  # the same name in another case, replaced (force was given)
     return AddedVehicle(folder / SPEC_FILE, found_axles, prepared.wheels, prepared.closing, prepared.warnings,
-                        prepared.notes, tuple(data.get("keep_out", ())))
+                        prepared.notes, tuple(data.get("keep_out", ())), data["category"], reason)
 
 
 def _store_folder(name: str, force: bool) -> Path:

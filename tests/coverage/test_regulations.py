@@ -7,6 +7,7 @@ coverage on the box car of tests/coverage/conftest.py (x in [-2, 2], y in [-1, 1
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from pathlib import Path
 
@@ -16,6 +17,7 @@ import shapely
 
 from rigopt.vehicle.footprint import Footprint
 from rigopt.coverage.regulations import (
+    CATEGORY_DEFAULTS,
     EYE_SETBACK,
     NEAR_BODY_CLEARANCE,
     PRESETS,
@@ -28,7 +30,7 @@ from rigopt.errors import DataError, RigoptError
 from rigopt.rig.model import Rig
 from rigopt.rig.pccr_format import write_rig
 from rigopt.vehicle.library import find_spec, load_vehicle
-from rigopt.vehicle.model import Vehicle, infer_category
+from rigopt.vehicle.model import Vehicle
 from rigopt.vehicle.spec import CATEGORIES, read_spec, spec_from_dict
 
 from box_car import install_user_vehicle
@@ -258,11 +260,28 @@ def test_the_spec_category_is_validated_and_normalised():
         assert "'category'" in str(error.value) and ", ".join(CATEGORIES) in str(error.value)
 
 
-def test_the_category_is_inferred_from_the_size_when_not_given(box_vehicle):
-    assert box_vehicle.spec.category is None and box_vehicle.category == "M1"
-    assert infer_category((6.5, 2.5, 2.4)) == "N3"
-    assert infer_category((5.5, 2.2, 2.7)) == "N3"
-    assert infer_category((5.9, 2.0, 2.0)) == "M1"
+def box_shape(*boxes) -> Vehicle:
+    """A vehicle of boxes (centre, size) m and wheels on axles at its box's front and rear quarter."""
+    solids = [{"type": "box", "center": list(c), "size": list(s)} for c, s in boxes]
+    return Vehicle.from_spec(spec_from_dict({"name": "v", "solids": solids}))
+
+
+@pytest.mark.parametrize("boxes, axles, category, words", [
+    ([((0, 0, 0.9), (4.6, 1.9, 1.4))], (1.4, -1.4), "M1", "a car"),  # a saloon's box
+    ([((0, 0, 1.45), (5.9, 2.0, 2.5))], (1.9, -1.7), "N1", "a van"),  # a high-roof van
+    ([((0, 0, 1.7), (12.0, 2.55, 2.8))], (3.3, -3.3), "M3", "a bus"),  # the door ahead of the front axle
+    ([((2.5, 0, 1.6), (2.2, 2.5, 2.8)), ((-2.0, 0, 2.1), (6.8, 2.5, 3.8))], (3.2, -2.0), "N3", "a truck"),
+])
+def test_the_category_is_guessed_from_the_shape_when_not_given(boxes, axles, category, words):
+    vehicle = box_shape(*boxes)
+    vehicle = Vehicle(dataclasses.replace(vehicle.spec, axles=axles), vehicle.mesh)
+    assert vehicle.spec.category is None and vehicle.category == category
+    assert words in vehicle.category_guess.reason
+
+
+def test_a_bus_and_a_truck_require_the_blind_spot_field_and_a_car_and_a_van_do_not():
+    assert all("r151" in CATEGORY_DEFAULTS[c] for c in ("M2", "M3", "N2", "N3"))
+    assert all("r151" not in CATEGORY_DEFAULTS[c] for c in ("M1", "N1"))
 
 
 def test_the_builtin_vehicles_name_their_category():

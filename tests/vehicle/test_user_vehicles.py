@@ -335,3 +335,46 @@ def test_names_are_letters_of_any_script_digits_and_three_marks(box_stl):
     for bad in ("my car", "a/b", "_lead", "x!", "..", ""):
         with pytest.raises(RigoptError, match="letters, digits"):
             add_user_vehicle(bad, box_stl)
+
+
+# --- category ----------------------------------------------------------------------------------------------
+
+
+def a_bus_mesh() -> trimesh.Trimesh:
+    """A 12 m box bus on four wheels, its front axle 3 m behind its front face."""
+    body = trimesh.creation.box(extents=[12.0, 2.5, 2.6], transform=trimesh.transformations.translation_matrix(
+        [0.0, 0.0, 1.6]))
+    wheels = []
+    for x in (3.0, -3.5):
+        for y in (1.0, -1.0):
+            wheel = trimesh.creation.cylinder(radius=0.5, height=0.3, sections=24,
+                                              transform=trimesh.transformations.rotation_matrix(np.pi / 2, [1, 0, 0]))
+            wheel.apply_translation([x, y, 0.5])
+            wheels.append(wheel)
+    return trimesh.util.concatenate([body, *wheels])
+
+
+def test_a_bus_shaped_mesh_is_stated_an_m3_that_needs_the_blind_spot_field(export, rigopt_home):
+    from in_process import run_rigopt
+
+    added = run_rigopt("vehicle", "add", "bus", "--mesh", str(export(a_bus_mesh(), "bus.stl")), "--forward", "+x",
+                       env={"RIGOPT_HOME": str(rigopt_home)})
+    assert added.returncode == 0, added.stderr
+    said = " ".join(added.stdout.split())
+    assert "category: M3" in said and "a bus" in said and "front axle 3.00 m behind the front" in said
+    assert "fields required by default: r151, r159, r158" in said
+    assert load_vehicle("bus").category == "M3" and find_spec("bus").category == "M3"  # stored, not guessed again
+
+
+def test_a_category_given_is_stored_and_a_wrong_one_refused(box_stl, rigopt_home):
+    from in_process import run_rigopt
+
+    assert user.add_user_vehicle("mycar", box_stl, forward="+x", category=" n2 ").category == "N2"
+    assert find_spec("mycar").category == "N2"
+    refused = run_rigopt("vehicle", "add", "other", "--mesh", str(box_stl), "--forward", "+x", "--category",
+                         "truck", env={"RIGOPT_HOME": str(rigopt_home)})
+    assert refused.returncode == 2 and refused.stdout == ""
+    assert refused.stderr.strip().splitlines() == [
+        "rigopt: error: --category 'truck' is not a UN vehicle category: give one of M1, M2, M3, N1, N2, N3 (M: "
+        "carrying people, N: goods; 1 light, 2 medium, 3 heavy)"]
+    assert "other" not in vehicle_names()
