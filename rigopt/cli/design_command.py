@@ -220,15 +220,13 @@ def design_command(
              "match_fov_deg": match_fov, "perception_range_m": perception_range,
              "perception_symmetric": None if free_perception is None else not free_perception,
              "height_search_m": height_search}
-    defaults = POSES[pose.lower() if two_roles else "free"]
-    pose_settings = {k: defaults[k] if v is None else v for k, v in given.items()}
-    settings = DesignSettings(
-        cameras=parse_camera_count(cameras), lenses=lenses, fov_range=fov_range,
-        zones=tuple(z.strip() for z in zones.split(",")) if zones else None,
+    settings = DesignSettings.preset(
+        pose, **{k: v for k, v in given.items() if v is not None}, cameras=parse_camera_count(cameras),
+        lenses=lenses, fov_range=fov_range, zones=tuple(z.strip() for z in zones.split(",")) if zones else None,
         pitches_deg=pitches, yaw_step_deg=yaw_step, spacing=spacing,
         min_coverage=min_coverage, min_overlap=min_overlap, max_nodes=max_nodes, accept_gap=accept_gap,
         rules=mount_rules(min_height, no_trailer), symmetric=False if asymmetric else None, cost_weight=cost_weight,
-        require=require, near_field=two_roles, drop_model=_objective(objective, ref), **pose_settings)
+        require=require, near_field=two_roles, drop_model=_objective(objective, ref))
     # a worker process beside this one (with a second core): the near-field stage and the pictures go there
     background = INLINE if pareto else Background(later_imports=("rigopt.report.vehicle_figures",
                                                                  "rigopt.report.coverage_figures"))

@@ -212,14 +212,16 @@ def select_valid(prepared: Prepared, vehicle: Vehicle, calibration: Calibration,
 
 
 def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRig], calibration: Calibration,
-               settings: DesignSettings = DesignSettings(), compare_with: Sequence[Rig] = (),
+               settings: DesignSettings | None = None, compare_with: Sequence[Rig] = (),
                progress: Callable[[str], None] = no_progress, background: Background = INLINE) -> DesignResult:
     """Design a rig on ``vehicle`` for a detector trained on the reference (one rig, or a fleet of rigs, each
     on its own vehicle; see the module docstring), judged beside the naive transfer and ``compare_with``
-    (e.g. ``problem.benchmark_rigs(vehicle)``). With a ``background`` worker the near-field stage (which needs
+    (e.g. ``problem.benchmark_rigs(vehicle)``), under ``settings`` (None: ``DesignSettings.preset()``, what
+    ``rigopt design`` does by default). With a ``background`` worker the near-field stage (which needs
     nothing of the perception cameras until they share housings) runs there while the perception cameras are
     designed and refined here, and the naive transfer refined: the same design."""
     start = time.perf_counter()
+    settings = DesignSettings.preset() if settings is None else settings
     references = (references,) if isinstance(references, ReferenceRig) else tuple(references)
     if not references:
         raise RigoptError("a design needs at least one reference rig")

@@ -21,7 +21,8 @@ import numpy as np
 
 from rigopt.benchmark import BENCHMARK_IMAGE_SIZE
 from rigopt.camera import DISTORTION_COEFFICIENTS, Lens
-from rigopt.design.defaults import DEFAULT_FOVS, DEFAULT_MAX_NODES, DEFAULT_PITCHES_DEG, DEFAULT_YAW_STEP_DEG, RANGE_STEP
+from rigopt.design.defaults import (DEFAULT_FOVS, DEFAULT_MAX_NODES, DEFAULT_PITCHES_DEG, DEFAULT_YAW_STEP_DEG, POSES,
+                                    RANGE_STEP)
 from rigopt.errors import DataError, RigoptError, not_utf8
 from rigopt.output import existing_file
 from rigopt.rig.model import Camera
@@ -278,6 +279,17 @@ class DesignSettings:
     """Two roles (the default): the perception cameras are designed for the reference alone (no fields asked
     of them), then near_field fisheyes (:mod:`rigopt.design.near_field`) see the required fields and the near
     ring around the body. False (``--single-set``): one camera set serves both."""
+
+    @classmethod
+    def preset(cls, pose: str = "nearest", **fields) -> DesignSettings:
+        """The settings ``rigopt design`` designs with: the perception cameras' pose preset ``pose`` (POSES:
+        "nearest", the default design, or "free"), any other field from ``fields`` (a pose field given there wins
+        over the preset's). The nearest pose is a two-role design's: with ``near_field=False`` (one camera set)
+        the pose is "free"'s. ``design_rig`` without settings designs with ``preset()``."""
+        key = str(pose).lower()
+        if key not in POSES:
+            raise RigoptError(f"the pose preset must be one of {', '.join(POSES)}, got {pose!r}")
+        return cls(**{**POSES[key if fields.get("near_field", True) else "free"], **fields})
 
     @property
     def tolerances(self) -> bool:

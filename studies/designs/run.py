@@ -38,10 +38,9 @@ LADDER = ("reference coverage only, free mounting", "+ practical mounts", "+ sym
 
 def command_default():
     """The DesignSettings of ``rigopt design``'s default (``--pose nearest``)."""
-    from rigopt.design.defaults import NEAREST_POSE
     from rigopt.design.settings import DesignSettings
 
-    return DesignSettings(**NEAREST_POSE)
+    return DesignSettings.preset("nearest")
 
 
 def ladder_settings(step: str):

@@ -16,6 +16,8 @@ from typer.testing import CliRunner
 
 from in_process import run_rigopt
 from rigopt.cli.app import app
+from rigopt.design.settings import DesignSettings
+from rigopt.errors import RigoptError
 from rigopt.metrics.calibration import load_weights
 from rigopt.metrics.rigcd import rigcd
 from rigopt.rig.library import load_rig
@@ -90,6 +92,39 @@ def documented_keys(summary: dict) -> None:
 @pytest.mark.slow
 def test_json_has_the_documented_keys(design_run):
     documented_keys(design_run[0])
+
+
+@pytest.mark.slow
+def test_the_python_api_the_command_and_the_studies_make_the_same_rig_file(design_run, tmp_path):
+    """``design_rig`` without settings, ``DesignSettings.preset()`` (the studies' command_default) and ``rigopt
+    design`` by default write the same rig.json, byte for byte."""
+    import importlib.util
+    from pathlib import Path
+
+    from rigopt.design.designer import design_rig
+    from rigopt.design.problem import ReferenceRig
+    from rigopt.rig.pccr_format import write_rig
+    from rigopt.vehicle.library import load_vehicle
+
+    study = Path(__file__).resolve().parents[2] / "studies" / "designs" / "run.py"
+    spec = importlib.util.spec_from_file_location("designs_run", study)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    assert module.command_default() == DesignSettings.preset()
+    result = design_rig(load_vehicle("firetruck"), ReferenceRig.on_own_vehicle(load_rig("R1")), load_weights("joint"))
+    written = write_rig(result.design.rig, tmp_path / "rig.json")
+    assert written.read_bytes() == (design_run[1] / "rig.json").read_bytes()
+
+
+def test_the_command_default_is_the_nearest_preset_and_one_camera_set_the_free_one():
+    from rigopt.design.defaults import FREE_POSE, NEAREST_POSE
+
+    nearest, single = DesignSettings.preset(), DesignSettings.preset(near_field=False, cameras=(6, 8))
+    assert all(getattr(nearest, k) == v for k, v in NEAREST_POSE.items()) and nearest.near_field
+    assert all(getattr(single, k) == v for k, v in FREE_POSE.items()) and single.cameras == (6, 8)
+    assert DesignSettings.preset("nearest", match_height_m=0.2).match_height_m == 0.2  # a field given wins
+    with pytest.raises(RigoptError, match="nearest, free"):
+        DesignSettings.preset("closest")
 
 
 def test_a_small_design_has_the_documented_keys_and_its_rig_file(small_run):
