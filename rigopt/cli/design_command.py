@@ -70,16 +70,23 @@ def parse_fovs(text: str) -> tuple[tuple[float, ...], tuple[float, float] | None
     return fovs, fov_range
 
 
+#: The headings of design --help beyond the options a user changes day to day.
+POSE_PANEL = "Pose of the perception cameras (the --pose preset's, unless given)"
+OBJECTIVE_PANEL = "What the designer minimises"
+SEARCH_PANEL = "Catalogue, orientation grid and MILP"
+
 @app.command("design")
 def design_command(
     vehicle: str = typer.Option(..., help="Vehicle to design for: name, alias or CARLA blueprint."),
     ref: str = typer.Option(..., help="Reference rig the detector was trained on: library name or rig file; "
                                       "several, comma-separated, for a fleet (minimise the worst predicted drop)."),
-    weights: Optional[str] = typer.Option(None, help="Calibrated RigCD weights the designer minimises: BEVDet, "
+    weights: Optional[str] = typer.Option(None, rich_help_panel=OBJECTIVE_PANEL,
+                                          help="Calibrated RigCD weights the designer minimises: BEVDet, "
                                           "BEVFusion, Fast-BEV, PETR, joint (default), or a file."),
-    metric: str = typer.Option("rigcd", "--metric", help=METRIC_HELP),
+    metric: str = typer.Option("rigcd", "--metric", rich_help_panel=OBJECTIVE_PANEL, help=METRIC_HELP),
     predictor: str = typer.Option("auto", "--predictor", help=PREDICTOR_HELP + " It predicts; --objective designs."),
-    objective: str = typer.Option("rigcd", "--objective", help="What the MILP minimises: rigcd (the calibrated "
+    objective: str = typer.Option("rigcd", "--objective", rich_help_panel=OBJECTIVE_PANEL,
+                                  help="What the MILP minimises: rigcd (the calibrated "
                                   "RigCD under --weights, default) or a model of the measured drop (a shipped name, "
                                   "lss-R1, or a drop model JSON file) fitted from REF; the continuous stage is then "
                                   "off."),
@@ -88,23 +95,31 @@ def design_command(
                                                                 "pinholes at --image-size, or a continuous range "
                                                                 "such as 60-120."),
     image_size: str = typer.Option(image_size_text(BENCHMARK_IMAGE_SIZE), "--image-size",
+                                   rich_help_panel=SEARCH_PANEL,
                                    help="Image size WIDTHxHEIGHT (px) of the --fov pinholes."),
     cameras_file: Optional[Path] = typer.Option(None, "--cameras-file",
+                                                rich_help_panel=SEARCH_PANEL,
                                                 help="Camera catalogue file (TOML or JSON): real cameras with "
                                                      "name, width, height, fx, fy, cx, cy, distortion, "
                                                      "coefficients; replaces --fov."),
     zones: Optional[str] = typer.Option(None, help="Allowed zones, comma-separated (default: all of the vehicle's)."),
-    pitch: str = typer.Option(numbers_text(DEFAULT_PITCHES_DEG), help="Pitch angles to consider, degrees (> 0 up)."),
-    yaw_step: float = typer.Option(DEFAULT_YAW_STEP_DEG, callback=more_than(0, " degrees", 180), help="Yaw grid step, degrees."),
+    pitch: str = typer.Option(numbers_text(DEFAULT_PITCHES_DEG), rich_help_panel=SEARCH_PANEL,
+                              help="Pitch angles to consider, degrees (> 0 up)."),
+    yaw_step: float = typer.Option(DEFAULT_YAW_STEP_DEG, callback=more_than(0, " degrees", 180),
+                                   rich_help_panel=SEARCH_PANEL, help="Yaw grid step, degrees."),
     spacing: Optional[float] = typer.Option(None, callback=more_than(0, " m", MAX_SPACING_M),
+                                            rich_help_panel=SEARCH_PANEL,
                                             help="Mount point spacing (m), at most 2; default: sized to the vehicle."),
-    min_coverage: int = typer.Option(0, min=0, help="Cameras every ring sector needs, beyond the reference's "
-                                                    "coverage."),
-    min_overlap: int = typer.Option(0, min=0, help="Cameras needed where the reference sees a sector twice (e.g. 2)."),
+    min_coverage: int = typer.Option(0, min=0, rich_help_panel=SEARCH_PANEL,
+                                     help="Cameras every ring sector needs, beyond the reference's coverage."),
+    min_overlap: int = typer.Option(0, min=0, rich_help_panel=SEARCH_PANEL,
+                                    help="Cameras needed where the reference sees a sector twice (e.g. 2)."),
     max_nodes: int = typer.Option(DEFAULT_MAX_NODES, "--max-nodes", min=1, max=10_000_000,
+                                  rich_help_panel=SEARCH_PANEL,
                                   help="MILP work limit in branch-and-bound nodes: the same design on any machine; "
                                        "a design not proven best within it is an error."),
     accept_gap: bool = typer.Option(False, "--accept-gap",
+                                    rich_help_panel=SEARCH_PANEL,
                                     help="Take the best design found within --max-nodes, reported with its gap, "
                                          "instead of refusing one not proven best."),
     min_height: Optional[float] = typer.Option(None, "--min-height", min=0.0, max=5.0,
@@ -113,17 +128,21 @@ def design_command(
     require: Optional[str] = typer.Option(None, "--require",
                                           help="Regulation fields the design must see: comma-separated r158, r151, "
                                                "r159, r46-iv, r46-v, r46-vi, dvs (':lht' for left-hand traffic), "
-                                               "'default' (the vehicle category's: trucks and "
-                                               "buses r151,r159,r158; cars and vans r158) or 'none'. Without it the category's fields are required "
-                                               "unless no design sees them all (then reported). See "
+                                               "'default' (the vehicle category's: trucks and buses "
+                                               "r151,r159,r158; cars and vans r158) or 'none'. Without it the "
+                                               "category's fields are required unless no design sees them all "
+                                               "(then reported). See "
                                                "docs/regulations.md."),
     cost_weight: float = typer.Option(0.0, "--cost-weight", min=0.0, callback=finite(),
+                                      rich_help_panel=OBJECTIVE_PANEL,
                                       help="Weight of the cameras' mean relative mounting cost (zone cost, +0.5 in "
                                            "tyre spray) added to the calibrated RigCD; 0 reports it only."),
     asymmetric: bool = typer.Option(False, "--asymmetric",
+                                    rich_help_panel=SEARCH_PANEL,
                                     help="Place cameras freely; by default a mirror-symmetric vehicle gets cameras "
                                          "in mirrored pairs and on its centreline."),
     pose: str = typer.Option("nearest", "--pose",
+                             rich_help_panel=POSE_PANEL,
                              help="The perception cameras' pose in a two-role design: nearest (each at the nearest "
                                   "pose the body allows to its matched reference camera's: 0.05 m of height, its "
                                   "pitch, 5 deg of yaw, its lens; the reference's coverage kept from 20 m; placed "
@@ -132,32 +151,39 @@ def design_command(
                                   "the earlier default). --match-*, --perception-range and --free-perception "
                                   "override it; one camera set (--single-set, --pareto) is always free."),
     free_perception: Optional[bool] = typer.Option(None, "--free-perception/--mirrored-perception",
+                                                   rich_help_panel=POSE_PANEL,
                                                    help="Place the perception cameras freely (the reference's own "
                                                         "layout, which a mirrored body may not offer) while the "
                                                         "near-field cameras keep their mirrored pairs; default: as "
                                                         "--pose says."),
     match_height: Optional[float] = typer.Option(None, "--match-height", min=0.0, callback=finite(),
+                                                 rich_help_panel=POSE_PANEL,
                                                  help="Pose tolerance (m): each perception camera within this "
                                                       "height of its matched reference camera, or as near as the "
                                                       "body allows (a lifting detector's depth prior is its "
                                                       "training rig's; docs/design.md, 'Pose tolerance')."),
     match_pitch: Optional[float] = typer.Option(None, "--match-pitch", min=0.0, callback=finite(),
+                                                rich_help_panel=POSE_PANEL,
                                                 help="Pose tolerance (deg): each perception camera's pitch within "
                                                      "this of its matched reference camera's."),
     match_yaw: Optional[float] = typer.Option(None, "--match-yaw", min=0.0, callback=finite(),
+                                              rich_help_panel=POSE_PANEL,
                                               help="Pose tolerance (deg): each perception camera's yaw within this "
                                                    "of its matched reference camera's (half the yaw step keeps the "
                                                    "nearest grid yaw)."),
     match_fov: Optional[float] = typer.Option(None, "--match-fov", min=0.0, callback=finite(),
+                                              rich_help_panel=POSE_PANEL,
                                               help="Lens tolerance (deg): each perception camera's horizontal FOV "
                                                    "within this of its matched reference camera's (0: the "
                                                    "reference's lens)."),
     height_search: Optional[float] = typer.Option(None, "--height-search", min=0.0, callback=finite(),
+                                                  rich_help_panel=POSE_PANEL,
                                                   help="With --match-height and free perception cameras: move each "
                                                        "perception camera, within this many metres, to the valid "
                                                        "mount (0.03 m grid) nearest its matched reference camera's "
                                                        "height (0: off; default: as --pose says, 0.75 for nearest)."),
     perception_range: Optional[float] = typer.Option(None, "--perception-range", min=0.0, callback=finite(),
+                                           rich_help_panel=POSE_PANEL,
                                            help="With near-field cameras: the perception cameras keep the "
                                                 "reference's coverage only on the rings at least this far (m) from "
                                                 "the body (rings at 2, 5, 10, 20 m; 0: all of them; default: as "
@@ -184,7 +210,8 @@ def design_command(
     force: bool = typer.Option(False, "--force", help=FORCE_HELP),
     as_json: bool = typer.Option(False, "--json", help="Print the JSON summary."),
 ):
-    """Design a rig on VEHICLE that minimises the calibrated RigCD to REF while covering what REF covers."""
+    """Design a rig on VEHICLE for a detector trained on REF: perception cameras at the nearest pose the body allows
+    to REF's (heights searched), near-field fisheyes for the regulation fields; predicted drops printed."""
     from rich.console import Console
 
     from rigopt.background import INLINE, Background
