@@ -19,8 +19,6 @@ import numpy as np
 
 HERE = Path(__file__).resolve().parent
 TARGET = HERE.parents[1] / "metrics" / "drop_models" / "lss-R1.json"
-sys.path.insert(0, str(HERE))
-from analysis import TERMS  # noqa: E402
 
 
 def main() -> int:
@@ -30,6 +28,7 @@ def main() -> int:
     from rigopt.vehicle.placement import in_vehicle_frame
 
     analysis = json.loads((HERE / "results" / "analysis.json").read_text())
+    terms = tuple(analysis["weights_all"])  # the study's pre-registered terms, in FEATURES order
     weights = np.array([analysis["weights_all"].get(name, 0.0) for name in drop_model.FEATURES])
     reference = in_vehicle_frame(load_rig("R1"))[0].perception()
     rigs = [in_vehicle_frame(load_rig(HERE / "rigs" / f"{row['rig']}.json"))[0] for row in analysis["per_rig"]]
@@ -41,7 +40,7 @@ def main() -> int:
              f"{r['mean_within_rho']:.3f}), MAE {p['mae']:.3f} (RigCD {r['mae']:.3f})")
     model = drop_model.DropModel("lss-R1", "lss-R1", "R1", drop_model.camera_table(reference), weights,
                                  drop_model.interval_halfwidths(held_out, measured), np.zeros((len(weights), 2)),
-                                 bool(analysis["replaces_rigcd"]), study, features=TERMS)
+                                 bool(analysis["replaces_rigcd"]), study, features=terms)
     terms = model.terms(reference, rigs)  # each term's range over the fitting rigs, under the model's matching
     model = dataclasses.replace(model, ranges=np.column_stack([terms.min(axis=0), terms.max(axis=0)]))
     TARGET.parent.mkdir(parents=True, exist_ok=True)
