@@ -8,7 +8,8 @@ from typing import Optional
 
 import typer
 
-from rigopt.cli.app import FORCE_HELP, app, console, note_vehicle, print_json, print_next, print_table
+from rigopt.cli.app import (FORCE_HELP, NO_TRAILER_HELP, app, console, note_vehicle, print_json, print_next,
+                            print_table)
 from rigopt.errors import RigoptError
 
 
@@ -70,9 +71,11 @@ def coverage_command(
     force: bool = typer.Option(False, "--force", help=FORCE_HELP),
     as_json: bool = typer.Option(False, "--json", help="Print the JSON report instead of tables."),
     require: str = typer.Option("none", "--require", help=REQUIRE_HELP),
+    no_trailer: bool = typer.Option(False, "--no-trailer", help=NO_TRAILER_HELP + " It then neither blocks views nor "
+                                    "shapes the fields."),
 ):
     """Coverage of a rig around its vehicle: rings at 2-50 m, bird's-eye counts, near-field blind zone, per camera."""
-    from rigopt.coverage.measures import compare_coverage, coverage_report
+    from rigopt.coverage.measures import CoverageSettings, compare_coverage, coverage_report
     from rigopt.coverage.packaging import report_origin
     from rigopt.coverage.regulations import parse_require, region_coverage
     from rigopt.report.coverage_figures import comparison_dict, report_dict
@@ -83,10 +86,11 @@ def coverage_command(
     out_dir = check_out_folder(out, force=force) if out is not None else None
     loaded, on, announce = _placed(rig, vehicle)
     presets = parse_require(require, on)
-    report = coverage_report(loaded, on)
+    lifted = ("trailer",) if no_trailer else ()
+    report = coverage_report(loaded, on, CoverageSettings(lifted=lifted))
     _refuse_blind(report, loaded, on)
     regions = region_coverage(loaded, on, presets, backend=report.settings.backend,
-                              max_range=report.settings.max_range)
+                              max_range=report.settings.max_range, lifted=lifted)
     other = comparison = None
     if compare is not None:
         _, other, announce_other = _report(compare, None)

@@ -4,8 +4,9 @@
 
 Reads ``results/analysis.json`` (``analysis.py``) and writes ``metrics/drop_models/lss-R1.json``, the model that
 ``rigopt rank``, ``rigcd``, ``design`` and ``validate`` print by default (``--predictor auto``) when the study's
-pre-registered decision found it better than RigCD (``replaces_rigcd``); otherwise it ships marked not default
-and prints only when asked for by name (``--predictor lss-R1``).
+pre-registered decision found it better than RigCD (``replaces_rigcd``) and the second predictor study
+(studies/predictor_v2/) did not replace it; otherwise it ships marked not default and prints only when asked for
+by name (``--predictor lss-R1``).
 """
 
 from __future__ import annotations
@@ -38,9 +39,12 @@ def main() -> int:
     study = (f"studies/predictor (pre-registered): {analysis['rigs']} rigs on {len(analysis['vehicles'])} vehicles, "
              f"leave-one-vehicle-out mean within-vehicle rho {p['mean_within_rho']:.3f} (RigCD "
              f"{r['mean_within_rho']:.3f}), MAE {p['mae']:.3f} (RigCD {r['mae']:.3f})")
+    # printed by default when it beat RigCD, unless the second study's model replaced it (studies/predictor_v2/)
+    later = HERE.parent / "predictor_v2" / "results" / "analysis.json"
+    replaced = later.is_file() and json.loads(later.read_text())["v2_replaces_v1"]
     model = drop_model.DropModel("lss-R1", "lss-R1", "R1", drop_model.camera_table(reference), weights,
                                  drop_model.interval_halfwidths(held_out, measured), np.zeros((len(weights), 2)),
-                                 bool(analysis["replaces_rigcd"]), study, features=terms)
+                                 bool(analysis["replaces_rigcd"]) and not replaced, study, features=terms)
     terms = model.terms(reference, rigs)  # each term's range over the fitting rigs, under the model's matching
     model = dataclasses.replace(model, ranges=np.column_stack([terms.min(axis=0), terms.max(axis=0)]))
     TARGET.parent.mkdir(parents=True, exist_ok=True)

@@ -27,3 +27,13 @@ def test_a_rig_that_sees_only_its_own_body_is_an_error_naming_the_check(tmp_path
     assert result.stderr.count("rigopt: error:") == 1
     assert all(f"{c.id} (the body is in its view" in result.stderr for c in r1.cameras)
     assert run_rigopt("coverage", "R1", "--json").returncode == 0  # the same cameras facing out are fine
+
+
+def test_the_hgvs_trailer_blocks_views_unless_lifted():
+    """R9 on the hgv sees less of the rings with its coupled trailer in the way than with --no-trailer, never more."""
+    import json
+
+    runs = [run_rigopt("coverage", "R9", "--vehicle", "hgv", "--json", *flag) for flag in ((), ("--no-trailer",))]
+    assert all(run.returncode == 0 for run in runs), [run.stderr for run in runs]
+    coupled, lifted = ([ring["covered_frac"] for ring in json.loads(run.stdout)["rings"]] for run in runs)
+    assert all(a <= b + 1e-12 for a, b in zip(coupled, lifted)) and sum(lifted) - sum(coupled) > 0.3
