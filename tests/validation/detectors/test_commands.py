@@ -149,6 +149,7 @@ def test_validate_with_data_feeds_the_perception_cameras_and_keeps_the_whole_des
     from rigopt.metrics.calibration import load_weights
     from rigopt.metrics.drop_model import load_drop_model
     from rigopt.metrics.ranking import predict_transfer
+    from rigopt.mounting.candidates import rig_body_share
     from rigopt.rig.library import load_rig
     from rigopt.rig.pccr_format import write_rig
     from rigopt.validation import designs
@@ -168,10 +169,11 @@ def test_validate_with_data_feeds_the_perception_cameras_and_keeps_the_whole_des
     assert "FISHEYE" in RigSplit(trained, "fed_whole", "test").channels
     assert result["design_minus"] == []  # the whole design is not another rig to beat
     assert result["near_field"]["whole_rig"] == {"rig": "fed_whole", "n_cameras": 5, "measured": True, "reason": None}
-    model = load_drop_model("lss-R1")  # from R1 the printed prediction is the shipped drop model's
-    perception = predict_transfer(load_rig("R1"), [design.perception()], load_weights("joint", "rigcd"), model)[0]
+    model = load_drop_model("lss-R1-v2")  # from R1 the printed prediction is the default shipped drop model's
+    perception = predict_transfer(load_rig("R1"), [design.perception()], load_weights("joint", "rigcd"), model,
+                                  rig_body_share)[0]
     assert result["rigs"][0]["predicted_drop"] == pytest.approx(perception.predicted_drop)
-    assert result["predicted_by"] == "lss-R1 drop model"
+    assert result["predicted_by"] == "lss-R1-v2 drop model"
     assert ("fed: 1 near_field camera(s) are not fed to the detector: measured on its 4 perception cameras, and "
             "whole (5 cameras) for the record") in stderr
 

@@ -312,7 +312,7 @@ def test_the_table_says_when_the_prediction_interval_is_uninformative(use_packed
     assert result["predicted_by"] == "RigCD (joint)"
     code = run([*base, "--json"])
     result = json.loads(capsys.readouterr().out)
-    assert result["predicted_by"] == "lss-R1 drop model" and result["rigs"][0]["interval_informative"] is True
+    assert result["predicted_by"] == "lss-R1-v2 drop model" and result["rigs"][0]["interval_informative"] is True
 
 
 @pytest.mark.slow
