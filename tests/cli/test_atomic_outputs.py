@@ -46,7 +46,7 @@ def r1_report():
 
 @pytest.fixture
 def known_report(r1_report, monkeypatch):
-    monkeypatch.setattr("rigopt.coverage.measures.coverage_report", lambda rig, vehicle: r1_report)
+    monkeypatch.setattr("rigopt.coverage.measures.coverage_report", lambda rig, vehicle, settings=None: r1_report)
 
 
 @pytest.fixture(scope="module")
@@ -54,7 +54,7 @@ def coverage_out(tmp_path_factory, r1_report):
     """A complete ``rigopt coverage R1 --out`` folder (made once; tests copy it)."""
     out = tmp_path_factory.mktemp("coverage") / "out"
     with pytest.MonkeyPatch.context() as patch:
-        patch.setattr("rigopt.coverage.measures.coverage_report", lambda rig, vehicle: r1_report)
+        patch.setattr("rigopt.coverage.measures.coverage_report", lambda rig, vehicle, settings=None: r1_report)
         result = invoke("coverage", "R1", "--out", out)
     assert result.exit_code == 0, result.output
     return out

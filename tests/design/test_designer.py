@@ -46,8 +46,8 @@ UNCOVERED = re.compile(r"ring (?P<distance>[\d.]+) m at height (?P<height>[\d.]+
 @pytest.fixture(scope="module")
 def firetruck():
     vehicle, reference, calibration = load_vehicle("firetruck"), load_rig("R1"), load_weights("joint")
-    result = design_rig(vehicle, ReferenceRig.on_own_vehicle(reference), calibration,
-                        compare_with=benchmark_rigs(vehicle))
+    result = design_rig(vehicle, ReferenceRig.on_own_vehicle(reference), calibration, DesignSettings(),
+                        compare_with=benchmark_rigs(vehicle))  # the bare designer (no pose preset)
     return SimpleNamespace(vehicle=vehicle, reference=reference, calibration=calibration, result=result,
                            design=result.design, milp_rig=result.milp.rig, settings=DesignSettings())
 
