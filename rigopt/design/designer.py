@@ -10,6 +10,8 @@ again, so a returned design is always valid. With a height tolerance, the refine
 the mounts nearest their reference cameras' heights (:mod:`rigopt.design.heights`), and a two-role design's
 near-field stage adds its fisheyes.
 
+The stages are functions of the records before them (``FieldPlan``, ``Selected``, ``Perception``,
+``NearFieldResult``; :func:`design_rig` lists them in order), each record carrying the settings its stage used.
 Every input is explicit: the references come with the vehicles they were designed on and the rigs to
 compare with are passed in (:mod:`rigopt.design.problem` builds the usual ones); the result
 (:mod:`rigopt.design.result`) carries everything the reports show.
@@ -219,9 +221,44 @@ def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRi
     (e.g. ``problem.benchmark_rigs(vehicle)``), under ``settings`` (None: ``DesignSettings.preset()``, what
     ``rigopt design`` does by default). With a ``background`` worker the near-field stage (which needs
     nothing of the perception cameras until they share housings) runs there while the perception cameras are
-    designed and refined here, and the naive transfer refined: the same design."""
+    designed and refined here, and the naive transfer refined: the same design.
+
+    The stages, each a function of the records before it: the fields' plan (who sees the regulation fields) ->
+    requirements -> selection (the MILP, down the fallback ladder) -> validation (pose tolerance, coverage) ->
+    refinement (casadi + IPOPT) -> height search -> the naive transfer -> near field -> result."""
     start = time.perf_counter()
     settings = DesignSettings.preset() if settings is None else settings
+    references = checked_references(references)
+    rigs = [r.rig for r in references]
+    progress(f"coverage requirements from {', '.join(r.name for r in rigs)} and the required fields")
+    fields = plan_fields(vehicle, settings, background)
+    requirements = design_requirements(references, vehicle, fields.perception)
+    selected = select_stage(vehicle, rigs, calibration, fields.perception, requirements, progress)
+    refines = (selected.settings.refine and len(rigs) == 1 and calibration.lifting is None
+               and selected.settings.drop_model is None)
+    perception = validate_stage(selected, vehicle, rigs, calibration, progress)
+    perception = refine_stage(perception, selected, vehicle, rigs, calibration, refines, progress)
+    perception = height_stage(perception, selected, vehicle, rigs, calibration, progress)
+    naive, naive_refinement = naive_stage(selected, vehicle, rigs[0], calibration, refines, progress)
+    near = near_field_result(perception.design, selected, fields, vehicle, rigs, calibration, progress)
+    regions = field_coverage(near.design.rig, vehicle, near.presets or required_fields(near.requirements, near.settings)
+                             or default_presets(vehicle), near.settings)
+    reference_coverage = rig_coverage_matrix(rigs[0], references[0].vehicle,
+                                             near.settings.coverage).sees.any(axis=0).mean()
+    comparisons = Comparisons(
+        summarise(naive, vehicle, rigs, calibration, near.requirements, near.settings) if naive else None,
+        tuple(summarise(rig, vehicle, rigs, calibration, near.requirements, near.settings) for rig in compare_with),
+        naive_refinement)
+    widened = tuple((rigs[0].cameras[k].id, float(perception.widen[k])) for k in np.flatnonzero(perception.widen > 1.0))
+    return DesignResult(near.design, selected.milp, perception.refinement, comparisons, float(reference_coverage),
+                        vehicle, references, calibration, near.settings, time.perf_counter() - start,
+                        selected.symmetry_fallback, regions, near.fields_fallback, near.stage, widened,
+                        near.settings.near_field and selected.near_field_mirrored, perception.height_moves)
+
+
+def checked_references(references: ReferenceRig | Sequence[ReferenceRig]) -> tuple[ReferenceRig, ...]:
+    """The reference rigs as a tuple; none, or one measured from another origin than its vehicle's centre, is an
+    error."""
     references = (references,) if isinstance(references, ReferenceRig) else tuple(references)
     if not references:
         raise RigoptError("a design needs at least one reference rig")
@@ -230,53 +267,128 @@ def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRi
         raise RigoptError(f"reference rig(s) {', '.join(off_centre)} measure positions from another origin than the "
                           "vehicle centre the design uses; build them with ReferenceRig.on_own_vehicle (or "
                           "rigopt.vehicle.placement.place_rig), which converts them")
-    rigs = [r.rig for r in references]
-    reference = rigs[0]
-    progress(f"coverage requirements from {', '.join(r.name for r in rigs)} and the required fields")
-    near_field_presets, user_require = (), settings.require
-    near_field_job = None
-    if settings.near_field:  # the fields are the near-field cameras' job, not the perception cameras'
-        near_field_presets = required_presets(vehicle, settings) if settings.require != "none" else ()
-        settings = replace(settings, require="none")
-        if background.parallel:  # for the symmetry the first attempt asks for: checked when it is taken
-            near_field_job = background.submit(near_field_stage_choice, vehicle, near_field_presets, settings,
-                                               user_require)
-    requirements = design_requirements(references, vehicle, settings)
-    # What the design must have, and what it gives up, in this order, when nothing meets it: mirrored pairs
-    # (unless asked for or refused) and the category's fields (unless named).
-    auto_symmetry = settings.symmetric is None and settings.perception_mirrored_on(vehicle)
-    auto_fields = settings.require is None and bool(requirements.presets)
-    near_field_mirrored = settings.is_symmetric_on(vehicle)
-    attempts = [(settings.perception_mirrored_on(vehicle), True)] + [(False, True)] * auto_symmetry
-    attempts += [(s, False) for s, _ in attempts] if auto_fields else []
-    prepared_for, reasons = {}, []
-    for k, (symmetric, with_fields) in enumerate(attempts):
-        tried = replace(settings, symmetric=symmetric, require=settings.require if with_fields else "none")
-        needs = requirements if with_fields else requirements.sector_only()
-        counts = settings.cameras or default_counts(len(reference), with_fields and bool(requirements.presets))
+    return references
+
+
+@dataclass(frozen=True)
+class FieldPlan:
+    """Who sees the regulation fields. ``presets``: the near-field stage's fields (a two-role design; () else);
+    ``user_require``: the user's ``require``; ``perception``: the settings the perception cameras are designed
+    under (no fields asked of them in a two-role design); ``job``: the near-field choice computed ahead in a
+    background worker, or None."""
+
+    presets: tuple
+    user_require: str | None
+    perception: DesignSettings
+    job: object | None
+
+
+def plan_fields(vehicle: Vehicle, settings: DesignSettings, background: Background) -> FieldPlan:
+    """The fields' plan: in a two-role design the fields are the near-field cameras' job, started in the
+    ``background`` worker when there is one (for the symmetry the first rung asks for: checked when taken)."""
+    if not settings.near_field:
+        return FieldPlan((), settings.require, settings, None)
+    presets = required_presets(vehicle, settings) if settings.require != "none" else ()
+    perception = replace(settings, require="none")
+    job = (background.submit(near_field_stage_choice, vehicle, presets, perception, settings.require)
+           if background.parallel else None)
+    return FieldPlan(presets, settings.require, perception, job)
+
+
+@dataclass(frozen=True)
+class Rung:
+    """One rung of the fallback ladder: the perception cameras in mirrored pairs or not, the category's fields
+    required of them or not."""
+
+    symmetric: bool
+    with_fields: bool
+
+
+def fallback_ladder(vehicle: Vehicle, settings: DesignSettings, requirements: Requirements) -> tuple[Rung, ...]:
+    """What the design must have, and what it gives up, in this order, when nothing meets it: mirrored pairs
+    (unless asked for or refused), then the category's fields (unless named)."""
+    first = Rung(settings.perception_mirrored_on(vehicle), True)
+    rungs = [first] + [Rung(False, True)] * auto_symmetry(vehicle, settings)
+    if auto_fields(settings, requirements):
+        rungs += [Rung(r.symmetric, False) for r in rungs]
+    return tuple(rungs)
+
+
+def auto_symmetry(vehicle: Vehicle, settings: DesignSettings) -> bool:
+    """Whether mirrored pairs are the vehicle's default rather than asked for (so they may be given up)."""
+    return settings.symmetric is None and settings.perception_mirrored_on(vehicle)
+
+
+def auto_fields(settings: DesignSettings, requirements: Requirements) -> bool:
+    """Whether the fields required are the category's rather than named (so they may be given up)."""
+    return settings.require is None and bool(requirements.presets)
+
+
+@dataclass(frozen=True)
+class Selected:
+    """The selection stage: the first rung of the ladder with a valid MILP selection. ``settings`` and
+    ``requirements`` are that rung's (its symmetry and fields, the dense check's field points added);
+    ``near_field_mirrored``: whether the near-field cameras come in mirrored pairs."""
+
+    prepared: Prepared
+    requirements: Requirements
+    milp: MilpStage
+    settings: DesignSettings
+    symmetry_fallback: str | None
+    fields_fallback: str | None
+    near_field_mirrored: bool
+
+
+def select_stage(vehicle: Vehicle, rigs: Sequence[Rig], calibration: Calibration, settings: DesignSettings,
+                 requirements: Requirements, progress: Callable[[str], None]) -> Selected:
+    """Down the fallback ladder until a rung has a valid selection (the last rung's failure is raised)."""
+    rungs, prepared_for, reasons = fallback_ladder(vehicle, settings, requirements), {}, []
+    for k, rung in enumerate(rungs):
+        tried = replace(settings, symmetric=rung.symmetric, require=settings.require if rung.with_fields else "none")
+        needs = requirements if rung.with_fields else requirements.sector_only()
+        counts = settings.cameras or default_counts(len(rigs[0]), rung.with_fields and bool(requirements.presets))
         try:
-            if symmetric not in prepared_for:
-                prepared_for[symmetric] = prepare(vehicle, rigs, calibration, tried, requirements.points, progress)
-            prepared, needs, milp = _select_seeing_fields(prepared_for[symmetric], vehicle, calibration, needs, counts,
-                                                          tried, progress)
+            if rung.symmetric not in prepared_for:
+                prepared_for[rung.symmetric] = prepare(vehicle, rigs, calibration, tried, requirements.points,
+                                                       progress)
+            prepared, needs, milp = _select_seeing_fields(prepared_for[rung.symmetric], vehicle, calibration, needs,
+                                                          counts, tried, progress)
             break
         except DesignInfeasible as error:
-            if k == len(attempts) - 1:
+            if k == len(rungs) - 1:
                 raise
             reasons.append(str(error))
-            progress(f"no design with{'' if symmetric else 'out'} mirrored pairs"
-                     f"{' seeing the fields' if with_fields else ''} ({error}); trying with less")
-    settings, requirements = tried, needs
+            progress(f"no design with{'' if rung.symmetric else 'out'} mirrored pairs"
+                     f"{' seeing the fields' if rung.with_fields else ''} ({error}); trying with less")
     symmetry_fallback = (f"no symmetric design meets the requirements ({reasons[0]}); designed without symmetry"
-                         if auto_symmetry and not symmetric else None)
-    near_field_mirrored &= symmetry_fallback is None
+                         if auto_symmetry(vehicle, settings) and not rung.symmetric else None)
     fields_fallback = (f"no design sees all of the vehicle category's fields "
-                       f"{', '.join(p.key for p in requirements.presets)} ({reasons[-1]}); they are reported, not "
-                       "required" if auto_fields and not with_fields else None)
+                       f"{', '.join(p.key for p in needs.presets)} ({reasons[-1]}); they are reported, not "
+                       "required" if auto_fields(settings, requirements) and not rung.with_fields else None)
+    return Selected(prepared, needs, milp, tried, symmetry_fallback, fields_fallback,
+                    settings.is_symmetric_on(vehicle) and symmetry_fallback is None)
 
-    refines = settings.refine and len(rigs) == 1 and calibration.lifting is None and settings.drop_model is None
-    naive = naive_transfer(vehicle, reference, prepared.candidates, settings)
+
+@dataclass(frozen=True)
+class Perception:
+    """The perception cameras after a stage. ``design``: the rig's summary; ``matched`` (m,) int: the reference
+    cameras matched, in the order of the rig's first m cameras; ``widen`` (R,) float: each reference camera's
+    pose tolerance widened by (1: as set; inf: matched without it, `matched_widening`); ``refinement``: the
+    continuous stage's report; ``height_moves``: what the height search moved."""
+
+    design: RigSummary
+    matched: np.ndarray
+    widen: np.ndarray
+    refinement: RefinementReport
+    height_moves: tuple = ()
+
+
+def validate_stage(selected: Selected, vehicle: Vehicle, rigs: Sequence[Rig], calibration: Calibration,
+                   progress: Callable[[str], None]) -> Perception:
+    """The MILP's rig checked: its pose tolerance (widened where no mount keeps it, said so) and its coverage
+    recomputed."""
     progress("validating the design: mount checks, coverage, RigCD")
+    milp, reference, settings = selected.milp, rigs[0], selected.settings
     matched = np.sort(milp.selection.matched[milp.selection.matched >= 0])  # the rig's cameras come in this order
     gaps = tolerance_gaps(milp.rig.positions[:len(matched)], milp.rig.rotations[:len(matched)],
                           milp.rig.fovs[:len(matched)], reference, settings)
@@ -285,64 +397,102 @@ def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRi
         progress(f"no mount keeps {reference.cameras[k].id} within {tolerance_text(settings)}: "
                  + (f"the nearest pose the body allows, {widen[k]:.2f}x the tolerance" if np.isfinite(widen[k])
                     else "matched without the tolerance"))
-    design = summarise(milp.rig, vehicle, rigs, calibration, requirements, settings, milp.check)
+    design = summarise(milp.rig, vehicle, rigs, calibration, selected.requirements, settings, milp.check)
     if not design.meets_requirements:
         raise DesignInfeasible("the selected rig does not meet the coverage requirements when recomputed; "
                                "this should not happen: please report it")
-    refinement = RefinementReport(  # the continuous stage's objective has RigCD's terms only
-        f"off ({calibration.metric}: the continuous stage weighs RigCD's terms only)" if calibration.lifting is not None
-        else "off (the MILP minimised a drop model; the continuous stage weighs RigCD's terms only)"
-        if settings.drop_model is not None else "off" if len(rigs) == 1 else "off (fleet design)")
-    if refines:
-        progress("continuous refinement (casadi + IPOPT)")
-        refinement = _refined(design, vehicle, reference, calibration, requirements, prepared.spacing, settings)
-        outside = (pose_violations(refinement.refined.rig, reference, calibration, settings, widen)
-                   if refinement.accepted else [])
-        if outside:  # the continuous stage may slide and tilt a camera out of the tolerance: keep the MILP's rig
-            refinement = replace(refinement, accepted=False,
-                                 status=f"rejected: moves {', '.join(outside)} out of {tolerance_text(settings)}")
-        if refinement.accepted:
-            design = refinement.refined
-    height_moves = ()
-    if (settings.height_search_m > 0 and settings.match_height_m is not None and len(rigs) == 1
-            and not settings.perception_mirrored_on(vehicle)):
-        progress("moving each perception camera to the mount nearest its reference camera's height")
-        rig, height_moves = search_heights(
-            design.rig, matched, reference, vehicle, settings.height_search_m, settings,
-            lambda trial: bool(np.all(requirements.counts(trial, vehicle, settings) >= requirements.needed)))
-        if height_moves:
-            design = summarise(rig, vehicle, rigs, calibration, requirements, settings,
-                               check_rig(rig, vehicle, settings.rules))
-            widen = matched_widening(tolerance_gaps(rig.positions[:len(matched)], rig.rotations[:len(matched)],
-                                                    rig.fovs[:len(matched)], reference, settings), matched)
-    naive_refinement = "off"
-    if naive is not None and refines:  # before the near-field stage: meanwhile a background worker finishes it
-        progress("refining the naive transfer as the design")
-        naive, naive_refinement = refine_comparison(naive, vehicle, reference, calibration, requirements,
-                                                    prepared.spacing, settings)
-    stage = None
-    if settings.near_field:
-        stage, near_field_presets, fields_fallback = _near_field_stage(
-            vehicle, design.rig, near_field_presets, prepared.spacing, replace(settings, symmetric=near_field_mirrored),
-            user_require, progress, near_field_job)
-        design = summarise(stage.rig, vehicle, rigs, calibration, requirements, settings,
-                           check_rig(stage.rig, vehicle, settings.rules))
-        requirements = replace(requirements, presets=near_field_presets)
-        settings = replace(settings, require=user_require if near_field_presets else "none")
-    regions = field_coverage(design.rig, vehicle, near_field_presets or required_fields(requirements, settings)
-                             or default_presets(vehicle), settings)
+    return Perception(design, matched, widen, RefinementReport(refinement_off(calibration, settings, len(rigs))))
 
-    reference_coverage = rig_coverage_matrix(reference, references[0].vehicle,
-                                             settings.coverage).sees.any(axis=0).mean()
-    comparisons = Comparisons(
-        summarise(naive, vehicle, rigs, calibration, requirements, settings) if naive else None,
-        tuple(summarise(rig, vehicle, rigs, calibration, requirements, settings) for rig in compare_with),
-        naive_refinement)
-    return DesignResult(design, milp, refinement, comparisons, float(reference_coverage), vehicle, references,
-                        calibration, settings, time.perf_counter() - start, symmetry_fallback, regions,
-                        fields_fallback, stage,
-                        tuple((reference.cameras[k].id, float(widen[k])) for k in np.flatnonzero(widen > 1.0)),
-                        settings.near_field and near_field_mirrored, height_moves)
+
+def refinement_off(calibration: Calibration, settings: DesignSettings, n_references: int) -> str:
+    """Why the continuous stage does not run (its objective has RigCD's terms only), or "off"."""
+    if calibration.lifting is not None:
+        return f"off ({calibration.metric}: the continuous stage weighs RigCD's terms only)"
+    if settings.drop_model is not None:
+        return "off (the MILP minimised a drop model; the continuous stage weighs RigCD's terms only)"
+    return "off" if n_references == 1 else "off (fleet design)"
+
+
+def refine_stage(perception: Perception, selected: Selected, vehicle: Vehicle, rigs: Sequence[Rig],
+                 calibration: Calibration, refines: bool, progress: Callable[[str], None]) -> Perception:
+    """The continuous refinement, its rig taken when accepted and within the (widened) pose tolerance."""
+    if not refines:
+        return perception
+    progress("continuous refinement (casadi + IPOPT)")
+    settings = selected.settings
+    refinement = _refined(perception.design, vehicle, rigs[0], calibration, selected.requirements,
+                          selected.prepared.spacing, settings)
+    outside = (pose_violations(refinement.refined.rig, rigs[0], calibration, settings, perception.widen)
+               if refinement.accepted else [])
+    if outside:  # the continuous stage may slide and tilt a camera out of the tolerance: keep the MILP's rig
+        refinement = replace(refinement, accepted=False,
+                             status=f"rejected: moves {', '.join(outside)} out of {tolerance_text(settings)}")
+    design = refinement.refined if refinement.accepted else perception.design
+    return replace(perception, design=design, refinement=refinement)
+
+
+def height_stage(perception: Perception, selected: Selected, vehicle: Vehicle, rigs: Sequence[Rig],
+                 calibration: Calibration, progress: Callable[[str], None]) -> Perception:
+    """With a height tolerance and free perception cameras of one reference: each perception camera moved to the
+    mount nearest its reference camera's height (:func:`rigopt.design.heights.search_heights`), the coverage kept;
+    what moved is in ``height_moves``."""
+    settings, requirements = selected.settings, selected.requirements
+    if not (settings.height_search_m > 0 and settings.match_height_m is not None and len(rigs) == 1
+            and not settings.perception_mirrored_on(vehicle)):
+        return perception
+    progress("moving each perception camera to the mount nearest its reference camera's height")
+    matched = perception.matched
+    rig, moves = search_heights(
+        perception.design.rig, matched, rigs[0], vehicle, settings.height_search_m, settings,
+        lambda trial: bool(np.all(requirements.counts(trial, vehicle, settings) >= requirements.needed)))
+    if not moves:
+        return perception
+    design = summarise(rig, vehicle, rigs, calibration, requirements, settings, check_rig(rig, vehicle, settings.rules))
+    gaps = tolerance_gaps(rig.positions[:len(matched)], rig.rotations[:len(matched)], rig.fovs[:len(matched)],
+                          rigs[0], settings)
+    return replace(perception, design=design, widen=matched_widening(gaps, matched), height_moves=moves)
+
+
+def naive_stage(selected: Selected, vehicle: Vehicle, reference: Rig, calibration: Calibration, refines: bool,
+                progress: Callable[[str], None]) -> tuple[Rig | None, str]:
+    """The naive transfer (None when some camera finds no mount) and, when the design was refined, the same
+    refinement of it (so that the comparison credits the design's objective, not its extra stage): (rig, the
+    refinement's status)."""
+    naive = naive_transfer(vehicle, reference, selected.prepared.candidates, selected.settings)
+    if naive is None or not refines:
+        return naive, "off"
+    progress("refining the naive transfer as the design")
+    return refine_comparison(naive, vehicle, reference, calibration, selected.requirements, selected.prepared.spacing,
+                             selected.settings)
+
+
+@dataclass(frozen=True)
+class NearFieldResult:
+    """The design after the near-field stage (the perception design as it was without one): its summary, the
+    stage (None without), the fields its cameras see, the fallback note, and the requirements and settings the
+    whole design is reported under (the near-field fields and the user's ``require``)."""
+
+    design: RigSummary
+    stage: object | None
+    presets: tuple
+    fields_fallback: str | None
+    requirements: Requirements
+    settings: DesignSettings
+
+
+def near_field_result(design: RigSummary, selected: Selected, fields: FieldPlan, vehicle: Vehicle,
+                      rigs: Sequence[Rig], calibration: Calibration, progress: Callable[[str], None]) -> NearFieldResult:
+    """A two-role design's near-field fisheyes added to the perception cameras (:func:`_near_field_stage`)."""
+    settings, requirements = selected.settings, selected.requirements
+    if not settings.near_field:
+        return NearFieldResult(design, None, fields.presets, selected.fields_fallback, requirements, settings)
+    stage, presets, fallback = _near_field_stage(
+        vehicle, design.rig, fields.presets, selected.prepared.spacing,
+        replace(settings, symmetric=selected.near_field_mirrored), fields.user_require, progress, fields.job)
+    design = summarise(stage.rig, vehicle, rigs, calibration, requirements, settings,
+                       check_rig(stage.rig, vehicle, settings.rules))
+    return NearFieldResult(design, stage, presets, fallback, replace(requirements, presets=presets),
+                           replace(settings, require=fields.user_require if presets else "none"))
 
 
 def near_field_stage_choice(vehicle: Vehicle, presets: tuple, settings: DesignSettings, user_require: str | None,
