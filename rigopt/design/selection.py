@@ -139,9 +139,23 @@ def select_cameras(cost, sees: np.ndarray, required: np.ndarray, mount: np.ndarr
     import cvxpy as cp
 
     costs = [np.asarray(c, dtype=float) for c in (cost if isinstance(cost, (list, tuple)) else [cost])]
-    n = costs[0].shape[0]
+    low, high = count_range(n_cameras, max(c.shape[1] for c in costs), mount)
+    model = _selection_model(costs, sees, required, mount, low, high, alpha, clash_pairs, mirror, mount_cost,
+                             cost_weight)
+    seconds = _solve(model.problem, max_nodes, mip_gap)
+    if model.problem.status in (cp.INFEASIBLE, cp.INFEASIBLE_INACCURATE):
+        pairs = " in mirrored pairs" if mirror is not None else ""
+        raise DesignInfeasible(f"no choice of {low if low == high else f'{low}-{high}'} candidate cameras{pairs} meets "
+                               "the coverage and housing requirements; allow more cameras (--cameras), more zones, "
+                               "wider lenses or lower the coverage requirement"
+                               f"{' (or design without symmetry: --asymmetric)' if pairs else ''}")
+    return _selection_of(model, costs, low, high, max_nodes, seconds)
+
+
+def count_range(n_cameras: int | tuple[int, int], n_ref: int, mount: np.ndarray) -> tuple[int, int]:
+    """(low, high) of a camera count or range, checked: at least 1; a range only at or above the largest
+    reference's ``n_ref`` cameras; no more cameras than mount points."""
     low, high = (n_cameras, n_cameras) if np.isscalar(n_cameras) else (int(n_cameras[0]), int(n_cameras[1]))
-    n_ref = max(c.shape[1] for c in costs)
     if low < 1 or high < low:
         raise RigoptError(f"the camera count must be at least 1 (a range low <= high), got {n_cameras}")
     if low < high and low < n_ref:
@@ -150,6 +164,28 @@ def select_cameras(cost, sees: np.ndarray, required: np.ndarray, mount: np.ndarr
     if len(np.unique(mount)) < low:
         raise DesignInfeasible(f"only {len(np.unique(mount))} mount points are available for {low} cameras; "
                                "lower the camera count, allow more zones or a finer --spacing")
+    return low, high
+
+
+@dataclass(frozen=True)
+class _SelectionModel:
+    """The selection MILP as cvxpy holds it: ``x`` (n,) the chosen candidates, ``matchings`` one (y, constraints,
+    calibrated RigCD expression) per reference, ``objective`` the RigCD (the largest over a fleet), ``penalty``
+    the mounting cost term (0.0 without)."""
+
+    problem: object
+    x: object
+    matchings: list
+    objective: object
+    penalty: object
+
+
+def _selection_model(costs, sees, required, mount, low, high, alpha, clash_pairs, mirror, mount_cost,
+                     cost_weight) -> _SelectionModel:
+    """The MILP of :func:`select_cameras` (its docstring and the module's), built in one fixed order."""
+    import cvxpy as cp
+
+    n, n_ref = costs[0].shape[0], max(c.shape[1] for c in costs)
     x = cp.Variable(n, boolean=True)
     if low == high:
         constraints, choice = [cp.sum(x) == low], None
@@ -179,7 +215,13 @@ def select_cameras(cost, sees: np.ndarray, required: np.ndarray, mount: np.ndarr
     penalty = 0.0
     if cost_weight and mount_cost is not None:
         penalty = cost_weight / n_ref * (np.asarray(mount_cost, dtype=float) @ x)
-    problem = cp.Problem(cp.Minimize(objective + penalty), constraints)
+    return _SelectionModel(cp.Problem(cp.Minimize(objective + penalty), constraints), x, matchings, objective, penalty)
+
+
+def _solve(problem, max_nodes: int, mip_gap: float) -> float:
+    """Solve with HiGHS under its work limit (one thread, fixed seed); the seconds it took."""
+    import cvxpy as cp
+
     options = {**HIGHS_OPTIONS, "mip_rel_gap": float(mip_gap), "mip_max_nodes": int(max_nodes)}
     quiet_highs()
     start = time.perf_counter()
@@ -189,25 +231,28 @@ def select_cameras(cost, sees: np.ndarray, required: np.ndarray, mount: np.ndarr
             problem.solve(solver=cp.HIGHS, **options)
     except cp.error.SolverError as error:
         raise RigoptError(f"the MIP solver failed ({error}); is highspy installed? pip install highspy") from None
-    seconds = time.perf_counter() - start
-    if problem.status in (cp.INFEASIBLE, cp.INFEASIBLE_INACCURATE):
-        pairs = " in mirrored pairs" if mirror is not None else ""
-        raise DesignInfeasible(f"no choice of {low if low == high else f'{low}-{high}'} candidate cameras{pairs} meets the coverage and housing "
-                               "requirements; allow more cameras (--cameras), more zones, wider lenses or lower "
-                               f"the coverage requirement{' (or design without symmetry: --asymmetric)' if pairs else ''}")
+    return time.perf_counter() - start
+
+
+def _selection_of(model: _SelectionModel, costs, low: int, high: int, max_nodes: int, seconds: float) -> Selection:
+    """The Selection a solved model holds; a node limit reached before any feasible selection is an error."""
+    import cvxpy as cp
+
+    problem, x = model.problem, model.x
     chosen = np.flatnonzero(x.value > 0.5) if x.value is not None else np.zeros(0, dtype=int)
     if not low <= len(chosen) <= high:  # stopped at the node limit before finding any feasible selection
         raise RigoptError(f"the MIP solver found no feasible design within {max_nodes} branch-and-bound nodes "
                           f"(status {problem.status}); raise --max-nodes")
+    n = costs[0].shape[0]
     matched = []
-    for (y, _, _), c in zip(matchings, costs):
+    for (y, _, _), c in zip(model.matchings, costs):
         pairs = y.value.reshape(n, c.shape[1]) > 0.5
         matched.append(np.array([int(np.argmax(pairs[k])) if pairs[k].any() else -1 for k in chosen]))
-    gap = _gap(problem)
     status = "optimal" if problem.status == cp.OPTIMAL else "node_limit" if _stopped(problem) else problem.status
-    rigcd_value = float(objective.value) if len(matchings) > 1 else float(matchings[0][2].value)
-    cost_term = float(penalty.value) if hasattr(penalty, "value") else 0.0
-    return Selection(chosen, matched[0], rigcd_value, status, gap, seconds, n, tuple(matched), cost_term)
+    rigcd_value = (float(model.objective.value) if len(model.matchings) > 1
+                   else float(model.matchings[0][2].value))
+    cost_term = float(model.penalty.value) if hasattr(model.penalty, "value") else 0.0
+    return Selection(chosen, matched[0], rigcd_value, status, _gap(problem), seconds, n, tuple(matched), cost_term)
 
 
 def _stopped(problem) -> bool:
