@@ -220,40 +220,24 @@ def design_command(
     from rigopt.design.result import predicted_by
     from rigopt.metrics.drop_model import choose_model
     from rigopt.design.problem import benchmark_rigs
-    from rigopt.design.settings import DesignSettings, pinhole_catalogue, read_catalogue
+    from rigopt.design.settings import DesignSettings
     from rigopt.metrics.calibration import load_weights
     from rigopt.output import atomic_folder, check_out_folder, published
-    from rigopt.report.design_html import NEXT_STEPS
     from rigopt.report.design_report import write_design_report
     from rigopt.vehicle.library import load_vehicle
 
     if out is not None:
         check_out_folder(out, force=force)
-    fovs, fov_range = parse_fovs(fov)
-    size = parse_image_size(image_size)
-    if cameras_file is not None:
-        if fov_range is not None or fov != numbers_text(DEFAULT_FOVS) or size != BENCHMARK_IMAGE_SIZE:
-            raise RigoptError("--cameras-file gives the whole catalogue: leave out --fov and --image-size")
-        lenses = read_catalogue(cameras_file)
-    else:
-        lenses = pinhole_catalogue(fovs, size)
-    pitches = parse_numbers(pitch, "--pitch")
-    if not all(-90 <= p <= 90 for p in pitches):
-        raise RigoptError(f"--pitch angles must be within [-90, 90] degrees (> 0 up), got {pitch!r}")
-    two_roles = not pareto if near_field is None else near_field
-    if pose.lower() not in POSES:
-        raise RigoptError(f"--pose must be one of {', '.join(POSES)}, got {pose!r}")
-    given = {"match_height_m": match_height, "match_pitch_deg": match_pitch, "match_yaw_deg": match_yaw,
-             "match_fov_deg": match_fov, "perception_range_m": perception_range,
-             "perception_symmetric": None if free_perception is None else not free_perception,
-             "height_search_m": height_search}
-    settings = DesignSettings.preset(
-        pose, **{k: v for k, v in given.items() if v is not None}, cameras=parse_camera_count(cameras),
-        lenses=lenses, fov_range=fov_range, zones=tuple(z.strip() for z in zones.split(",")) if zones else None,
-        pitches_deg=pitches, yaw_step_deg=yaw_step, spacing=spacing,
-        min_coverage=min_coverage, min_overlap=min_overlap, max_nodes=max_nodes, accept_gap=accept_gap,
-        rules=mount_rules(min_height, no_trailer), symmetric=False if asymmetric else None, cost_weight=cost_weight,
-        require=require, near_field=two_roles, drop_model=_objective(objective, ref))
+    lenses, fov_range = _catalogue(fov, image_size, cameras_file)
+    pose_fields = _pose_fields(pose, match_height, match_pitch, match_yaw, match_fov, perception_range,
+                               free_perception, height_search)
+    settings = DesignSettings.preset(  # the flags mapped onto the library's preset
+        pose, **pose_fields, cameras=parse_camera_count(cameras), lenses=lenses, fov_range=fov_range,
+        zones=tuple(z.strip() for z in zones.split(",")) if zones else None, pitches_deg=_pitches(pitch),
+        yaw_step_deg=yaw_step, spacing=spacing, min_coverage=min_coverage, min_overlap=min_overlap,
+        max_nodes=max_nodes, accept_gap=accept_gap, rules=mount_rules(min_height, no_trailer),
+        symmetric=False if asymmetric else None, cost_weight=cost_weight, require=require,
+        near_field=not pareto if near_field is None else near_field, drop_model=_objective(objective, ref))
     # a worker process beside this one (with a second core): the near-field stage and the pictures go there
     background = INLINE if pareto else Background(later_imports=("rigopt.report.vehicle_figures",
                                                                  "rigopt.report.coverage_figures"))
@@ -270,11 +254,7 @@ def design_command(
         label = "+".join(r.rig.name for r in references)
         out = check_out_folder(out or Path(f"design-{target.name}-{label}"), force=force)
         status = Console(stderr=True)
-        if pareto and near_field:
-            raise RigoptError("--pareto sweeps one camera set; leave out --near-field or add --single-set "
-                              "(or leave out --pareto)")
-        if pareto and measure:
-            raise RigoptError("--measure measures one design: leave out --pareto (or --measure)")
+        _check_pareto(pareto, near_field, measure)
         if pareto:
             _pareto(target, references, calibration, drop_model, settings, out, force, as_json, status)
             return
@@ -294,59 +274,113 @@ def design_command(
         if as_json:
             print_json(summary)
             return
-        rows, flagged, uninformative = [], [], []
-        for name, entry in (("design", {**summary, "meets_coverage_requirements": True}),
-                            ("naive transfer", summary["comparisons"]["naive_transfer"]),
-                            *((f"benchmark {s['name']}", s) for s in summary["comparisons"]["benchmark_rigs"])):
-            if entry:
-                interval = "-" if entry["interval"] is None else "[{:.2f}, {:.2f}]".format(*entry["interval"])
-                if entry.get("interval_informative") is False:  # spans the range a drop can take: no finding
-                    interval, uninformative = "uninformative", uninformative + [name]
-                rows.append([name, entry["predicted_drop"], interval, entry["rigcd"], entry["n_cameras"],
-                             entry["coverage"], "yes" if entry["meets_coverage_requirements"] else "no",
-                             "yes" if entry["extrapolation"] else "-"])
-                flagged += [name] if entry["extrapolation"] else []
-        print_table(f"{label} -> {target.name} (predicted by {summary['predictor']}); reference coverage "
-                    f"{summary['reference_coverage']:.3f}", ["rig", "predicted drop", "interval",
-                                                               f"{calibration.metric} ({calibration.name} weights)",
-                                                               "cameras",
-                                                               "coverage", "meets coverage", "extrapolates"], rows)
-        if uninformative:
-            from rigopt.metrics.prediction import UNINFORMATIVE_TEXT
-
-            print(f"rigopt: note: {', '.join(uninformative)}: {UNINFORMATIVE_TEXT}; the predicted drops are point "
-                  "estimates only (report.json keeps the numbers)", file=sys.stderr)
-        if flagged:
-            print(f"rigopt: note: {', '.join(flagged)}: beyond the {'fitting rigs' if drop_model else 'calibration pairs'}"
-                  " (see report.json 'extrapolation'); "
-                  "their predicted drops are less certain than the intervals say", file=sys.stderr)
-        solver = summary["solver"]
-        print(f"{summary['symmetry']['describe']}", file=sys.stderr)
-        if summary["regions_fallback"]:
-            print(f"rigopt: note: {summary['regions_fallback']}", file=sys.stderr)
-        for region in summary["regions"]:
-            state = "required" if summary["regions_required"] else "reported"
-            print(f"field {region['key']} ({state}): {region['covered_frac']:.1%} of its points seen "
-                  f"({region['weighted_covered_frac']:.1%} weighted by criticality), unseen area "
-                  f"{region['unseen_area_m2']:.1f} m²" + _excluded_text(region), file=sys.stderr)
-        moves = summary["pose_tolerance"]["height_moves"]
-        if moves:
-            heights = ", ".join(f"{m['camera']} {m['from_m']:.2f} -> {m['to_m']:.2f} m" for m in moves)
-            print(f"height search: {len(moves)} perception camera(s) moved nearer their reference camera's height "
-                  f"({heights})", file=sys.stderr)
-        print(f"MILP {solver['milp_status']} (gap {solver['milp_gap']:.2e}) on {solver['offered_to_milp']} of "
-              f"{solver['candidates']} candidates; refinement {solver['refine_status']}; {solver['seconds']:.1f} s",
-              file=sys.stderr)
-        for line in summary["notes"]:
-            print(line)
-        if measured is not None:
-            _print_measured(measured)
-        print(f"wrote {', '.join(str(f) for f in files)}")
-        print_next(f"open {out / 'report.html'} (the design for a packaging review: cameras, fields, 3D view)",
-                   *(f"in {out}: {command} ({why})" for command, why in NEXT_STEPS))
+        _print_design(summary, label, target.name, calibration, drop_model is not None, measured, files, out)
 
     finally:
         background.close()
+
+
+def _pose_fields(pose: str, match_height, match_pitch, match_yaw, match_fov, perception_range, free_perception,
+                 height_search) -> dict:
+    """The pose settings given on the command line (the --pose preset keeps the others)."""
+    if pose.lower() not in POSES:
+        raise RigoptError(f"--pose must be one of {', '.join(POSES)}, got {pose!r}")
+    given = {"match_height_m": match_height, "match_pitch_deg": match_pitch, "match_yaw_deg": match_yaw,
+             "match_fov_deg": match_fov, "perception_range_m": perception_range,
+             "perception_symmetric": None if free_perception is None else not free_perception,
+             "height_search_m": height_search}
+    return {k: v for k, v in given.items() if v is not None}
+
+
+def _pitches(pitch: str) -> tuple[float, ...]:
+    """--pitch: angles in degrees within [-90, 90] (> 0 up)."""
+    pitches = parse_numbers(pitch, "--pitch")
+    if not all(-90 <= p <= 90 for p in pitches):
+        raise RigoptError(f"--pitch angles must be within [-90, 90] degrees (> 0 up), got {pitch!r}")
+    return pitches
+
+
+def _check_pareto(pareto: bool, near_field, measure: bool) -> None:
+    """--pareto sweeps one camera set and measures nothing."""
+    if pareto and near_field:
+        raise RigoptError("--pareto sweeps one camera set; leave out --near-field or add --single-set "
+                          "(or leave out --pareto)")
+    if pareto and measure:
+        raise RigoptError("--measure measures one design: leave out --pareto (or --measure)")
+
+
+def _catalogue(fov: str, image_size: str, cameras_file: Optional[Path]) -> tuple:
+    """(lenses, fov_range) of --fov and --image-size, or of --cameras-file (which gives the whole catalogue)."""
+    from rigopt.design.settings import pinhole_catalogue, read_catalogue
+
+    fovs, fov_range = parse_fovs(fov)
+    size = parse_image_size(image_size)
+    if cameras_file is None:
+        return pinhole_catalogue(fovs, size), fov_range
+    if fov_range is not None or fov != numbers_text(DEFAULT_FOVS) or size != BENCHMARK_IMAGE_SIZE:
+        raise RigoptError("--cameras-file gives the whole catalogue: leave out --fov and --image-size")
+    return read_catalogue(cameras_file), fov_range
+
+
+def _print_design(summary: dict, label: str, vehicle: str, calibration, by_model: bool, measured, files, out) -> None:
+    """The design's table of predicted drops (design, naive transfer, benchmark rigs), its notes on stderr (intervals
+    that say nothing, extrapolation, symmetry, fields, height moves, solver) and what was written."""
+    rows, flagged, uninformative = [], [], []
+    for name, entry in (("design", {**summary, "meets_coverage_requirements": True}),
+                        ("naive transfer", summary["comparisons"]["naive_transfer"]),
+                        *((f"benchmark {s['name']}", s) for s in summary["comparisons"]["benchmark_rigs"])):
+        if entry:
+            interval = "-" if entry["interval"] is None else "[{:.2f}, {:.2f}]".format(*entry["interval"])
+            if entry.get("interval_informative") is False:  # spans the range a drop can take: no finding
+                interval, uninformative = "uninformative", uninformative + [name]
+            rows.append([name, entry["predicted_drop"], interval, entry["rigcd"], entry["n_cameras"],
+                         entry["coverage"], "yes" if entry["meets_coverage_requirements"] else "no",
+                         "yes" if entry["extrapolation"] else "-"])
+            flagged += [name] if entry["extrapolation"] else []
+    print_table(f"{label} -> {vehicle} (predicted by {summary['predictor']}); reference coverage "
+                f"{summary['reference_coverage']:.3f}",
+                ["rig", "predicted drop", "interval", f"{calibration.metric} ({calibration.name} weights)", "cameras",
+                 "coverage", "meets coverage", "extrapolates"], rows)
+    if uninformative:
+        from rigopt.metrics.prediction import UNINFORMATIVE_TEXT
+
+        print(f"rigopt: note: {', '.join(uninformative)}: {UNINFORMATIVE_TEXT}; the predicted drops are point "
+              "estimates only (report.json keeps the numbers)", file=sys.stderr)
+    if flagged:
+        print(f"rigopt: note: {', '.join(flagged)}: beyond the {'fitting rigs' if by_model else 'calibration pairs'}"
+              " (see report.json 'extrapolation'); their predicted drops are less certain than the intervals say",
+              file=sys.stderr)
+    _print_design_notes(summary)
+    if measured is not None:
+        _print_measured(measured)
+    from rigopt.report.design_html import NEXT_STEPS
+
+    print(f"wrote {', '.join(str(f) for f in files)}")
+    print_next(f"open {out / 'report.html'} (the design for a packaging review: cameras, fields, 3D view)",
+               *(f"in {out}: {command} ({why})" for command, why in NEXT_STEPS))
+
+
+def _print_design_notes(summary: dict) -> None:
+    """Symmetry, the fields seen, the height moves and the solver's figures (stderr), then the report's notes."""
+    print(f"{summary['symmetry']['describe']}", file=sys.stderr)
+    if summary["regions_fallback"]:
+        print(f"rigopt: note: {summary['regions_fallback']}", file=sys.stderr)
+    for region in summary["regions"]:
+        state = "required" if summary["regions_required"] else "reported"
+        print(f"field {region['key']} ({state}): {region['covered_frac']:.1%} of its points seen "
+              f"({region['weighted_covered_frac']:.1%} weighted by criticality), unseen area "
+              f"{region['unseen_area_m2']:.1f} m²" + _excluded_text(region), file=sys.stderr)
+    moves = summary["pose_tolerance"]["height_moves"]
+    if moves:
+        heights = ", ".join(f"{m['camera']} {m['from_m']:.2f} -> {m['to_m']:.2f} m" for m in moves)
+        print(f"height search: {len(moves)} perception camera(s) moved nearer their reference camera's height "
+              f"({heights})", file=sys.stderr)
+    solver = summary["solver"]
+    print(f"MILP {solver['milp_status']} (gap {solver['milp_gap']:.2e}) on {solver['offered_to_milp']} of "
+          f"{solver['candidates']} candidates; refinement {solver['refine_status']}; {solver['seconds']:.1f} s",
+          file=sys.stderr)
+    for line in summary["notes"]:
+        print(line)
 
 
 def _objective(objective: str, ref: str):
