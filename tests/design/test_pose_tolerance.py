@@ -12,13 +12,12 @@ import pytest
 from box_car import BOX_ZONES, ROOF_ZONE, spec_text
 from in_process import run_rigopt
 
-from rigopt.design.designer import (
+from rigopt.design.designer import design_rig, pose_violations
+from rigopt.design.tolerance import (
     EXCESS_COST,
     OUT_OF_TOLERANCE_COST,
-    design_rig,
     matched_widening,
     pose_gaps,
-    pose_violations,
     tolerance_penalty,
     within_pose_tolerance,
 )
