@@ -131,62 +131,107 @@ def check_rig(rig: Rig, vehicle: Vehicle, rules: MountRules = MountRules()) -> R
     body = vehicle.collision_object
     surface = vehicle.surface(rig.positions)
     zones = vehicle.zone_names(surface.foot, surface.normal)
+    mounts = _raised_mounts_of(rig, vehicle, surface, rules)
+    housings = _Housings.of(rig, surface, mounts, rules)
+    practice = practice_problems(vehicle, rig.positions, rules.practice, rules.housing, surface)
+    blockers = _view_blockers(vehicle, rules)
+    duplicated = duplicates(rig, rules.practice)
+    checks = []
+    for k, camera in enumerate(rig.cameras):
+        distance, mount = float(surface.distance[k]), mounts[k]
+        problems = list(practice[k]) + _surface_problems(distance, mount, vehicle, rules)
+        sunk = housing_object(housings.feet[k], housings.axes[k], camera.forward, rules.housing,
+                              rules.penetration_tolerance)
+        if distance >= 0 and collides(sunk, body):
+            problems.append(f"housing penetrates the body by more than {rules.penetration_tolerance * 100:.0f} cm")
+        problems += _view_problems(camera, rig, vehicle, body, blockers, housings.posts, rules)
+        zone = mount.zone.name if mount is not None else zones[k]
+        if zone is None:
+            problems.append("outside every mounting zone")
+        problems += _clash_problems(k, rig, housings)
+        if duplicated[k] is not None:
+            problems.append(duplicated[k])
+        checks.append(CameraCheck(camera.id, not problems, distance, zone, tuple(problems)))
+    return RigCheck(rig.name, vehicle.name, tuple(checks))
+
+
+def _raised_mounts_of(rig: Rig, vehicle: Vehicle, surface, rules: MountRules) -> list[RaisedMount | None]:
+    """For each camera: the raised zone's post carrying it when its lens stands further than ``max_distance`` off
+    the surface (:func:`raised_mounts`), else None."""
     far = surface.distance > rules.max_distance
     raised = raised_mounts(vehicle, rig.positions[far]) if far.any() and any(z.raised for z in vehicle.zones) else []
     mounts: list[RaisedMount | None] = [None] * len(rig.cameras)
     for k, mount in zip(np.flatnonzero(far), raised):
         mounts[k] = mount
-    # where each housing sits: back face on the surface, or centred on a raised camera's lens along its post
-    feet = [surface.foot[k] if m is None else rig.positions[k] - m.axis * rules.housing[2] / 2.0
-            for k, m in enumerate(mounts)]
-    axes = [surface.normal[k] if m is None else m.axis for k, m in enumerate(mounts)]
-    housings = [housing_object(feet[k], axes[k], c.forward, rules.housing) for k, c in enumerate(rig.cameras)]
-    posts = {k: post_object(m, c.forward, rules) for k, (m, c) in enumerate(zip(mounts, rig.cameras))
-             if m is not None}
-    posts = {k: p for k, p in posts.items() if p is not None}
-    practice = practice_problems(vehicle, rig.positions, rules.practice, rules.housing, surface)
+    return mounts
+
+
+@dataclass(frozen=True)
+class _Housings:
+    """Where each camera's housing sits: ``feet`` (n,) of (3,) m and ``axes`` (n,) of (3,) (its back face on the
+    surface, or centred on a raised camera's lens along its post), the fcl ``objects`` (n,), and the ``posts``
+    {camera index: fcl object} of raised cameras."""
+
+    feet: list
+    axes: list
+    objects: list
+    posts: dict
+
+    @classmethod
+    def of(cls, rig: Rig, surface, mounts: list, rules: MountRules) -> _Housings:
+        feet = [surface.foot[k] if m is None else rig.positions[k] - m.axis * rules.housing[2] / 2.0
+                for k, m in enumerate(mounts)]
+        axes = [surface.normal[k] if m is None else m.axis for k, m in enumerate(mounts)]
+        objects = [housing_object(feet[k], axes[k], c.forward, rules.housing) for k, c in enumerate(rig.cameras)]
+        posts = {k: post_object(m, c.forward, rules) for k, (m, c) in enumerate(zip(mounts, rig.cameras))
+                 if m is not None}
+        return cls(feet, axes, objects, {k: p for k, p in posts.items() if p is not None})
+
+
+def _view_blockers(vehicle: Vehicle, rules: MountRules) -> list[tuple]:
+    """(fcl object, label) of what blocks a view besides the body: the keep-outs in force that occlude (a coupled
+    trailer), by label, and the space a trailer's front swings through."""
     in_force = keep_out_boxes(vehicle, rules.practice.lifted, occluding_only=True) if rules.practice.enabled else []
     blockers = [(box_object(low, high), label) for low, high, label in sorted(in_force, key=lambda b: b[2])]
     swings = trailer_swings(vehicle, rules.practice.lifted) if rules.practice.feature_rules else []
-    blockers += [(swing_object(swing), swing.describe()) for swing in swings]
-    duplicated = duplicates(rig, rules.practice)
-    checks = []
-    for k, camera in enumerate(rig.cameras):
-        problems = list(practice[k])
-        distance = float(surface.distance[k])
-        mount = mounts[k]
-        if distance < 0:
-            problems.append(f"inside the body ({-distance * 100:.1f} cm deep)")
-        elif distance > rules.max_distance and mount is None:
-            raised_zones = ", ".join(f"{z.name} {z.raised_max * 100:.0f} cm" for z in
-                                     {z.name: z for z in vehicle.zones if z.raised}.values())
-            problems.append(f"{distance * 100:.1f} cm off the surface (at most {rules.max_distance * 100:.0f} cm"
-                            + (f"; on a post over a raised zone: {raised_zones}" if raised_zones else "") + ")")
-        sunk = housing_object(feet[k], axes[k], camera.forward, rules.housing, rules.penetration_tolerance)
-        if distance >= 0 and collides(sunk, body):
-            problems.append(f"housing penetrates the body by more than {rules.penetration_tolerance * 100:.0f} cm")
-        frustum = frustum_object(camera, rules)
-        if collides(frustum, body) or _body_blocks_probes(vehicle, camera, rules):
-            problems.append(f"the body is in its view within {rules.frustum_range:g} m")
-        blocked = dict.fromkeys(label for box, label in blockers if collides(frustum, box))
-        for label in blocked:
-            what = label if label.startswith("the ") else f"the keep-out {label}"
-            problems.append(f"{what} is in its view within {rules.frustum_range:g} m")
-        seen_posts = [j for j, post in posts.items() if collides(frustum, post)]
-        if seen_posts:
-            problems.append(f"the post of {', '.join(rig.cameras[j].id for j in seen_posts)} is in its view within "
-                            f"{rules.frustum_range:g} m")
-        zone = mount.zone.name if mount is not None else zones[k]
-        if zone is None:
-            problems.append("outside every mounting zone")
-        clashes = [other.id for j, other in enumerate(rig.cameras) if j != k and not _one_module(camera, other) and
-                   (collides(housings[k], housings[j]) or (j in posts and collides(housings[k], posts[j])))]
-        if clashes:
-            problems.append(f"housing collides with {', '.join(clashes)}")
-        if duplicated[k] is not None:
-            problems.append(duplicated[k])
-        checks.append(CameraCheck(camera.id, not problems, distance, zone, tuple(problems)))
-    return RigCheck(rig.name, vehicle.name, tuple(checks))
+    return blockers + [(swing_object(swing), swing.describe()) for swing in swings]
+
+
+def _surface_problems(distance: float, mount: RaisedMount | None, vehicle: Vehicle, rules: MountRules) -> list[str]:
+    """A lens inside the body, or too far off its surface without a raised zone's post to carry it."""
+    if distance < 0:
+        return [f"inside the body ({-distance * 100:.1f} cm deep)"]
+    if distance > rules.max_distance and mount is None:
+        raised_zones = ", ".join(f"{z.name} {z.raised_max * 100:.0f} cm" for z in
+                                 {z.name: z for z in vehicle.zones if z.raised}.values())
+        return [f"{distance * 100:.1f} cm off the surface (at most {rules.max_distance * 100:.0f} cm"
+                + (f"; on a post over a raised zone: {raised_zones}" if raised_zones else "") + ")"]
+    return []
+
+
+def _view_problems(camera: Camera, rig: Rig, vehicle: Vehicle, body, blockers: list, posts: dict,
+                   rules: MountRules) -> list[str]:
+    """What is in the camera's checked frustum within ``frustum_range``: the body, a keep-out or swing, a post."""
+    problems = []
+    frustum = frustum_object(camera, rules)
+    if collides(frustum, body) or _body_blocks_probes(vehicle, camera, rules):
+        problems.append(f"the body is in its view within {rules.frustum_range:g} m")
+    for label in dict.fromkeys(label for box, label in blockers if collides(frustum, box)):
+        what = label if label.startswith("the ") else f"the keep-out {label}"
+        problems.append(f"{what} is in its view within {rules.frustum_range:g} m")
+    seen_posts = [j for j, post in posts.items() if collides(frustum, post)]
+    if seen_posts:
+        problems.append(f"the post of {', '.join(rig.cameras[j].id for j in seen_posts)} is in its view within "
+                        f"{rules.frustum_range:g} m")
+    return problems
+
+
+def _clash_problems(k: int, rig: Rig, housings: _Housings) -> list[str]:
+    """Camera k's housing against the other cameras' housings and posts (cameras of one module never clash)."""
+    camera, own = rig.cameras[k], housings.objects[k]
+    clashes = [other.id for j, other in enumerate(rig.cameras) if j != k and not _one_module(camera, other) and
+               (collides(own, housings.objects[j]) or (j in housings.posts and collides(own, housings.posts[j])))]
+    return [f"housing collides with {', '.join(clashes)}"] if clashes else []
 
 
 def _body_blocks_probes(vehicle: Vehicle, camera: Camera, rules: MountRules) -> bool:
