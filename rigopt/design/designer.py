@@ -214,13 +214,15 @@ def select_valid(prepared: Prepared, vehicle: Vehicle, calibration: Calibration,
     raise DesignInfeasible(f"after {MAX_REPAIRS} repairs the design still fails the mount checks ({problems})")
 
 
-def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRig], calibration: Calibration,
-               settings: DesignSettings | None = None, compare_with: Sequence[Rig] = (),
-               progress: Callable[[str], None] = no_progress, background: Background = INLINE) -> DesignResult:
-    """Design a rig on ``vehicle`` for a detector trained on the reference (one rig, or a fleet of rigs, each
-    on its own vehicle; see the module docstring), judged beside the naive transfer and ``compare_with``
-    (e.g. ``problem.benchmark_rigs(vehicle)``), under ``settings`` (None: ``DesignSettings.preset()``, what
-    ``rigopt design`` does by default). With a ``background`` worker the near-field stage (which needs
+def design_rig(vehicle: Vehicle | str, references: ReferenceRig | Sequence[ReferenceRig] | str,
+               calibration: Calibration | None = None, settings: DesignSettings | None = None,
+               compare_with: Sequence[Rig] = (), progress: Callable[[str], None] = no_progress,
+               background: Background = INLINE) -> DesignResult:
+    """Design a rig on ``vehicle`` (a Vehicle or its name) for a detector trained on the reference (one rig, or a
+    fleet of rigs, each on its own vehicle; a library rig's name or a rig file is placed on its own vehicle; see
+    the module docstring), judged beside the naive transfer and ``compare_with`` (e.g.
+    ``problem.benchmark_rigs(vehicle)``), under ``calibration`` (None: the joint weights) and ``settings`` (None:
+    ``DesignSettings.preset()``, what ``rigopt design`` does by default). With a ``background`` worker the near-field stage (which needs
     nothing of the perception cameras until they share housings) runs there while the perception cameras are
     designed and refined here, and the naive transfer refined: the same design.
 
@@ -228,6 +230,7 @@ def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRi
     requirements -> selection (the MILP, down the fallback ladder) -> validation (pose tolerance, coverage) ->
     refinement (casadi + IPOPT) -> height search -> the naive transfer -> near field -> result."""
     start = time.perf_counter()
+    vehicle, references, calibration = by_name(vehicle, references, calibration)
     settings = DesignSettings.preset() if settings is None else settings
     references = checked_references(references)
     rigs = [r.rig for r in references]
@@ -255,6 +258,19 @@ def design_rig(vehicle: Vehicle, references: ReferenceRig | Sequence[ReferenceRi
                         vehicle, references, calibration, near.settings, time.perf_counter() - start,
                         selected.symmetry_fallback, regions, near.fields_fallback, near.stage, widened,
                         near.settings.near_field and selected.near_field_mirrored, perception.height_moves)
+
+
+def by_name(vehicle, references, calibration):
+    """(Vehicle, references, Calibration) from what a caller may give by name: a vehicle's name, one reference
+    rig's name or file (placed on its own vehicle), no calibration (the joint weights)."""
+    from rigopt.metrics.calibration import load_weights
+    from rigopt.rig.library import load_rig
+    from rigopt.vehicle.library import load_vehicle
+
+    vehicle = load_vehicle(vehicle) if isinstance(vehicle, str) else vehicle
+    if isinstance(references, str):
+        references = ReferenceRig.on_own_vehicle(load_rig(references))
+    return vehicle, references, load_weights("joint") if calibration is None else calibration
 
 
 def checked_references(references: ReferenceRig | Sequence[ReferenceRig]) -> tuple[ReferenceRig, ...]:

@@ -96,22 +96,20 @@ def test_json_has_the_documented_keys(design_run):
 
 @pytest.mark.slow
 def test_the_python_api_the_command_and_the_studies_make_the_same_rig_file(design_run, tmp_path):
-    """``design_rig`` without settings, ``DesignSettings.preset()`` (the studies' command_default) and ``rigopt
-    design`` by default write the same rig.json, byte for byte."""
+    """``rigopt.design.design_rig("firetruck", "R1")`` (every default), ``DesignSettings.preset()`` (the studies'
+    command_default) and ``rigopt design`` by default write the same rig.json, byte for byte."""
     import importlib.util
     from pathlib import Path
 
-    from rigopt.design.designer import design_rig
-    from rigopt.design.problem import ReferenceRig
+    from rigopt.design import design_rig
     from rigopt.rig.pccr_format import write_rig
-    from rigopt.vehicle.library import load_vehicle
 
     study = Path(__file__).resolve().parents[2] / "studies" / "designs" / "run.py"
     spec = importlib.util.spec_from_file_location("designs_run", study)
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     assert module.command_default() == DesignSettings.preset()
-    result = design_rig(load_vehicle("firetruck"), ReferenceRig.on_own_vehicle(load_rig("R1")), load_weights("joint"))
+    result = design_rig("firetruck", "R1")
     written = write_rig(result.design.rig, tmp_path / "rig.json")
     assert written.read_bytes() == (design_run[1] / "rig.json").read_bytes()
 
