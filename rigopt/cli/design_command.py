@@ -215,16 +215,12 @@ def design_command(
     from rich.console import Console
 
     from rigopt.background import INLINE, Background
-    from rigopt.coverage.regulations import parse_require
     from rigopt.design.designer import design_rig
-    from rigopt.design.result import predicted_by
-    from rigopt.metrics.drop_model import choose_model
     from rigopt.design.problem import benchmark_rigs
+    from rigopt.design.result import predicted_by
     from rigopt.design.settings import DesignSettings
-    from rigopt.metrics.calibration import load_weights
     from rigopt.output import atomic_folder, check_out_folder, published
     from rigopt.report.design_report import write_design_report
-    from rigopt.vehicle.library import load_vehicle
 
     if out is not None:
         check_out_folder(out, force=force)
@@ -242,15 +238,8 @@ def design_command(
     background = INLINE if pareto else Background(later_imports=("rigopt.report.vehicle_figures",
                                                                  "rigopt.report.coverage_figures"))
     try:
-        references = [_reference(name.strip(), ref_vehicle) for name in ref.split(",") if name.strip()]
-        if not references:
-            raise RigoptError("--ref needs at least one rig")
-        target, calibration = load_vehicle(vehicle), load_weights(weights or "joint", metric)
-        drop_model = choose_model(predictor, references[0].rig, weights is not None or metric != "rigcd")
-        if require is not None:
-            parse_require(require, target)  # a bad --require is an error before any work
-        if drop_model is None:
-            note_fallback(calibration)
+        references, target, calibration, drop_model = _inputs(ref, ref_vehicle, vehicle, weights, metric, predictor,
+                                                              require)
         label = "+".join(r.rig.name for r in references)
         out = check_out_folder(out or Path(f"design-{target.name}-{label}"), force=force)
         status = Console(stderr=True)
@@ -278,6 +267,26 @@ def design_command(
 
     finally:
         background.close()
+
+
+def _inputs(ref: str, ref_vehicle, vehicle: str, weights, metric: str, predictor: str, require) -> tuple:
+    """(references, the target vehicle, the calibration, the drop model that predicts or None) of the command line,
+    every one checked before any design work (a bad --require too)."""
+    from rigopt.coverage.regulations import parse_require
+    from rigopt.metrics.calibration import load_weights
+    from rigopt.metrics.drop_model import choose_model
+    from rigopt.vehicle.library import load_vehicle
+
+    references = [_reference(name.strip(), ref_vehicle) for name in ref.split(",") if name.strip()]
+    if not references:
+        raise RigoptError("--ref needs at least one rig")
+    target, calibration = load_vehicle(vehicle), load_weights(weights or "joint", metric)
+    drop_model = choose_model(predictor, references[0].rig, weights is not None or metric != "rigcd")
+    if require is not None:
+        parse_require(require, target)
+    if drop_model is None:
+        note_fallback(calibration)
+    return references, target, calibration, drop_model
 
 
 def _pose_fields(pose: str, match_height, match_pitch, match_yaw, match_fov, perception_range, free_perception,
