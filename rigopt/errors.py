@@ -29,3 +29,15 @@ def not_utf8(path, what: str, error: UnicodeDecodeError, kind: type[RigoptError]
     """Build the error for a ``what`` file at ``path`` that is not UTF-8 text (``error`` from decoding it)."""
     return kind(f"{path}: the {what} is not UTF-8 text (byte {error.start} is {error.object[error.start]:#04x}); "
                 "save it as UTF-8")
+
+
+def json_loads(text: str):
+    """``json.loads``, whose RecursionError on arrays or objects nested past Python's limit (about a thousand
+    levels: no file rigopt reads nests more than a few) comes back as the JSONDecodeError every reader turns into
+    its one-line error."""
+    import json
+
+    try:
+        return json.loads(text)
+    except RecursionError:
+        raise json.JSONDecodeError("arrays or objects nested too deeply (over a thousand levels)", text, 0) from None

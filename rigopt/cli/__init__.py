@@ -101,6 +101,13 @@ def _os_message(error: OSError) -> str:
     return f"{where}{error.strerror or error}"
 
 
+def _error(message: str) -> None:
+    """Print ``rigopt: error: message`` as one line on stderr, control characters from the input (a camera name's
+    ESC or BEL, a newline) shown escaped (``\\x1b``), never sent to the terminal."""
+    safe = "".join(c if c.isprintable() else repr(c)[1:-1] for c in message)
+    print(f"rigopt: error: {safe}", file=sys.stderr)
+
+
 def run(argv: list[str] | None = None) -> int:
     """Run the CLI on ``argv`` (default: the process's arguments) and return the exit code."""
     import importlib
@@ -112,7 +119,7 @@ def run(argv: list[str] | None = None) -> int:
     try:
         result = app(args=argv, prog_name="rigopt", standalone_mode=False)
     except RigoptError as error:
-        print(f"rigopt: error: {error}", file=sys.stderr)
+        _error(str(error))
         return INPUT_ERROR
     except getattr(click, "NoArgsIsHelpError", ()) as error:  # a command group without a command: its help
         text = error.ctx.get_help()  # typer's rich help prints itself and returns ""
@@ -120,20 +127,20 @@ def run(argv: list[str] | None = None) -> int:
             print(text)
         return INPUT_ERROR
     except click.UsageError as error:
-        print(f"rigopt: error: {_usage_message(error)}", file=sys.stderr)
+        _error(_usage_message(error))
         return INPUT_ERROR
     except click.ClickException as error:
-        print(f"rigopt: error: {' '.join(error.format_message().split())}", file=sys.stderr)
+        _error(" ".join(error.format_message().split()))
         return INPUT_ERROR
     except (typer.Abort, KeyboardInterrupt):
         return _interrupted()
     except BrokenPipeError:
         return 0  # the reader of stdout closed it (rigopt ... | head): not an error of rigopt's
     except MemoryError:
-        print("rigopt: error: out of memory; ask for less (smaller sizes, fewer items)", file=sys.stderr)
+        _error("out of memory; ask for less (smaller sizes, fewer items)")
         return INPUT_ERROR
     except OSError as error:
-        print(f"rigopt: error: {_os_message(error)}", file=sys.stderr)
+        _error(_os_message(error))
         return INPUT_ERROR
     if result == INTERRUPTED:  # typer turns Ctrl-C inside a command into this exit code
         return _interrupted()

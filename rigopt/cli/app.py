@@ -107,6 +107,15 @@ def more_than(low: float, unit: str = "", high: float = math.inf):
     return check
 
 
+def between(low: float, high: float, unit: str = "", why: str = ""):
+    """An option callback that refuses, at parse time, a number not in [low, high] (and NaN or inf), saying ``why``."""
+    def check(value):
+        if value is not None and not (math.isfinite(value) and low <= value <= high):
+            raise typer.BadParameter(f"must be from {low:g}{unit} to {high:g}{unit}{why}, got {value:g}")
+        return value
+    return check
+
+
 def finite():
     """An option callback that refuses NaN and inf at parse time (typer's min/max let them through)."""
     def check(value):

@@ -22,7 +22,7 @@ BYTES_PER_PIXEL = 64
 def render_size(text: str) -> tuple[int, int]:
     """``--size`` as (width, height), refused beyond MAX_SIDE with the memory one image would take."""
 
-    width, height = parse_image_size(text, "--size")
+    width, height = parse_image_size(text, "--size", smallest=1)  # a rendering size (tests render tiny images)
     if max(width, height) > MAX_SIDE:
         gib = width * height * BYTES_PER_PIXEL / 2**30
         raise RigoptError(f"--size {text}: rendering one {width}x{height} image needs at least {gib:,.0f} GiB "

@@ -8,8 +8,8 @@ from typing import TYPE_CHECKING, Optional
 
 import typer
 
-from rigopt.cli.app import (FORCE_HELP, MIN_HEIGHT_HELP, NO_TRAILER_HELP, app, finite, more_than, mount_rules, note,
-                            note_fallback, print_json, print_next, print_table)
+from rigopt.cli.app import (FORCE_HELP, MIN_HEIGHT_HELP, NO_TRAILER_HELP, app, between, finite, more_than,
+                            mount_rules, note, note_fallback, print_json, print_next, print_table)
 from rigopt.cli.metric_commands import METRIC_HELP, PREDICTOR_HELP
 from rigopt.cli.parsing import image_size_text, parse_image_size
 from rigopt.benchmark import BENCHMARK_IMAGE_SIZE
@@ -21,6 +21,10 @@ if TYPE_CHECKING:
 
 #: Widest mount point spacing (m) --spacing takes: a zone narrower than it would hold no mount point.
 MAX_SPACING_M = 2.0
+#: Finest mount point spacing (m): half a housing; finer points could not both hold a camera, and their candidates
+#: would not fit in memory.
+MIN_SPACING_M = 0.05
+SPACING_WHY = " (mount points finer than half a housing hold no more cameras)"
 
 
 def numbers_text(values) -> str:
@@ -107,9 +111,9 @@ def design_command(
                               help="Pitch angles to consider, degrees (> 0 up)."),
     yaw_step: float = typer.Option(DEFAULT_YAW_STEP_DEG, callback=more_than(0, " degrees", 180),
                                    rich_help_panel=SEARCH_PANEL, help="Yaw grid step, degrees."),
-    spacing: Optional[float] = typer.Option(None, callback=more_than(0, " m", MAX_SPACING_M),
+    spacing: Optional[float] = typer.Option(None, callback=between(MIN_SPACING_M, MAX_SPACING_M, " m", SPACING_WHY),
                                             rich_help_panel=SEARCH_PANEL,
-                                            help="Mount point spacing (m), at most 2; default: sized to the vehicle."),
+                                            help="Mount point spacing (m), 0.05 to 2; default: sized to the vehicle."),
     min_coverage: int = typer.Option(0, min=0, rich_help_panel=SEARCH_PANEL,
                                      help="Cameras every ring sector needs, beyond the reference's coverage."),
     min_overlap: int = typer.Option(0, min=0, rich_help_panel=SEARCH_PANEL,

@@ -13,20 +13,26 @@ from rigopt.errors import RigoptError
 #: Largest image side (px) any command takes: beyond every camera made (the largest automotive sensors are
 #: under 4000 px, industrial ones under 15000), so a larger number is a typo.
 MAX_IMAGE_SIDE = 20000
+#: Smallest image side (px): below every camera a detector is fed (a thumbnail is not a camera).
+MIN_IMAGE_SIDE = 16
+#: Largest origin offset (m) in any coordinate: a rig's positions lie within 100 m of its origin
+#: (``rigopt.rig.model.MAX_POSITION_M``), so a larger offset is a typo or a wrong unit.
+MAX_ORIGIN_OFFSET_M = 100.0
 
 
-def parse_image_size(text: str, option: str = "--image-size") -> tuple[int, int]:
-    """``"1600x900"`` -> (1600, 900): (width, height) in pixels, each a whole number in 1..MAX_IMAGE_SIDE.
+def parse_image_size(text: str, option: str = "--image-size", smallest: int = MIN_IMAGE_SIDE) -> tuple[int, int]:
+    """``"1600x900"`` -> (1600, 900): (width, height) in pixels, each a whole number in smallest..MAX_IMAGE_SIDE.
 
-    option : the option the value came from, named in the RigoptError raised for anything else.
+    option : the option the value came from, named in the RigoptError raised for anything else; smallest : the
+    smallest side, a camera's MIN_IMAGE_SIDE by default (a rendering size for tests may go down to 1).
     """
     width, sep, height = (part.strip() for part in text.strip().lower().partition("x"))
     size = None
     if sep and all(part.isascii() and part.isdigit() for part in (width, height)):
         size = (int(width), int(height))
-    if size is None or not all(1 <= side <= MAX_IMAGE_SIDE for side in size):
-        raise RigoptError(f"{option} must be WIDTHxHEIGHT in whole pixels, each side 1 to {MAX_IMAGE_SIDE}, "
-                          f"e.g. 1600x900; got {text!r}")
+    if size is None or not all(smallest <= side <= MAX_IMAGE_SIDE for side in size):
+        raise RigoptError(f"{option} must be WIDTHxHEIGHT in whole pixels, each side {smallest} to "
+                          f"{MAX_IMAGE_SIDE}, e.g. 1600x900; got {text!r}")
     return size
 
 
@@ -36,13 +42,14 @@ def image_size_text(size: tuple[int, int]) -> str:
 
 
 def parse_origin_offset(text: str) -> tuple[float, float, float]:
-    """``"-1.4,0,0.3"`` -> (-1.4, 0.0, 0.3) metres; raises RigoptError on anything but three finite numbers."""
+    """``"-1.4,0,0.3"`` -> (-1.4, 0.0, 0.3) metres; raises RigoptError on anything but three finite numbers within
+    MAX_ORIGIN_OFFSET_M."""
     parts = text.split(",")
     try:
         values = tuple(float(p) for p in parts)
     except ValueError:
         values = ()
-    if len(values) != 3 or not all(math.isfinite(v) for v in values):
-        raise RigoptError(f"--origin-offset must be three numbers X,Y,Z in metres (x forward, y left, z up), e.g. "
-                          f"-1.4,0,0.3; got {text!r}")
+    if len(values) != 3 or not all(math.isfinite(v) and abs(v) <= MAX_ORIGIN_OFFSET_M for v in values):
+        raise RigoptError(f"--origin-offset must be three numbers X,Y,Z in metres (x forward, y left, z up), each "
+                          f"within {MAX_ORIGIN_OFFSET_M:g} m, e.g. -1.4,0,0.3; got {text!r}")
     return values

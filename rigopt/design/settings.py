@@ -23,7 +23,7 @@ from rigopt.benchmark import BENCHMARK_IMAGE_SIZE
 from rigopt.camera import DISTORTION_COEFFICIENTS, Lens
 from rigopt.design.defaults import (DEFAULT_FOVS, DEFAULT_MAX_NODES, DEFAULT_PITCHES_DEG, DEFAULT_YAW_STEP_DEG, POSES,
                                     RANGE_STEP)
-from rigopt.errors import DataError, RigoptError, not_utf8
+from rigopt.errors import DataError, RigoptError, json_loads, not_utf8
 from rigopt.output import existing_file
 from rigopt.rig.model import Camera
 
@@ -177,7 +177,7 @@ def read_catalogue(path) -> tuple[CatalogueCamera, ...]:
     except UnicodeDecodeError as error:
         raise not_utf8(path, "camera catalogue", error) from None
     try:
-        data = tomllib.loads(text) if path.suffix.lower() == ".toml" else json.loads(text)
+        data = tomllib.loads(text) if path.suffix.lower() == ".toml" else json_loads(text)
     except (tomllib.TOMLDecodeError, json.JSONDecodeError) as error:
         kind = "TOML" if path.suffix.lower() == ".toml" else "JSON"
         raise DataError(f"{path}: the camera catalogue is not valid {kind} ({error}); fix the file") from None

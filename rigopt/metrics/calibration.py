@@ -40,7 +40,7 @@ from typing import Sequence
 
 import numpy as np
 
-from rigopt.errors import DataError, RigoptError, not_utf8, unknown_name
+from rigopt.errors import DataError, RigoptError, json_loads, not_utf8, unknown_name
 from rigopt.metrics.lifting import PAIR_TERMS, TERMS
 from rigopt.metrics.prediction import LINKS, Domain, Interval, Link
 from rigopt.metrics.rigcd import DEFAULT_ALPHA, rigcd_matrix, tie_broken_lambdas
@@ -348,7 +348,7 @@ def load_weights(name_or_path, metric: str = "rigcd") -> Calibration:
     existing_file(path, "weights file", "give a shipped name or a JSON file rigopt calibrate wrote",
                   option="--weights", kind=DataError)
     try:
-        data = json.loads(path.read_text())
+        data = json_loads(path.read_text())
     except OSError as error:
         raise DataError(f"{path}: cannot read the weights file ({error.strerror})") from None
     except UnicodeDecodeError as error:
@@ -362,6 +362,11 @@ def load_weights(name_or_path, metric: str = "rigcd") -> Calibration:
     return calibration
 
 
+#: The largest magnitude of any number of a weights file: calibrations are of order 0.01-10 (docs/metrics.md), and
+#: beyond this the distances and drops they give overflow into inf and NaN.
+MAX_WEIGHT = 1e6
+
+
 def _calibration_from_dict(data, path: Path) -> Calibration:
     keys = ("K", "alpha", "lambda_t", "lambda_r", "lambda_f")
     if not isinstance(data, dict) or any(k not in data for k in keys):
@@ -369,8 +374,9 @@ def _calibration_from_dict(data, path: Path) -> Calibration:
     values = {}
     for key in keys:
         value = data[key]
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not np.isfinite(value) or value < 0:
-            raise DataError(f"{path}: {key} must be a finite, non-negative number, got {value!r}")
+        if (isinstance(value, bool) or not isinstance(value, (int, float)) or not np.isfinite(value) or value < 0
+                or value > MAX_WEIGHT):
+            raise DataError(f"{path}: {key} must be a number from 0 to {MAX_WEIGHT:g}, got {value!r}")
         values[key] = float(value)
     if values["alpha"] > 1:
         raise DataError(f"{path}: alpha must be in [0, 1], got {values['alpha']}")
@@ -378,9 +384,10 @@ def _calibration_from_dict(data, path: Path) -> Calibration:
     if not isinstance(beta, dict):
         raise DataError(f"{path}: beta must be an object of numbers ({', '.join(FEATURES)}), got {beta!r}")
     for key, value in beta.items():
-        if key in FEATURES and (isinstance(value, bool) or not isinstance(value, (int, float))):
-            raise DataError(f"{path}: beta.{key} must be a number, got {value!r}; write a number or leave the key "
-                            "out")
+        if key in FEATURES and (isinstance(value, bool) or not isinstance(value, (int, float))
+                                or not abs(value) <= MAX_WEIGHT):
+            raise DataError(f"{path}: beta.{key} must be a number within +-{MAX_WEIGHT:g}, got {value!r}; write a "
+                            "number or leave the key out")
     beta = tuple(float(beta.get(k, np.nan)) for k in FEATURES)
     metric = data.get("metric", "rigcd")
     if metric not in METRICS:
@@ -414,7 +421,7 @@ def _prediction_parts(data: dict, path: Path) -> dict:
             link = data["link"]
             kind, parameters = link["kind"], tuple(float(v) for v in link["parameters"])
             if kind not in LINKS or len(parameters) != (1 if kind == "exp" else 2) or not all(
-                    np.isfinite(v) and v > 0 for v in parameters):
+                    np.isfinite(v) and 0 < v <= MAX_WEIGHT for v in parameters):
                 raise ValueError
             parts["link"] = Link(kind, parameters)
         if "interval" in data:

@@ -40,7 +40,7 @@ import numpy as np
 from scipy.optimize import least_squares, linear_sum_assignment
 
 from rigopt.camera import CameraModel
-from rigopt.errors import DataError, RigoptError, not_utf8, unknown_name
+from rigopt.errors import DataError, RigoptError, json_loads, not_utf8, unknown_name
 from rigopt.geometry import yaw_pitch_roll_from_rotation
 from rigopt.metrics.lifting import depths_on_ground
 from rigopt.rig.model import Rig
@@ -383,7 +383,6 @@ def shipped_drop_models() -> list[str]:
 
 def load_drop_model(name_or_path) -> DropModel:
     """The shipped drop model of that name (case-insensitive) or a drop model JSON file (``DropModel.to_dict``)."""
-    import json
     from pathlib import Path
 
     from rigopt.resources import data_dir
@@ -400,7 +399,7 @@ def load_drop_model(name_or_path) -> DropModel:
     else:
         raise unknown_name("drop model", text, sorted(by_lower.values()))
     try:
-        return DropModel.from_dict(json.loads(path.read_text()))
+        return DropModel.from_dict(json_loads(path.read_text()))
     except UnicodeDecodeError as error:
         raise not_utf8(path, "drop model file", error) from None
     except KeyError as error:

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from rigopt.errors import DataError, not_utf8
+from rigopt.errors import DataError, json_loads, not_utf8
 
 CSV_HEADER = ("model", "train_rig", "test_rig", "mAP")
 
@@ -135,7 +135,7 @@ def _read_results_folder(root: Path) -> TransferTable:
     for file in sorted(root.glob("*/trained_on_*.json")):
         model, train = file.parent.name, file.stem.removeprefix("trained_on_")
         try:
-            data = json.loads(file.read_text())
+            data = json_loads(file.read_text())
         except json.JSONDecodeError as error:
             raise DataError(f"{file}: not valid JSON (line {error.lineno}: {error.msg})") from None
         except UnicodeDecodeError as error:

@@ -33,7 +33,7 @@ import numpy as np
 
 from rigopt.benchmark import BENCHMARK_IMAGE_SIZE
 from rigopt.camera import DISTORTION_COEFFICIENTS, FOV_TOLERANCE_DEG, Lens
-from rigopt.errors import RigFileError, RigoptError, not_utf8
+from rigopt.errors import RigFileError, RigoptError, json_loads, not_utf8
 from rigopt.geometry import carla_to_iso, iso_to_carla
 from rigopt.output import existing_file
 from rigopt.rig.model import ROLES, VEHICLE_CENTRE, Camera, Rig, RigOrigin
@@ -198,7 +198,7 @@ def read_rig(path, name: str | None = None) -> Rig:
     except UnicodeDecodeError as error:
         raise not_utf8(path, "rig file", error, RigFileError) from None
     try:
-        data = json.loads(text)
+        data = json_loads(text)
     except json.JSONDecodeError as error:
         raise RigFileError(f"{path}: not valid JSON (line {error.lineno}, column {error.colno}: {error.msg})") from None
     return rig_from_dict(data, name or path.stem, str(path))

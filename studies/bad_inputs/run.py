@@ -51,7 +51,7 @@ says `no such ...`. A missing `--data` folder is said as such, not as a missing 
 --rigs` takes several folders (the first holding `<rig>.json`, in it or below it, wins); a rig the results name
 that is in none of them nor in the library is refused before any work, naming `--rigs` as the fix (`--rigs
 measurements/rigs` finds the real datasets' rigs in `measurements/rigs/real/`). Image sizes (`--image-size`,
-`bench generate --size`) are whole pixels, 1 to 20000 a side, through one parser (`rigopt/cli/parsing.py`).
+`bench generate --size`) are whole pixels, 16 to 20000 a side (a rendering size for tests from 1), through one parser (`rigopt/cli/parsing.py`).
 
 A run killed outright (SIGKILL, power loss) cannot remove its temporary sibling `.NAME.partial-PID`: the next
 atomic write of the same target removes every such sibling whose process id no longer runs (`os.kill(pid, 0)`
@@ -96,7 +96,7 @@ def main() -> None:
             if not ok:
                 failures.append(f"{name}: exit {result.returncode}, stdout {result.stdout[:80]!r}, stderr "
                                 f"{normalised(result.stderr, tmp)[-400:]!r}")
-            shown = " ".join(a if a and " " not in a else repr(a) for a in args)
+            shown = " ".join(a if a and a.isprintable() and " " not in a else repr(a) for a in args)
             rows.append(f"| {name} | `rigopt {shown}` | `{line.replace('|', '/')}` |")
         DOC.write_text(INTRO + "\n".join(rows) + "\n")
         print(f"{len(CASES)} cases, {len(CASES) - len(failures)} as they should be; wrote {DOC}")

@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from rigopt.camera import Lens
-from rigopt.errors import RigFileError, RigoptError, not_utf8
+from rigopt.errors import RigFileError, RigoptError, json_loads, not_utf8
 from rigopt.geometry import body_from_optical, nearest_rotation, quaternion_to_matrix
 from rigopt.output import existing_file
 from rigopt.rig.model import Camera, Rig, RigOrigin
@@ -79,7 +79,7 @@ def read_json(path: Path, what: str, fix: str):
     path = Path(path)
     text = read_text(path, what, fix)
     try:
-        return json.loads(text)
+        return json_loads(text)
     except json.JSONDecodeError as error:
         raise RigFileError(f"{path}: not valid JSON (line {error.lineno}, column {error.colno}: {error.msg}); "
                            f"the {what} must be JSON") from None

@@ -14,7 +14,7 @@ import pyarrow.parquet as parquet
 import pytest
 
 from in_process import refused, run_rigopt
-from rigopt.errors import RigFileError
+from rigopt.errors import RigFileError, RigoptError
 from rigopt.rig.formats.datasets import WAYMO_COLUMNS, read_waymo
 from rigopt.rig.formats.nuscenes import SAMPLE_DATA_FILE, nuscenes_token, read_nuscenes, write_nuscenes_calibration
 from rigopt.rig.formats.urdf import FOV_AGREEMENT_DEG, export_urdf, read_urdf
@@ -216,13 +216,17 @@ def test_the_nuscenes_command_names_the_record_and_writes_nothing(tmp_path):
 ])
 def test_image_sizes_beyond_any_camera_are_refused_with_one_message(tmp_path, args, option):
     line = refused(run_rigopt(*(a.format(tmp=tmp_path) for a in args)), option)
-    assert line.endswith(f"{option} must be WIDTHxHEIGHT in whole pixels, each side 1 to 20000, e.g. 1600x900; got "
-                         f"{args[-1]!r}")
+    smallest = 1 if option == "--size" else 16  # a rendering size may be tiny, a camera's image may not
+    assert line.endswith(f"{option} must be WIDTHxHEIGHT in whole pixels, each side {smallest} to 20000, e.g. "
+                         f"1600x900; got {args[-1]!r}")
     assert list(tmp_path.iterdir()) == []
 
 
 def test_the_largest_image_size_is_taken(tmp_path):
-    from rigopt.cli.parsing import MAX_IMAGE_SIDE, parse_image_size
+    from rigopt.cli.parsing import MAX_IMAGE_SIDE, MIN_IMAGE_SIDE, parse_image_size
 
-    assert parse_image_size(f"{MAX_IMAGE_SIDE}x1") == (MAX_IMAGE_SIDE, 1)
+    assert parse_image_size(f"{MAX_IMAGE_SIDE}x{MIN_IMAGE_SIDE}") == (MAX_IMAGE_SIDE, MIN_IMAGE_SIDE)
+    assert parse_image_size("16x9", "--size", smallest=1) == (16, 9)  # a rendering size may be tiny
+    with pytest.raises(RigoptError, match="each side 16 to 20000"):
+        parse_image_size("1x1")  # a camera's may not
     np.testing.assert_array_equal(parse_image_size(" 1600 X 900 "), (1600, 900))
