@@ -11,3 +11,7 @@ BENCHMARK_IMAGE_SIZE = (1280, 720)
 #: (width, height) px: the synthetic benchmark's default rendering size (``rigopt bench generate --size``), the
 #: benchmark's 16:9 at an eighth of its width.
 SYNTHETIC_IMAGE_SIZE = (160, 90)
+
+#: Largest image side (px) of any camera: beyond every camera made (the largest automotive sensors are under
+#: 4000 px, industrial ones under 15000), so a larger number is a typo or a unit mistake.
+MAX_IMAGE_SIDE = 20000

@@ -58,7 +58,7 @@ from typing import TYPE_CHECKING, Sequence
 
 import numpy as np
 
-from rigopt.benchmark import BENCHMARK_IMAGE_SIZE
+from rigopt.benchmark import BENCHMARK_IMAGE_SIZE, MAX_IMAGE_SIDE
 from rigopt.errors import RigoptError
 
 if TYPE_CHECKING:
@@ -280,8 +280,9 @@ class Lens:
     def __post_init__(self):
         for name in ("width", "height"):
             value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value <= 0:
-                raise RigoptError(f"lens {name} must be a positive whole number of pixels, got {value!r}")
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not 0 < value <= MAX_IMAGE_SIDE:
+                raise RigoptError(f"lens {name} must be a whole number of pixels from 1 to {MAX_IMAGE_SIDE}, got "
+                                  f"{value!r}")
             object.__setattr__(self, name, int(value))
         for name in ("fx", "fy", "cx", "cy"):
             value = getattr(self, name)
@@ -290,6 +291,9 @@ class Lens:
             if name in ("fx", "fy") and value <= 0:
                 raise RigoptError(f"lens {name} must be positive, got {value!r}")
             object.__setattr__(self, name, float(value))
+        if not (0.0 <= self.cx <= self.width and 0.0 <= self.cy <= self.height):
+            raise RigoptError(f"lens principal point ({self.cx:g}, {self.cy:g}) px lies outside its {self.width} x "
+                              f"{self.height} image; check cx, cy (pixels from the top-left corner) and the image size")
         if self.distortion not in DISTORTION_COEFFICIENTS:
             raise RigoptError(f"unknown lens distortion model {self.distortion!r}; use one of "
                               f"{', '.join(DISTORTION_COEFFICIENTS)}")

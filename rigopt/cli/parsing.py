@@ -8,11 +8,9 @@ from __future__ import annotations
 
 import math
 
+from rigopt.benchmark import MAX_IMAGE_SIDE  # the largest image side any command takes (a camera's)
 from rigopt.errors import RigoptError
 
-#: Largest image side (px) any command takes: beyond every camera made (the largest automotive sensors are
-#: under 4000 px, industrial ones under 15000), so a larger number is a typo.
-MAX_IMAGE_SIDE = 20000
 #: Smallest image side (px): below every camera a detector is fed (a thumbnail is not a camera).
 MIN_IMAGE_SIDE = 16
 #: Largest origin offset (m) in any coordinate: a rig's positions lie within 100 m of its origin

@@ -101,6 +101,12 @@ def make_fixtures(tmp: Path) -> dict[str, str]:
         "robot.urdf": "<robot name='r'><link name='base_link'/></robot>\n",
         "robot_broken.urdf": "<robot name='r'><link name='base_link'>\n",
         "carla_no_sensors.json": json.dumps({"rig": "x", "vehicle": "vehicle.audi.tt"}),
+        "carla_huge_image.json": json.dumps({"sensors": [{"id": "C", "attributes": {"image_size_x": "99999",
+                                             "image_size_y": "480", "fov": "90"},
+                                             "transform": {"location": {"x": 2, "y": 0, "z": 1.5},
+                                                           "rotation": {"pitch": 0, "yaw": 0, "roll": 0}}}]}),
+        "camchain_far_centre.yaml": "cam0:\n  intrinsics: [400.0, 400.0, 5320.0, 240.0]\n  resolution: [640, 480]\n"
+                                    "  distortion_model: radtan\n  distortion_coeffs: [0, 0, 0, 0]\n",
         "carla_fov_text.json": json.dumps({"sensors": [{"id": "C", "attributes": {"image_size_x": "640", "image_size_y":
                                            "480", "fov": "wide"}, "transform": {}}]}),
         "dgp/calibration/c.json": json.dumps({"names": ["CAMERA_01"], "intrinsics": [{"fx": 1000.0, "skew": 2.0}],
@@ -537,6 +543,10 @@ CASES: list[tuple[str, list[str], str]] = [
     ("import carla without sensors", ["import", "carla", f"{T}/carla_no_sensors.json", "--out", f"{T}/r.json"],
      "'sensors'"),
     ("import carla fov text", ["import", "carla", f"{T}/carla_fov_text.json", "--out", f"{T}/r.json"], "wide"),
+    ("import carla image 99999 px wide", ["import", "carla", f"{T}/carla_huge_image.json", "--out", f"{T}/r.json"],
+     "from 1 to 20000"),
+    ("import opencv principal point outside the image", ["import", "opencv", f"{T}/camchain_far_centre.yaml", "--out",
+                                                        f"{T}/r.json"], "outside its 640 x 480 image"),
     # --- export ---
     ("export --format unknown", ["export", "R1", "--format", "kitti", "--out", f"{T}/x"], "kitti"),
     ("export --out wrong extension", ["export", "R1", "--format", "urdf", "--out", f"{T}/x.json"], ".urdf"),
