@@ -103,7 +103,8 @@ def comparison_rigs(design: Rig, reference: Rig, calibration: Calibration | None
     ``calibration``, refined as a design is: ``designer.refine_comparison``, the same continuous stage,
     keeping what it sees of the reference's coverage, so that the comparison credits the design's objective
     and not its extra refinement) and the height-matched transfer (each camera at the mount nearest its
-    height: does matching heights alone explain the design's gain?)."""
+    height: does matching heights alone explain the design's gain?). A hand-designed rig that is the design or the
+    reference itself (a rig on the reference's own vehicle) is not compared again."""
     from rigopt.design.designer import default_spacing, mount_candidates, naive_transfer, refine_comparison
     from rigopt.design.problem import ReferenceRig, benchmark_rigs
     from rigopt.design.requirements import design_requirements
@@ -112,7 +113,8 @@ def comparison_rigs(design: Rig, reference: Rig, calibration: Calibration | None
 
     vehicle = load_vehicle(design.vehicle)
     settings = DesignSettings(symmetric=False, require="none")
-    rigs = [("design", design)] + [("hand-designed", rig) for rig in benchmark_rigs(vehicle)]
+    rigs = [("design", design)] + [("hand-designed", rig) for rig in benchmark_rigs(vehicle)
+                                   if rig.name not in (design.name, reference.name)]
     candidates = mount_candidates(vehicle, settings)
     naive = naive_transfer(vehicle, reference, candidates, settings)
     if naive is not None and calibration is not None:
