@@ -105,6 +105,9 @@ def make_fixtures(tmp: Path) -> dict[str, str]:
                                              "image_size_y": "480", "fov": "90"},
                                              "transform": {"location": {"x": 2, "y": 0, "z": 1.5},
                                                            "rotation": {"pitch": 0, "yaw": 0, "roll": 0}}}]}),
+        "camchain_gap.yaml": "cam0:\n  intrinsics: [400.0, 400.0, 320.0, 240.0]\n  resolution: [640, 480]\n"
+                             "  distortion_model: radtan\n  distortion_coeffs: [0, 0, 0, 0]\n"
+                             "camera_left:\n  intrinsics: [400.0, 400.0, 320.0, 240.0]\n  resolution: [640, 480]\n",
         "camchain_far_centre.yaml": "cam0:\n  intrinsics: [400.0, 400.0, 5320.0, 240.0]\n  resolution: [640, 480]\n"
                                     "  distortion_model: radtan\n  distortion_coeffs: [0, 0, 0, 0]\n",
         "carla_fov_text.json": json.dumps({"sensors": [{"id": "C", "attributes": {"image_size_x": "640", "image_size_y":
@@ -545,6 +548,8 @@ CASES: list[tuple[str, list[str], str]] = [
     ("import carla fov text", ["import", "carla", f"{T}/carla_fov_text.json", "--out", f"{T}/r.json"], "wide"),
     ("import carla image 99999 px wide", ["import", "carla", f"{T}/carla_huge_image.json", "--out", f"{T}/r.json"],
      "from 1 to 20000"),
+    ("import opencv block not named camN", ["import", "opencv", f"{T}/camchain_gap.yaml", "--out", f"{T}/r.json"],
+     "camera_left not read"),
     ("import opencv principal point outside the image", ["import", "opencv", f"{T}/camchain_far_centre.yaml", "--out",
                                                         f"{T}/r.json"], "outside its 640 x 480 image"),
     # --- export ---

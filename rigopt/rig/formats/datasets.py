@@ -188,10 +188,10 @@ def read_dgp(path, image_size=DGP_IMAGE_SIZE, calibration: int | None = None, na
     sizes = _dgp_image_sizes(scene_folder)
     rigs = []
     for file in files:
-        cameras, defaulted = _dgp_cameras(file, sizes, image_size)
+        cameras, defaulted, skipped = _dgp_cameras(file, sizes, image_size)
         if not any(same_cameras(cameras, other[0]) for other in rigs):
-            rigs.append((cameras, defaulted, file))
-    cameras, defaulted, file = choose_calibration(rigs, calibration, str(path), "--calibration K")
+            rigs.append((cameras, defaulted, skipped, file))
+    cameras, defaulted, skipped, file = choose_calibration(rigs, calibration, str(path), "--calibration K")
     origin, note = _origin(origin, "DDAD ego frame")
     default_name = scene_folder.resolve().name
     rig = make_rig(str(file), name or default_name, vehicle, cameras, origin)
@@ -199,6 +199,9 @@ def read_dgp(path, image_size=DGP_IMAGE_SIZE, calibration: int | None = None, na
     if defaulted:
         notes.append(f"image size {image_size[0]}x{image_size[1]} assumed for {', '.join(defaulted)} (no scene JSON "
                      "gives it; set it with --image-size)")
+    if skipped:
+        notes.append(f"{', '.join(skipped)} left out: no camera model (fx 0: a lidar or another sensor); give a "
+                     "camera its intrinsics to import it")
     return Imported(rig, tuple(notes))
 
 
@@ -209,7 +212,7 @@ def dgp_calibrations(path, image_size=DGP_IMAGE_SIZE) -> list[dict]:
     sizes = _dgp_image_sizes(path if path.is_dir() else path.parent.parent)
     rows: list[dict] = []
     for file in files:
-        cameras, _ = _dgp_cameras(file, sizes, image_size)
+        cameras, _, _ = _dgp_cameras(file, sizes, image_size)
         for row in rows:
             if same_cameras(cameras, row["_cameras"]):
                 row["files"].append(file.name)
@@ -241,7 +244,8 @@ def _dgp_number(entry: dict, key: str, where: str) -> float:
     return float(numbers([value], (1,), f"{where} {key}")[0])
 
 
-def _dgp_cameras(file: Path, sizes: dict, image_size) -> tuple[tuple, list[str]]:
+def _dgp_cameras(file: Path, sizes: dict, image_size) -> tuple[tuple, list[str], list[str]]:
+    """(cameras, the camera names whose image size was assumed, the datums skipped as no camera: fx 0)."""
     data = read_json(file, "DGP calibration JSON", "use a calibration/<key>.json of a DGP scene")
     if not isinstance(data, dict) or not all(isinstance(data.get(k), list) for k in ("names", "intrinsics", "extrinsics")):
         raise RigFileError(f"{file}: a DGP calibration is a JSON object with lists 'names', 'intrinsics' and "
@@ -250,13 +254,14 @@ def _dgp_cameras(file: Path, sizes: dict, image_size) -> tuple[tuple, list[str]]
     if not len(names) == len(intrinsics) == len(extrinsics):
         raise RigFileError(f"{file}: 'names', 'intrinsics' and 'extrinsics' must be as long as each other, got "
                            f"{len(names)}, {len(intrinsics)} and {len(extrinsics)}")
-    cameras, defaulted = [], []
+    cameras, defaulted, skipped = [], [], []
     for k, (sensor, intrinsic, extrinsic) in enumerate(zip(names, intrinsics, extrinsics)):
         where = f"{file}: datum {k} ({sensor})"
         if not isinstance(sensor, str) or not isinstance(intrinsic, dict) or not isinstance(extrinsic, dict):
             raise RigFileError(f"{where}: names are strings, intrinsics and extrinsics objects")
         if _dgp_number(intrinsic, "fx", where) == 0.0:
-            continue  # a lidar or other datum without a camera model
+            skipped.append(sensor)  # a lidar or other datum without a camera model: said in a note
+            continue
         fx, fy, cx, cy, skew = (_dgp_number(intrinsic, key, where) for key in ("fx", "fy", "cx", "cy", "skew"))
         if skew != 0.0:
             raise RigFileError(f"{where}: skew {skew:g} is not supported; rigopt's lenses have no skew")
@@ -285,7 +290,7 @@ def _dgp_cameras(file: Path, sizes: dict, image_size) -> tuple[tuple, list[str]]
             defaulted.append(sensor)
         lens = make_lens(where, size[0], size[1], fx, fy, cx, cy, model, values)
         cameras.append(make_camera(where, sensor, position, optical_quaternion_rotation(q), lens))
-    return tuple(cameras), defaulted
+    return tuple(cameras), defaulted, skipped
 
 
 # --------------------------------------------------------------------------------------------------- Waymo

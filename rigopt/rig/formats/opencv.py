@@ -74,6 +74,10 @@ def read_camchain(path, name: str | None = None, vehicle: str = "opencv", origin
         cameras.append(make_camera(where, camera_id, t_body_optical[:3, 3], body_from_optical(t_body_optical[:3, :3]), lens))
         previous = t_body_optical
         k += 1
+    unread = [str(key) for key in data if key not in {f"cam{j}" for j in range(k)}]
+    if unread:
+        raise RigFileError(f"{path}: block(s) {', '.join(unread)} not read: a camchain numbers its cameras cam0, cam1, "
+                           f"... without gaps (read cam0..cam{k - 1}); rename them or remove them")
     origin = origin or RigOrigin()
     why = "--origin" if origin.kind != "vehicle_centre" else "assumed: a camchain does not say; set it with --origin"
     rig = make_rig(str(path), name or path.stem, vehicle, cameras, origin)

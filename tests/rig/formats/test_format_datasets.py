@@ -205,7 +205,9 @@ def test_dgp_six_cameras_with_sizes_from_the_scene():
     imported = read_dgp(DGP)
     rig = imported.rig
     assert [c.id for c in rig.cameras] == ["CAMERA_01", "CAMERA_05", "CAMERA_06", "CAMERA_07", "CAMERA_08", "CAMERA_09"]
-    assert imported.notes == ("origin: rear axle (DDAD ego frame)",)
+    assert imported.notes == ("origin: rear axle (DDAD ego frame)",  # the lidar datum is said to be left out
+                              "LIDAR left out: no camera model (fx 0: a lidar or another sensor); give a camera its "
+                              "intrinsics to import it")
     assert all(c.image_size == (1936, 1216) for c in rig.cameras)
     yaws = [math.degrees(math.atan2(c.forward[1], c.forward[0])) for c in rig.cameras]
     np.testing.assert_allclose(yaws, [0, 60, -60, 120, -120, 180], atol=1e-9)
