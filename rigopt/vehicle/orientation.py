@@ -41,6 +41,9 @@ from rigopt.geometry import rot_z
 AXES = {"+x": (1, 0, 0), "-x": (-1, 0, 0), "+y": (0, 1, 0), "-y": (0, -1, 0), "+z": (0, 0, 1), "-z": (0, 0, -1)}
 #: Road-vehicle limits (m): length, width (without mirrors), height.
 SIZE_LIMITS = {"length": (2.5, 25.0), "width": (1.4, 3.0), "height": (1.0, 4.5)}
+#: The widest a mesh may be with its mirrors (m) and still be a road vehicle: a 2.55 m body with mirrors reaching
+#: 0.5 m out each side. A unit is judged on this width, since a mesh's box holds its mirrors.
+WIDTH_WITH_MIRRORS = 3.6
 #: Typical road vehicles (length, width, height m) whose proportions a mesh's size is fitted to, to infer its scale.
 REFERENCE_SIZES = {"car": (4.6, 1.8, 1.5), "van": (5.2, 2.0, 2.0), "truck": (8.5, 2.5, 3.5), "bus": (12.0, 2.55, 3.2)}
 #: Common units (m per file unit).
@@ -151,9 +154,11 @@ class ScaleGuess:
 
 
 def plausible(size) -> bool:
-    """Whether ``size`` (3,) m, in any order, can be a road vehicle's length, width and height (SIZE_LIMITS)."""
+    """Whether ``size`` (3,) m, in any order, can be a road vehicle's length, width (mirrors included: up to
+    WIDTH_WITH_MIRRORS) and height (SIZE_LIMITS)."""
     length, a, b = np.sort(np.asarray(size, float))[::-1]
-    (l0, l1), (w0, w1), (h0, h1) = SIZE_LIMITS.values()
+    (l0, l1), (w0, _), (h0, h1) = SIZE_LIMITS.values()
+    w1 = WIDTH_WITH_MIRRORS
     return l0 <= length <= l1 and ((w0 <= a <= w1 and h0 <= b <= h1) or (w0 <= b <= w1 and h0 <= a <= h1))
 
 
@@ -243,8 +248,12 @@ def check_pose(mesh: trimesh.Trimesh, source: str, *, scale: float = 1.0, forwar
                 reason = str(error)[len(source) + 2:].rsplit(": add ", 1)[0]
                 then = f"; scaled by it, {reason}" if extra else ""
             break
+        other = next((g for g in ranked if g.unit and g is not guess), None) if not guess.unit else None
+        also = (f" or {other.describe()}, {scale * other.scale:.6g} m per unit ({length * other.scale:.3g} m long): "
+                "the shape cannot tell which, the real length can") if other is not None else ""
         raise PoseError(f"{source}: the mesh is {described} {units} (x, y, z), which looks like {guess.describe()}"
-                        f"{then}: add {_flags(fix)}, or --length L with its real length L in metres", fix)
+                        f" ({length * guess.scale:.3g} m long){also}{then}: add {_flags(fix)}, or --length L with "
+                        "its real length L in metres", fix)
     if not low <= length <= high and (not allow_size or not HARD_LENGTH[0] <= length <= HARD_LENGTH[1]):
         raise DataError(f"{source}: the mesh is {described} {units} (x, y, z): its length {length:.3g} m is outside a "
                         f"road vehicle's {low:g}-{high:g} m and no unit makes it one; give its real length with "

@@ -56,7 +56,7 @@ def check(mesh, **flags):
 @pytest.mark.parametrize("scale, unit", [(0.01, "centimetres"), (0.001, "millimetres"), (0.0254, "inches")])
 def test_units_are_named_with_the_scale_that_fixes_them(scale, unit):
     mesh = sim_car_mesh(scale=scale)
-    with pytest.raises(DataError, match=f"looks like {unit}: add --scale {scale:g}") as caught:
+    with pytest.raises(DataError, match=rf"looks like {unit} \([\d.]+ m long\): add --scale {scale:g}") as caught:
         check(mesh)
     assert check(mesh, **pose_flags(suggested_flags(str(caught.value))), ) == []
 
