@@ -43,8 +43,9 @@ def session(tmp_path_factory):
 
 def test_the_error_suggests_scale_and_forward_at_once(session):
     runs, _, scale, forward = session
-    assert runs["plain"].returncode == 2 and "looks like centimetres; scaled by it, the mesh is longest along y" \
-        in runs["plain"].stderr and "add --scale 0.01 --forward -y," in runs["plain"].stderr
+    assert runs["plain"].returncode == 2 and re.search(r"looks like centimetres \([\d.]+ m long\); scaled by it, the "
+                                                       r"mesh is longest along y", runs["plain"].stderr)
+    assert "add --scale 0.01 --forward -y," in runs["plain"].stderr
     assert runs["scaled"].returncode == 2 and "seems to face -y" in runs["scaled"].stderr  # the scale alone is not enough
     assert scale == ["--scale", "0.01"] and forward == ["--forward", "-y"]
 
