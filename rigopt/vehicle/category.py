@@ -1,4 +1,5 @@
-"""The UN vehicle category (ECE/TRANS/WP.29/78, R.E.3) a body's shape suggests, with the reason in words.
+"""What a body's shape says of the vehicle: the UN category (ECE/TRANS/WP.29/78, R.E.3) it suggests, with the reason
+in words, and its width without mirrors against the legal maximum.
 
 The category is set by mass and seats, which a mesh does not carry; its size and shape narrow it down, and the user
 confirms or overrides (``vehicle add --category``, ``category`` in ``vehicle.toml``):
@@ -76,3 +77,39 @@ def guess_category(vehicle) -> CategoryGuess:
         return CategoryGuess("N1", f"{size}, roof at {VAN_ROOF:.1f} m or more over {tall:.0%} of its length: a "
                                    "van (N1, up to 3.5 t; N2 if heavier, M1 or M2 if it carries people)")
     return CategoryGuess("M1", f"{size}, roof at {VAN_ROOF:.1f} m or more over {tall:.0%} of its length: a car (M1)")
+
+
+#: The largest width (m) of a road vehicle's body in the EU (Council Directive 96/53/EC, Annex I 1.2): 2.55 m, 2.60 m
+#: for the superstructure of a conditioned (refrigerated) vehicle; mirrors are not counted.
+MAX_BODY_WIDTH, MAX_CONDITIONED_WIDTH = 2.55, 2.60
+
+
+def body_width(vehicle) -> float:
+    """The body's width (m) without its mirrors: at each of PROFILE_SAMPLES stations along the length the widest of
+    rays cast across at 20-80 % of the height, the median over the stations (mirrors, a step or a handle stand out
+    over a few stations only)."""
+    low, high = vehicle.mesh.bounds
+    x = np.linspace(low[0], high[0], PROFILE_SAMPLES + 2)[1:-1]
+    z = low[2] + np.array([0.2, 0.35, 0.5, 0.65, 0.8]) * (high[2] - low[2])
+    reach = high[1] - low[1] + 2.0
+    stations = np.array([[xi, zi] for xi in x for zi in z])
+    widths = np.zeros(len(stations))
+    sides = []
+    for sign in (1.0, -1.0):  # from the left (+y) inward, then from the right
+        origins = np.column_stack([stations[:, 0], np.full(len(stations), sign * reach), stations[:, 1]])
+        direction = np.tile([0.0, -sign, 0.0], (len(stations), 1))
+        sides.append(sign * (reach - vehicle.ray_caster.first_hit_distance(origins, direction)))
+    hit = np.isfinite(sides[0]) & np.isfinite(sides[1])
+    widths[hit] = sides[0][hit] - sides[1][hit]
+    per_station = widths.reshape(len(x), len(z)).max(axis=1)
+    return float(np.median(per_station[per_station > 0])) if np.any(per_station > 0) else 0.0
+
+
+def width_warning(vehicle) -> str | None:
+    """A warning when the body without mirrors is wider than MAX_BODY_WIDTH (None within it)."""
+    width = body_width(vehicle)
+    if width <= MAX_BODY_WIDTH + 1e-3:
+        return None
+    return (f"the body is {width:.2f} m wide without its mirrors, above the {MAX_BODY_WIDTH} m a road vehicle may be "
+            f"({MAX_CONDITIONED_WIDTH} m for a refrigerated body; Directive 96/53/EC): check the mesh's scale "
+            "(--scale, --length) or that it is meant to be this wide")

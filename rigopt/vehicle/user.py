@@ -22,6 +22,7 @@ from rigopt.errors import DataError, RigoptError
 from rigopt.output import atomic_folder
 from rigopt.vehicle.library import SPEC_FILE, broken_user_vehicles, find_spec, user_vehicles_dir
 from rigopt.vehicle.model import ZONE_QUERY_EDGE, Vehicle, expand_zones
+from rigopt.vehicle.category import width_warning
 from rigopt.vehicle.closing import SHELL_PITCHES, ClosingReport, close_mesh
 from rigopt.vehicle.orientation import PoseError, check_pose, frame_rotation
 from rigopt.vehicle.spec import CATEGORIES, read_toml, spec_from_dict
@@ -298,11 +299,12 @@ def add_user_vehicle(name: str, mesh_path, zones_path=None, frame: str = "iso", 
     # validated before anything is written; problems name the user's zones file (or the mesh for default zones)
     spec = spec_from_dict({k: v for k, v in data.items() if v != []}, str(zones_path or mesh_path))
     _check_zones_select_surface(spec, mesh)
+    body = Vehicle(spec, mesh)
     if category is None:
-        guess = Vehicle(spec, mesh).category_guess
-        data["category"], reason = guess.category, guess.reason
+        data["category"], reason = body.category_guess.category, body.category_guess.reason
     else:
         data["category"], reason = str(category).strip().upper(), "given (--category)"
+    too_wide = width_warning(body)
     if not zones_path:
         # beyond the narrow part: its thickening and one grid pitch (an enclosed ladder is filled up to it)
         reach = (SHELL_PITCHES + 1) * prepared.closing.pitch + KEEP_OUT_CLEARANCE
@@ -313,8 +315,9 @@ def add_user_vehicle(name: str, mesh_path, zones_path=None, frame: str = "iso", 
         (work / SPEC_FILE).write_text(_to_toml(data))
     for old in [p for p in folder.parent.iterdir() if p.name.lower() == name.lower() and p.name != name]:
         shutil.rmtree(old, ignore_errors=True)  # the same name in another case, replaced (force was given)
-    return AddedVehicle(folder / SPEC_FILE, found_axles, prepared.wheels, prepared.closing, prepared.warnings,
-                        prepared.notes, tuple(data.get("keep_out", ())), data["category"], reason)
+    return AddedVehicle(folder / SPEC_FILE, found_axles, prepared.wheels, prepared.closing,
+                        prepared.warnings + ((too_wide,) if too_wide else ()), prepared.notes,
+                        tuple(data.get("keep_out", ())), data["category"], reason)
 
 
 def _store_folder(name: str, force: bool) -> Path:

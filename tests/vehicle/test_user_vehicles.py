@@ -378,3 +378,21 @@ def test_a_category_given_is_stored_and_a_wrong_one_refused(box_stl, rigopt_home
         "rigopt: error: --category 'truck' is not a UN vehicle category: give one of M1, M2, M3, N1, N2, N3 (M: "
         "carrying people, N: goods; 1 light, 2 medium, 3 heavy)"]
     assert "other" not in vehicle_names()
+
+
+def test_a_body_wider_than_the_legal_maximum_is_warned_of_and_mirrors_do_not_count(export):
+    """The box bus is 2.5 m wide: no warning; a 2.9 m wide one is warned of; mirrors reaching 0.2 m out of the
+    2.5 m body change nothing (the width is the body's, median over the length)."""
+    from rigopt.vehicle.category import body_width
+
+    bus = a_bus_mesh()
+    mirrors = [trimesh.creation.box(extents=[0.1, 0.4, 0.3], transform=trimesh.transformations.translation_matrix(
+        [5.5, side * 1.25, 2.0])) for side in (1.0, -1.0)]
+    mirrored = user.add_user_vehicle("bus", export(trimesh.util.concatenate([bus, *mirrors]), "bus.stl"),
+                                     forward="+x")
+    assert not any("wide without its mirrors" in w for w in mirrored.warnings)
+    assert body_width(load_vehicle("bus")) == pytest.approx(2.5, abs=0.03)
+    wide = a_bus_mesh()
+    wide.apply_scale([1.0, 1.16, 1.0])
+    warned = user.add_user_vehicle("widebus", export(wide, "wide.stl"), forward="+x")
+    assert any("2.90 m wide without its mirrors, above the 2.55 m" in w for w in warned.warnings)
