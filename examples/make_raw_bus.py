@@ -13,12 +13,15 @@ bumper at ground level, and its parts are separate, overlapping, unwelded meshes
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 import numpy as np
 import trimesh
 
 HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))  # the examples' shared mesh parts
+import mesh_parts  # noqa: E402
 
 LENGTH, WIDTH, HEIGHT = 12.0, 2.55, 3.10  # m, overall (mirrors aside)
 CLEARANCE, ROOF = 0.30, 2.85  # underside and roof of the body; the HVAC unit rises to HEIGHT
@@ -57,15 +60,7 @@ def box(size, centre) -> trimesh.Trimesh:
 
 def wheels() -> list[trimesh.Trimesh]:
     """Four wheels, cylinders along y standing on the ground, their outer faces just inside the body's sides."""
-    y = WIDTH / 2 - 0.05 - WHEEL_W / 2
-    turn = trimesh.transformations.rotation_matrix(np.pi / 2, [1.0, 0.0, 0.0])  # cylinder axis z -> y
-    parts = []
-    for x in (FRONT_AXLE, FRONT_AXLE - WHEELBASE):
-        for side in (1.0, -1.0):
-            wheel = trimesh.creation.cylinder(radius=WHEEL_R, height=WHEEL_W, sections=24, transform=turn)
-            wheel.apply_translation([x, side * y, WHEEL_R])
-            parts.append(wheel)
-    return parts
+    return mesh_parts.wheels((FRONT_AXLE, FRONT_AXLE - WHEELBASE), WIDTH / 2 - 0.05 - WHEEL_W / 2, WHEEL_R, WHEEL_W)
 
 
 def mirrors() -> list[trimesh.Trimesh]:

@@ -12,12 +12,15 @@ often come: in millimetres, front facing +x, Z up, its origin at the middle of t
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 import numpy as np
 import trimesh
 
 HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))  # the examples' shared mesh parts
+import mesh_parts  # noqa: E402
 
 WIDTH, HEIGHT, CLEARANCE = 2.05, 2.60, 0.20  # m: overall (mirrors aside), underside of the body
 FRONT, REAR = 4.65, -1.25  # x (m) of the front and rear faces, from the rear axle
@@ -45,15 +48,7 @@ def body() -> list[trimesh.Trimesh]:
 
 def wheels() -> list[trimesh.Trimesh]:
     """Four wheels, cylinders along y standing on the ground, their outer faces just inside the body's sides."""
-    y = WIDTH / 2 - 0.06 - WHEEL_W / 2
-    turn = trimesh.transformations.rotation_matrix(np.pi / 2, [1.0, 0.0, 0.0])  # cylinder axis z -> y
-    parts = []
-    for x in (0.0, WHEELBASE):
-        for side in (1.0, -1.0):
-            wheel = trimesh.creation.cylinder(radius=WHEEL_R, height=WHEEL_W, sections=24, transform=turn)
-            wheel.apply_translation([x, side * y, WHEEL_R])
-            parts.append(wheel)
-    return parts
+    return mesh_parts.wheels((0.0, WHEELBASE), WIDTH / 2 - 0.06 - WHEEL_W / 2, WHEEL_R, WHEEL_W)
 
 
 def mirrors() -> list[trimesh.Trimesh]:

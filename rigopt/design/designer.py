@@ -50,12 +50,14 @@ from rigopt.design.settings import DesignSettings
 from rigopt.design.tolerance import (OUT_OF_TOLERANCE_COST, matched_widening, tolerance_gaps, tolerance_penalty,
                                      tolerance_text, tolerated)
 from rigopt.errors import RigoptError
-from rigopt.metrics.calibration import Calibration
+from rigopt.metrics.calibration import Calibration, load_weights
 from rigopt.metrics.drop_model import FEATURES as DROP_MODEL_FEATURES, DropModel
 from rigopt.metrics.lifting import pair_terms
 from rigopt.metrics.ranking import predict_transfer
 from rigopt.metrics.rigcd import camera_costs
+from rigopt.rig.library import load_rig
 from rigopt.rig.model import Rig
+from rigopt.vehicle.library import load_vehicle
 from rigopt.vehicle.model import Vehicle
 from rigopt.vehicle.symmetry import camera_mirrors
 
@@ -263,10 +265,6 @@ def design_rig(vehicle: Vehicle | str, references: ReferenceRig | Sequence[Refer
 def by_name(vehicle, references, calibration):
     """(Vehicle, references, Calibration) from what a caller may give by name: a vehicle's name, one reference
     rig's name or file (placed on its own vehicle), no calibration (the joint weights)."""
-    from rigopt.metrics.calibration import load_weights
-    from rigopt.rig.library import load_rig
-    from rigopt.vehicle.library import load_vehicle
-
     vehicle = load_vehicle(vehicle) if isinstance(vehicle, str) else vehicle
     if isinstance(references, str):
         references = ReferenceRig.on_own_vehicle(load_rig(references))

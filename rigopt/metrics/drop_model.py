@@ -321,6 +321,7 @@ class DropModel:
         ego-body shares, required when the model weighs them (:attr:`needs_body`)."""
         if self.needs_body and body_share is None:
             raise ValueError(f"the {self.name} drop model weighs the ego body each camera sees: pass body_share")
+        body_share = body_share if self.needs_body else None  # no rays cast for a term the model does not weigh
         a = CameraGeometry.of(reference, body_share)
         pair_weights = matching_weights(self.weights, self.features)
         return np.array([matched_features(pair_features(a, b), rig_features(a, b), pair_weights)
