@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import importlib.util
 import json
 import sys
 from pathlib import Path
@@ -21,11 +22,16 @@ HERE = Path(__file__).resolve().parent
 RESULTS = HERE / "results"
 LINES = RESULTS / "new_scenes.jsonl"
 sys.path.insert(0, str(HERE.parent))  # studies/: the studies' shared code (studylib)
-sys.path.insert(0, str(HERE))
-from analysis import DESIGNER_KINDS, PREDICTORS, interval, rho  # noqa: E402
 from studylib.logs import timestamped_log  # noqa: E402
 from studylib.measuring import add_measuring_options, measure_to_lines  # noqa: E402
 from studylib.tables import markdown  # noqa: E402
+
+# this study's analysis (other studies have a module of that name: loaded under its own)
+_spec = importlib.util.spec_from_file_location("predictor_v2_analysis", HERE / "analysis.py")
+_analysis = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(_analysis)
+DESIGNER_KINDS, PREDICTORS = _analysis.DESIGNER_KINDS, _analysis.PREDICTORS
+interval, rho = _analysis.interval, _analysis.rho
 
 #: The pre-registered bar of the replication.
 BAR = {"pooled_rho": 0.8, "mae": 0.10}
@@ -75,7 +81,8 @@ def report() -> str:
                        "rho_ci": interval(lambda k: rho(p[k], measured[k]), every),
                        "mae_ci": interval(lambda k: float(error[k].mean()), every),
                        "designer_rho": rho(p[designer], measured[designer]),
-                       "design_vs_naive": bool(np.sign(p[design] - p[naive]) == np.sign(measured[design] - measured[naive]))}
+                       "design_vs_naive": bool(np.sign(p[design] - p[naive])
+                                               == np.sign(measured[design] - measured[naive]))}
     for label, key in (("pooled rho (95 % over rigs)", "pooled_rho"), ("MAE (95 % over rigs)", "mae")):
         ci = "rho_ci" if key == "pooled_rho" else "mae_ci"
         table.append([label, *(f"{cells[n][key]:.3f} [{cells[n][ci][0]:.3f}, {cells[n][ci][1]:.3f}]"
