@@ -31,11 +31,11 @@ through the left and right (top and bottom) edge midpoints, through the axis.
 
 :class:`CameraModel` holds a batch of lenses (every field an array of one batch shape, ``()`` for one camera
 or ``(c,)`` for c cameras, the distortion model and coefficients included); its methods broadcast over that
-batch. :meth:`CameraModel.of_cameras` builds it from rig cameras' lenses (every camera has one; the
-benchmark's centred square-pixel pinholes, :meth:`Lens.pinhole`, by :meth:`CameraModel.from_fov` from their
-stated FOVs and image sizes). The maths
-of the distortion models is in one place, :func:`undistorted_directions` and :func:`distorted_coordinates`,
-used by both classes. Pinhole cameras take the exact edge-tangent formulas everywhere (bit-identical to
+batch. It is the one implementation of a lens's geometry: a :class:`Lens` is the validated value of one camera
+and maps through its own model of batch shape (), :attr:`Lens.model`. :meth:`CameraModel.of_cameras` builds
+the batch from rig cameras' lenses (every camera has one; the benchmark's centred square-pixel pinholes,
+:meth:`Lens.pinhole`, by :meth:`CameraModel.from_fov` from their stated FOVs and image sizes). The maths of the
+distortion models is in :func:`undistorted_directions` and :func:`distorted_coordinates`. Pinhole cameras take the exact edge-tangent formulas everywhere (bit-identical to
 before distortion existed); distorted ones take their projection: a point is in view when it projects
 inside the image and lies less than the lens's valid angle (:func:`valid_angle`) off the axis. The checked
 view frustum of the mount rules (probe rays, frustum corners) bounds the image's edge rays, its half-angles
@@ -54,15 +54,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import TYPE_CHECKING, Sequence
+from typing import Protocol, Sequence
 
 import numpy as np
 
 from rigopt.benchmark import BENCHMARK_IMAGE_SIZE, MAX_IMAGE_SIDE
 from rigopt.errors import RigoptError
-
-if TYPE_CHECKING:
-    from rigopt.rig.model import Camera
 
 #: Depths (m) below this count as this when margins divide by a point's depth.
 MIN_DEPTH = 1e-9
@@ -205,8 +202,7 @@ def undistorted_directions(xd, yd, distortion, k) -> tuple[np.ndarray, np.ndarra
     xd, yd : (...,) float, ((u - cx) / fx, (v - cy) / fy); distortion : (...,) str, broadcast (one of
     :data:`DISTORTION_COEFFICIENTS`); k : (..., 5) float coefficients in the model's order, zero-padded.
     Pinhole and radtan points come back at unit depth (z = 1); fisheye ones as unit vectors (z may be <= 0
-    beyond 90 degrees). The one implementation of the lens models' inverse, shared by :class:`Lens` and
-    :class:`CameraModel`.
+    beyond 90 degrees). The one implementation of the lens models' inverse.
     """
     xd, yd = np.asarray(xd, dtype=float), np.asarray(yd, dtype=float)
     distortion, k = np.asarray(distortion), np.asarray(k, dtype=float)
@@ -368,29 +364,26 @@ class Lens:
                 and abs(self.cy - self.height / 2) <= 1e-9 * self.height)
 
     # ------------------------------------------------------------------------------------------ mapping
+    # A lens is the batch model of one camera: every mapping below is :class:`CameraModel`'s, through :attr:`model`.
+
+    @cached_property
+    def model(self) -> "CameraModel":
+        """This lens as a :class:`CameraModel` of batch shape (), the one implementation of its geometry."""
+        return CameraModel.of_lens(self)
 
     def pixel_rays(self, pixels) -> np.ndarray:
         """(n, 3) float unit optical-frame rays (z along the axis, x right, y down) through pixels (n, 2)."""
-        pixels = np.atleast_2d(np.asarray(pixels, dtype=float))
-        x, y, z = undistorted_directions((pixels[:, 0] - self.cx) / self.fx, (pixels[:, 1] - self.cy) / self.fy,
-                                         self.distortion, self.padded_coefficients)
-        rays = np.stack([x, y, z], axis=1)
-        return rays / np.linalg.norm(rays, axis=1, keepdims=True)
+        return self.model.pixel_rays(np.atleast_2d(np.asarray(pixels, dtype=float)), frame="optical")
 
     def project(self, rays) -> np.ndarray:
         """(n, 2) float pixels of optical-frame directions ``rays`` (n, 3) (any length). Pinhole and radtan
         lenses need z > 0; fisheye lenses take any direction but the one straight behind."""
-        rays = np.atleast_2d(np.asarray(rays, dtype=float))
-        xd, yd = distorted_coordinates(rays[:, 0], rays[:, 1], rays[:, 2], self.distortion,
-                                       self.padded_coefficients)
-        return np.stack([self.fx * xd + self.cx, self.fy * yd + self.cy], axis=1)
+        return self.model.project(np.atleast_2d(np.asarray(rays, dtype=float)), frame="optical")
 
     def edge_angles(self) -> tuple[float, float, float, float]:
         """(left, right, top, bottom): radians from the optical axis to the rays through the midpoints of the
-        image's edges, taken on the principal point's row and column."""
-        pixels = np.array([[0.0, self.cy], [self.width, self.cy], [self.cx, 0.0], [self.cx, self.height]])
-        rays = self.pixel_rays(pixels)
-        return tuple(float(a) for a in np.arctan2(np.hypot(rays[:, 0], rays[:, 1]), rays[:, 2]))
+        image's edges, taken on the principal point's row and column (:meth:`CameraModel.edge_angles`)."""
+        return tuple(float(a) for a in self.model.edge_angles())
 
     @property
     def derived_hfov(self) -> float:
@@ -460,6 +453,13 @@ def _is_stated_pinhole(lens: Lens) -> bool:
 MAX_FRUSTUM_HALF_ANGLE_DEG = 80.0
 #: Points per image edge whose rays bound the frustum of a distorted lens (:meth:`CameraModel.side_angles`).
 EDGE_SAMPLES = 33
+
+
+class HasLens(Protocol):
+    """Anything with a :class:`Lens` (a rig's :class:`~rigopt.rig.model.Camera`): what the models of rig cameras
+    are built from, without this module knowing the rig."""
+
+    lens: Lens
 
 
 @dataclass(frozen=True, eq=False)
@@ -555,7 +555,7 @@ class CameraModel:
                    lens.padded_coefficients)
 
     @classmethod
-    def of_cameras(cls, cameras: Sequence["Camera"]) -> "CameraModel":
+    def of_cameras(cls, cameras: Sequence[HasLens]) -> "CameraModel":
         """The models of rig cameras (batch shape (c,)) from each camera's :attr:`~rigopt.rig.model.Camera.lens`.
         The one place that reads a rig camera's lens, so real lenses reach coverage, mount checks, refinement and
         the renderer. Benchmark pinholes (each lens stated by its FOV, :meth:`Lens.pinhole`) are built from their
@@ -565,20 +565,18 @@ class CameraModel:
         return cls.of_lenses([c.lens for c in cameras])
 
     @classmethod
-    def of_camera(cls, camera: "Camera") -> "CameraModel":
-        """The model of one rig camera (batch shape ())."""
-        if _is_stated_pinhole(camera.lens):
-            return cls.from_fov(camera.lens.hfov, camera.lens.image_size)
-        return cls.of_lens(camera.lens)
+    def of_camera(cls, camera: HasLens) -> "CameraModel":
+        """The model of one rig camera (batch shape ()): its lens's :attr:`Lens.model`."""
+        return camera.lens.model
 
     @classmethod
-    def rendered(cls, camera: "Camera", image_size) -> "CameraModel":
+    def rendered(cls, camera: HasLens, image_size) -> "CameraModel":
         """The model of one rig camera rendered at ``image_size`` (width, height) px, batch shape (): the
         centred pinhole of its FOV at that size for the benchmark's ideal pinhole, else its own lens
         :meth:`resized` to it. What the benchmark's renderer sees through and its tables record."""
         if camera.lens.is_ideal_pinhole:
-            return cls.from_fov(camera.fov, image_size)
-        return cls.of_lens(camera.lens).resized(image_size)
+            return cls.from_fov(camera.lens.hfov, image_size)
+        return camera.lens.model.resized(image_size)
 
     def lens(self, index=()) -> Lens:
         """The :class:`Lens` of the camera at ``index`` of the batch (``()`` for a single camera); image sizes

@@ -185,6 +185,19 @@ def test_a_mixed_batch_answers_each_camera_as_alone():
         assert batch.lens(k) == lens
 
 
+def test_a_lens_maps_through_its_own_batch_model_and_a_camera_reads_it():
+    """One lens API: a Lens is the batch model of one camera (Lens.model), its rays, projections and FOVs that
+    model's, and a rig camera's model is its lens's."""
+    for lens in LENSES:
+        pixels = random_pixels(lens, 50, seed=8)
+        optical = lens.model.pixel_rays(pixels, frame="optical")
+        np.testing.assert_array_equal(lens.pixel_rays(pixels), optical)
+        np.testing.assert_array_equal(lens.project(optical), lens.model.project(optical, frame="optical"))
+        assert lens.derived_hfov == float(lens.model.hfov) and lens.vfov == float(lens.model.vfov)
+        camera = Camera("C", np.zeros(3), np.eye(3), lens)
+        assert CameraModel.of_camera(camera) is lens.model
+
+
 def test_pinholes_given_as_lenses_are_the_from_fov_model_exactly():
     fovs, size = np.array([60.0, 90.0, 120.0]), (1280, 720)
     a = CameraModel.of_lenses([Lens.pinhole(f, size) for f in fovs])
