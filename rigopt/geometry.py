@@ -59,7 +59,6 @@ The module also holds two small pieces of plain geometry that are not rotations:
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 #: Reflection between the CARLA frame (y right) and ISO 8855 (y left); its own inverse.
 S_CARLA_ISO = np.diag([1.0, -1.0, 1.0])
@@ -70,8 +69,10 @@ R_CAM_OPTICAL = np.array([[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]])
 R_CAM_OPTICAL.flags.writeable = False
 
 
-def _rotations(rotation) -> Rotation:
+def _rotations(rotation) -> "Rotation":
     """The Rotation stack of matrices (..., 3, 3) float, flattened to (n,)."""
+    from scipy.spatial.transform import Rotation  # on first use: reading and comparing rigs needs no scipy
+
     r = np.asarray(rotation, dtype=float)
     return Rotation.from_matrix(r.reshape(-1, 3, 3))
 

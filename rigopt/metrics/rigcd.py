@@ -31,7 +31,6 @@ import numpy as np
 
 from rigopt.errors import RigoptError
 from rigopt.geometry import quaternion_angle, sum_of_squares
-from rigopt.metrics.pair_kernels import assign_pairs, pair_distances
 from rigopt.rig.model import FOV, POSITION, QUATERNION, Rig, camera_columns
 
 DEFAULT_ALPHA = 0.9
@@ -203,6 +202,8 @@ def match_pairs(pack_a: RigBatch, index_a, pack_b: RigBatch, index_b, alpha: flo
     assignments): values a dict of (P,) float arrays keyed rigcd, match, count, t, r, f; assignments, with
     ``keep_assignment``, a list of (rows (M,), cols (M,)) int camera indices per pair, else None.
     """
+    from rigopt.metrics.pair_kernels import assign_pairs, pair_distances  # numba, loaded when pairs are matched
+
     lt, lr, lf = lambdas
     index_a, index_b = np.asarray(index_a), np.asarray(index_b)
     n_pairs = len(index_a)
