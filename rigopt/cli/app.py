@@ -73,8 +73,7 @@ NO_TRAILER_HELP = "Lift the vehicle's optional trailer keep-out (a tractor unit 
 
 def mount_rules(min_height, no_trailer: bool):
     """The mount rules of the command line's --min-height and --no-trailer."""
-    from rigopt.mounting.practice import MountPractice
-    from rigopt.mounting.rules import MountRules
+    from rigopt.mounting.records import MountPractice, MountRules
 
     return MountRules(practice=MountPractice(min_height=min_height, lifted=("trailer",) if no_trailer else ()))
 

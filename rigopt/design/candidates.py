@@ -14,7 +14,7 @@ import numpy as np
 
 from rigopt.camera import CameraModel
 from rigopt.design.settings import CatalogueCamera, catalogue_of
-from rigopt.mounting.rules import MountRules
+from rigopt.mounting.records import MountRules
 from rigopt.errors import RigoptError
 from rigopt.geometry import rotation_from_yaw_pitch_roll
 from rigopt.mounting.candidates import body_fraction, clear_directions

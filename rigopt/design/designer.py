@@ -32,7 +32,8 @@ from rigopt.background import INLINE, Background
 from rigopt.camera import CameraModel
 from rigopt.design.naming import mount_name, unique
 from rigopt.mounting.practice import mounting_costs
-from rigopt.mounting.rules import RigCheck, check_rig
+from rigopt.mounting.records import RigCheck
+from rigopt.mounting.rules import check_rig
 from rigopt.coverage.matrix import rig_coverage_matrix
 from rigopt.coverage.visibility import visible_by
 from rigopt.design.candidates import CandidateSet, build_candidates

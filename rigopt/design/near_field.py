@@ -48,7 +48,7 @@ from rigopt.design.selection import (
 )
 from rigopt.design.settings import CatalogueCamera
 from rigopt.mounting.practice import mounting_costs
-from rigopt.mounting.rules import MountRules
+from rigopt.mounting.records import MountRules
 from rigopt.mounting.shapes import NEAR_FIELD_CLEAR_CONE_DEG
 from rigopt.quiet import HIGHS_OPTIONS, quiet_highs
 from rigopt.rig.model import Camera, Rig

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rigopt.camera import CameraModel, camera_frame_points, pinhole_half_tangents
-from rigopt.mounting.rules import MountRules
+from rigopt.mounting.records import MountRules
 from rigopt.mounting.shapes import surface_frame
 from rigopt.geometry import rotation_from_yaw_pitch_roll, symbolic_rotation_angle, symbolic_rotation_from_yaw_pitch
 from rigopt.rig.model import Camera, Rig

@@ -7,7 +7,7 @@ from dataclasses import dataclass, replace
 from typing import Sequence
 
 from rigopt.mounting.candidates import rig_body_share
-from rigopt.mounting.rules import RigCheck
+from rigopt.mounting.records import RigCheck
 from rigopt.design.problem import ReferenceRig
 from rigopt.design.selection import Selection
 from rigopt.design.settings import DesignSettings

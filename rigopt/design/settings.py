@@ -28,7 +28,7 @@ from rigopt.output import existing_file
 from rigopt.rig.model import Camera
 
 if TYPE_CHECKING:
-    from rigopt.mounting.rules import MountRules
+    from rigopt.mounting.records import MountRules
     from rigopt.coverage.measures import CoverageSettings
     from rigopt.metrics.drop_model import DropModel
 
@@ -40,7 +40,7 @@ def _design_coverage() -> CoverageSettings:
 
 
 def _mount_rules() -> MountRules:
-    from rigopt.mounting.rules import MountRules
+    from rigopt.mounting.records import MountRules
 
     return MountRules()
 

@@ -20,7 +20,7 @@ from rigopt.camera import CameraModel, Lens
 from rigopt.geometry import rotation_from_yaw_pitch_roll
 from rigopt.mounting.features import segments_hit_swings, trailer_swings
 from rigopt.mounting.practice import keep_out_boxes, segments_hit_boxes
-from rigopt.mounting.rules import MountRules
+from rigopt.mounting.records import MountRules
 from rigopt.mounting.sampling import DEFAULT_SPACING, sample_zone_points
 from rigopt.rig.model import Rig
 from rigopt.vehicle.model import Vehicle

@@ -31,16 +31,13 @@ Frames and units: ISO 8855 vehicle frame, metres; angles in degrees where named 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 
+from rigopt.mounting.records import MountPractice
 from rigopt.mounting.shapes import surface_frame
 from rigopt.vehicle.model import Vehicle
 from rigopt.vehicle.spec import HINGE_EDGES
-
-if TYPE_CHECKING:
-    from rigopt.mounting.practice import MountPractice
 
 #: Why each kind of fixture carries no camera.
 FIXTURE_REASONS = {

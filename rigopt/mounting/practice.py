@@ -17,74 +17,18 @@ And, for a whole rig (:func:`duplicates`): no two cameras duplicate each other (
 ``duplicate_distance`` m, optical axes within ``duplicate_angle_deg``), unless they share a module (a stereo
 pair is one on purpose).
 
-Frames: ISO 8855 vehicle frame, metres.
+Its settings are :class:`rigopt.mounting.records.MountPractice`. Frames: ISO 8855 vehicle frame, metres.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
 from rigopt.mounting import features
+from rigopt.mounting.records import DEFAULT_HOUSING, MountPractice
 from rigopt.rig.model import Rig
 from rigopt.vehicle.arches import wheel_name
 from rigopt.vehicle.model import SurfaceQuery, Vehicle
-
-#: The lowest lens height (m) when neither the rules nor the vehicle say otherwise.
-DEFAULT_MIN_HEIGHT = 0.5
-#: A camera housing (m): width along the surface's horizontal tangent, height, depth along its outward normal.
-DEFAULT_HOUSING = (0.08, 0.06, 0.06)
-
-
-@dataclass(frozen=True)
-class MountPractice:
-    """The practice rules' settings: ``min_height`` m (None: the vehicle's, else DEFAULT_MIN_HEIGHT),
-    ``enabled`` False switches every practice rule off (to measure what practice costs); ``wheel_clearance`` m
-    around each tyre (a fender camera above the arch, as on the benchmark's cars 8-17 cm from the tread, stays
-    allowed), ``lifted`` names of optional keep-outs switched off (e.g. ``("trailer",)`` for a tractor unit
-    driven solo, which lifts the trailer's swing too).
-
-    The body features (:mod:`rigopt.mounting.features`): ``feature_margin`` m, how close to a step's, a
-    fixture's or a door's box a lens counts as on it (a housing's lens sits 3 cm off the surface);
-    ``hinge_band`` m either side of a door's hinged edge; ``lip_band`` m beyond a wheel arch's edge (the
-    housing reaches 3-4 cm towards it, the lip's flange 1-2 cm more); the tyre-spray cone's
-    ``spray_elevation_deg`` (its axis above backwards), ``spray_half_angle_deg`` and ``spray_length`` m;
-    ``width_exempt_zones`` zones whose cameras do not count in the legal width (mirrors) and
-    ``width_allowance`` m how far other cameras may stick out beyond it (Regulation (EU) 1230/2012, Annex I,
-    Appendix 1, point 1(c): devices on the sides other than mirrors, up to 100 mm in total, are not counted in
-    the width; 0 refuses any protrusion); two cameras
-    duplicate each other within ``duplicate_distance`` m and ``duplicate_angle_deg``; ``features`` False
-    switches the body-feature rules, the trailer's swing and the duplicate rule off (the rules before them)."""
-
-    min_height: float | None = None
-    wheel_clearance: float = 0.05
-    lifted: tuple[str, ...] = ()
-    enabled: bool = True
-    feature_margin: float = 0.05
-    hinge_band: float = 0.10
-    lip_band: float = 0.05
-    spray_elevation_deg: float = 15.0
-    spray_half_angle_deg: float = 15.0
-    spray_length: float = 2.0
-    width_exempt_zones: tuple[str, ...] = ("mirror",)
-    width_allowance: float = 0.10
-    duplicate_distance: float = 0.5
-    duplicate_angle_deg: float = 10.0
-    features: bool = True
-
-    @property
-    def feature_rules(self) -> bool:
-        """Whether the body-feature rules, the trailer's swing and the duplicate rule apply."""
-        return self.enabled and self.features
-
-    def height_floor(self, vehicle: Vehicle) -> float:
-        """The minimum lens height (m) on ``vehicle``."""
-        if self.min_height is not None:
-            return self.min_height
-        given = vehicle.spec.min_lens_height
-        return DEFAULT_MIN_HEIGHT if given is None else given
-
 
 def on_wheels(vehicle: Vehicle, points, clearance: float) -> list[list[str]]:
     """For each point (n, 3) m: the wheels ('front-left wheel', ...) whose keep-out it is in."""

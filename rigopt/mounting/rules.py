@@ -1,5 +1,6 @@
 """The mount rules: where a camera may go on a vehicle, checked with python-fcl (the solids are in
-:mod:`rigopt.mounting.shapes`).
+:mod:`rigopt.mounting.shapes`; the rules' settings, :class:`MountRules`, and what a check finds, :class:`RigCheck`,
+in :mod:`rigopt.mounting.records`).
 
 A camera is valid on a vehicle when
   1. its lens is outside the body and at most ``max_distance`` from the surface;
@@ -38,54 +39,17 @@ collides with it.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
 from rigopt.mounting.features import trailer_swings
-from rigopt.mounting.practice import DEFAULT_HOUSING, MountPractice, duplicates, keep_out_boxes, practice_problems
+from rigopt.mounting.practice import duplicates, keep_out_boxes, practice_problems
+from rigopt.mounting.records import CameraCheck, MountRules, RaisedMount, RigCheck
 from rigopt.mounting.shapes import (box_object, collides, frustum_object, housing_object, post_object, probe_rays,
                                     swing_object)
 from rigopt.rig.model import Camera, Rig
-from rigopt.vehicle.model import Vehicle, Zone
-
-
-@dataclass(frozen=True)
-class MountRules:
-    """Tolerances of the mount checks; lengths in metres, ``frustum_margin`` a fraction of each half-angle."""
-
-    housing: tuple[float, float, float] = DEFAULT_HOUSING
-    max_distance: float = 0.05
-    penetration_tolerance: float = 0.01
-    near: float = 0.02
-    frustum_range: float = 1.0
-    frustum_margin: float = 0.5
-    practice: MountPractice = MountPractice()
-
-
-@dataclass(frozen=True)
-class CameraCheck:
-    """Outcome for one camera: ``distance_to_surface`` m (> 0 outside), ``zone`` (None outside every
-    zone), ``problems`` (empty when valid)."""
-
-    id: str
-    valid: bool
-    distance_to_surface: float
-    zone: str | None
-    problems: tuple[str, ...] = field(default_factory=tuple)
-
-
-@dataclass(frozen=True)
-class RigCheck:
-    """Outcome for a rig on a vehicle; ``valid`` when every camera is."""
-
-    rig: str
-    vehicle: str
-    cameras: tuple[CameraCheck, ...]
-
-    @property
-    def valid(self) -> bool:
-        return all(c.valid for c in self.cameras)
+from rigopt.vehicle.model import Vehicle
 
 
 def housing_fits(vehicle: Vehicle, feet, normals, rules: MountRules = MountRules()) -> np.ndarray:
@@ -98,17 +62,6 @@ def housing_fits(vehicle: Vehicle, feet, normals, rules: MountRules = MountRules
     return np.array([bool(np.linalg.norm(normal) > 0.5) and not collides(
         housing_object(foot, normal, forward, rules.housing, rules.penetration_tolerance), body)
         for foot, normal in zip(feet, normals)], dtype=bool)
-
-
-@dataclass(frozen=True)
-class RaisedMount:
-    """A camera on a raised zone's post: ``zone``, ``foot`` (3,) m where the post meets the surface,
-    ``axis`` (3,) the post's unit direction (the zone's normal), ``height`` m from the foot to the lens."""
-
-    zone: Zone
-    foot: np.ndarray
-    axis: np.ndarray
-    height: float
 
 
 def raised_mounts(vehicle: Vehicle, positions) -> list[RaisedMount | None]:

@@ -12,7 +12,8 @@ import trimesh
 
 from rigopt.errors import RigoptError
 from rigopt.mounting.practice import practical
-from rigopt.mounting.rules import MountRules, housing_fits, raised_mounts
+from rigopt.mounting.records import MountRules
+from rigopt.mounting.rules import housing_fits, raised_mounts
 from rigopt.mounting.shapes import collides, housing_object
 from rigopt.quiet import quiet_trimesh
 from rigopt.vehicle.model import Vehicle

@@ -7,15 +7,11 @@ Frames and units: vehicle frame (ISO 8855), metres. python-fcl is imported on fi
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 
 from rigopt.camera import CameraModel
+from rigopt.mounting.records import MountRules, RaisedMount
 from rigopt.rig.model import Camera
-
-if TYPE_CHECKING:
-    from rigopt.mounting.rules import MountRules, RaisedMount
 
 
 def _fcl():

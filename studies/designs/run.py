@@ -48,7 +48,7 @@ def ladder_settings(step: str):
     from dataclasses import replace
 
     from rigopt.design.settings import DesignSettings
-    from rigopt.mounting.practice import MountPractice
+    from rigopt.mounting.records import MountPractice
 
     one_set = DesignSettings(near_field=False)
     free = replace(one_set, max_body_fraction=None, symmetric=False, require="none")

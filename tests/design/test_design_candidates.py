@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rigopt.mounting.rules import MountRules
+from rigopt.mounting.records import MountRules
 from rigopt.design.candidates import CandidateSet, build_candidates
 from rigopt.errors import RigoptError
 from rigopt.vehicle.model import Vehicle

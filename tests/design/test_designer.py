@@ -17,7 +17,8 @@ import pytest
 
 from rigopt.coverage.measures import coverage_report
 from rigopt.coverage.regulations import parse_require, region_coverage
-from rigopt.mounting.practice import MountPractice, practice_problems
+from rigopt.mounting.practice import practice_problems
+from rigopt.mounting.records import MountPractice
 from rigopt.mounting.rules import check_rig
 from rigopt.coverage.matrix import rig_coverage_matrix
 from rigopt.design.designer import FIELD_EXTRA_CAMERAS, design_rig
@@ -411,8 +412,8 @@ def test_an_unseeable_field_point_is_named_with_the_field(box_car):
 @pytest.mark.slow
 def test_a_camera_may_slide_only_as_far_as_its_disc_stays_mountable(firetruck):
     from rigopt.design.refine import free_radii
-    from rigopt.mounting.practice import MountPractice, on_wheels
-    from rigopt.mounting.rules import MountRules
+    from rigopt.mounting.practice import on_wheels
+    from rigopt.mounting.records import MountPractice, MountRules
     from rigopt.mounting.sampling import sample_zone_points
 
     vehicle, reach = firetruck.vehicle, 0.3

@@ -18,8 +18,9 @@ import pytest
 from rigopt.errors import DataError
 from rigopt.geometry import rotation_from_yaw_pitch_roll
 from rigopt.mounting import features
-from rigopt.mounting.practice import MountPractice, duplicates, practical, practice_problems
-from rigopt.mounting.rules import MountRules, check_rig
+from rigopt.mounting.practice import duplicates, practical, practice_problems
+from rigopt.mounting.records import MountPractice, MountRules
+from rigopt.mounting.rules import check_rig
 from rigopt.mounting.sampling import sample_zone_points
 from rigopt.rig.model import Camera, Rig
 from rigopt.vehicle.model import Vehicle

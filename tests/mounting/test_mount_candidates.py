@@ -7,7 +7,7 @@ import pytest
 
 from rigopt.camera import Lens
 from rigopt.mounting.candidates import clear_directions, mount_candidates
-from rigopt.mounting.rules import MountRules
+from rigopt.mounting.records import MountRules
 
 
 def test_front_point_can_look_forward_not_backward(box_car):

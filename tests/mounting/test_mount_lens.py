@@ -8,7 +8,8 @@ import pytest
 
 from rigopt.camera import CameraModel, Lens
 from rigopt.mounting.candidates import clear_directions, probe_directions
-from rigopt.mounting.rules import MountRules, check_rig
+from rigopt.mounting.records import MountRules
+from rigopt.mounting.rules import check_rig
 from rigopt.mounting.shapes import frustum_vertices
 from rigopt.rig.model import Camera, Rig
 

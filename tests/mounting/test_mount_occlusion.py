@@ -17,8 +17,8 @@ import pytest
 from rigopt.camera import CameraModel, Lens
 from rigopt.geometry import rotation_from_yaw_pitch_roll
 from rigopt.mounting.candidates import body_fraction, clear_directions
-from rigopt.mounting.practice import MountPractice
-from rigopt.mounting.rules import MountRules, check_rig
+from rigopt.mounting.records import MountPractice, MountRules
+from rigopt.mounting.rules import check_rig
 from rigopt.mounting.shapes import collides, frustum_object, frustum_vertices
 from rigopt.rig.library import load_rig
 from rigopt.rig.model import Camera, Rig

@@ -13,7 +13,8 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from rigopt.mounting.rules import CameraCheck, MountRules, RigCheck, check_rig
+from rigopt.mounting.records import CameraCheck, MountRules, RigCheck
+from rigopt.mounting.rules import check_rig
 from rigopt.geometry import rotation_from_yaw_pitch_roll
 from rigopt.rig.model import Camera, Rig
 from rigopt.vehicle.model import Vehicle

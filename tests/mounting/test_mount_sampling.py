@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from rigopt.errors import RigoptError
-from rigopt.mounting.rules import MountRules
+from rigopt.mounting.records import MountRules
 from rigopt.mounting.sampling import sample_zone_points
 
 SPACING = 0.2

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from rigopt.geometry import rotation_from_yaw_pitch_roll
-from rigopt.mounting.rules import MountRules
+from rigopt.mounting.records import MountRules
 from rigopt.mounting.shapes import frustum_vertices, housing_object, surface_frame
 from rigopt.rig.model import Camera
 

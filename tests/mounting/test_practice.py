@@ -5,9 +5,9 @@ import numpy as np
 import pytest
 
 from rigopt.errors import DataError
-from rigopt.mounting.practice import (MountPractice, in_keep_outs, on_wheels, practical, practice_problems,
-                                      segments_hit_boxes)
-from rigopt.mounting.rules import MountRules, check_rig
+from rigopt.mounting.practice import in_keep_outs, on_wheels, practical, practice_problems, segments_hit_boxes
+from rigopt.mounting.records import MountPractice, MountRules
+from rigopt.mounting.rules import check_rig
 from rigopt.mounting.sampling import sample_zone_points
 from rigopt.rig.library import load_rig, rig_names
 from rigopt.rig.model import Camera, Rig

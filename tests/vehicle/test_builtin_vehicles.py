@@ -88,8 +88,7 @@ SOLO = {"R9"}
 
 @pytest.mark.parametrize("rig_name", rig_names())
 def test_library_rig_is_valid_on_its_vehicle(rig_name):
-    from rigopt.mounting.practice import MountPractice
-    from rigopt.mounting.rules import MountRules
+    from rigopt.mounting.records import MountPractice, MountRules
 
     rig = library_rig(rig_name)
     # the body-feature rules refuse some benchmark cameras: tests/mounting/test_practice.py lists which and why
@@ -102,8 +101,7 @@ def test_library_rig_is_valid_on_its_vehicle(rig_name):
 
 def test_r9_looks_into_a_coupled_trailer():
     """R9's cab-roof camera faces back over the fifth wheel: with a semi-trailer coupled it sees the trailer."""
-    from rigopt.mounting.practice import MountPractice
-    from rigopt.mounting.rules import MountRules
+    from rigopt.mounting.records import MountPractice, MountRules
 
     rig = library_rig("R9")
     rules = MountRules(practice=MountPractice(features=False))  # the fender cameras' width: test_practice.py
