@@ -25,13 +25,21 @@ def surface_frame(normal: np.ndarray, forward: np.ndarray) -> np.ndarray:
 
     The width axis is horizontal; on a horizontal surface it is perpendicular to ``forward`` (3,).
     """
-    width = np.cross([0.0, 0.0, 1.0], normal)
+    width = cross3((0.0, 0.0, 1.0), normal)
     if np.linalg.norm(width) < 1e-6:
-        width = np.cross(normal, forward)
+        width = cross3(normal, forward)
         if np.linalg.norm(width) < 1e-6:
-            width = np.cross(normal, [1.0, 0.0, 0.0])
+            width = cross3(normal, (1.0, 0.0, 0.0))
     width /= np.linalg.norm(width)
-    return np.stack([width, np.cross(normal, width), normal], axis=1)
+    return np.column_stack([width, cross3(normal, width), normal])
+
+
+def cross3(a, b) -> np.ndarray:
+    """(3,) float: the cross product of two 3-vectors, each component computed as ``np.cross`` computes it (to
+    the bit) without its array machinery (the mount checks take tens of thousands of surface frames)."""
+    a0, a1, a2 = (float(v) for v in a)
+    b0, b1, b2 = (float(v) for v in b)
+    return np.array([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
 
 
 def housing_object(foot: np.ndarray, normal: np.ndarray, forward: np.ndarray, size, sink: float = 0.0):
