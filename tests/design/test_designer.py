@@ -433,17 +433,14 @@ def test_the_naive_transfer_is_refined_as_the_design_is(firetruck):
     from rigopt.design.designer import mount_candidates, naive_transfer
 
     status = firetruck.result.comparisons.naive_refinement
-    assert status.startswith(("accepted", "rejected"))
+    assert status.startswith("accepted: IPOPT Solve_Succeeded")  # the default fire truck's, deterministic
     settings = firetruck.result.settings
     unrefined = naive_transfer(firetruck.vehicle, firetruck.reference, mount_candidates(firetruck.vehicle, settings),
                                settings)
     refined = firetruck.result.comparisons.naive_transfer.rig
     assert [c.id for c in refined.cameras] == [c.id for c in unrefined.cameras]
     before, after = weighted_rigcd(firetruck, unrefined), weighted_rigcd(firetruck, refined)
-    if status.startswith("accepted"):
-        assert after < before  # accepted only when it lowers the calibrated RigCD
-    else:
-        assert after == pytest.approx(before, abs=1e-12)
+    assert after < before  # accepted only when it lowers the calibrated RigCD
 
 
 @pytest.mark.slow
