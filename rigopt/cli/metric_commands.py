@@ -61,6 +61,7 @@ def rigcd_command(
     from rigopt.metrics.calibration import check_metric, load_weights
     from rigopt.metrics.drop_model import choose_model
     from rigopt.metrics.ranking import predict_transfer
+    from rigopt.metrics.view_overlap import view_overlap
     from rigopt.mounting.candidates import rig_body_share
 
     metric = check_metric(metric)
@@ -73,20 +74,23 @@ def rigcd_command(
     if weights is None and calibration.lifting is None:  # RigCD's unit-weight distance, the default drop
         unit = predict_transfer(rig_a, [rig_b], None)[0]
         p = replace(p, rigcd=unit.rigcd, match=unit.match)
+    overlap = view_overlap(rig_a, rig_b)
     _note_changes((rig_a, rig_b), changes)
     data = {"a": p.reference, "b": p.rig, **{k: v for k, v in p.to_dict().items() if k not in ("reference", "rig")},
             "weights": weights or f"{DEFAULT_WEIGHTS} (default)", "origin_changes": [c.as_dict() for c in changes],
-            "near_field_left_out": left_out}
+            "near_field_left_out": left_out, **_overlap_fields(overlap)}
     if as_json:
         print_json(data)
+        _warn_overlap([p], {p.rig: overlap})
         return
     distance = "unit weights" if weights is None and calibration.lifting is None else f"{calibration.name} weights"
     columns = [f"{metric} ({distance})", f"match ({distance})", "count", "t (m)", "r (rad)", "f (deg)",
-               f"predicted drop ({p.predictor})", "interval"]
+               f"predicted drop ({p.predictor})", "interval", f"sees of {p.reference}"]
     drop = "-" if p.predicted_drop is None else p.predicted_drop
     print_table(f"{'RigCD' if calibration.lifting is None else metric} {p.reference} -> {p.rig}", columns,
-                [[p.rigcd, p.match, p.count, p.t, p.r, p.f, drop, _interval(p)]])
+                [[p.rigcd, p.match, p.count, p.t, p.r, p.f, drop, _interval(p), _overlap_cell(overlap)]])
     _warn_prediction([p], calibration, model)
+    _warn_overlap([p], {p.rig: overlap})
 
 
 @app.command("rank")
@@ -105,23 +109,29 @@ def rank_command(
     from rigopt.metrics.calibration import load_weights
     from rigopt.metrics.drop_model import choose_model
     from rigopt.metrics.ranking import model_predictor, rank_candidates, rigcd_predictor
+    from rigopt.metrics.view_overlap import view_overlaps
     from rigopt.mounting.candidates import rig_body_share
 
     calibration = load_weights(weights or DEFAULT_WEIGHTS, metric)
     (reference, *others), changes, left_out = _comparable([ref, *candidates], vehicle)
     model = choose_model(predictor, reference, weights is not None or metric != "rigcd")
     ranked = rank_candidates(reference, others, calibration, model, rig_body_share)
+    overlaps = dict(zip((rig.name for rig in others), view_overlaps(reference, others).tolist()))
     _note_changes((reference, *others), changes)
     if as_json:
-        print_json([{**p.to_dict(), "near_field_left_out": left_out.get(p.rig, 0)} for p in ranked])
+        print_json([{**p.to_dict(), "near_field_left_out": left_out.get(p.rig, 0), **_overlap_fields(overlaps[p.rig])}
+                    for p in ranked])
+        _warn_overlap(ranked, overlaps)
         return
     by = rigcd_predictor(calibration) if model is None else model_predictor(model)
     print_table(f"Candidates ranked by predicted drop from {ref} ({by})",
-                ["rank", "rig", "predicted drop", "interval", f"{calibration.metric} ({calibration.name} weights)", "t (m)",
-                 "r (rad)", "f (deg)", "count", "extrapolates"],
-                [[k + 1, p.rig, p.predicted_drop, _interval(p), p.rigcd, p.t, p.r, p.f, p.count,
-                  "yes" if p.extrapolation else "-"] for k, p in enumerate(ranked)])
+                ["rank", "rig", "predicted drop", "interval", f"sees of {reference.name}",
+                 f"{calibration.metric} ({calibration.name} weights)", "t (m)", "r (rad)", "f (deg)", "count",
+                 "extrapolates"],
+                [[k + 1, p.rig, p.predicted_drop, _interval(p), _overlap_cell(overlaps[p.rig]), p.rigcd, p.t, p.r, p.f,
+                  p.count, "yes" if p.extrapolation else "-"] for k, p in enumerate(ranked)])
     _warn_prediction(ranked, calibration, model)
+    _warn_overlap(ranked, overlaps)
 
 
 def _comparable(names: List[str], vehicle: Optional[str]):
@@ -163,6 +173,34 @@ def _interval(p) -> str:
     if p.interval is None:
         return "-"
     return "uninformative" if not p.interval_informative else f"[{p.interval[0]:.2f}, {p.interval[1]:.2f}]"
+
+
+def _overlap_fields(overlap: float) -> dict:
+    """The JSON fields of a candidate's view overlap with the reference (:mod:`rigopt.metrics.view_overlap`):
+    ``view_overlap`` (null where the reference sees no direction of the grid) and ``low_view_overlap``."""
+    from rigopt.metrics.view_overlap import low_view_overlap
+
+    return {"view_overlap": overlap, "low_view_overlap": low_view_overlap(overlap)}
+
+
+def _overlap_cell(overlap: float) -> str:
+    """The view overlap's cell: '97 %', or '0 % LOW' below the threshold (:func:`_warn_overlap` says why)."""
+    from rigopt.metrics.view_overlap import low_view_overlap, percent
+
+    return f"{percent(overlap)} LOW" if low_view_overlap(overlap) else percent(overlap)
+
+
+def _warn_overlap(predictions, overlaps: dict) -> None:
+    """One warning line per prediction whose candidate sees less of the reference's view than
+    LOW_VIEW_OVERLAP (``overlaps``: {candidate name: view overlap}): its predicted drop, and so its rank, is not
+    to be read as good."""
+    from rigopt.metrics.view_overlap import LOW_VIEW_OVERLAP, low_overlap_text, low_view_overlap, percent
+
+    for p in predictions:
+        if low_view_overlap(overlaps[p.rig]):
+            typer.echo(f"rigopt: warning: {p.reference} -> {p.rig}: {low_overlap_text(p.reference, overlaps[p.rig])} "
+                       f"(view overlap below {percent(LOW_VIEW_OVERLAP)}, docs/metrics.md); do not read its rank or "
+                       "drop as good", err=True)
 
 
 def _warn_prediction(predictions, calibration, model=None) -> None:

@@ -4,6 +4,9 @@ Each case is (class, arguments, fragment): the command line after ``rigopt`` ({t
 that :func:`make_fixtures` fills, {repo} the checkout), and a piece of the one ``rigopt: error: ...`` line it must print. The
 table in docs/errors.md is written from these by ``run.py`` (through the installed console script), and
 tests/cli/test_bad_inputs.py runs each in-process and checks that the table says what rigopt says.
+
+WARNINGS holds the inputs a command takes but flags: it does its work, exits 0 and prints one ``rigopt: warning:
+...`` line holding the fragment (docs/errors.md's second table).
 """
 
 from __future__ import annotations
@@ -63,6 +66,7 @@ def make_fixtures(tmp: Path) -> dict[str, str]:
         "rig_null_id.json": RIG.replace("LOC", "[2.1, 0, 0.6]").replace('"id": "C"', '"id": null'),
         "rig_no_cameras.json": '{"vehicle_type": "v", "cameras": []}',
         "rig_fov_200.json": RIG.replace("LOC", "[0, 0, 1]").replace('"fov": 60', '"fov": 200'),
+        "rig_one_camera.json": RIG.replace("LOC", "[2.36, 0, 0.68]"),
         "rig_list.json": "[1, 2, 3]",
         "rig_nested.json": "[" * 100000 + "]" * 100000,
         "rig_beyond_float.json": RIG.replace("LOC", "[1e400, 0, 1]"),
@@ -163,6 +167,7 @@ def make_fixtures(tmp: Path) -> dict[str, str]:
         (tmp / folder).mkdir(exist_ok=True)
     _write_empty_waymo_table(tmp / "waymo_empty" / "camera_calibration.parquet")
     _write_inward_rig(tmp / "rig_inward.json")
+    _write_sky_rig(tmp / "rig_sky.json")
     load_vehicle("tt").mesh.export(tmp / "car.stl")
     _write_posed_meshes(load_vehicle("tt").mesh, tmp)
     env = {"RIGOPT_HOME": str(tmp / "home")}
@@ -226,6 +231,22 @@ def _write_inward_rig(path: Path) -> None:
     r1 = load_rig("R1")
     write_rig(Rig("R1_inward", r1.vehicle, tuple(replace(c, rotation=c.rotation @ rot_z(np.pi)) for c in r1.cameras)),
               path)
+
+
+def _write_sky_rig(path: Path) -> None:
+    """R1 with every camera pitched 80 degrees up: it sees the sky, none of what R1 sees."""
+    from dataclasses import replace
+
+    import numpy as np
+
+    from rigopt.geometry import rot_y
+    from rigopt.rig.library import load_rig
+    from rigopt.rig.model import Rig
+    from rigopt.rig.pccr_format import write_rig
+
+    r1 = load_rig("R1")
+    up = rot_y(-np.radians(80.0))  # about the camera's y (left): a negative angle lifts its optical axis
+    write_rig(Rig("R1_sky", r1.vehicle, tuple(replace(c, rotation=c.rotation @ up) for c in r1.cameras)), path)
 
 
 def _write_posed_meshes(mesh, tmp: Path) -> None:
@@ -675,4 +696,15 @@ CASES: list[tuple[str, list[str], str]] = [
      "not a drop model file"),
     ("design --objective of another reference", ["design", "--vehicle", "tt", "--ref", "R2", "--objective", "lss-R1",
                                                  "--out", f"{T}/dobj"], "fitted from R1"),
+]
+
+#: (class, arguments, fragment of the one warning line): inputs a command takes, exit 0, but flags.
+WARNINGS = [
+    # --- a candidate that sees little of what the reference sees (issue 44) ---
+    ("rank a rig whose cameras look at the sky", ["rank", "R3", f"{T}/rig_sky.json", "--ref", "R1"],
+     "see 0 % of what R1's see"),
+    ("rank a rig of one camera", ["rank", "R3", f"{T}/rig_one_camera.json", "--ref", "R1", "--predictor", "rigcd"],
+     "of what R1's see; the predictors were not calibrated on such rigs"),
+    ("rigcd a rig whose cameras look at the sky", ["rigcd", "R1", f"{T}/rig_sky.json", "--json"],
+     "see 0 % of what R1's see"),
 ]

@@ -1,5 +1,6 @@
 """Every bad input of the catalogue (studies/bad_inputs/cases.py) exits 2 with one ``rigopt: error:`` line
-that contains its fragment, and docs/errors.md shows exactly that line.
+that contains its fragment, and docs/errors.md shows exactly that line; every input it flags (its WARNINGS) exits 0
+with one ``rigopt: warning:`` line holding its fragment, shown in the page's second table.
 
 The cases run in-process through ``rigopt.cli.run`` (the console script's ``main`` minus the stdout
 diversion, which tests/cli/test_console_script.py checks in real processes); studies/bad_inputs/run.py runs
@@ -31,11 +32,16 @@ def _load_cases():
 
 CASES_MODULE = _load_cases()
 CASES = {name: (args, fragment) for name, args, fragment in CASES_MODULE.CASES}
+WARNINGS = {name: (args, fragment) for name, args, fragment in CASES_MODULE.WARNINGS}
+#: The heading of docs/errors.md's second table, the warnings.
+WARNINGS_HEADING = "\n## Warnings: "
 
 
-def documented() -> dict[str, str]:
-    """class -> message, from the table in docs/errors.md."""
-    rows = re.findall(r"^\| (.+?) \| `rigopt .*?` \| `(.*)` \|$", DOC.read_text(), flags=re.MULTILINE)
+def documented(table: str = "errors") -> dict[str, str]:
+    """class -> message, from the errors table (or the ``"warnings"`` table) in docs/errors.md."""
+    errors, _, warnings = DOC.read_text().partition(WARNINGS_HEADING)
+    rows = re.findall(r"^\| (.+?) \| `rigopt .*?` \| `(.*)` \|$", errors if table == "errors" else warnings,
+                      flags=re.MULTILINE)
     return dict(rows)
 
 
@@ -52,6 +58,8 @@ def test_the_catalogue_has_no_duplicate_classes():
 
 def test_the_docs_table_lists_every_class():
     assert set(documented()) == set(CASES)
+    assert set(documented("warnings")) == set(WARNINGS)
+    assert not set(CASES) & set(WARNINGS)
 
 
 #: The cases that need a design or a coverage report before their error (2-5 s each).
@@ -76,6 +84,23 @@ def test_bad_input(scratch, name, capsys, monkeypatch):
     assert out == ""
     shown = lines[-1].replace(str(tmp), "{tmp}").replace(str(REPO), "{repo}").replace("|", "/")
     assert documented()[name] == shown, "docs/errors.md is out of date: python studies/bad_inputs/run.py"
+
+
+@pytest.mark.parametrize("name", sorted(WARNINGS))
+def test_flagged_input(scratch, name, capsys, monkeypatch):
+    tmp, env = scratch
+    for key, value in env.items():
+        monkeypatch.setenv(key, value)
+    monkeypatch.chdir(tmp)
+    args, fragment = WARNINGS[name]
+    capsys.readouterr()
+    code = run([a.format(tmp=tmp, repo=REPO) for a in args])
+    _, err = capsys.readouterr()
+    warned = [line for line in err.splitlines() if line.startswith("rigopt: warning: ")]
+    assert code == 0, err
+    assert len(warned) == 1 and fragment in warned[0], err
+    shown = warned[0].replace(str(tmp), "{tmp}").replace(str(REPO), "{repo}").replace("|", "/")
+    assert documented("warnings")[name] == shown, "docs/errors.md is out of date: python studies/bad_inputs/run.py"
 
 
 def test_an_interrupt_is_one_line_and_exit_130(monkeypatch, capsys):

@@ -113,7 +113,7 @@ def test_rigcd_json_keys_and_the_joint_drop_without_weights():
     data = invoke_json("rigcd", "R3", "R6", "--json")
     assert set(data) == {"a", "b", "rigcd", "match", "count", "t", "r", "f", "predicted_drop", "interval",
                          "interval_informative", "linear_drop", "extrapolation", "fallback", "weights",
-                         "origin_changes", "near_field_left_out", "predictor"}
+                         "origin_changes", "near_field_left_out", "predictor", "view_overlap", "low_view_overlap"}
     assert (data["a"], data["b"], data["predictor"]) == ("R3", "R6", "RigCD (joint)")
     w = shipped_weights("joint")
     assert data["weights"] == "joint (default)" and data["fallback"] is False
@@ -185,7 +185,8 @@ def test_rank_json_is_sorted_with_documented_keys():
     rows = invoke_json("rank", "--ref", "R1", "R6", "R4", "R1-f", "--json")
     assert [set(r) for r in rows] == [{"reference", "rig", "predicted_drop", "interval", "interval_informative",
                                        "linear_drop", "rigcd", "match", "t", "r", "f", "count", "extrapolation",
-                                       "fallback", "near_field_left_out", "predictor"}] * 3
+                                       "fallback", "near_field_left_out", "predictor", "view_overlap",
+                                       "low_view_overlap"}] * 3
     assert sorted(r["rig"] for r in rows) == ["R1-f", "R4", "R6"]
     drops = [r["predicted_drop"] for r in rows]
     assert drops == sorted(drops)
