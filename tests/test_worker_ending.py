@@ -92,3 +92,31 @@ def test_sigterm_stops_a_design_with_one_line_and_no_output(tmp_path):
     assert process.returncode == 143
     assert stderr.strip().splitlines()[-1] == "rigopt: terminated" and "Traceback" not in stderr
     assert not out.exists()
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="signals as on Linux")
+def test_an_interrupted_render_says_how_to_resume_and_the_rerun_skips_what_was_finished(tmp_path):
+    """SIGTERM once the first of 12 scenes is finished: the stop line says to rerun the same command, and the rerun
+    keeps the finished scenes untouched (and says so) and renders the rest."""
+    from console import console_script
+
+    out = tmp_path / "bench"
+    parts = out / "R1" / "mini" / ".parts"
+    command = [str(console_script()), "bench", "generate", "--rigs", "R1", "--split", "mini", "--scenes", "12",
+               "--frames", "2", "--size", "64x36", "--out", str(out)]
+    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 120
+    while not list(parts.glob("*.json")) and time.monotonic() < deadline and process.poll() is None:
+        time.sleep(0.05)
+    process.send_signal(signal.SIGTERM)
+    _, stderr = process.communicate(timeout=60)
+    assert process.returncode == 143, stderr
+    last = stderr.strip().splitlines()[-1]
+    assert last.startswith("rigopt: terminated; to resume, rerun the same command") and str(out) in last
+    finished = {p.name: p.stat().st_mtime_ns for p in parts.glob("*.json")}
+    assert 1 <= len(finished) < 12
+    rerun = subprocess.run(command, capture_output=True, text=True, timeout=300)
+    assert rerun.returncode == 0, rerun.stderr
+    assert f"resumed: {len(finished)} of the 12 (rig, scene) pairs were rendered before and kept" in rerun.stderr
+    assert len(list(parts.glob("*.json"))) == 12
+    assert all((parts / name).stat().st_mtime_ns == mtime for name, mtime in finished.items())

@@ -38,12 +38,13 @@ def _terminate(signum, frame) -> None:
 
 
 def _interrupted() -> int:
-    """Say how the run was stopped (SIGTERM or Ctrl-C) and return its exit code."""
-    if _terminated:
-        print("rigopt: terminated", file=sys.stderr)
-        return TERMINATED
-    print("rigopt: interrupted", file=sys.stderr)
-    return INTERRUPTED
+    """Say how the run was stopped (SIGTERM or Ctrl-C) and, where the command can resume, how (its
+    :func:`~rigopt.cli.app.resumable` hint); return its exit code."""
+    from rigopt.cli.app import RESUME_HINTS
+
+    how = f"; to resume, {RESUME_HINTS[-1]}" if RESUME_HINTS else ""
+    print(f"rigopt: {'terminated' if _terminated else 'interrupted'}{how}", file=sys.stderr)
+    return TERMINATED if _terminated else INTERRUPTED
 
 
 class _CStdoutToStderr:

@@ -33,6 +33,15 @@ def print_json(data) -> None:
     print(json.dumps(json_ready(data), indent=2))
 
 
+#: How the running command resumes after an interrupt, said on the line that reports it (:func:`resumable`).
+RESUME_HINTS: list[str] = []
+
+
+def resumable(how: str) -> None:
+    """Say, should the command be interrupted from here on, how to resume it (e.g. 'rerun the same command: ...')."""
+    RESUME_HINTS.append(how)
+
+
 def note(message: str) -> None:
     """One ``rigopt: note: ...`` line on stderr: something the command did that the user should know."""
     typer.echo(f"rigopt: note: {message}", err=True)

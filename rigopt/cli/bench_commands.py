@@ -8,7 +8,7 @@ from typing import List, Optional
 import typer
 
 from rigopt.benchmark import SYNTHETIC_IMAGE_SIZE
-from rigopt.cli.app import PICTURE_SUFFIXES, app, console, print_next, status_console
+from rigopt.cli.app import PICTURE_SUFFIXES, app, console, note, print_next, resumable, status_console
 from rigopt.cli.parsing import image_size_text, parse_image_size
 from rigopt.errors import RigoptError
 
@@ -75,6 +75,8 @@ def generate_command(
     ego_body_of = ego_body_lookup(lambda message: status_console.print(f"[yellow]warning:[/] {message}"))
 
     scene_list = split_scenes(split, scenes, frames, seed)
+    resumable(f"rerun the same command: the scenes rendered so far in {out} are kept and skipped")
+    kept = []
     with Progress(console=status_console, transient=True) as progress:
         task = progress.add_task("rendering", total=len(loaded) * len(scene_list))
 
@@ -82,10 +84,15 @@ def generate_command(
             progress.update(task, description=message)
             if "rendering " in message or "skipped" in message or message.endswith("rendered"):
                 progress.advance(task)
+            if "skipped" in message:
+                kept.append(message)
 
         roots = generate_split(loaded, scene_list, out, width_height, render_rig, ego_body_of, step,
                                lambda message: status_console.print(f"rigopt: note: {message}", markup=False,
                                                                     highlight=False, soft_wrap=True), ray, workers)
+    if kept:
+        note(f"resumed: {len(kept)} of the {len(loaded) * len(scene_list)} (rig, scene) pairs were rendered before "
+             "and kept")
     console.print("wrote " + ", ".join(str(r) for r in roots))
     print_next(f"rigopt bench show {out} --rig {roots[0].parent.name} --split {split} --out sample.png (a sample's "
                "images with their boxes)",

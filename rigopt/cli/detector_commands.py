@@ -11,7 +11,8 @@ from typing import List, Optional
 
 import typer
 
-from rigopt.cli.app import app, console, note, note_fallback, print_json, print_table, status_console
+from rigopt.cli.app import (app, console, note, note_fallback, print_json, print_table, resumable,
+                            status_console)
 from rigopt.cli.bench_commands import bench_app
 from rigopt.cli.metric_commands import METRIC_HELP, PREDICTOR_HELP
 from rigopt.errors import RigoptError
@@ -90,6 +91,7 @@ def train_command(
     config = configured(model_config(model, size), epochs)
     resolve_device(device)
     runs = runs if runs is not None else data / "runs"
+    resumable(f"rerun the same command: training goes on from the last finished epoch in {runs}")
     with training_bar(f"{config.family} on {rig}") as step:
         run = train_on(data, rig, config, runs, device, seed, step)
     if run.steps_now == 0:
@@ -179,6 +181,8 @@ def matrix_command(
     config = configured(model_config(model, size), epochs)
     resolve_device(device)
     names = [n.strip() for text in [*rigs, *(more or [])] for n in text.split(",") if n.strip()]
+    resumable(f"rerun the same command: finished results in {out} are kept, training goes on from the last "
+              "finished epoch")
     with training_bar(f"{config.family} matrix") as step:
         transfer_matrix(data, names, config, out, runs, device, seed, ray,
                         lambda message: console.print(message), step, workers)
@@ -334,6 +338,7 @@ def _validate_shipped(measured_rigs: list, ref: str, family: str, calibration, d
     if len(set(names)) != len(names):
         raise RigoptError(f"rig names must differ from each other: {names}")
     workers = workers or os.cpu_count() or 1
+    resumable(f"rerun the same command: the renderings finished so far are kept in {cache or default_cache()}")
     with status_console.status("validating") as status:
         measured = measure([r for _, r in rigs], detector, cache, device, workers, status.update, protocol)
     predictions = predict_transfer(reference, [r for _, r in rigs], calibration, drop_model, rig_body_share)

@@ -34,7 +34,9 @@ Outputs are written whole or not at all (`rigopt/output.py`): a folder is built 
 and renamed into place when complete; a file is written beside its target and renamed over it. A failure or
 Ctrl-C (exit 130, `rigopt: interrupted`) or SIGTERM (exit 143, `rigopt: terminated`) leaves nothing, or the
 previous complete output, and ends the command's worker processes at once (a worker whose command is killed
-ends too). An existing non-empty
+ends too). Where the command can resume, the line says how (`rigopt: interrupted; to resume, rerun the same
+command: the renderings finished so far are kept in CACHE` for `validate`; `bench generate`, `bench train` and
+`bench matrix` likewise), and the rerun says what it kept. An existing non-empty
 output folder is refused unless `--force`, which replaces it whole. `bench generate` and `bench matrix` are
 resumable instead: their `--out` may exist and is added to; each image is written whole, a scene counts once its
 part file exists, and the split's tables are replaced whole, so they only ever describe complete scenes.
