@@ -1,5 +1,6 @@
 """``rigopt rigs`` (the built-in library), ``rigopt import FORMAT PATH`` and ``rigopt export`` (docs/formats.md):
-one command each way over the format registry (``rigopt.rig.formats.FORMATS``)."""
+one command each way over the format registry (``rigopt.rig.formats.registry.FORMATS``); their help on which
+format takes which option, and which formats write, comes from the light ``rigopt.rig.formats.catalogue``."""
 
 from __future__ import annotations
 
@@ -12,6 +13,8 @@ import typer
 from rigopt.cli.app import app, console, note, print_json, print_next, print_table, status_console
 from rigopt.cli.parsing import parse_image_size, parse_origin_offset
 from rigopt.errors import RigoptError
+from rigopt.rig.formats.catalogue import (AXLE_HEIGHT, CALIBRATION, CAMERAS, IMAGE_SIZE, LIST, LOG, RAW_LENS,
+                                          SCENE, SEGMENT, SPECS, ImportOption, taking, writing)
 
 
 @app.command("rigs")
@@ -127,16 +130,33 @@ def _print_listing(rows: list[dict], as_json: bool, title: str) -> None:
                                  for r in rows])
 
 
-#: The import options each takes, for the check that a format takes what it is given: option -> request field.
-IMPORT_OPTIONS = {"--calibration": "calibration", "--list": "calibration", "--image-size": "image_sizes",
-                  "--log": "log", "--scene": "scene", "--segment": "segment", "--cameras": "cameras",
-                  "--raw-lens": "raw_lens", "--axle-height": "axle_height"}
+def _listed(specs) -> str:
+    """``a (its summary), b (...) or c``."""
+    names = [f"{s.name} ({s.summary})" for s in specs]
+    return f"{', '.join(names[:-1])} or {names[-1]}"
+
+
+def _option_help(option: ImportOption, defaults: str = "") -> str:
+    """``option``'s help after the formats that take it (``nuscenes, dgp: ...``)."""
+    return f"{', '.join(s.name for s in taking(option))}: {option.help}{defaults}."
+
+
+def _image_size_defaults() -> str:
+    """`` (nuscenes 1600x900, per channel: 1600x900,CAM_BACK=1440x900; dgp 1936x1216)``."""
+    sizes = [f"{s.name} {s.image_size}" + (f", per channel: {s.image_size},{s.channel_size}" if s.channel_size else "")
+             for s in taking(IMAGE_SIZE)]
+    return f" ({'; '.join(sizes)})"
+
+
+FORMAT_HELP = f"The file's format (docs/formats.md): {_listed(SPECS.values())}."
+EXPORT_FORMAT_HELP = f"{_listed(writing())}."
+EXPORT_OUT_HELP = (f"Folder ({', '.join(s.name for s in writing() if s.suffixes is None)}) or file "
+                   f"({', '.join(s.suffixes[0] for s in writing() if s.suffixes is not None)}) to write.")
 
 
 @app.command("import")
 def import_command(
-    format_name: str = typer.Argument(..., metavar="FORMAT", help="The file's format: nuscenes, argoverse1, "
-                                      "argoverse2, dgp, waymo, opencv, urdf or carla (docs/formats.md)."),
+    format_name: str = typer.Argument(..., metavar="FORMAT", help=FORMAT_HELP),
     path: Path = typer.Argument(..., help="The calibration file or folder (each format's is in docs/formats.md)."),
     out: Optional[Path] = typer.Option(None, "--out", help=OUT_HELP),
     vehicle: Optional[str] = typer.Option(None, help="The rigopt vehicle the rig is on (default: the format's name; "
@@ -144,46 +164,37 @@ def import_command(
     name: Optional[str] = typer.Option(None, help="The rig's name (default: the log's, scene's, segment's or file's)."),
     origin: Optional[str] = typer.Option(None, help=ORIGIN_HELP),
     origin_offset: Optional[str] = typer.Option(None, "--origin-offset", help=ORIGIN_OFFSET_HELP),
-    calibration: Optional[int] = typer.Option(None, help="nuscenes, dgp, waymo: take the K-th distinct calibration "
-                                                         "(0-based; --list)."),
-    list_: bool = typer.Option(False, "--list", help="nuscenes, dgp, waymo: list the distinct calibrations with "
-                                                     "their logs, files or segments."),
-    image_size: Optional[str] = typer.Option(None, help="nuscenes, dgp: image size WIDTHxHEIGHT where the files give "
-                                                        "none (nuscenes 1600x900, per channel: 1600x900,CAM_BACK="
-                                                        "1440x900; dgp 1936x1216)."),
-    log: Optional[str] = typer.Option(None, help="nuscenes: take the calibration this log used (logfile or token)."),
-    scene: Optional[str] = typer.Option(None, help="nuscenes: take the calibration this scene used (name or token)."),
-    segment: Optional[str] = typer.Option(None, help="waymo: take this segment's calibration "
-                                                     "(key.segment_context_name)."),
-    cameras: Optional[str] = typer.Option(None, help="argoverse1: ring (the seven ring cameras, default) or all (and "
-                                                     "the two stereo cameras)."),
-    raw_lens: bool = typer.Option(False, "--raw-lens", help="argoverse1: keep the lenses' radial distortion (radtan "
-                                                            "k1, k2, 0, 0, k3) instead of the undistorted pinholes."),
-    axle_height: Optional[float] = typer.Option(None, help="argoverse1: the rear axle's height above the ground in "
-                                                           "metres, by which positions are raised (default 0.328, "
-                                                           "the Ford Fusion Hybrid's tyre radius)."),
+    calibration: Optional[int] = typer.Option(None, CALIBRATION.flag, help=_option_help(CALIBRATION)),
+    list_: bool = typer.Option(False, LIST.flag, help=_option_help(LIST)),
+    image_size: Optional[str] = typer.Option(None, IMAGE_SIZE.flag,
+                                             help=_option_help(IMAGE_SIZE, _image_size_defaults())),
+    log: Optional[str] = typer.Option(None, LOG.flag, help=_option_help(LOG)),
+    scene: Optional[str] = typer.Option(None, SCENE.flag, help=_option_help(SCENE)),
+    segment: Optional[str] = typer.Option(None, SEGMENT.flag, help=_option_help(SEGMENT)),
+    cameras: Optional[str] = typer.Option(None, CAMERAS.flag, help=_option_help(CAMERAS)),
+    raw_lens: bool = typer.Option(False, RAW_LENS.flag, help=_option_help(RAW_LENS)),
+    axle_height: Optional[float] = typer.Option(None, AXLE_HEIGHT.flag, help=_option_help(AXLE_HEIGHT)),
     force: bool = typer.Option(False, "--force", help=IMPORT_FORCE_HELP),
     as_json: bool = typer.Option(False, "--json", help="Print JSON instead of a summary."),
 ):
     """Read a rig from another format's calibration and write it as a rig file (rigopt's, the benchmark's JSON).
 
-    Formats: nuscenes (calibration tables), argoverse1, argoverse2, dgp (DDAD), waymo (v2 Parquet, v1 TFRecord),
-    opencv (Kalibr camchain), urdf, carla (spawn list). Each format's options are marked with its name."""
-    from rigopt.rig.formats import ImportRequest, find_format
+    Each format's options are marked with its name."""
+    from rigopt.rig.formats.registry import ImportRequest, find_format
 
     fmt = find_format(format_name)
-    given = {"--calibration": calibration is not None, "--list": list_, "--image-size": image_size is not None,
-             "--log": log is not None, "--scene": scene is not None, "--segment": segment is not None,
-             "--cameras": cameras is not None, "--raw-lens": raw_lens, "--axle-height": axle_height is not None}
-    foreign = [option for option, used in given.items() if used and IMPORT_OPTIONS[option] not in fmt.options
-               and not (option == "--list" and fmt.listing is not None)]
+    # Each format-bound option's value as parsed (None or False: not given).
+    values = {CALIBRATION: calibration, LIST: list_, IMAGE_SIZE: image_size, LOG: log, SCENE: scene,
+              SEGMENT: segment, CAMERAS: cameras, RAW_LENS: raw_lens, AXLE_HEIGHT: axle_height}
+    foreign = [o.flag for o, value in values.items()
+               if value is not None and value is not False and o not in fmt.spec.options]
     if foreign:
-        takes = sorted(o for o, f in IMPORT_OPTIONS.items() if f in fmt.options and (o != "--list" or fmt.listing))
+        takes = sorted(o.flag for o in fmt.spec.options)
         raise RigoptError(f"{', '.join(foreign)}: not an option of {format_name} (it takes "
                           f"{', '.join(takes) or 'none beyond --out, --vehicle, --name, --origin'}); drop "
                           f"{'them' if len(foreign) > 1 else 'it'}")
-    sizes = parse_image_sizes(image_size or fmt.image_size) if "image_sizes" in fmt.options else None
-    if sizes is not None and format_name != "nuscenes" and set(sizes) != {None}:
+    sizes = parse_image_sizes(image_size or fmt.spec.image_size) if IMAGE_SIZE in fmt.spec.options else None
+    if sizes is not None and fmt.spec.channel_size is None and set(sizes) != {None}:
         raise RigoptError(f"--image-size {image_size}: {format_name} takes one WIDTHxHEIGHT for every camera")
     request = ImportRequest(path, name, vehicle, None, calibration, sizes, log, scene, segment, cameras or "ring",
                             raw_lens, axle_height)
@@ -198,9 +209,8 @@ def import_command(
 @app.command("export")
 def export_command(
     rig: str = typer.Argument(..., help="Library rig name or rig JSON file."),
-    format_name: str = typer.Option(..., "--format", help="nuscenes (a folder of tables), urdf, opencv (Kalibr "
-                                                          "camchain YAML) or carla (spawn list JSON)."),
-    out: Path = typer.Option(..., "--out", help="Folder (nuscenes) or file (.urdf, .yaml, .json) to write."),
+    format_name: str = typer.Option(..., "--format", help=EXPORT_FORMAT_HELP),
+    out: Path = typer.Option(..., "--out", help=EXPORT_OUT_HELP),
     force: bool = typer.Option(False, "--force", help="Replace an existing --out."),
     perception: bool = typer.Option(False, "--perception",
                                     help="Write only the perception cameras (the ones a detector is fed; e.g. a "
@@ -212,13 +222,13 @@ def export_command(
     centre) when rigopt knows the rig's vehicle, and the conversion is noted; otherwise they are written
     unchanged, with a warning."""
     from rigopt.output import atomic_file, atomic_folder, check_out_file, check_out_folder
-    from rigopt.rig.formats import find_format
+    from rigopt.rig.formats.registry import find_format
     from rigopt.rig.library import load_rig
     from rigopt.rig.model import RigOrigin
     from rigopt.vehicle.placement import convert_origin, known_vehicle
 
     fmt = find_format(format_name, writing=True)
-    suffixes = fmt.suffixes
+    suffixes = fmt.spec.suffixes
     if suffixes is None:
         out = check_out_folder(out, force=force)
     else:
@@ -231,7 +241,7 @@ def export_command(
         loaded = loaded.perception()
     vehicle = known_vehicle(loaded)
     if vehicle is not None:
-        loaded, change = convert_origin(loaded, vehicle, RigOrigin(fmt.origin))
+        loaded, change = convert_origin(loaded, vehicle, RigOrigin(fmt.spec.origin))
         if change is not None:
             note(change.describe())
     exported = fmt.write(loaded)

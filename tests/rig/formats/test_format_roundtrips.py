@@ -11,7 +11,7 @@ import pytest
 from in_process import run_rigopt
 from rigopt.camera import Lens
 from rigopt.errors import RigoptError
-from rigopt.rig.formats import export_rig
+from rigopt.rig.formats.registry import export_rig
 from rigopt.rig.library import load_rig
 from rigopt.rig.model import Camera, Rig, RigOrigin
 
