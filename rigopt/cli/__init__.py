@@ -115,8 +115,11 @@ def run(argv: list[str] | None = None) -> int:
 
     import typer
 
+    from rigopt.cli.app import RESUME_HINTS
+
     # click's exceptions, wherever this typer takes click from (click itself, or its own copy)
     click = importlib.import_module(typer.BadParameter.__module__)
+    RESUME_HINTS.clear()  # a hint is the running command's (in-process runs follow one another)
     try:
         result = app(args=argv, prog_name="rigopt", standalone_mode=False)
     except RigoptError as error:
