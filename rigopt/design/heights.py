@@ -60,7 +60,8 @@ def search_heights(rig: Rig, matched: np.ndarray, reference: Rig, vehicle: Vehic
     within ``radius`` m, under ``settings``' zones, mount rules and body share; ``meets_requirements(rig)``
     says whether a moved rig still meets the design's coverage requirements. Returns the rig, its moved cameras
     renamed after their new mounts (:mod:`rigopt.design.naming`), and the moves."""
-    points, _, zones = sample_zone_points(vehicle, HEIGHT_SEARCH_SPACING, settings.zones, rules=settings.rules)
+    points, _, zones = sample_zone_points(vehicle, HEIGHT_SEARCH_SPACING, settings.zones, rules=settings.rules,
+                                          near=(rig.positions[:len(matched)], radius))
     cameras, moves = list(rig.cameras), []
     for k, r in enumerate(np.asarray(matched, dtype=int)):
         camera, target = cameras[k], float(reference.cameras[r].position[2])

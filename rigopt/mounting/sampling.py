@@ -23,16 +23,28 @@ DEFAULT_SPACING = 0.10
 
 
 def sample_zone_points(vehicle: Vehicle, spacing: float = DEFAULT_SPACING, zones=None, seed: int = 0,
-                       rules: MountRules = MountRules()):
+                       rules: MountRules = MountRules(), near: tuple[np.ndarray, float] | None = None):
     """Evenly spread surface samples of the zones (about ``spacing`` m apart).
 
     Returns points (n, 3) lens positions, normals (n, 3), zone names (n,) str; samples whose lens would
     sit nearest to another zone's surface (at edges), or whose housing would sink into the body (in
     hollows), are dropped. Raised zones (``raised_max`` > 0) are sampled only when named in ``zones``: their
     points are lifted above the surface (see :func:`_raised_points`) and their normals are the posts' axes.
+
+    ``near`` (positions (k, 3) m, radius m): only the samples within the radius of one of the positions are
+    checked and returned, in the same order: the checks are per point, so these are the whole set's points
+    near them, found for a fraction of the work; none is then an answer, not an error.
     """
     points, normals, names, raised = _zone_samples(vehicle, spacing, zones, seed, rules)
-    keep = _mountable(vehicle, points, normals, names, raised, rules, zones)
+    if near is not None:
+        positions, radius = near
+        close = np.zeros(len(points), dtype=bool)
+        for position in np.atleast_2d(positions):
+            close |= np.linalg.norm(points - position, axis=1) <= radius
+        points, normals, names = points[close], normals[close], names[close]
+        if not close.any():
+            return points, normals, names
+    keep = _mountable(vehicle, points, normals, names, raised, rules, zones, required=near is None)
     return points[keep], normals[keep], names[keep]
 
 
@@ -144,13 +156,14 @@ def _zone_samples(vehicle: Vehicle, spacing: float, zones, seed: int, rules: Mou
     return np.concatenate(points), np.concatenate(normals), np.array(names), raised
 
 
-def _mountable(vehicle: Vehicle, points, normals, names, raised, rules: MountRules, zones) -> np.ndarray:
+def _mountable(vehicle: Vehicle, points, normals, names, raised, rules: MountRules, zones,
+               required: bool = True) -> np.ndarray:
     """(n,) bool: the samples the mount checks will place in the same zone (near edges the nearest surface of
     the lens can be a neighbouring face with another normal), at the intended distance, with the housing
     fitting, where mounting practice allows a lens (:func:`rigopt.mounting.practice.practice_problems`: off the
     wheels, high enough, out of the keep-outs, off steps, door frames, fixtures, arch lips and tyre spray,
     within the legal width, out of the tilt-cab arc and the trailer's swing, inside the wiped area). Raises
-    when none is."""
+    when none is, if ``required``."""
     if len(points) == 0:
         raise RigoptError(f"no mount point was sampled on {vehicle.name}'s zones: the spacing is wider than the "
                           "zones themselves; lower --spacing (the default is sized to the vehicle)")
@@ -163,6 +176,8 @@ def _mountable(vehicle: Vehicle, points, normals, names, raised, rules: MountRul
     fitting = agrees.copy()
     # off wheels, high enough, out of the keep-outs and off the features practice refuses (steps, door frames...)
     agrees &= practical(vehicle, points, rules.practice, rules.housing, surface)
+    if not required:
+        return agrees
     floor = rules.practice.height_floor(vehicle)
     if fitting.any() and not agrees.any() and rules.practice.enabled and points[fitting, 2].max() < floor:
         raise RigoptError(f"no mount point of {vehicle.name} is as high as the minimum lens height {floor:.2f} m "

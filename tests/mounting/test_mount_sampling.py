@@ -69,3 +69,18 @@ def test_unknown_zone_name_raises(box_car):
 def test_non_positive_spacing_raises(box_car, spacing):
     with pytest.raises(RigoptError, match="spacing"):
         sample_zone_points(box_car, spacing)
+
+
+def test_samples_near_given_positions_are_the_whole_sets_points_there(box_car):
+    """``near`` checks only the samples around the positions: the answer is exactly the whole set's points within
+    the radius, in the same order; positions far from every zone give none, without an error."""
+    points, normals, names = sample_zone_points(box_car, 0.05)
+    positions, radius = points[[3, len(points) // 2]] + 0.01, 0.2
+    close = (np.linalg.norm(points - positions[0], axis=1) <= radius) | (
+        np.linalg.norm(points - positions[1], axis=1) <= radius)
+    near = sample_zone_points(box_car, 0.05, near=(positions, radius))
+    assert 0 < close.sum() < len(points)
+    for got, whole in zip(near, (points, normals, names)):
+        np.testing.assert_array_equal(got, whole[close])
+    nothing = sample_zone_points(box_car, 0.05, near=(np.array([[100.0, 0.0, 0.0]]), radius))
+    assert [len(a) for a in nothing] == [0, 0, 0]
