@@ -1,5 +1,6 @@
-"""Start-up speed of the CLI: wall time of ``rigopt --help`` and ``rigopt design --help`` (the installed console
-script, median of several runs), beside a bare ``python -c pass``, and which modules ``import rigopt.cli`` loads.
+"""Start-up speed of the CLI: wall time of ``rigopt --help``, ``rigopt design --help`` and ``rigopt rigs`` (the
+installed console script, median of several runs), beside a bare ``python -c pass``, and which modules
+``import rigopt.cli`` loads.
 
 Usage: python benchmarks/help_speed.py [--runs 7]
 """
@@ -33,7 +34,7 @@ def main() -> None:
     script = Path(sys.executable).parent / "rigopt"
     rigopt = str(script) if script.is_file() else shutil.which("rigopt")
     rows = [("python -c pass", [sys.executable, "-c", "pass"]), ("rigopt --help", [rigopt, "--help"]),
-            ("rigopt design --help", [rigopt, "design", "--help"])]
+            ("rigopt design --help", [rigopt, "design", "--help"]), ("rigopt rigs", [rigopt, "rigs"])]
     for label, command in rows:
         print(f"{label:24s} {median_seconds(command, args.runs):.3f} s (median of {args.runs})")
     probe = f"import sys, rigopt.cli; print(sorted(m for m in {HEAVY!r} if m in sys.modules))"
