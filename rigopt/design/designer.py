@@ -257,10 +257,13 @@ def design_rig(vehicle: Vehicle | str, references: ReferenceRig | Sequence[Refer
         tuple(summarise(rig, vehicle, rigs, calibration, near.requirements, near.settings) for rig in compare_with),
         naive_refinement)
     widened = tuple((rigs[0].cameras[k].id, float(perception.widen[k])) for k in np.flatnonzero(perception.widen > 1.0))
+    stand_ins = tuple((camera.id, rigs[0].cameras[r].id)
+                      for camera, r in zip(perception.design.rig.cameras, perception.matched))
     return DesignResult(near.design, selected.milp, perception.refinement, comparisons, float(reference_coverage),
                         vehicle, references, calibration, near.settings, time.perf_counter() - start,
                         selected.symmetry_fallback, regions, near.fields_fallback, near.stage, widened,
-                        near.settings.near_field and selected.near_field_mirrored, perception.height_moves)
+                        near.settings.near_field and selected.near_field_mirrored, perception.height_moves,
+                        stand_ins=stand_ins)
 
 
 def by_name(vehicle, references, calibration):

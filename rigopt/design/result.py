@@ -125,12 +125,16 @@ class DesignResult:
     """(reference camera id, factor): the reference cameras no mount keeps within the pose tolerance, with the
     factor their tolerance was widened by (inf: matched without it)."""
     near_field_mirrored: bool = False
+    """Whether the near-field cameras were placed in mirrored pairs (with the perception cameras or, under
+    ``perception_symmetric=False``, without them)."""
     height_moves: tuple = ()
     """The height search's moves (:class:`rigopt.design.heights.HeightMove`), in camera order."""
     drop_model: DropModel | None = None
     """The drop model whose predictions the summaries carry (:func:`predicted_by`), None for RigCD's."""
-    """Whether the near-field cameras were placed in mirrored pairs (with the perception cameras or, under
-    ``perception_symmetric=False``, without them)."""
+    stand_ins: tuple[tuple[str, str], ...] = ()
+    """(perception camera id, reference camera id): the first reference's camera each perception camera was
+    designed for (the MILP's matching, its pose kept near that camera's under the pose tolerance), in camera order.
+    RigCD's own matching of the final rig (the report's ``matched_reference_camera``) may pair them otherwise."""
 
 
 def repredicted(summary: RigSummary | None, references: Sequence[Rig], calibration: Calibration,

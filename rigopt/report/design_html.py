@@ -27,6 +27,16 @@ def _distortion_text(lens: dict) -> str:
     return f"{lens['distortion']} " + ", ".join(f"{k:.4g}" for k in lens["coefficients"])
 
 
+def _designed_for_text(camera: dict) -> str:
+    """The reference camera a perception camera was designed for and how far its pose is from it, e.g.
+    ``CAM_SIDE_LEFT: height +0.03 m, pitch +0, yaw -5, FOV +0 deg; 4.03 m apart``; '-' for the others."""
+    s = camera.get("stands_in_for")
+    if s is None:
+        return "-"
+    return (f"{s['id']}: height {s['height_m']:+.2f} m, pitch {s['pitch_deg']:+.0f}, yaw {s['yaw_deg']:+.0f}, "
+            f"FOV {s['fov_deg']:+.0f} deg; {s['lenses_apart_m']:.2f} m apart")
+
+
 def _match_text(camera: dict) -> str:
     match = camera.get("matched_reference_camera")
     if match is None and camera.get("role") == "near_field":
@@ -209,14 +219,15 @@ def render_design_html(summary: dict, figures: dict[str, bytes], scene: str | No
         "<h2>Cameras</h2>",
         table(["camera", "zone", f"x, y, z (m, {frame})", "yaw, pitch, roll (deg; yaw > 0 left, pitch > 0 up)",
                "hfov", "image (px)", "fx (px)", "distortion", "lens hFOV x vFOV",
-               "matched reference camera (t m, r rad, f deg)", "zone cost", "tyre spray"],
+               "designed for (its pose against that camera's)", "RigCD's matching (t m, r rad, f deg)",
+               "zone cost", "tyre spray"],
               [[escape(c["id"]), escape(c["zone"] or "-"),
                 escape(", ".join(f"{v:.2f}" for v in c["position"])),
                 escape(", ".join(f"{v:.1f}" for v in c["yaw_pitch_roll_deg"])),
                 num(c["fov"], 1, "°"), escape(f"{c['lens']['width']}x{c['lens']['height']}"),
                 num(c["lens"]["fx"], 1, ""), escape(_distortion_text(c["lens"])),
-                escape(f"{c['lens']['hfov_deg']:.1f}° x {c['lens']['vfov_deg']:.1f}°"), escape(_match_text(c)),
-                num(c.get("zone_cost"), 2, ""), escape(c.get("spray") or "-")]
+                escape(f"{c['lens']['hfov_deg']:.1f}° x {c['lens']['vfov_deg']:.1f}°"), escape(_designed_for_text(c)),
+                escape(_match_text(c)), num(c.get("zone_cost"), 2, ""), escape(c.get("spray") or "-")]
                for c in summary["cameras"]], numeric_from=4),
         breakdown_note(summary),
         f'<p class="note">Positions and angles in this report: {escape(frame)} (x forward, y left, z up). The rig '

@@ -48,7 +48,7 @@ def rig_mounting_cost(rig: Rig, vehicle) -> float:
     return float(mounting_costs(vehicle, [c.zone for c in rig.cameras], rig.positions).sum())
 
 
-def camera_rows(rig: Rig, reference: Rig, pairs, vehicle=None) -> list[dict]:
+def camera_rows(rig: Rig, reference: Rig, pairs, vehicle=None, stand_ins=()) -> list[dict]:
     """Each designed camera for an engineer: id (where it is mounted and looks), zone, lens, its pose in the
     report's frame (``position`` m and ``yaw_pitch_roll_deg``: ISO 8855, x forward, y left, z up, measured
     from the ground below the rear axle's centre, :func:`rigopt.coverage.packaging.report_origin`, or from the
@@ -56,14 +56,18 @@ def camera_rows(rig: Rig, reference: Rig, pairs, vehicle=None) -> list[dict]:
     it is matched to by RigCD (unit weights) with that pair's t (m), r (rad), f (deg) (``pairs``:
     RigCDBreakdown.pairs, (reference id, rig id), of the perception cameras, :func:`perception_breakdown`: a
     near-field camera has none); with the ``vehicle``, its zone's mounting ``zone_cost`` and
-    its tyre ``spray`` exposure (high / low). ``rig`` is in the vehicle-centre frame (the design's); CARLA's
-    frame appears only in the rig file."""
+    its tyre ``spray`` exposure (high / low). ``stand_ins``: (camera id, reference id) of the designer's own
+    pairing (:attr:`rigopt.design.result.DesignResult.stand_ins`); each such camera's ``stands_in_for`` gives the
+    reference camera and how far its pose is from it: height above the ground, pitch, yaw (wrapped to +-180) and
+    FOV, this camera's minus the reference's, and the lenses' distance apart, each in its own vehicle's centre
+    frame. ``rig`` is in the vehicle-centre frame (the design's); CARLA's frame appears only in the rig file."""
     from rigopt.coverage.packaging import report_origin
     from rigopt.geometry import yaw_pitch_roll_from_rotation
     from rigopt.metrics.rigcd import camera_costs
     from rigopt.mounting.practice import mounting_costs, spray_exposure
 
     partner = {b: a for a, b in pairs}
+    designed_for = dict(stand_ins)
     by_id = {c.id: c for c in reference.cameras}
     origin = report_origin(vehicle).point if vehicle is not None else np.zeros(3)
     angles = np.rad2deg(np.stack(yaw_pitch_roll_from_rotation(rig.rotations), axis=-1))
@@ -84,8 +88,24 @@ def camera_rows(rig: Rig, reference: Rig, pairs, vehicle=None) -> list[dict]:
             t, r, f = (float(v.item()) for v in camera_costs(ref.position[None], ref.rotation[None], [ref.fov],
                                                      camera.position[None], camera.rotation[None], [camera.fov]))
             row["matched_reference_camera"] = {"id": ref.id, "t_m": t, "r_rad": r, "f_deg": f}
+        if camera.id in designed_for:
+            row["stands_in_for"] = _pose_apart(camera, by_id[designed_for[camera.id]])
         rows.append(row)
     return rows
+
+
+def _pose_apart(camera, reference) -> dict:
+    """How far ``camera``'s pose is from ``reference``'s (each in its own vehicle's centre frame, z up from the
+    ground): the reference's id, height (m), pitch, yaw (wrapped to +-180) and FOV (deg) of the camera minus the
+    reference's, and the lenses' distance apart (m)."""
+    from rigopt.geometry import yaw_pitch_roll_from_rotation
+
+    (yaw, pitch, _), (ref_yaw, ref_pitch, _) = (np.rad2deg(np.ravel(yaw_pitch_roll_from_rotation(r)))
+                                                for r in (camera.rotation, reference.rotation))
+    return {"id": reference.id, "height_m": float(camera.position[2] - reference.position[2]),
+            "pitch_deg": float(pitch - ref_pitch), "yaw_deg": float((yaw - ref_yaw + 180.0) % 360.0 - 180.0),
+            "fov_deg": float(camera.fov - reference.fov),
+            "lenses_apart_m": float(np.linalg.norm(camera.position - reference.position))}
 
 
 def packaging_rows(rig: Rig, vehicle) -> list[dict]:
@@ -181,7 +201,7 @@ def design_dict(result: DesignResult, rig_file: Path | None) -> dict:
                    "refine_status": result.refinement.status, "candidates": milp.n_candidates,
                    "offered_to_milp": milp.n_offered, "repairs": milp.repairs, "seconds": result.seconds,
                    "near_field": near_field_dict(result.near_field)},
-        "cameras": camera_rows(design.rig, reference, breakdown.pairs, result.vehicle),
+        "cameras": camera_rows(design.rig, reference, breakdown.pairs, result.vehicle, result.stand_ins),
         "packaging": packaging_rows(design.rig, result.vehicle),
         "symmetry": symmetry_dict(result),
         "roles": {"perception": len(design.rig) - design.rig.near_field_count,

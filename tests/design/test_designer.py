@@ -512,3 +512,13 @@ def test_a_near_field_choice_for_another_symmetry_is_made_again(box_car):
     fresh, _, _ = designer._near_field_stage(box_car, front_reference(box_car).rig, (), None, settings, "none",
                                              lambda message: None)
     assert camera_values(stage.rig) == camera_values(fresh.rig)
+
+
+@pytest.mark.slow
+def test_each_perception_camera_names_the_reference_camera_it_was_designed_for(firetruck):
+    """The designer's own pairing reaches the result: every perception camera, in order, with one of R1's cameras
+    each (eight for eight), whatever RigCD's matching of the final rig says."""
+    result = firetruck.result
+    perception = [c.id for c in result.design.rig.cameras if c.role == "perception"]
+    assert [camera for camera, _ in result.stand_ins] == perception
+    assert sorted(reference for _, reference in result.stand_ins) == sorted(c.id for c in firetruck.reference.cameras)

@@ -56,6 +56,20 @@ def test_camera_rows_without_a_vehicle_stay_at_the_vehicle_centre(rig):
     assert rows[0]["position"] == pytest.approx([2.04, 0.0, 1.0])
 
 
+def test_a_camera_states_the_reference_camera_it_was_designed_for_and_its_pose_against_it(car, rig):
+    """The designer's own pairing (stand-ins) beside RigCD's matching: here F stands in for a reference camera 0.3 m
+    lower, turned 170 deg (its yaw gap wraps to -150) and 10 deg wider, whatever RigCD pairs; L stands in for none."""
+    reference = Rig("ref", "vehicle.test.reportcar", (Camera.pinhole(
+        "R_BACK", np.array([-2.0, 0.0, 0.7]), rotation_from_yaw_pitch_roll(*np.deg2rad([170.0, -4.0, 0.0])), 80.0),))
+    rows = camera_rows(rig, reference, [], car, stand_ins=[("F", "R_BACK")])
+    designed = rows[0]["stands_in_for"]
+    assert designed["id"] == "R_BACK"
+    assert designed["height_m"] == pytest.approx(0.3) and designed["fov_deg"] == pytest.approx(10.0)
+    assert designed["yaw_deg"] == pytest.approx(-150.0) and designed["pitch_deg"] == pytest.approx(-6.0)
+    assert designed["lenses_apart_m"] == pytest.approx(np.hypot(4.04, 0.3))
+    assert "stands_in_for" not in rows[1] and rows[0]["matched_reference_camera"] is None
+
+
 def test_the_report_names_its_frame_and_where_its_origin_lies(car):
     assert frame_dict(car) == {"frame": FRAME, "origin_from_vehicle_centre_m": pytest.approx([-1.3, 0.0, 0.0])}
 
