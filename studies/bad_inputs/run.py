@@ -62,6 +62,27 @@ atomic write of the same target removes every such sibling whose process id no l
 finds no process), and puts back a previous output that was set aside (`.NAME.partial-PID.old`) when the
 target itself is missing. A partial of a running process is left alone.
 
+## Answered in the output, not by an error
+
+Some inputs are right but were easy to misread; the command now says what they mean where it answers:
+
+- A design's camera names say where a camera is mounted and where it looks (`CAM_FENDER_FRONT_LEFT_TO_BACK_LEFT`),
+  not which reference camera it replaces: `rigopt design` prints each perception camera beside the reference
+  camera it was designed for, with its height, pitch, yaw and FOV against that camera's and how far apart the
+  lenses are (report.json `stands_in_for`), and notes where RigCD's own matching of the final rig pairs a camera
+  otherwise (the fire truck from R1: two cameras, `CAM_FENDER_FRONT_LEFT_TO_BACK_LEFT` designed for
+  `CAM_FENDER_BACK_LEFT`, matched by RigCD to `CAM_SIDE_LEFT`); the pose kept near the reference is height, pitch,
+  yaw and lens, not place (README).
+- A mesh's unit: `vehicle add` hints a scale with the length it gives (`which looks like centimetres (4.18 m
+  long): add --scale 0.01`) and, where another unit is plausible too, that one with its length, so a hint can be
+  checked against the real vehicle before it is taken.
+- `validate --data` of a rig on the reference's own vehicle is measured (it was refused as "rig names must
+  differ"): the measured rig and the reference are not compared again as hand-designed rigs.
+- A rig exported to nuScenes is written from the rear axle, as nuScenes' readers assume; rigopt's nuScenes reader
+  takes the rear axle as the file's origin itself (docs/formats.md, "Origins on export"), so reading it back needs
+  no `--origin`.
+- `rank` and `rigcd` flag a candidate that sees little of what the reference sees (the second table below).
+
 ## The catalogue
 
 The table is written by `studies/bad_inputs/run.py`, which runs each case through the installed console script
