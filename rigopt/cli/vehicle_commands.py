@@ -86,7 +86,9 @@ def vehicle_show_command(
     out: Path = typer.Option(..., "--out", help="Picture to write: .png (or .pdf, .svg, .jpg)."),
     rig: Optional[str] = typer.Option(None, "--rig", help="Draw this rig's cameras and frustums too."),
 ):
-    """Draw top and side views of a vehicle with its zones coloured (and a rig's cameras)."""
+    """Draw top and side views of a vehicle with its zones coloured (and a rig's cameras), measured in the reports'
+    frame (ISO 8855 from the ground below the rear axle's centre)."""
+    from rigopt.coverage.packaging import report_origin
     from rigopt.output import atomic_file, check_out_file
     from rigopt.report.vehicle_figures import write_vehicle_figure
     from rigopt.rig.library import load_rig
@@ -100,7 +102,7 @@ def vehicle_show_command(
         drawn, change = place_rig(loaded, vehicle, refuse_inside=False)
         note_vehicle(loaded, vehicle, change)
     with atomic_file(out) as work:
-        write_vehicle_figure(vehicle, work, drawn)
+        write_vehicle_figure(vehicle, work, drawn, report_origin(vehicle))
     console.print(f"wrote {out}")
 
 

@@ -218,3 +218,32 @@ def test_the_pictures_draw_the_cameras_where_the_tables_put_them(car, rig):
     (centred,) = regions_figure(fields, ring_report(rig, car), rig).axes  # the default: the vehicle centre
     assert np.allclose(_plotted(centred, "o")[:, 1], rig.positions[:, 0])
     assert centred.get_ylabel() == "x forward (m), from the vehicle centre"
+
+
+def test_vehicle_show_report_json_and_the_packaging_sheet_put_a_camera_at_the_same_coordinates(monkeypatch, tmp_path):
+    """One frame everywhere: R1 on the etron drawn by ``rigopt vehicle show`` (the figure it draws, caught on its way
+    to the file) has every camera where report.json's camera table and the packaging sheet put it, from the rear
+    axle."""
+    import rigopt.report.vehicle_figures as figures
+    from in_process import run_rigopt
+
+    from rigopt.rig.library import load_rig
+    from rigopt.vehicle.library import load_vehicle
+
+    drawn = []
+
+    def keep(vehicle, path, rig=None, datum=figures.CENTRE_DATUM):
+        drawn.append(figures.vehicle_figure(vehicle, rig, datum))
+        figures.Path(path).write_bytes(b"picture")  # the file the command publishes
+        return figures.Path(path)
+
+    monkeypatch.setattr(figures, "write_vehicle_figure", keep)
+    assert run_rigopt("vehicle", "show", "etron", "--rig", "R1", "--out", tmp_path / "etron.png").returncode == 0
+    etron, r1 = load_vehicle("etron"), load_rig("R1")
+    table = [row["position"] for row in camera_rows(r1, r1, [], etron)]
+    sheet = [row["position_m"] for row in packaging_rows(r1, etron)]
+    top, side = drawn[0].axes[:2]
+    assert np.allclose(table, sheet)
+    assert np.allclose(_plotted(top, "o"), np.array(table)[:, :2])
+    assert np.allclose(_plotted(side, "o"), np.array(table)[:, ::2])
+    assert "rear axle" in top.get_xlabel() and not np.allclose(np.array(table)[:, 0], r1.positions[:, 0])
