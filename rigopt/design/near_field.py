@@ -9,15 +9,18 @@ the body. This stage chooses the near_field cameras of a design, given its perce
     subject to sum_c sees_cq x_c >= 1            every required point q: each field point at each of its
                                                  test-object heights, and the near ring around the body
                at most one camera per mount point and per clashing pair (a fisheye at a perception camera's
-               mount shares its housing: the two are one camera module)
+               mount shares its housing: the two are one camera module), and of two that would duplicate
+               each other (the same lens, close and looking the same way: mounting practice's rule)
                x_c = x_mirror(c)                 (symmetric designs: mirrored pairs or the centreline)
                x binary
 
 Candidates are the catalogue's fisheyes (default :func:`fisheye_190`: 190 deg, equidistant Kannala-Brandt) on
-the vehicle's mount points, facing every NEAR_FIELD_YAW_STEP deg of yaw at NEAR_FIELD_PITCHES_DEG (down to
-straight down), whose central cone (a CLEAR_CONE_DEG pinhole) is clear of the body: a surround-view fisheye sees
-its own body at its edges, which is why it is mounted at the outermost points. ``m_c`` is the relative mounting
-cost (:func:`rigopt.mounting.practice.mounting_costs`). The MILP has a work limit, never a clock. Afterwards the
+the vehicle's mount points (never on a windscreen's or rear window's outside), facing every NEAR_FIELD_YAW_STEP
+deg of yaw at NEAR_FIELD_PITCHES_DEG (down to straight down), whose central cone (a CLEAR_CONE_DEG pinhole) is
+clear of the body: a surround-view fisheye sees its own body at its edges, which is why it is mounted at the
+outermost points. ``m_c`` is the relative mounting cost (:func:`near_field_costs`): the zone's and the tyre
+spray's, plus one panel's off the places production surround view uses (mirrors, grille, tailgate, rear roof
+line), so that of the fewest fisheyes that see what is asked, those at production spots are chosen. The MILP has a work limit, never a clock. Afterwards the
 fields are checked densely (every ``DENSE_SPACING`` m) and unseen points join the requirements of another round.
 The near ring is asked only where some candidate sees it (a body without mounts at its rear cannot see behind
 it); its other points are reported (``NearFieldDesign.ring_unseeable``).
@@ -47,6 +50,7 @@ from rigopt.design.selection import (
     essential_requirements,
 )
 from rigopt.design.settings import CatalogueCamera
+from rigopt.errors import RigoptError
 from rigopt.mounting.practice import mounting_costs
 from rigopt.mounting.records import MountRules
 from rigopt.mounting.shapes import NEAR_FIELD_CLEAR_CONE_DEG
@@ -77,6 +81,15 @@ NEAR_FIELD_RANGE = 35.0
 CLASH_DISTANCE = 0.10
 #: Rounds of the dense field check.
 DENSE_ROUNDS = 3
+#: Where production surround view mounts its fisheyes: the mirror bases or arms, the grille or badge, the tailgate
+#: or number plate, the rear roof line (zone names, as the built-in vehicles and ``vehicle add`` name them).
+SURROUND_VIEW_ZONES = ("mirror", "bumper_front", "bumper_rear", "roof_rear")
+#: Extra mounting cost of a near-field fisheye anywhere else, in units of an ordinary panel's (1): with the fewest
+#: cameras first, it decides between mounts that see as much.
+OFF_SPOT_COST = 1.0
+#: Glass no near-field fisheye is mounted on the outside of (a surround-view camera behind a windscreen would see
+#: the dashboard; on it, it sits in the wipers' sweep).
+GLASS_ZONES = ("windshield_front", "windshield_rear")
 
 
 def fisheye_190() -> CatalogueCamera:
@@ -129,10 +142,35 @@ def near_field_points(vehicle: Vehicle, presets: tuple[RegionPreset, ...], lifte
 
 def near_field_candidates(vehicle: Vehicle, spacing: float, symmetric: bool, rules: MountRules = MountRules(),
                           catalogue=None, zones=None) -> CandidateSet:
-    """The near-field candidates on ``vehicle``'s mount points (see the module docstring)."""
+    """The near-field candidates on ``vehicle``'s mount points (see the module docstring), on ``zones`` (None: every
+    zone the perception cameras may use) less the glass (GLASS_ZONES)."""
     yaws = np.arange(-180.0, 180.0, NEAR_FIELD_YAW_STEP)
-    return build_candidates(vehicle, catalogue or (fisheye_190(),), spacing, yaws, NEAR_FIELD_PITCHES_DEG, zones,
-                            rules, MAX_BODY_FRACTION, symmetric, clear_lens=Lens.pinhole(CLEAR_CONE_DEG))
+    catalogue = catalogue or (fisheye_190(),)
+    # the cone the mount check clears (rigopt.mounting.shapes.checked_model) has each camera's image aspect: the
+    # tallest catalogue image's clears them all
+    tallest = max((c.lens.image_size for c in catalogue), key=lambda size: size[1] / size[0])
+    return build_candidates(vehicle, catalogue, spacing, yaws, NEAR_FIELD_PITCHES_DEG,
+                            near_field_zones(vehicle, zones), rules, MAX_BODY_FRACTION, symmetric,
+                            clear_lens=Lens.pinhole(CLEAR_CONE_DEG, tallest))
+
+
+def near_field_zones(vehicle: Vehicle, zones=None) -> tuple[str, ...]:
+    """The zones a near-field fisheye may sit on: ``zones`` (None: the vehicle's zones that are sampled without being
+    named, those on the body's surface) less GLASS_ZONES."""
+    asked = zones if zones is not None else [z.name for z in vehicle.zones if not z.raised_max]
+    allowed = tuple(name for name in dict.fromkeys(asked) if name not in GLASS_ZONES)
+    if not allowed:
+        raise RigoptError(f"the zones {sorted(set(asked))} of {vehicle.name} are glass, where no near-field fisheye "
+                          "is mounted; allow a zone of the body (--zones), or design without near-field cameras")
+    return allowed
+
+
+def near_field_costs(vehicle: Vehicle, zones, points) -> np.ndarray:
+    """(n,) float: the mounting cost of a near-field fisheye at each of ``points`` (n, 3) m in ``zones`` (n,): the
+    zone's and the tyre spray's (:func:`rigopt.mounting.practice.mounting_costs`) plus OFF_SPOT_COST off the
+    places production surround view uses (SURROUND_VIEW_ZONES)."""
+    off_spot = ~np.isin(np.asarray(zones, dtype=str), SURROUND_VIEW_ZONES)
+    return mounting_costs(vehicle, zones, points) + OFF_SPOT_COST * off_spot
 
 
 @dataclass(frozen=True)
@@ -154,10 +192,11 @@ class NearFieldDesign:
 
 def select_near_field(sees: np.ndarray, mount: np.ndarray, mount_points: np.ndarray, mount_cost: np.ndarray,
                       mirror: np.ndarray | None = None, max_nodes: int = DEFAULT_MAX_NODES,
-                      labels=None) -> tuple[np.ndarray, str, float]:
+                      labels=None, duplicates: np.ndarray | None = None) -> tuple[np.ndarray, str, float]:
     """The MILP of the module docstring: (chosen (k,) int, status, relative gap). sees (n, q) bool; mount (n,) int
-    into mount_points (m, 3) m; mount_cost (n,) float; mirror (n,) int or None. Raises DesignInfeasible when some
-    point no candidate sees, or no selection meets every point."""
+    into mount_points (m, 3) m; mount_cost (n,) float; mirror (n,) int or None; duplicates (d, 2) int pairs of
+    candidates of which at most one may be chosen (:func:`duplicate_pairs`), or None. Raises DesignInfeasible when
+    some point no candidate sees, or no selection meets every point."""
     import cvxpy as cp
 
     n = sees.shape[0]
@@ -174,6 +213,10 @@ def select_near_field(sees: np.ndarray, mount: np.ndarray, mount_points: np.ndar
     groups = _mount_groups(mount, clashes)
     if groups.shape[0]:
         constraints.append(groups @ x <= 1)
+    if duplicates is not None and len(duplicates):
+        rows = np.repeat(np.arange(len(duplicates)), 2)
+        pairs = sparse.csr_matrix((np.ones(rows.size), (rows, np.ravel(duplicates))), shape=(len(duplicates), n))
+        constraints.append(pairs @ x <= 1)
     if mirror is not None:
         first = np.flatnonzero(np.arange(n) < mirror)
         if len(first):
@@ -190,6 +233,25 @@ def select_near_field(sees: np.ndarray, mount: np.ndarray, mount_points: np.ndar
                                "of the others; allow more zones or a finer --spacing")
     status = "optimal" if problem.status == cp.OPTIMAL else "node_limit"
     return np.flatnonzero(x.value > 0.5), status, _gap(problem)
+
+
+def duplicate_pairs(candidates: CandidateSet, index: np.ndarray, practice) -> np.ndarray:
+    """(d, 2) int positions in ``index`` of the candidate pairs that would duplicate each other by mounting practice
+    (:func:`rigopt.mounting.practice.duplicates`: the same lens, lenses within ``practice.duplicate_distance`` m and
+    optical axes within ``practice.duplicate_angle_deg``); none when the practice's feature rules are off."""
+    if not practice.feature_rules:
+        return np.zeros((0, 2), dtype=int)
+    positions = candidates.positions[index]
+    pairs = cKDTree(positions).query_pairs(practice.duplicate_distance, output_type="ndarray")
+    if not len(pairs):
+        return np.zeros((0, 2), dtype=int)
+    i, j = pairs[:, 0], pairs[:, 1]
+    forwards = candidates.rotations[index][:, :, 0]
+    lenses = candidates.lens[index]
+    apart = np.linalg.norm(positions[i] - positions[j], axis=1)
+    angle = np.rad2deg(np.arccos(np.clip(np.einsum("ij,ij->i", forwards[i], forwards[j]), -1.0, 1.0)))
+    same = (lenses[i] == lenses[j]) & (apart <= practice.duplicate_distance) & (angle <= practice.duplicate_angle_deg)
+    return pairs[same]
 
 
 @dataclass(frozen=True)
@@ -231,14 +293,15 @@ def choose_near_field(vehicle: Vehicle, presets: tuple[RegionPreset, ...], spaci
     if ring_unseeable:
         progress(f"near field: {len(ring_unseeable)} near-ring point(s) no candidate sees are left out")
         points, sees = points.subset(~unseeable), sees[:, ~unseeable]
-    cost = mounting_costs(vehicle, candidates.mount_zones[candidates.mount[index]], candidates.positions[index])
+    cost = near_field_costs(vehicle, candidates.mount_zones[candidates.mount[index]], candidates.positions[index])
+    duplicates = duplicate_pairs(candidates, index, rules.practice)
     dense = [preset.points(vehicle, DENSE_SPACING) for preset in presets]
     dense = [p[required_mask(vehicle, p, lifted)] for p in dense]
     for round_ in range(1, DENSE_ROUNDS + 1):
         if round_ > 1:  # the points the dense check added
             sees = seen_by_candidates(points)
         chosen, status, gap = select_near_field(sees, candidates.mount[index], candidates.mount_points, cost, mirror,
-                                                max_nodes, points.labels)
+                                                max_nodes, points.labels, duplicates)
         picked = index[chosen]
         unseen = []
         if dense:

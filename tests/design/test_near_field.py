@@ -45,6 +45,50 @@ def test_clashing_mounts_hold_one_camera():
     assert chosen.tolist() == [2]
 
 
+def test_of_two_duplicating_candidates_at_most_one_is_chosen():
+    """0 and 1 (cheap) would duplicate each other; 2 and 3 (dearer) see what they see. Without the pair the MILP
+    takes 0 and 1; with it, one of them and the other's stand-in."""
+    sees = np.array([[1, 0], [0, 1], [1, 0], [0, 1]], dtype=bool)
+    mount_points = np.array([[0, 0, 0], [0.3, 0, 0], [5, 0, 0], [9, 0, 0]], dtype=float)
+    cost = np.array([0.0, 0.0, 1.0, 1.0])
+    free, _, _ = near_field.select_near_field(sees, np.arange(4), mount_points, cost)
+    assert free.tolist() == [0, 1]
+    kept, _, _ = near_field.select_near_field(sees, np.arange(4), mount_points, cost, duplicates=np.array([[0, 1]]))
+    assert kept.tolist() in ([0, 3], [1, 2])
+
+
+def test_duplicate_pairs_are_the_same_lens_close_and_looking_the_same_way():
+    """Mounting practice's duplicate rule on candidates: 0.5 m and 10 deg by default; a third lens or a turned
+    axis is no duplicate, and none are with the feature rules off."""
+    from rigopt.design.candidates import CandidateSet
+    from rigopt.geometry import rotation_from_yaw_pitch_roll
+    from rigopt.mounting.records import MountPractice
+
+    yaws = np.deg2rad([0.0, 8.0, 30.0, 0.0])
+    rotations = np.stack([rotation_from_yaw_pitch_roll(y, 0.0, 0.0) for y in yaws])
+    positions = np.array([[0, 0, 1], [0.4, 0, 1], [0.2, 0, 1], [0.1, 0.1, 1]], dtype=float)
+    catalogue = (near_field.fisheye_190(), near_field.fisheye_190())
+    candidates = CandidateSet(positions, rotations, np.full(4, 190.0), yaws, np.zeros(4), np.arange(4), positions,
+                              np.tile([1.0, 0.0, 0.0], (4, 1)), np.array(["bumper_front"] * 4), np.array([0, 0, 0, 1]),
+                              catalogue)
+    pairs = near_field.duplicate_pairs(candidates, np.arange(4), MountPractice())
+    assert sorted(map(tuple, pairs.tolist())) == [(0, 1)]  # 2 is turned 30 deg, 3 has the other lens
+    assert len(near_field.duplicate_pairs(candidates, np.arange(4), MountPractice(features=False))) == 0
+
+
+def test_near_field_fisheyes_stay_off_glass_and_cost_more_off_the_production_spots():
+    hgv = load_vehicle("hgv")
+    zones = near_field.near_field_zones(hgv)
+    assert "mirror" in zones and "bumper_front" in zones
+    assert not set(zones) & set(near_field.GLASS_ZONES)
+    with pytest.raises(Exception, match="glass"):
+        near_field.near_field_zones(hgv, ("windshield_front",))
+    points = np.array([[3.9, 0.0, 1.0], [3.5, 1.4, 2.0], [1.0, 1.3, 2.0]])
+    costs = near_field.near_field_costs(hgv, ["bumper_front", "mirror", "b_pillar"], points)
+    plain = near_field.mounting_costs(hgv, ["bumper_front", "mirror", "b_pillar"], points)
+    assert (costs - plain).tolist() == [0.0, 0.0, near_field.OFF_SPOT_COST]
+
+
 @pytest.mark.slow
 def test_the_tt_sees_its_rear_field_and_near_ring_with_few_fisheyes():
     """On the tt (M1: R158), the design's fisheyes see every near ring and field point, at most two look back."""
@@ -117,3 +161,18 @@ def test_free_perception_cameras_beside_mirrored_fisheyes():
     assert result.near_field_mirrored and rig_symmetry(fisheyes).symmetric
     assert not rig_symmetry(rig.perception()).symmetric
     assert symmetry_dict(result)["describe"].startswith("perception cameras placed freely")
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["firetruck", "hgv"])
+def test_a_trucks_default_design_puts_its_fisheyes_where_production_surround_view_does(name):
+    """The default design from R1: every near-field fisheye at a production spot (a mirror among them), none on
+    glass, and the whole rig passes the mount checks (duplicates included)."""
+    from rigopt.design import design_rig
+    from rigopt.mounting.rules import check_rig
+
+    result = design_rig(name, "R1")
+    fisheyes = [c for c in result.design.rig.cameras if c.role == "near_field"]
+    assert fisheyes and all(c.zone in near_field.SURROUND_VIEW_ZONES for c in fisheyes)
+    assert any(c.zone == "mirror" for c in fisheyes)
+    assert check_rig(result.design.rig, result.vehicle, result.settings.rules).valid
