@@ -59,7 +59,7 @@ def _mirrored(low, high) -> tuple[np.ndarray, np.ndarray]:
     return np.minimum(low * _FLIP, high * _FLIP), np.maximum(low * _FLIP, high * _FLIP)
 
 
-def _boxes(entries):
+def feature_boxes(entries):
     """(entry, low (3,), high (3,)) for each spec entry with ``min``, ``max``, ``mirrored``; copies expanded."""
     for entry in entries:
         yield entry, entry.min, entry.max
@@ -77,7 +77,7 @@ def on_steps(vehicle: Vehicle, points, margin: float) -> list[list[str]]:
     within ``margin`` m of it."""
     points = np.atleast_2d(np.asarray(points, dtype=float))
     found: list[list[str]] = [[] for _ in range(len(points))]
-    for step, low, high in _boxes(vehicle.spec.steps):
+    for step, low, high in feature_boxes(vehicle.spec.steps):
         for k in np.flatnonzero(_in_box(points, low, high, margin)):
             message = f"on the {step.name} (walkable) at {points[k, 2]:.2f} m"
             if message not in found[k]:
@@ -89,7 +89,7 @@ def on_fixtures(vehicle: Vehicle, points, margin: float) -> list[list[str]]:
     """For each lens position (n, 3) m: the fixtures (rails, ladders, light bars, racks) within ``margin`` m."""
     points = np.atleast_2d(np.asarray(points, dtype=float))
     found: list[list[str]] = [[] for _ in range(len(points))]
-    for fixture, low, high in _boxes(vehicle.spec.fixtures):
+    for fixture, low, high in feature_boxes(vehicle.spec.fixtures):
         for k in np.flatnonzero(_in_box(points, low, high, margin)):
             message = f"on the {fixture.name} ({FIXTURE_REASONS[fixture.kind]})"
             if message not in found[k]:
@@ -107,7 +107,7 @@ def in_door_frames(vehicle: Vehicle, points, margin: float, hinge_band: float) -
     """
     points = np.atleast_2d(np.asarray(points, dtype=float))
     found: list[list[str]] = [[] for _ in range(len(points))]
-    for door, low, high in _boxes(vehicle.spec.door_frames):
+    for door, low, high in feature_boxes(vehicle.spec.door_frames):
         normal = int(np.argmin(high - low))
         plane = [a for a in range(3) if a != normal]
         across = (points[:, normal] >= low[normal] - margin) & (points[:, normal] <= high[normal] + margin)

@@ -136,7 +136,41 @@ def packaging_section(packaging: list[dict], frame: str) -> list[str]:
             "point in the direction of the image's left edge, its centre and its right edge, height in pixels of "
             "the part in the image and not hidden by the body. Image blocked: the share of a "
             f"{BLOCKED_GRID[0]} x {BLOCKED_GRID[1]} grid of pixel rays that meets the body. Definitions in "
-            "docs/design.md and rigopt/coverage/packaging.py.</p>"]
+            "docs/design.md and rigopt/coverage/packaging.py.</p>", *bracket_section(packaging, frame)]
+
+
+def bracket_section(packaging: list[dict], frame: str) -> list[str]:
+    """The "Brackets" table: each camera's bracket sheet (``packaging[k]["bracket"]``,
+    :mod:`rigopt.coverage.bracket`); the ECU in ``frame``."""
+    from rigopt.coverage.bracket import BUMP_TRAVEL_M, SERVICE_LOOP_M
+
+    sheets = [(c["camera"], c["bracket"]) for c in packaging if "bracket" in c]
+    if not sheets:
+        return []
+
+    def flag(value) -> str:
+        return "-" if value is None else "yes" if value is True else "no" if value is False else str(value)
+
+    rows = [[escape(name), escape(", ".join(f"{a:.1f}" for a in b["bracket_ypr_deg"])),
+             escape(" x ".join(f"{v:.3f}" for v in b["housing_m"])), num(b["depth_behind_skin_m"], 2),
+             num(b["clearance_m"]["door"], 2), escape(flag(b["door_swing"])), num(b["clearance_m"]["wheel_envelope"], 2),
+             escape(flag(b["tilt_cab_sweep"])), num(b["outside_wiped_area_m"], 2), num(b["harness_m"], 1),
+             escape(b["stone_chip"]), escape(b["soiling"]), escape(flag(b["washer"]))] for name, b in sheets]
+    ecu = ", ".join(f"{v:.2f}" for v in sheets[0][1]["ecu_m"])
+    return ["<h2>Brackets</h2>",
+            table(["camera", "bracket yaw, pitch, roll (deg)", "housing w x h x d (m)", "depth behind skin (m)",
+                   "door clearance (m)", "in a door's swing", "wheel envelope clearance (m)", "tilt-cab sweep",
+                   "outside the wiped area (m)", "harness (m)", "stone chips", "soiling", "washer"], rows,
+                  numeric_from=3),
+            '<p class="note">Bracket angles: the camera\'s yaw, pitch and roll against a bracket looking straight '
+            "out of the surface with its up along the surface's up. Depth behind the skin: how far the body reaches "
+            "inward along the surface normal (at most 1 m). Clearances (0: inside): the nearest door opening, a "
+            f"door's swing about its hinge; the wheels' envelope (each tyre, a steered one swept through a full turn, "
+            f"raised by {BUMP_TRAVEL_M:g} m of bump travel); the tilting cab's sweep; the wipers' sweep for a camera "
+            f"on the windscreen. Harness: the length along the vehicle's axes to an ECU assumed at ({escape(ecu)}) m "
+            f"({escape(frame)}), plus a {SERVICE_LOOP_M:g} m service loop: an estimate to start routing from. "
+            "Stone chips and soiling from where the lens sits and looks (docs/design.md, rigopt/coverage/bracket.py); "
+            "a washer is advised where either is high.</p>"]
 
 
 def breakdown_note(summary: dict) -> str:

@@ -111,13 +111,16 @@ def _pose_apart(camera, reference) -> dict:
 def packaging_rows(rig: Rig, vehicle) -> list[dict]:
     """Each camera's packaging sheet (:mod:`rigopt.coverage.packaging`: body feature, surface normal and
     bracket wedge angle, protrusion, nearest visible ground, ground resolution, people's heights in pixels,
-    blocked share) as JSON values, positions measured from the report's datum
+    blocked share) with its bracket sheet under ``bracket`` (:mod:`rigopt.coverage.bracket`: bracket angles,
+    housing and depth behind the skin, clearances, harness, exposure) as JSON values, positions measured from the report's datum
     (:func:`rigopt.coverage.packaging.report_origin`). ``rig`` may be measured from any origin the vehicle
     can place."""
+    from rigopt.coverage.bracket import rig_brackets
     from rigopt.coverage.packaging import report_origin, rig_packaging
 
     origin = report_origin(vehicle).point
-    return [sheet.to_dict(origin) for sheet in rig_packaging(rig, vehicle)]
+    return [{**sheet.to_dict(origin), "bracket": bracket.to_dict(origin)}
+            for sheet, bracket in zip(rig_packaging(rig, vehicle), rig_brackets(rig, vehicle))]
 
 
 def frame_dict(vehicle) -> dict:
