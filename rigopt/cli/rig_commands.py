@@ -94,11 +94,26 @@ def _check_out(out, force: bool, listing: bool) -> Path | None:
 
 
 def _finish_import(imported, out: Path, as_json: bool, source: str) -> None:
-    """Write the imported rig, print the notes on stderr and a summary (or JSON) on stdout."""
+    """Write the imported rig, print the notes on stderr and a summary (or JSON) on stdout. Cameras closer than a
+    module's size (calibration files say nothing of housings) are written as one module, noted."""
+    from dataclasses import replace
+
+    from rigopt.mounting.practice import as_modules
     from rigopt.output import atomic_file
     from rigopt.rig.pccr_format import write_rig
 
-    rig = imported.rig
+    rig = as_modules(imported.rig)
+    grouped = {c.module: [] for c in rig.cameras if c.module}
+    for camera, before in zip(rig.cameras, imported.rig.cameras):
+        if camera.module != before.module:
+            grouped[camera.module].append(camera.id)
+    if any(grouped.values()):
+        from rigopt.mounting.records import MountPractice
+
+        modules = "; ".join(f"{name}: {', '.join(ids)}" for name, ids in grouped.items() if ids)
+        imported = replace(imported, notes=(*imported.notes, f"cameras closer than "
+                                            f"{MountPractice().module_distance:g} m share one housing, as the mount "
+                                            f"rules ask: written as modules ({modules})"))
     with atomic_file(out) as work:
         write_rig(rig, work)
     for line in imported.notes:

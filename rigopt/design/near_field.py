@@ -51,8 +51,8 @@ from rigopt.design.selection import (
 )
 from rigopt.design.settings import CatalogueCamera
 from rigopt.errors import RigoptError
-from rigopt.mounting.practice import mounting_costs
-from rigopt.mounting.records import MountRules
+from rigopt.mounting.practice import as_modules, mounting_costs
+from rigopt.mounting.records import MountPractice, MountRules
 from rigopt.mounting.shapes import NEAR_FIELD_CLEAR_CONE_DEG
 from rigopt.quiet import HIGHS_OPTIONS, quiet_highs
 from rigopt.rig.model import Camera, Rig
@@ -325,19 +325,13 @@ def choose_near_field(vehicle: Vehicle, presets: tuple[RegionPreset, ...], spaci
                            ring_unseeable)
 
 
-def with_near_field(perception: Rig, choice: NearFieldChoice) -> NearFieldDesign:
-    """``perception``'s cameras followed by the ``choice``'s; a fisheye at a perception camera's mount (within
-    CLASH_DISTANCE) shares its housing: the two are one camera module."""
-    cameras = list(choice.cameras)
-    perception_cameras = list(perception.cameras)
-    if len(perception) and len(cameras):
-        distance, nearest = cKDTree(perception.positions).query(np.array([c.position for c in cameras]))
-        for n, (d, p) in enumerate(zip(distance, nearest)):
-            if d < CLASH_DISTANCE:
-                module = perception_cameras[p].module or f"{perception_cameras[p].id}_MODULE"
-                perception_cameras[p] = dataclasses.replace(perception_cameras[p], module=module)
-                cameras[n] = dataclasses.replace(cameras[n], module=module)
-    rig = Rig(perception.name, perception.vehicle, tuple(perception_cameras) + tuple(cameras), perception.origin)
+def with_near_field(perception: Rig, choice: NearFieldChoice, practice: MountPractice = MountPractice()
+                     ) -> NearFieldDesign:
+    """``perception``'s cameras followed by the ``choice``'s; cameras closer than ``practice.module_distance`` (a
+    fisheye at a perception camera's mount among them) share a housing: they are one camera module
+    (:func:`rigopt.mounting.practice.as_modules`)."""
+    rig = as_modules(Rig(perception.name, perception.vehicle, perception.cameras + choice.cameras, perception.origin),
+                     practice)
     return NearFieldDesign(rig, choice.n_candidates, choice.n_points, choice.status, choice.gap, choice.seconds,
                            choice.rounds, choice.ring_unseeable)
 
@@ -349,4 +343,4 @@ def design_near_field(vehicle: Vehicle, perception: Rig, presets: tuple[RegionPr
     see every field of ``presets`` densely and the near ring, the fewest and cheapest
     (:func:`choose_near_field`, then :func:`with_near_field`)."""
     return with_near_field(perception, choose_near_field(vehicle, presets, spacing, symmetric, rules, catalogue,
-                                                         zones, max_nodes, lifted, progress))
+                                                         zones, max_nodes, lifted, progress), rules.practice)

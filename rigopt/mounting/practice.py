@@ -15,12 +15,15 @@ Besides the geometric mount rules (:mod:`rigopt.mounting.rules`) a lens may not 
 
 And, for a whole rig (:func:`duplicates`): no two cameras duplicate each other (the same lens, lenses within
 ``duplicate_distance`` m, optical axes within ``duplicate_angle_deg``), unless they share a module (a stereo
-pair is one on purpose).
+pair is one on purpose); no two lenses closer than ``module_distance`` m sit in housings of their own
+(:func:`separate_housings`; :func:`as_modules` makes them one module).
 
 Its settings are :class:`rigopt.mounting.records.MountPractice`. Frames: ISO 8855 vehicle frame, metres.
 """
 
 from __future__ import annotations
+
+from dataclasses import replace
 
 import numpy as np
 
@@ -169,14 +172,76 @@ def duplicates(rig: Rig, practice: MountPractice = MountPractice()) -> list[str 
         for earlier in cameras[:j]:
             if later.module is not None and later.module == earlier.module:
                 continue
-            if later.lens != earlier.lens:
-                continue
-            apart = float(np.linalg.norm(later.position - earlier.position))
-            angle = float(np.rad2deg(np.arccos(np.clip(later.forward @ earlier.forward, -1.0, 1.0))))
-            if apart <= practice.duplicate_distance and angle <= practice.duplicate_angle_deg:
-                found[j] = f"duplicates {earlier.id}: same lens, {apart:.2f} m apart, {angle:.0f} deg apart"
+            twin = _twins(later, earlier, practice)
+            if twin is not None:
+                found[j] = f"duplicates {earlier.id}: same lens, {twin[0]:.2f} m apart, {twin[1]:.0f} deg apart"
                 break
     return found
+
+
+def _twins(a, b, practice: MountPractice) -> tuple[float, float] | None:
+    """(m apart, deg apart) when cameras ``a`` and ``b`` duplicate each other (the same lens, lenses within
+    ``duplicate_distance`` m and optical axes within ``duplicate_angle_deg``), else None."""
+    if a.lens != b.lens:
+        return None
+    apart = float(np.linalg.norm(a.position - b.position))
+    angle = float(np.rad2deg(np.arccos(np.clip(a.forward @ b.forward, -1.0, 1.0))))
+    return (apart, angle) if apart <= practice.duplicate_distance and angle <= practice.duplicate_angle_deg else None
+
+
+def separate_housings(rig: Rig, practice: MountPractice = MountPractice()) -> list[str | None]:
+    """For each camera of ``rig``: why its housing is too close to an earlier camera's ('0.173 m from CAM_X in a
+    housing of its own: ...'), or None. Lenses closer than ``practice.module_distance`` m cannot sit in housings
+    of their own: they are one module (the same ``Camera.module``, :func:`as_modules`) or stand farther apart.
+    Only the later camera of a pair is named."""
+    found: list[str | None] = [None] * len(rig.cameras)
+    if not practice.feature_rules:
+        return found
+    for j, later in enumerate(rig.cameras):
+        for earlier in rig.cameras[:j]:
+            apart = float(np.linalg.norm(later.position - earlier.position))
+            if apart < practice.module_distance and (later.module is None or later.module != earlier.module):
+                found[j] = (f"{apart:.3f} m from {earlier.id} in a housing of its own: housings closer than "
+                            f"{practice.module_distance:g} m are one module (give both the same module) or stand "
+                            "farther apart")
+                break
+    return found
+
+
+def as_modules(rig: Rig, practice: MountPractice = MountPractice()) -> Rig:
+    """``rig`` with each group of cameras whose lenses lie closer than ``practice.module_distance`` m to one another
+    (chained) in one module: the module a member has already (the first in camera order), else
+    '<first member's id>_MODULE'. Two cameras that duplicate each other are not grouped (a module is no licence for
+    an unplanned stereo pair: :func:`duplicates` still names them). Positions and lenses are unchanged; ``rig``
+    itself when nothing is grouped."""
+    cameras = list(rig.cameras)
+    if not practice.feature_rules or len(cameras) < 2:
+        return rig
+    group = list(range(len(cameras)))  # each camera's group: the lowest index it is chained to
+
+    def root(k: int) -> int:
+        while group[k] != k:
+            k = group[k]
+        return k
+
+    for j in range(len(cameras)):
+        for i in range(j):
+            close = float(np.linalg.norm(cameras[j].position - cameras[i].position)) < practice.module_distance
+            if close and _twins(cameras[i], cameras[j], practice) is None:
+                a, b = sorted((root(i), root(j)))
+                group[b] = a
+    members: dict[int, list[int]] = {}
+    for k in range(len(cameras)):
+        members.setdefault(root(k), []).append(k)
+    changed = False
+    for first, ks in members.items():
+        if len(ks) < 2:
+            continue
+        module = next((cameras[k].module for k in ks if cameras[k].module), f"{cameras[first].id}_MODULE")
+        for k in ks:
+            if cameras[k].module != module:
+                cameras[k], changed = replace(cameras[k], module=module), True
+    return replace(rig, cameras=tuple(cameras)) if changed else rig
 
 
 #: Spray from a tyre reaches about this far (m) around it, fore and aft and above its top.

@@ -38,8 +38,9 @@ class MountPractice:
     ``width_allowance`` m how far other cameras may stick out beyond it (Regulation (EU) 1230/2012, Annex I,
     Appendix 1, point 1(c): devices on the sides other than mirrors, up to 100 mm in total, are not counted in
     the width; 0 refuses any protrusion); two cameras
-    duplicate each other within ``duplicate_distance`` m and ``duplicate_angle_deg``; ``features`` False
-    switches the body-feature rules, the trailer's swing and the duplicate rule off (the rules before them)."""
+    duplicate each other within ``duplicate_distance`` m and ``duplicate_angle_deg``; housings whose lenses lie
+    closer than ``module_distance`` m are one module (a shared housing) or refused; ``features`` False switches
+    the body-feature rules, the trailer's swing, the duplicate and the module rule off (the rules before them)."""
 
     min_height: float | None = None
     wheel_clearance: float = 0.05
@@ -55,6 +56,7 @@ class MountPractice:
     width_allowance: float = 0.10
     duplicate_distance: float = 0.5
     duplicate_angle_deg: float = 10.0
+    module_distance: float = 0.25
     features: bool = True
 
     @property

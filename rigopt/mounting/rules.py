@@ -44,7 +44,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rigopt.mounting.features import trailer_swings
-from rigopt.mounting.practice import duplicates, keep_out_boxes, practice_problems
+from rigopt.mounting.practice import as_modules, duplicates, keep_out_boxes, practice_problems, separate_housings
 from rigopt.mounting.records import CameraCheck, MountRules, RaisedMount, RigCheck
 from rigopt.mounting.shapes import (box_object, collides, frustum_object, housing_object, post_object, probe_rays,
                                     swing_object)
@@ -79,6 +79,12 @@ def raised_mounts(vehicle: Vehicle, positions) -> list[RaisedMount | None]:
     return found
 
 
+def check_assembled(rig: Rig, vehicle: Vehicle, rules: MountRules = MountRules()) -> RigCheck:
+    """:func:`check_rig` of ``rig`` as a design assembles it: lenses closer than a module's size in one module
+    (:func:`rigopt.mounting.practice.as_modules`), the rest as they are."""
+    return check_rig(as_modules(rig, rules.practice), vehicle, rules)
+
+
 def check_rig(rig: Rig, vehicle: Vehicle, rules: MountRules = MountRules()) -> RigCheck:
     """Apply every mount rule to every camera of ``rig`` on ``vehicle`` (raised mounts: see the module doc)."""
     body = vehicle.collision_object
@@ -89,6 +95,7 @@ def check_rig(rig: Rig, vehicle: Vehicle, rules: MountRules = MountRules()) -> R
     practice = practice_problems(vehicle, rig.positions, rules.practice, rules.housing, surface)
     blockers = _view_blockers(vehicle, rules)
     duplicated = duplicates(rig, rules.practice)
+    crowded = separate_housings(rig, rules.practice)
     checks = []
     for k, camera in enumerate(rig.cameras):
         distance, mount = float(surface.distance[k]), mounts[k]
@@ -102,8 +109,7 @@ def check_rig(rig: Rig, vehicle: Vehicle, rules: MountRules = MountRules()) -> R
         if zone is None:
             problems.append("outside every mounting zone")
         problems += _clash_problems(k, rig, housings)
-        if duplicated[k] is not None:
-            problems.append(duplicated[k])
+        problems += [reason for reason in (duplicated[k], crowded[k]) if reason is not None]
         checks.append(CameraCheck(camera.id, not problems, distance, zone, tuple(problems)))
     return RigCheck(rig.name, vehicle.name, tuple(checks))
 

@@ -277,10 +277,17 @@ def test_two_cameras_of_one_module_share_a_housing(box_car):
     assert [n for n in ("A", "B") if n in clash] == ["A", "B"]
 
 
-def test_two_cameras_20cm_apart_are_valid(box_car):
-    # different lenses: the same lens looking the same way this close would duplicate A (test_features.py)
-    result = check(box_car, camera("A", FRONT), camera("B", [2.03, 0.2, 1.0], fov=90.0))
-    assert result.valid
+def test_two_cameras_20cm_apart_are_one_module_or_refused(box_car):
+    """Lenses closer than a module's size (0.25 m) share one housing: in housings of their own the later is refused,
+    as one module both are valid; 0.3 m apart they may stand alone. (Different lenses: the same lens looking the
+    same way this close would duplicate A, test_features.py.)"""
+    a, b = camera("A", FRONT), camera("B", [2.03, 0.2, 1.0], fov=90.0)
+    alone = check(box_car, a, b)
+    assert alone.cameras[0].valid and not alone.cameras[1].valid
+    assert alone.cameras[1].problems == ("0.200 m from A in a housing of its own: housings closer than 0.25 m are one "
+                                         "module (give both the same module) or stand farther apart",)
+    assert check(box_car, replace(a, module="pod"), replace(b, module="pod")).valid
+    assert check(box_car, a, camera("B", [2.03, 0.3, 1.0], fov=90.0)).valid
 
 
 def test_a_foot_on_a_degenerate_face_has_no_surface_and_no_housing_fits(badge_5mm):

@@ -171,3 +171,31 @@ def test_r9_with_a_trailer_coupled_sees_the_trailer_and_its_swing(hgv):
     assert back_top.problems == ("the keep-out trailer (a coupled semi-trailer) is in its view within 1 m",
                                  "the trailer's swing (its front corners turn 3.83 m about the kingpin at x -2.30 m) "
                                  "is in its view within 1 m")
+
+
+def _pinhole(id_, x, y=0.0, yaw=0.0, fov=90.0, module=None):
+    from dataclasses import replace
+
+    from rigopt.geometry import rotation_from_yaw_pitch_roll
+
+    camera = Camera.pinhole(id_, np.array([x, y, 1.0]), rotation_from_yaw_pitch_roll(np.deg2rad(yaw), 0.0, 0.0), fov)
+    return replace(camera, module=module)
+
+
+def test_lenses_closer_than_a_modules_size_become_one_module_chained_and_duplicates_do_not():
+    """A-B 0.2 m and B-C 0.2 m apart (A-C 0.4 m) are one module, named after A; D stands alone; E, 0.1 m from D
+    with D's lens looking D's way, would duplicate it and is not grouped (the duplicate rule names it)."""
+    from rigopt.mounting.practice import as_modules, duplicates, separate_housings
+
+    rig = Rig("r", "vehicle.audi.tt", (_pinhole("A", 0.0, yaw=0.0), _pinhole("B", 0.2, yaw=30.0, fov=60.0),
+                                       _pinhole("C", 0.4, yaw=60.0, fov=70.0), _pinhole("D", 3.0),
+                                       _pinhole("E", 3.1)))
+    assert [reason is not None for reason in separate_housings(rig)] == [False, True, True, False, True]
+    grouped = as_modules(rig)
+    assert [c.module for c in grouped.cameras] == ["A_MODULE"] * 3 + [None, None]
+    assert separate_housings(grouped)[:4] == [None] * 4 and separate_housings(grouped)[4] is not None
+    assert duplicates(grouped)[4].startswith("duplicates D")
+    assert as_modules(grouped) is grouped  # nothing left to group
+    named = as_modules(Rig("r", "vehicle.audi.tt", (_pinhole("A", 0.0), _pinhole("B", 0.2, fov=60.0, module="pod"))))
+    assert [c.module for c in named.cameras] == ["pod", "pod"]  # a member's module is kept
+    assert as_modules(rig, MountPractice(features=False)) is rig

@@ -16,6 +16,7 @@ from scipy.optimize import brentq
 from scipy.spatial.transform import Rotation
 
 from rigopt.errors import RigFileError, RigoptError
+from rigopt.mounting.practice import as_modules
 from rigopt.rig.formats.argoverse1 import AV1_AXLE_HEIGHT_M, read_argoverse1
 from rigopt.rig.model import RigOrigin
 from rigopt.rig.pccr_format import read_rig
@@ -167,7 +168,8 @@ def test_import_command_writes_the_rig(tmp_path):
     assert result.stdout.startswith(f"wrote {out}: 9 cameras")
     assert "raised by 0.33 m" in result.stderr
     written, expected = read_rig(out, name="argoverse1_log"), read_argoverse1(LOG, cameras="all", axle_height=0.33).rig
-    assert written.same_as(expected, atol=1e-6)  # the rig file rounds its numbers
+    assert written.same_as(as_modules(expected), atol=1e-6)  # the rig file rounds its numbers
+    assert "cameras closer than 0.25 m share one housing" in result.stderr  # the roof ring's, 0.2 m apart
     bad = run_rigopt("import", "argoverse1", LOG, "--out", tmp_path / "x.json", "--origin", "rear_axle",
                      "--axle-height", "0.3")
     assert bad.returncode == 2 and bad.stderr.startswith("rigopt: error: --axle-height")
