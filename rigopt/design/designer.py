@@ -33,7 +33,7 @@ from rigopt.camera import CameraModel
 from rigopt.design.naming import mount_name, unique
 from rigopt.mounting.practice import as_modules, mounting_costs
 from rigopt.mounting.records import RigCheck
-from rigopt.mounting.rules import check_assembled
+from rigopt.mounting.rules import check_rig, check_unassembled
 from rigopt.coverage.matrix import rig_coverage_matrix
 from rigopt.coverage.visibility import visible_by
 from rigopt.design.candidates import CandidateSet, build_candidates
@@ -201,7 +201,7 @@ def select_valid(prepared: Prepared, vehicle: Vehicle, calibration: Calibration,
                                    "(--match-height, --match-pitch, --match-yaw, --match-fov), add pitches (--pitch) "
                                    "or allow more zones")
         rig = _rig_from(candidates.subset(chosen), best.matched, prepared.references[0], vehicle)
-        check = check_assembled(rig, vehicle, settings.rules)
+        check = check_unassembled(rig, vehicle, settings.rules)
         failed = [(chosen[k], c) for k, c in enumerate(check.cameras) if not c.valid]
         if not failed:
             return MilpStage(rig, check, best, len(candidates), len(offered), repairs)
@@ -467,7 +467,7 @@ def height_stage(perception: Perception, selected: Selected, vehicle: Vehicle, r
     if not moves:
         return perception
     design = summarise(rig, vehicle, rigs, calibration, requirements, settings,
-                       check_assembled(rig, vehicle, settings.rules))
+                       check_unassembled(rig, vehicle, settings.rules))
     gaps = tolerance_gaps(rig.positions[:len(matched)], rig.rotations[:len(matched)], rig.fovs[:len(matched)],
                           rigs[0], settings)
     return replace(perception, design=design, widen=matched_widening(gaps, matched), height_moves=moves)
@@ -508,13 +508,13 @@ def near_field_result(design: RigSummary, selected: Selected, fields: FieldPlan,
         grouped = as_modules(design.rig, settings.rules.practice)  # housings closer than a module's size: one
         if grouped is not design.rig:
             design = summarise(grouped, vehicle, rigs, calibration, requirements, settings,
-                               check_assembled(grouped, vehicle, settings.rules))
+                               check_rig(grouped, vehicle, settings.rules))
         return NearFieldResult(design, None, fields.presets, selected.fields_fallback, requirements, settings)
     stage, presets, fallback = _near_field_stage(
         vehicle, design.rig, fields.presets, selected.prepared.spacing,
         replace(settings, symmetric=selected.near_field_mirrored), fields.user_require, progress, fields.job)
     design = summarise(stage.rig, vehicle, rigs, calibration, requirements, settings,
-                       check_assembled(stage.rig, vehicle, settings.rules))
+                       check_rig(stage.rig, vehicle, settings.rules))
     return NearFieldResult(design, stage, presets, fallback, replace(requirements, presets=presets),
                            replace(settings, require=fields.user_require if presets else "none"))
 
@@ -609,7 +609,7 @@ def refine_comparison(rig: Rig, vehicle: Vehicle, reference: Rig, calibration: C
     sectors = requirements.sector_only()
     own = replace(sectors, needed=np.minimum(sectors.needed, counts), presets=())
     free = replace(settings, symmetric=False, require="none")
-    summary = summarise(rig, vehicle, [reference], calibration, own, free, check_assembled(rig, vehicle, free.rules))
+    summary = summarise(rig, vehicle, [reference], calibration, own, free, check_unassembled(rig, vehicle, free.rules))
     report = _refined(summary, vehicle, reference, calibration, own, spacing, free)
     return (report.refined.rig if report.accepted else rig), report.status
 
@@ -666,7 +666,7 @@ def _refined(design: RigSummary, vehicle: Vehicle, reference: Rig, calibration: 
     if outcome.rig is None:
         return RefinementReport(f"rejected: IPOPT {outcome.status}", solver_status=outcome.status)
     refined_rig = project_to_surface(Rig(rig.name, rig.vehicle, outcome.rig.cameras), vehicle, settings.rules)
-    check = check_assembled(refined_rig, vehicle, settings.rules)
+    check = check_unassembled(refined_rig, vehicle, settings.rules)
     moved = len(rig)
     if not check.valid:  # keep the MILP pose of the cameras whose refined pose fails (with their mirrors), once
         keep = np.array([not c.valid for c in check.cameras])
@@ -675,7 +675,7 @@ def _refined(design: RigSummary, vehicle: Vehicle, reference: Rig, calibration: 
         cameras = tuple(old if k else new for new, old, k in zip(refined_rig.cameras, rig.cameras, keep))
         moved = int((~keep).sum())
         refined_rig = Rig(rig.name, rig.vehicle, cameras)
-        check = check_assembled(refined_rig, vehicle, settings.rules)
+        check = check_unassembled(refined_rig, vehicle, settings.rules)
     if not check.valid or moved == 0:
         return RefinementReport(f"rejected: IPOPT {outcome.status}, refined cameras fail the mount checks",
                                 solver_status=outcome.status)

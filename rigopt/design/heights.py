@@ -22,7 +22,7 @@ from rigopt.camera import CameraModel
 from rigopt.design.naming import mount_name, unique
 from rigopt.design.settings import DesignSettings
 from rigopt.mounting.candidates import body_fraction
-from rigopt.mounting.rules import check_assembled
+from rigopt.mounting.rules import check_unassembled
 from rigopt.mounting.sampling import sample_zone_points
 from rigopt.rig.model import Rig
 from rigopt.vehicle.model import Vehicle
@@ -76,7 +76,7 @@ def search_heights(rig: Rig, matched: np.ndarray, reference: Rig, vehicle: Vehic
                     vehicle, moved.position[None], moved.rotation[None],
                     CameraModel.of_cameras([moved]))[0] > settings.max_body_fraction:
                 continue
-            if check_assembled(trial, vehicle, settings.rules).valid and meets_requirements(trial):
+            if check_unassembled(trial, vehicle, settings.rules).valid and meets_requirements(trial):
                 cameras[k] = moved
                 moves.append((k, HeightMove(camera.id, reference.cameras[r].id, target, float(camera.position[2]),
                                             float(moved.position[2]), float(distance[i]))))

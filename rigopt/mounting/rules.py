@@ -39,12 +39,12 @@ collides with it.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from rigopt.mounting.features import trailer_swings
-from rigopt.mounting.practice import as_modules, duplicates, keep_out_boxes, practice_problems, separate_housings
+from rigopt.mounting.practice import duplicates, keep_out_boxes, practice_problems, separate_housings
 from rigopt.mounting.records import CameraCheck, MountRules, RaisedMount, RigCheck
 from rigopt.mounting.shapes import (box_object, collides, frustum_object, housing_object, post_object, probe_rays,
                                     swing_object)
@@ -79,10 +79,11 @@ def raised_mounts(vehicle: Vehicle, positions) -> list[RaisedMount | None]:
     return found
 
 
-def check_assembled(rig: Rig, vehicle: Vehicle, rules: MountRules = MountRules()) -> RigCheck:
-    """:func:`check_rig` of ``rig`` as a design assembles it: lenses closer than a module's size in one module
-    (:func:`rigopt.mounting.practice.as_modules`), the rest as they are."""
-    return check_rig(as_modules(rig, rules.practice), vehicle, rules)
+def check_unassembled(rig: Rig, vehicle: Vehicle, rules: MountRules = MountRules()) -> RigCheck:
+    """:func:`check_rig` of a design's cameras while they are being placed: every rule but the module rule, which
+    the design meets once placed (its lenses closer than a module's size become one module,
+    :func:`rigopt.mounting.practice.as_modules`, and the assembled rig is checked whole)."""
+    return check_rig(rig, vehicle, replace(rules, practice=replace(rules.practice, module_distance=0.0)))
 
 
 def check_rig(rig: Rig, vehicle: Vehicle, rules: MountRules = MountRules()) -> RigCheck:
