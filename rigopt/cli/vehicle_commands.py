@@ -88,6 +88,8 @@ def vehicle_show_command(
 ):
     """Draw top and side views of a vehicle with its zones coloured (and a rig's cameras), measured in the reports'
     frame (ISO 8855 from the ground below the rear axle's centre)."""
+    import numpy as np
+
     from rigopt.coverage.packaging import report_origin
     from rigopt.output import atomic_file, check_out_file
     from rigopt.report.vehicle_figures import write_vehicle_figure
@@ -101,9 +103,21 @@ def vehicle_show_command(
         loaded = load_rig(rig)
         drawn, change = place_rig(loaded, vehicle, refuse_inside=False)
         note_vehicle(loaded, vehicle, change)
+    datum = report_origin(vehicle)
     with atomic_file(out) as work:
-        write_vehicle_figure(vehicle, work, drawn, report_origin(vehicle))
+        write_vehicle_figure(vehicle, work, drawn, datum)
     console.print(f"wrote {out}")
+    features = vehicle.body_features()
+    if features:
+        def box(row) -> str:
+            if row["min"] is None:
+                return "-"
+            low, high = (np.asarray(row[k]) - datum.point for k in ("min", "max"))
+            return " .. ".join(", ".join(f"{v:.2f}" for v in corner) for corner in (low, high))
+
+        print_table(f"body features of {vehicle.name} the mount rules read (boxes x, y, z m, {datum.frame})",
+                    ["kind", "name", "note", "box (min .. max)"],
+                    [[r["kind"], r["name"], r["note"] or "-", box(r)] for r in features])
 
 
 @vehicle_app.command("export")

@@ -216,6 +216,28 @@ class Vehicle:
         """The width (m) no camera may stick out beyond: the spec's ``legal_width`` (2.55, or 2.60 refrigerated)."""
         return self.spec.legal_width
 
+    def body_features(self) -> list[dict]:
+        """The body features of the spec that the mount rules read, one row each: ``kind`` (mirror zone, step or a
+        fixture kind, door, wiped area, tilt cab, keep-out), ``name``, ``note`` (a door's hinge, a keep-out's
+        reason, the wiped area's zone) and the box ``min``, ``max`` (3,) m, vehicle-centre frame (a mirrored
+        entry gives its +y box; None for the wiped area, an outline on the glass)."""
+        spec = self.spec
+        rows = [{"kind": "mirror zone", "name": z.name, "note": "mounting zone", "min": z.min, "max": z.max}
+                for z in spec.zones if z.name.startswith("mirror")]
+        rows += [{"kind": f.kind, "name": f.name, "note": "mirrored" if f.mirrored else "", "min": f.min,
+                  "max": f.max} for f in (*spec.steps, *spec.fixtures)]
+        rows += [{"kind": "door", "name": d.name, "note": f"hinged {d.hinge}" if d.hinge else "sliding or unknown",
+                  "min": d.min, "max": d.max} for d in spec.door_frames]
+        if spec.wiped_area is not None:
+            rows.append({"kind": "wiped area", "name": "windscreen", "note": f"on zone {spec.wiped_area.zone}",
+                         "min": None, "max": None})
+        if spec.tilt_cab is not None:
+            rows.append({"kind": "tilt cab", "name": "cab", "note": f"tilts up to {spec.tilt_cab.angle_deg:g} deg",
+                         "min": spec.tilt_cab.min, "max": spec.tilt_cab.max})
+        rows += [{"kind": "keep-out", "name": k.name, "note": k.reason, "min": k.min, "max": k.max}
+                 for k in spec.keep_outs]
+        return rows
+
     @property
     def rear_axle(self) -> np.ndarray | None:
         """(3,) float m: the point on the ground (z = 0) below the centre of the rear axle, rigopt's rear-axle

@@ -135,3 +135,4 @@ def test_check_works_beside_a_broken_user_vehicle(mycar, rigopt_home):
     listed = invoke("vehicles", "--json")
     assert "wreck" in listed.stderr and "skipped" in listed.stderr
     assert "wreck" not in {row["vehicle"] for row in json.loads(listed.stdout)}
+
