@@ -393,7 +393,8 @@ PRESETS: dict[str, RegionPreset] = {p.key: p for p in (
     RegionPreset("r46-vi", "front field (class VI)",
                  "UN R46 class VI field of vision (front mirror / camera-monitor)",
                  (0.0, 0.8, 1.2), _R46_VI),
-    RegionPreset("dvs", "HGV cab zone and safe-system fields (London DVS)",
+    RegionPreset("dvs", "HGV cab zone and safe-system fields seen by cameras (a proxy of London DVS's camera part, "
+                 "not DVS compliance: DVS rates the driver's direct vision)",
                  "TfL Direct Vision Standard: the assessment zone around the cab (2 m front, 4.5 m nearside) and "
                  "the Progressive Safe System's fields (R46 classes V and VI, nearside sensors 9 m x 2.2 m)",
                  (0.0, 0.8, 1.2, 1.6),
