@@ -67,16 +67,23 @@ SLOW = {"design --pareto with no feasible point", "design --min-height above eve
         "coverage of a rig that sees only its body", "coverage unknown --compare"}
 
 
-@pytest.mark.parametrize("name", cases(CASES, SLOW))
-def test_bad_input(scratch, name, capsys, monkeypatch):
+def run_case(scratch, args, capsys, monkeypatch) -> tuple[int, str, str]:
+    """(exit code, stdout, stderr) of ``rigopt ARGS`` run in-process in the scratch folder with its environment."""
     tmp, env = scratch
     for key, value in env.items():
         monkeypatch.setenv(key, value)
     monkeypatch.chdir(tmp)
-    args, fragment = CASES[name]
     capsys.readouterr()
     code = run([a.format(tmp=tmp, repo=REPO) for a in args])
     out, err = capsys.readouterr()
+    return code, out, err
+
+
+@pytest.mark.parametrize("name", cases(CASES, SLOW))
+def test_bad_input(scratch, name, capsys, monkeypatch):
+    tmp = scratch[0]
+    fragment = CASES[name][1]
+    code, out, err = run_case(scratch, CASES[name][0], capsys, monkeypatch)
     lines = [line for line in err.splitlines() if line.strip()]
     assert code == INPUT_ERROR, err
     assert CASES_MODULE.one_error_line(lines), err  # the error last; before it only indented progress lines
@@ -88,14 +95,9 @@ def test_bad_input(scratch, name, capsys, monkeypatch):
 
 @pytest.mark.parametrize("name", sorted(WARNINGS))
 def test_flagged_input(scratch, name, capsys, monkeypatch):
-    tmp, env = scratch
-    for key, value in env.items():
-        monkeypatch.setenv(key, value)
-    monkeypatch.chdir(tmp)
-    args, fragment = WARNINGS[name]
-    capsys.readouterr()
-    code = run([a.format(tmp=tmp, repo=REPO) for a in args])
-    _, err = capsys.readouterr()
+    tmp = scratch[0]
+    fragment = WARNINGS[name][1]
+    code, _, err = run_case(scratch, WARNINGS[name][0], capsys, monkeypatch)
     warned = [line for line in err.splitlines() if line.startswith("rigopt: warning: ")]
     assert code == 0, err
     assert len(warned) == 1 and fragment in warned[0], err
