@@ -374,17 +374,24 @@ def _print_design(summary: dict, label: str, vehicle: str, calibration, by_model
                *(f"in {out}: {command} ({why})" for command, why in NEXT_STEPS))
 
 
+#: The pose tolerance's keys in a report (height m, pitch, yaw, FOV deg).
+TOLERANCE_KEYS = ("height_m", "pitch_deg", "yaw_deg", "fov_deg")
+
+
 def _print_matches(summary: dict, label: str) -> None:
     """Each perception camera beside the reference camera it was designed for, and how far its pose is from that
     camera's, so that a name (where a camera is mounted and where it looks) is never read as its place; a note where
     RigCD's own matching of the final rig pairs a camera otherwise."""
+    from rigopt.design.tolerance import describe_tolerance
+
     cameras = [c for c in summary["cameras"] if "stands_in_for" in c]
     if not cameras:
         return
+    tolerance = summary["pose_tolerance"]
     rows = [[c["id"], s["id"], s["height_m"], s["pitch_deg"], s["yaw_deg"], s["fov_deg"], s["lenses_apart_m"]]
             for c in cameras for s in [c["stands_in_for"]]]
     print_table(f"each perception camera and the {label} camera it was designed for (its pose, not its place, is "
-                f"kept near that camera's: {_tolerance_text(summary['pose_tolerance'])})",
+                f"kept near that camera's: {describe_tolerance(*(tolerance[k] for k in TOLERANCE_KEYS))})",
                 ["camera", f"{label} camera", "height (m)", "pitch (deg)", "yaw (deg)", "FOV (deg)",
                  "lenses apart (m)"], rows)
     other = [f"{c['id']} with {c['matched_reference_camera']['id']}" for c in cameras
@@ -393,14 +400,6 @@ def _print_matches(summary: dict, label: str) -> None:
         print(f"rigopt: note: RigCD's own matching of the final rig pairs {len(other)} camera(s) otherwise "
               f"({'; '.join(other)}); report.json keeps both (stands_in_for, matched_reference_camera)",
               file=sys.stderr)
-
-
-def _tolerance_text(tolerance: dict) -> str:
-    """'height 0.05 m, pitch 0 deg, yaw 5 deg, FOV 0 deg' of the report's pose tolerance (None: not held)."""
-    parts = [(name, tolerance[key], unit) for name, key, unit in (("height", "height_m", " m"), ("pitch", "pitch_deg",
-             " deg"), ("yaw", "yaw_deg", " deg"), ("FOV", "fov_deg", " deg"))]
-    held = [f"{name} {value:g}{unit}" for name, value, unit in parts if value is not None]
-    return ", ".join(held) if held else "no tolerance"
 
 
 def _print_design_notes(summary: dict) -> None:

@@ -96,31 +96,25 @@ def _check_out(out, force: bool, listing: bool) -> Path | None:
 def _finish_import(imported, out: Path, as_json: bool, source: str) -> None:
     """Write the imported rig, print the notes on stderr and a summary (or JSON) on stdout. Cameras closer than a
     module's size (calibration files say nothing of housings) are written as one module, noted."""
-    from dataclasses import replace
-
     from rigopt.mounting.practice import as_modules
+    from rigopt.mounting.records import MountPractice
     from rigopt.output import atomic_file
     from rigopt.rig.pccr_format import write_rig
 
     rig = as_modules(imported.rig)
-    grouped = {c.module: [] for c in rig.cameras if c.module}
-    for camera, before in zip(rig.cameras, imported.rig.cameras):
-        if camera.module != before.module:
-            grouped[camera.module].append(camera.id)
-    if any(grouped.values()):
-        from rigopt.mounting.records import MountPractice
-
-        modules = "; ".join(f"{name}: {', '.join(ids)}" for name, ids in grouped.items() if ids)
-        imported = replace(imported, notes=(*imported.notes, f"cameras closer than "
-                                            f"{MountPractice().module_distance:g} m share one housing, as the mount "
-                                            f"rules ask: written as modules ({modules})"))
+    notes = list(imported.notes)
+    grouped = [f"{c.id} in {c.module}" for c, before in zip(rig.cameras, imported.rig.cameras)
+               if c.module != before.module]
+    if grouped:
+        notes.append(f"cameras closer than {MountPractice().module_distance:g} m share one housing, as the mount rules "
+                     f"ask: written as modules ({', '.join(grouped)})")
     with atomic_file(out) as work:
         write_rig(rig, work)
-    for line in imported.notes:
+    for line in notes:
         status_console.print(line, highlight=False, markup=False, soft_wrap=True)
     if as_json:
         print_json({"rig": rig.name, "vehicle": rig.vehicle, "out": str(out), "source": source,
-                    "origin": rig.origin.kind, "notes": list(imported.notes),
+                    "origin": rig.origin.kind, "notes": notes,
                     "cameras": [_camera_row(c) for c in rig.cameras]})
         return
     console.print(f"wrote {out}: {len(rig)} cameras ({', '.join(c.id for c in rig.cameras)})", highlight=False,

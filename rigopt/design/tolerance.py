@@ -68,9 +68,16 @@ def tolerance_gaps(positions: np.ndarray, rotations: np.ndarray, fovs: np.ndarra
 
 def tolerance_text(settings: DesignSettings) -> str:
     """The pose tolerance in words, e.g. "0.1 m in height and 2 deg in pitch"."""
+    return describe_tolerance(settings.match_height_m, settings.match_pitch_deg, settings.match_yaw_deg,
+                              settings.match_fov_deg)
+
+
+def describe_tolerance(height_m, pitch_deg, yaw_deg, fov_deg) -> str:
+    """:func:`tolerance_text` of the four tolerances (None: not held), e.g. as a report's ``pose_tolerance`` gives
+    them."""
     parts = [f"{value:g} {unit} in {name}" for value, unit, name in (
-        (settings.match_height_m, "m", "height"), (settings.match_pitch_deg, "deg", "pitch"),
-        (settings.match_yaw_deg, "deg", "yaw"), (settings.match_fov_deg, "deg", "FOV")) if value is not None]
+        (height_m, "m", "height"), (pitch_deg, "deg", "pitch"), (yaw_deg, "deg", "yaw"), (fov_deg, "deg", "FOV"))
+        if value is not None]
     return " and ".join(parts) or "any pose"
 
 
