@@ -8,8 +8,8 @@ from typing import Optional
 
 import typer
 
-from rigopt.cli.app import (FORCE_HELP, NO_TRAILER_HELP, app, console, note_vehicle, print_json, print_next,
-                            print_table)
+from rigopt.cli.app import (FORCE_HELP, NO_TRAILER_HELP, app, console, finite, note_vehicle, print_json,
+                            print_next, print_table)
 from rigopt.errors import RigoptError
 
 
@@ -19,6 +19,11 @@ REQUIRE_HELP = ("Regulation fields every camera-visible point of which is checke
                 "classes II, IV, V, VI), dvs (London Direct Vision Standard); default (the vehicle category's: trucks "
                 "and buses r151,r159,r158, cars and vans r158) or none. Add :lht for left-hand traffic (nearside on the left), e.g. "
                 "r151:lht. See docs/regulations.md.")
+
+#: The --field-pixels option's help (design and coverage).
+FIELD_PIXELS_HELP = ("Pixels a field's test object must be tall in a camera's image for its point to count as seen "
+                     "(default 25, KITTI's smallest evaluated box; 0: in view is enough, however small). The test "
+                     "objects and their heights: docs/regulations.md.")
 
 
 def _placed(rig_name: str, vehicle: Optional[str]):
@@ -71,6 +76,8 @@ def coverage_command(
     force: bool = typer.Option(False, "--force", help=FORCE_HELP),
     as_json: bool = typer.Option(False, "--json", help="Print the JSON report instead of tables."),
     require: str = typer.Option("none", "--require", help=REQUIRE_HELP),
+    field_pixels: Optional[float] = typer.Option(None, "--field-pixels", min=0.0, callback=finite(),
+                                                 help=FIELD_PIXELS_HELP),
     no_trailer: bool = typer.Option(False, "--no-trailer", help=NO_TRAILER_HELP + " It then neither blocks views nor "
                                     "shapes the fields."),
 ):
@@ -86,6 +93,8 @@ def coverage_command(
     out_dir = check_out_folder(out, force=force) if out is not None else None
     loaded, on, announce = _placed(rig, vehicle)
     presets = parse_require(require, on)
+    if field_pixels is not None:
+        presets = tuple(preset.with_min_px(field_pixels) for preset in presets)
     lifted = ("trailer",) if no_trailer else ()
     report = coverage_report(loaded, on, CoverageSettings(lifted=lifted))
     _refuse_blind(report, loaded, on)
@@ -173,14 +182,15 @@ def _print_tables(data: dict, other: dict | None) -> None:
                   f"{100 * bev['overlap2_frac_within_20m']:.1f} % by >= 2 cameras, at most {bev['max_count']}")
 
     if data.get("regions"):
-        from rigopt.report.coverage_tables import camera_field_rows
+        from rigopt.report.coverage_tables import camera_field_rows, resolution_text
 
-        print_table("regulation fields (--require): required points seen by >= 1 camera, the unseen ground beside it; "
-                    "weighted: each point by its criticality (docs/regulations.md); covered = all of them",
-                    ["field", "covered", "seen", "unseen area (m²)", "weighted seen", "seen per height", "area (m²)",
-                     "points"],
+        print_table("regulation fields (--require): required points seen by >= 1 camera with the field's test object "
+                    "as many pixels tall as asked (in view: however small), the unseen ground beside it; weighted: "
+                    "each point by its criticality (docs/regulations.md); covered = all of them",
+                    ["field", "covered", "seen", "seen at", "in view", "unseen area (m²)", "weighted seen",
+                     "seen per height", "area (m²)", "points"],
                     [[r["key"], "yes" if r["covered"] else "no", f"{100 * r['covered_frac']:.1f} %",
-                      f"{r['unseen_area_m2']:.1f}", f"{100 * r['weighted_covered_frac']:.1f} %",
+                      resolution_text(r), f"{100 * r['in_view_frac']:.1f} %", f"{r['unseen_area_m2']:.1f}", f"{100 * r['weighted_covered_frac']:.1f} %",
                       ", ".join(f"{h['height_m']:g} m {100 * h['covered_frac']:.1f} %" for h in r["height_covered_frac"]),
                       f"{r['area_m2']:.1f}", r["n_points"]] for r in data["regions"]])
         columns, rows = camera_field_rows(data["regions"])

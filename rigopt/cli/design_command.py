@@ -10,6 +10,7 @@ import typer
 
 from rigopt.cli.app import (FORCE_HELP, MIN_HEIGHT_HELP, NO_TRAILER_HELP, app, between, finite, more_than,
                             mount_rules, note, note_fallback, print_json, print_next, print_table)
+from rigopt.cli.coverage_command import FIELD_PIXELS_HELP
 from rigopt.cli.metric_commands import METRIC_HELP, PREDICTOR_HELP
 from rigopt.cli.parsing import image_size_text, parse_image_size
 from rigopt.benchmark import BENCHMARK_IMAGE_SIZE
@@ -137,6 +138,8 @@ def design_command(
                                                "category's fields are required unless no design sees them all "
                                                "(then reported). See "
                                                "docs/regulations.md."),
+    field_pixels: Optional[float] = typer.Option(None, "--field-pixels", min=0.0, callback=finite(),
+                                                 help=FIELD_PIXELS_HELP),
     cost_weight: float = typer.Option(0.0, "--cost-weight", min=0.0, callback=finite(),
                                       rich_help_panel=OBJECTIVE_PANEL,
                                       help="Weight of the cameras' mean relative mounting cost (zone cost, +0.5 in "
@@ -236,7 +239,7 @@ def design_command(
         zones=tuple(z.strip() for z in zones.split(",")) if zones else None, pitches_deg=_pitches(pitch),
         yaw_step_deg=yaw_step, spacing=spacing, min_coverage=min_coverage, min_overlap=min_overlap,
         max_nodes=max_nodes, accept_gap=accept_gap, rules=mount_rules(min_height, no_trailer),
-        symmetric=False if asymmetric else None, cost_weight=cost_weight, require=require,
+        symmetric=False if asymmetric else None, cost_weight=cost_weight, require=require, field_pixels=field_pixels,
         near_field=not pareto if near_field is None else near_field, drop_model=_objective(objective, ref))
     # a worker process beside this one (with a second core): the near-field stage and the pictures go there
     background = INLINE if pareto else Background(later_imports=("rigopt.report.vehicle_figures",
@@ -404,12 +407,20 @@ def _print_matches(summary: dict, label: str) -> None:
 
 def _print_design_notes(summary: dict) -> None:
     """Symmetry, the fields seen, the height moves and the solver's figures (stderr), then the report's notes."""
+    from rigopt.report.coverage_tables import resolution_text
+    from rigopt.report.design_html import blocked_by_keep_outs_text
+
     print(f"{summary['symmetry']['describe']}", file=sys.stderr)
     if summary["regions_fallback"]:
         print(f"rigopt: note: {summary['regions_fallback']}", file=sys.stderr)
+    blocked = [f"{sheet['camera']} {blocked_by_keep_outs_text(sheet)}" for sheet in summary["packaging"]
+               if blocked_by_keep_outs_text(sheet)]
+    if blocked:
+        print(f"views blocked by keep-outs (share of the image): {'; '.join(blocked)}", file=sys.stderr)
     for region in summary["regions"]:
         state = "required" if summary["regions_required"] else "reported"
-        print(f"field {region['key']} ({state}): {region['covered_frac']:.1%} of its points seen "
+        print(f"field {region['key']} ({state}): {region['covered_frac']:.1%} of its points seen with "
+              f"{resolution_text(region)}, {region['in_view_frac']:.1%} in view "
               f"({region['weighted_covered_frac']:.1%} weighted by criticality), unseen area "
               f"{region['unseen_area_m2']:.1f} m²" + _excluded_text(region), file=sys.stderr)
     moves = summary["pose_tolerance"]["height_moves"]

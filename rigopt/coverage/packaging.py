@@ -33,7 +33,8 @@ Definitions (one camera; "the lens" is the camera's position, "its ground point"
   every PERSON_STEP_M): f H / (d cos a) px for an upright pinhole (d the distance, a the angle off the axis);
   0 when none of it is seen, None for a ray pointing straight up or down;
 - blocked share: the fraction of the rays through the centres of a BLOCKED_GRID of image cells that meet the
-  body (as ``coverage.measures``' self-occluded fraction).
+  body (as ``coverage.measures``' self-occluded fraction); per keep-out that blocks views (a coupled trailer,
+  unless lifted), the fraction that meet it, before the body and within DEFAULT_MAX_RANGE m.
 """
 
 from __future__ import annotations
@@ -43,6 +44,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from rigopt.camera import CameraModel
+from rigopt.coverage.visibility import DEFAULT_MAX_RANGE, occluders
+from rigopt.mounting.practice import segments_hit_boxes
 from rigopt.vehicle.footprint import Footprint
 from rigopt.rig.model import Camera, Rig
 from rigopt.vehicle.model import Vehicle
@@ -151,6 +154,7 @@ class CameraPackaging:
     ground_resolution: tuple[GroundResolution, ...]
     people: tuple[PersonHeight, ...]
     blocked_frac: float
+    keep_out_blocked: tuple[tuple[str, float], ...] = ()
 
     def __post_init__(self):
         for name in ("position", "mount_point", "surface_normal"):
@@ -174,6 +178,7 @@ class CameraPackaging:
             "person_height_px": [{"person": p.person, "height_m": p.height_m, "distance_m": p.distance_m,
                                   "left": p.left, "centre": p.centre, "right": p.right} for p in self.people],
             "blocked_frac": self.blocked_frac,
+            "blocked_by_keep_outs": dict(self.keep_out_blocked),
         }
 
 
@@ -307,17 +312,32 @@ def nearest_visible_ground(camera: Camera, vehicle: Vehicle, footprint: Footprin
 def blocked_fraction(camera: Camera, vehicle: Vehicle, grid=BLOCKED_GRID, backend: str = "auto") -> float:
     """The share of the image the body blocks: rays through the centres of ``grid`` (columns, rows) image cells
     that the body, a solid, blocks (:meth:`rigopt.raycast.RayCaster.blocked_distance`), in [0, 1]."""
+    return blocked_shares(camera, vehicle, grid, backend)[0]
+
+
+def blocked_shares(camera: Camera, vehicle: Vehicle, grid=BLOCKED_GRID, backend: str = "auto",
+                   lifted=None) -> tuple[float, tuple[tuple[str, float], ...]]:
+    """(the body's share of the image, ((label, share), ...) per keep-out that blocks views): rays through the
+    centres of ``grid`` (columns, rows) image cells that meet the body, and those that meet each keep-out in
+    force (:func:`rigopt.coverage.visibility.occluders`; ``lifted`` names those lifted, None: no keep-out is
+    looked at) before the body and within DEFAULT_MAX_RANGE m; shares in [0, 1]."""
     rays = CameraModel.of_camera(camera).grid_rays(grid) @ camera.rotation.T
-    hits = vehicle.caster(backend).blocked_distance(np.repeat(camera.position[None], len(rays), axis=0), rays)
-    return float(np.mean(np.isfinite(hits)))
+    starts = np.repeat(camera.position[None], len(rays), axis=0)
+    hits = vehicle.caster(backend).blocked_distance(starts, rays)
+    reach = np.minimum(np.where(np.isfinite(hits), hits, DEFAULT_MAX_RANGE), DEFAULT_MAX_RANGE)
+    keep_outs = () if lifted is None else occluders(vehicle, lifted)
+    return float(np.mean(np.isfinite(hits))), tuple(
+        (label, float(np.mean(segments_hit_boxes(starts, rays, reach, [(low, high, label)]))))
+        for low, high, label in keep_outs)
 
 
 # ------------------------------------------------------------------------------------------------ sheet
 
 
 def camera_packaging(camera: Camera, vehicle: Vehicle, footprint: Footprint | None = None,
-                     backend: str = "auto") -> CameraPackaging:
-    """The packaging sheet of ``camera`` (position in ``vehicle``'s centre frame) on ``vehicle``."""
+                     backend: str = "auto", lifted=()) -> CameraPackaging:
+    """The packaging sheet of ``camera`` (position in ``vehicle``'s centre frame) on ``vehicle``, ``lifted``
+    naming the keep-outs lifted (a trailer not coupled)."""
     surface = vehicle.surface(camera.position[None])
     mount_point, normal = surface.foot[0], surface.normal[0] / np.linalg.norm(surface.normal[0])
     zone, nearest, nearest_m = body_feature(vehicle, mount_point, normal)
@@ -333,12 +353,12 @@ def camera_packaging(camera: Camera, vehicle: Vehicle, footprint: Footprint | No
         camera.id, zone, nearest, nearest_m, camera.position, mount_point, normal, wedge,
         float((camera.position - mount_point) @ normal), ground_m, body_m,
         tuple(ground_resolution(camera, vehicle, d, backend) for d in GROUND_DISTANCES_M), people,
-        blocked_fraction(camera, vehicle, BLOCKED_GRID, backend))
+        *blocked_shares(camera, vehicle, BLOCKED_GRID, backend, lifted))
 
 
-def rig_packaging(rig: Rig, vehicle: Vehicle, backend: str = "auto") -> tuple[CameraPackaging, ...]:
+def rig_packaging(rig: Rig, vehicle: Vehicle, backend: str = "auto", lifted=()) -> tuple[CameraPackaging, ...]:
     """Every camera's packaging sheet, the rig first moved to ``vehicle``'s centre frame (RigoptError when its
-    origin needs axles the vehicle lacks)."""
+    origin needs axles the vehicle lacks); ``lifted`` names the keep-outs lifted (a trailer not coupled)."""
     placed, _ = to_vehicle_centre(rig, vehicle)
     footprint = vehicle.footprint
-    return tuple(camera_packaging(camera, vehicle, footprint, backend) for camera in placed.cameras)
+    return tuple(camera_packaging(camera, vehicle, footprint, backend, lifted) for camera in placed.cameras)

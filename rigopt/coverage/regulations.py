@@ -26,7 +26,7 @@ import numpy as np
 import shapely
 
 from rigopt.camera import CameraModel
-from rigopt.coverage.visibility import DEFAULT_MAX_RANGE, occluders, visible_by
+from rigopt.coverage.visibility import DEFAULT_MAX_RANGE, fine_enough, occluders, visible_by
 from rigopt.errors import RigoptError
 from rigopt.mounting.practice import keep_out_boxes
 from rigopt.rig.model import Rig
@@ -56,6 +56,40 @@ MIRROR_ZONE_MARGIN = 0.2
 R46_HORIZON_CUT = 50.0
 #: Length (m) of the criticality weights' fall-off with distance from the body and from the nearside front corner.
 CRITICALITY_LENGTH = 1.0
+
+
+@dataclass(frozen=True)
+class FieldObject:
+    """What a field asks to see at each of its points: ``name`` (a child, a cyclist, R46's critical object), a
+    cylinder ``height`` m tall and ``width`` m across, whose image must be at least ``min_px`` pixels tall for a
+    point to count as seen; ``source`` says where the figures come from (docs/regulations.md).
+
+    A field point counts as *resolved* by a camera when the camera sees it and the object standing on the ground
+    below it is at least ``min_px`` pixels tall in the camera's image
+    (:func:`rigopt.coverage.visibility.object_pixel_heights`)."""
+
+    name: str
+    height: float
+    width: float
+    min_px: float
+    source: str = ""
+
+    def __post_init__(self):
+        if not (self.height > 0 and self.width > 0 and self.min_px >= 0 and np.isfinite(self.min_px)):
+            raise RigoptError(f"test object {self.name!r}: height and width must be > 0 m and min_px a number of "
+                              f"pixels >= 0, got {self.height!r} m, {self.width!r} m, {self.min_px!r} px")
+
+    def with_min_px(self, min_px: float) -> "FieldObject":
+        """This object asked to be ``min_px`` pixels tall."""
+        return replace(self, min_px=float(min_px))
+
+    def describe(self) -> str:
+        """E.g. 'a cyclist 1.6 m tall at >= 25 px'."""
+        return f"{self.name} {self.height:g} m tall at >= {self.min_px:g} px"
+
+    def as_dict(self) -> dict:
+        return {"name": self.name, "height_m": self.height, "width_m": self.width, "min_px": self.min_px,
+                "source": self.source}
 
 
 def _check_edge(name: str, edge, lines: tuple[str, ...]) -> None:
@@ -223,7 +257,7 @@ def body_lines(vehicle: Vehicle, traffic: str = "right", reference: BodyReferenc
 class RegionPreset:
     """A requirement: the ground ``boxes`` (FieldBox or FieldPolygon) around the vehicle, joined, less the
     ``reference`` outline grown by ``clearance`` m, where a test object must be seen at every one of ``heights``
-    (m above the ground).
+    (m above the ground), as large in the image as its ``test_object`` asks (None: in view is enough).
 
     ``key`` names it on the command line (``r151``, ``r151:lht`` in left-hand traffic), ``title`` says what it
     is, ``source`` cites the regulation; ``traffic`` ('right' or 'left') puts the nearside at -y or +y;
@@ -238,6 +272,7 @@ class RegionPreset:
     traffic: str = "right"
     clearance: float = NEAR_BODY_CLEARANCE
     reference: BodyReference = WHOLE_BODY
+    test_object: FieldObject | None = None
 
     def __post_init__(self):
         if not self.heights or not all(np.isfinite(h) and h >= 0 for h in self.heights):
@@ -256,6 +291,21 @@ class RegionPreset:
             raise RigoptError(f"unknown traffic side {traffic!r}; use right or left")
         key = self.base_key + (f":{TRAFFIC_SUFFIX['left']}" if traffic == "left" else "")
         return replace(self, key=key, traffic=traffic)
+
+    @property
+    def pixel_demand(self) -> np.ndarray:
+        """(2,) float: (test object height m, pixels its image must span) at each field point; (1, 0) without a
+        test object (in view is enough)."""
+        thing = self.test_object
+        return np.array([thing.height, thing.min_px] if thing else [1.0, 0.0])
+
+    def pixel_demands(self, n: int) -> np.ndarray:
+        """(n, 2) float: :attr:`pixel_demand` for each of ``n`` field points."""
+        return np.tile(self.pixel_demand, (n, 1))
+
+    def with_min_px(self, min_px: float) -> "RegionPreset":
+        """This preset with its test object asked to be ``min_px`` pixels tall (a preset without one unchanged)."""
+        return replace(self, test_object=self.test_object.with_min_px(min_px)) if self.test_object else self
 
     def lines(self, vehicle: Vehicle, lifted=()) -> BodyLines:
         """The lines this preset's fields are placed against on ``vehicle`` (``lifted``: keep-outs lifted)."""
@@ -368,31 +418,45 @@ _R46_VI = (_box(("front", 0.0), ("front", 2.0), ("offside", 0.0), ("nearside", 2
 _R151 = (_box(("front", -30.0), ("front", 0.0), ("nearside", 0.0), ("nearside", 4.5)),
          _box(("rear", 0.0), ("front", 0.0), ("nearside", 0.0), ("nearside", 4.5)))
 
+#: The pixels a field's test object must be tall in a camera's image for its point to count as seen: KITTI's
+#: smallest evaluated box height (its Moderate and Hard levels), rigopt's choice for every field; the regulations
+#: judge what a driver sees on a monitor (arc-minutes at the eye) or what a system detects, neither a camera's
+#: pixels (docs/regulations.md).
+MIN_OBJECT_PX = 25.0
+R158_OBJECT = FieldObject("R158's test object", 0.8, 0.3, MIN_OBJECT_PX,
+                         "UN R158: a cylinder at least 0.8 m tall and 0.3 m wide")
+R46_OBJECT = FieldObject("R46's critical object", 0.8, 0.8, MIN_OBJECT_PX,
+                        "UN R46 / Directive 2003/97/EC: a circular object 0.8 m across (taken as 0.8 m tall)")
+CYCLIST = FieldObject("a cyclist", 1.6, 0.6, MIN_OBJECT_PX, "rigopt's: the field's top height (R151's target "
+                     "not found)")
+CHILD = FieldObject("a child", 1.15, 0.3, MIN_OBJECT_PX, "rigopt's: a child's height (R159's targets not found)")
+
 PRESETS: dict[str, RegionPreset] = {p.key: p for p in (
     RegionPreset("r158", "rear close-proximity field (reversing)",
                  "UN R158 (devices for reversing motion), rear-view camera field 0.3-3.5 m behind the vehicle; its "
                  "test object 0.8 m tall, 0.3 m across",
-                 (0.0, 0.4, 0.8), (_box(("rear", -3.5), ("rear", -0.3), *_FULL_WIDTH),)),
+                 (0.0, 0.4, 0.8), (_box(("rear", -3.5), ("rear", -0.3), *_FULL_WIDTH),), test_object=R158_OBJECT),
     RegionPreset("r151", "nearside blind-spot field (BSIS)",
                  "UN R151 (blind spot information system), nearside area from the front corner rearwards, lines "
                  "without mirrors and parts above 2.0 m, to the rear of a coupled trailer",
-                 (0.0, 0.8, 1.2, 1.6), _R151, reference=R151_REFERENCE),
+                 (0.0, 0.8, 1.2, 1.6), _R151, reference=R151_REFERENCE, test_object=CYCLIST),
     RegionPreset("r159", "front close-proximity field (MOIS)",
                  "UN R159 (moving off information system), area directly in front of the vehicle",
-                 (0.0, 0.8, 1.2, 1.6), (_box(("front", 0.0), ("front", 3.7), ("offside", 0.5), ("nearside", 0.5)),)),
+                 (0.0, 0.8, 1.2, 1.6), (_box(("front", 0.0), ("front", 3.7), ("offside", 0.5), ("nearside", 0.5)),),
+                 test_object=CHILD),
     RegionPreset("r46-ii", "main rear-view fields, both sides (class II)",
                  "UN R46 class II field of vision (main exterior mirror / camera-monitor), driver and passenger "
                  f"side, cut {R46_HORIZON_CUT:g} m behind the ocular points",
-                 (0.0, 0.8, 1.2), _R46_II),
+                 (0.0, 0.8, 1.2), _R46_II, test_object=R46_OBJECT),
     RegionPreset("r46-iv", "wide-angle field, nearside (class IV)",
                  "UN R46 class IV field of vision (wide-angle exterior mirror / camera-monitor), passenger side",
-                 (0.0, 0.8, 1.2), _R46_IV),
+                 (0.0, 0.8, 1.2), _R46_IV, test_object=R46_OBJECT),
     RegionPreset("r46-v", "close-proximity side field, nearside (class V)",
                  "UN R46 class V field of vision (close-proximity exterior mirror / camera-monitor), passenger side",
-                 (0.0, 0.8, 1.2), _R46_V),
+                 (0.0, 0.8, 1.2), _R46_V, test_object=R46_OBJECT),
     RegionPreset("r46-vi", "front field (class VI)",
                  "UN R46 class VI field of vision (front mirror / camera-monitor)",
-                 (0.0, 0.8, 1.2), _R46_VI),
+                 (0.0, 0.8, 1.2), _R46_VI, test_object=R46_OBJECT),
     RegionPreset("dvs", "HGV cab zone and safe-system fields seen by cameras (a proxy of London DVS's camera part, "
                  "not DVS compliance: DVS rates the driver's direct vision)",
                  "TfL Direct Vision Standard: the assessment zone around the cab (2 m front, 4.5 m nearside) and "
@@ -400,7 +464,7 @@ PRESETS: dict[str, RegionPreset] = {p.key: p for p in (
                  (0.0, 0.8, 1.2, 1.6),
                  (_box(("eye", -1.75), ("front", 2.0), ("offside", 0.6), ("nearside", 4.5)),
                   _box(("front", -9.0), ("front", 0.0), ("nearside", 0.0), ("nearside", 2.2)),
-                  *_R46_V, *_R46_VI)),
+                  *_R46_V, *_R46_VI), test_object=CHILD),
 )}
 
 #: The presets each UN category asks for when none are named (``default``).
@@ -475,7 +539,9 @@ class RegionCoverage:
     """How much of one preset's region a rig sees.
 
     ``covered_frac``: the fraction of the required points (``n_points``: grid and boundary, every height, at
-    ``spacing`` m) seen by at least one camera; ``height_covered_frac`` (h,) the same per height of
+    ``spacing`` m) seen by at least one camera, each at its ``test_object``'s pixels (resolved; every share below
+    counts resolved points); ``in_view_frac`` the fraction in some camera's view with nothing in between, however
+    small; ``height_covered_frac`` (h,) the same per height of
     ``heights``; ``weighted_covered_frac`` the same with each point weighted by its criticality
     (:func:`criticality_weights` of its ground position); ``unseen`` (k, 3) float m the required points no camera
     sees; ``area_m2`` the region's ground area; ``unseen_area_m2`` that area times the fraction of its grid
@@ -502,6 +568,8 @@ class RegionCoverage:
     cameras: tuple[CameraShare, ...] = ()
     overlap_frac: float = 0.0
     n_excluded: int = 0
+    in_view_frac: float = 1.0
+    test_object: FieldObject | None = None
 
     @property
     def covered(self) -> bool:
@@ -532,8 +600,9 @@ def region_coverage(rig: Rig, vehicle: Vehicle, presets, spacing: float = 0.1, b
     """Coverage of each of ``presets`` by ``rig`` (positions in ``vehicle``'s frame) on ``vehicle``: every
     required point (:func:`required_mask`) of the region's grid and boundary at ``spacing`` m, at every height,
     tested for occlusion-aware visibility (:func:`rigopt.coverage.visibility.visible_by`: the body and the keep-outs
-    in force that block views, a coupled trailer) by each camera. ``lifted`` names keep-outs lifted (a trailer not
-    coupled): they neither hide points, nor block views, nor place R151's lines."""
+    in force that block views, a coupled trailer) by each camera, and for the pixels its test object asks
+    (:func:`rigopt.coverage.visibility.fine_enough`). ``lifted`` names keep-outs lifted (a trailer not coupled):
+    they neither hide points, nor block views, nor place R151's lines."""
     model, boxes = CameraModel.of_cameras(rig.cameras), occluders(vehicle, lifted)
     out = []
     for preset in presets:
@@ -543,9 +612,13 @@ def region_coverage(rig: Rig, vehicle: Vehicle, presets, spacing: float = 0.1, b
         points = at_heights(ground, preset.heights)
         needed = required_mask(vehicle, points, lifted)
         by_camera = np.zeros((len(rig.cameras), len(points)), dtype=bool)
+        in_view = np.zeros(len(points), dtype=bool)
         if needed.any():
-            by_camera[:, needed] = visible_by(vehicle.caster(backend), model, rig.positions, rig.rotations,
-                                              points[needed], max_range, boxes)
+            view = visible_by(vehicle.caster(backend), model, rig.positions, rig.rotations, points[needed],
+                              max_range, boxes)
+            in_view[needed] = view.any(axis=0)
+            by_camera[:, needed] = fine_enough(view, model, rig.positions, rig.rotations, points[needed],
+                                               preset.pixel_demands(int(needed.sum())))
         count = by_camera.sum(axis=0)
         seen = (count > 0) | ~needed
         per_height = len(ground)
@@ -565,5 +638,5 @@ def region_coverage(rig: Rig, vehicle: Vehicle, presets, spacing: float = 0.1, b
             tuple(_share(s[n]) for s, n in by_height), points[needed & ~seen], int(needed.sum()),
             float(polygon.area), float(polygon.area * unseen_share), float(spacing), polygon,
             _share(seen[needed], weights), shares, float(np.mean(count[needed] >= 2)) if needed.any() else 0.0,
-            int((~needed).sum())))
+            int((~needed).sum()), _share(in_view[needed]), preset.test_object))
     return tuple(out)

@@ -12,6 +12,9 @@ nothing blocks the segment from the lens to p:
   lifted), which the coverage measures, the coverage matrix and the regulation fields pass by default. A point
   inside one is hidden by it.
 
+A point is *resolved* (:func:`resolved_by`) when it is seen and a regulation's test object standing there (its
+height, the pixels its image must span) is as tall in the camera's image as asked (:func:`object_pixel_heights`).
+
 Each (lens position, point) segment is cast once however many cameras at that position see the point.
 """
 
@@ -66,3 +69,61 @@ def visible_by(caster: RayCaster, model: CameraModel, positions, rotations, poin
         clear = clear[pair_of]
         seen[cam[~clear], point[~clear]] = False
     return seen
+
+
+#: Points along a test object's axis, foot to top, whose projections give the object's image height.
+OBJECT_SAMPLES = 9
+
+
+def object_pixel_heights(model: CameraModel, positions, rotations, points, object_heights, cameras, which
+                         ) -> np.ndarray:
+    """(n,) float px: how tall a test object standing below point ``which[i]`` is in camera ``cameras[i]``'s image:
+    the length of the image of the part of its axis in the camera's view (:meth:`CameraModel.in_view`, the object
+    not hidden by anything: the point's own visibility is :func:`visible_by`'s), the axis from the ground below the
+    point up to ``object_heights[which[i]]`` m sampled at OBJECT_SAMPLES points (their images joined by straight
+    lines: a distorted lens's curved image is a little longer).
+
+    model : CameraModel of batch shape (c,); positions : (c, 3) m; rotations : (c, 3, 3) R_vehicle_cam;
+    points : (p, 3) m, vehicle frame; object_heights : (p,) m; cameras, which : (n,) int pairs of indices.
+    """
+    positions, rotations = np.asarray(positions, dtype=float), np.asarray(rotations, dtype=float)
+    points, heights = np.asarray(points, dtype=float), np.asarray(object_heights, dtype=float)
+    cameras, which = np.asarray(cameras, dtype=int), np.asarray(which, dtype=int)
+    if not len(cameras):
+        return np.zeros(0)
+    up = np.linspace(0.0, 1.0, OBJECT_SAMPLES)
+    axis = np.repeat(points[which, None, :], OBJECT_SAMPLES, axis=1)  # (n, k, 3): foot to top
+    axis[:, :, 2] = up[None, :] * heights[which, None]
+    local = np.einsum("nji,nkj->nki", rotations[cameras], axis - positions[cameras, None, :])
+    pair_model = model.take(cameras)
+    inside = pair_model.in_view(local)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        pixels = pair_model.project(local)
+        steps = np.linalg.norm(np.diff(pixels, axis=1), axis=-1)
+    return np.where(inside[:, 1:] & inside[:, :-1], steps, 0.0).sum(axis=1)
+
+
+def fine_enough(seen, model: CameraModel, positions, rotations, points, pixel_demand) -> np.ndarray:
+    """(c, p) bool: the pairs of ``seen`` (c, p) bool (camera c sees point p) where the test object at point p is
+    as tall in camera c's image as it asks: ``pixel_demand`` (p, 2) float, each point's (object height m, pixels
+    its image must span; 0 asks nothing), :func:`object_pixel_heights`."""
+    fine = np.array(seen, dtype=bool)
+    demand = np.asarray(pixel_demand, dtype=float).reshape(-1, 2)
+    cam, point = np.nonzero(fine & (demand[:, 1] > 0)[None, :])
+    if len(cam):
+        small = object_pixel_heights(model, positions, rotations, points, demand[:, 0], cam, point) < demand[point, 1]
+        fine[cam[small], point[small]] = False
+    return fine
+
+
+def resolved_by(caster: RayCaster, model: CameraModel, positions, rotations, points, pixel_demand,
+                max_range: float = DEFAULT_MAX_RANGE, boxes=()) -> np.ndarray:
+    """(c, p) bool: point p seen by camera c (:func:`visible_by`) with its test object as many pixels tall as
+    ``pixel_demand`` (p, 2) asks (:func:`fine_enough`)."""
+    seen = visible_by(caster, model, positions, rotations, points, max_range, boxes)
+    return fine_enough(seen, model, positions, rotations, points, pixel_demand)
+
+
+def no_pixel_demand(n: int) -> np.ndarray:
+    """(n, 2) float: a pixel demand that asks nothing (in view is enough) of ``n`` points."""
+    return np.tile([1.0, 0.0], (n, 1))

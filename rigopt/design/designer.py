@@ -35,13 +35,13 @@ from rigopt.mounting.practice import as_modules, mounting_costs
 from rigopt.mounting.records import RigCheck
 from rigopt.mounting.rules import check_rig, check_unassembled
 from rigopt.coverage.matrix import rig_coverage_matrix
-from rigopt.coverage.visibility import visible_by
+from rigopt.coverage.visibility import resolved_by
 from rigopt.design.candidates import CandidateSet, build_candidates
 from rigopt.design.heights import search_heights
 from rigopt.design.problem import ReferenceRig
 from rigopt.design.refine import (RefineProblem, duty_points, free_radii, frustum_margins, project_to_surface,
                                   refine)
-from rigopt.coverage.regulations import default_presets, region_coverage
+from rigopt.coverage.regulations import region_coverage
 from rigopt.design.near_field import NEAR_FIELD_SPACING, NearFieldChoice, choose_near_field, with_near_field
 from rigopt.design.requirements import (DENSE_SPACING, Requirements, design_requirements, explain_uncoverable,
                                        field_labels, required_presets)
@@ -106,7 +106,8 @@ def _coverage_pool(candidates: CandidateSet, references: list[Rig], settings: De
 class Prepared:
     """What every MILP of one design problem shares: the candidates, their matching costs to each
     reference (n, R_k), the requirement points (q, 3) m (``Requirements.points``), the coverage pool (p,) int
-    and what it sees (p, q), the mount spacing (m) and each candidate's relative mounting cost (n,)."""
+    and what it resolves (p, q; at each point's ``Requirements.pixel_demand``), the mount spacing (m) and each
+    candidate's relative mounting cost (n,)."""
 
     references: tuple[Rig, ...]
     candidates: CandidateSet
@@ -119,12 +120,12 @@ class Prepared:
 
 
 def prepare(vehicle: Vehicle, references: Sequence[Rig], calibration: Calibration, settings: DesignSettings,
-            points: np.ndarray, progress: Callable[[str], None] = no_progress) -> Prepared:
-    """Candidates, costs and the coverage of the requirement ``points`` (q, 3) m by the candidates worth
+            requirements: Requirements, progress: Callable[[str], None] = no_progress) -> Prepared:
+    """Candidates, costs and the coverage of the ``requirements``' points by the candidates worth
     considering."""
     spacing = settings.spacing or default_spacing(vehicle, settings)
     progress(f"sampling mount candidates on {vehicle.name} (spacing {spacing:.2f} m)")
-    candidates = mount_candidates(vehicle, settings, spacing)
+    candidates, points = mount_candidates(vehicle, settings, spacing), requirements.points
     model = candidates.model()
     raw = tuple(calibrated_costs(candidates.positions, candidates.rotations, candidates.fovs, rig, calibration,
                                  None, model, drop_model=settings.drop_model) for rig in references)
@@ -138,21 +139,24 @@ def prepare(vehicle: Vehicle, references: Sequence[Rig], calibration: Calibratio
                   _coverage_pool(candidates, list(references), settings))
     pool = candidates.mirror_closed(pool)
     progress(f"coverage of {len(points)} requirement points by {len(pool)} of {len(candidates)} candidates")
-    sees_pool = _pool_sees(vehicle, candidates, pool, points, settings)
+    sees_pool = _pool_sees(vehicle, candidates, pool, points, requirements.demands, settings)
     per_mount = mounting_costs(vehicle, candidates.mount_zones, candidates.mount_points)
     return Prepared(tuple(references), candidates, costs, points, pool, sees_pool, spacing, per_mount[candidates.mount])
 
 
 def _pool_sees(vehicle: Vehicle, candidates: CandidateSet, pool: np.ndarray, points: np.ndarray,
-               settings: DesignSettings) -> np.ndarray:
-    """(p, q) bool: which of ``points`` (q, 3) m each pool candidate sees."""
-    return visible_by(vehicle.caster(settings.coverage.backend), candidates.model(pool), candidates.positions[pool],
-                      candidates.rotations[pool], points, settings.coverage.max_range)
+               pixel_demand: np.ndarray, settings: DesignSettings) -> np.ndarray:
+    """(p, q) bool: which of ``points`` (q, 3) m each pool candidate resolves (``pixel_demand`` (q, 2): each
+    point's test object height m and the pixels its image must span)."""
+    return resolved_by(vehicle.caster(settings.coverage.backend), candidates.model(pool), candidates.positions[pool],
+                       candidates.rotations[pool], points, pixel_demand, settings.coverage.max_range)
 
 
-def with_points(prepared: Prepared, vehicle: Vehicle, points: np.ndarray, settings: DesignSettings) -> Prepared:
-    """``prepared`` with the requirement ``points`` (k, 3) m appended (their coverage by the pool computed)."""
-    more = _pool_sees(vehicle, prepared.candidates, prepared.pool, points, settings)
+def with_points(prepared: Prepared, vehicle: Vehicle, points: np.ndarray, pixel_demand: np.ndarray,
+                settings: DesignSettings) -> Prepared:
+    """``prepared`` with the requirement ``points`` (k, 3) m appended (their coverage by the pool computed, at
+    ``pixel_demand`` (k, 2))."""
+    more = _pool_sees(vehicle, prepared.candidates, prepared.pool, points, pixel_demand, settings)
     return replace(prepared, points=np.concatenate([prepared.points, points]),
                    sees_pool=np.concatenate([prepared.sees_pool, more], axis=1))
 
@@ -249,7 +253,7 @@ def design_rig(vehicle: Vehicle | str, references: ReferenceRig | Sequence[Refer
     naive, naive_refinement = naive_stage(selected, vehicle, rigs[0], calibration, refines, progress)
     near = near_field_result(perception.design, selected, fields, vehicle, rigs, calibration, progress)
     regions = field_coverage(near.design.rig, vehicle, near.presets or required_fields(near.requirements, near.settings)
-                             or default_presets(vehicle), near.settings)
+                             or required_presets(vehicle, near.settings, "default"), near.settings)
     reference_coverage = rig_coverage_matrix(rigs[0], references[0].vehicle,
                                              near.settings.coverage).sees.any(axis=0).mean()
     comparisons = Comparisons(
@@ -368,8 +372,7 @@ def select_stage(vehicle: Vehicle, rigs: Sequence[Rig], calibration: Calibration
         counts = settings.cameras or default_counts(len(rigs[0]), rung.with_fields and bool(requirements.presets))
         try:
             if rung.symmetric not in prepared_for:
-                prepared_for[rung.symmetric] = prepare(vehicle, rigs, calibration, tried, requirements.points,
-                                                       progress)
+                prepared_for[rung.symmetric] = prepare(vehicle, rigs, calibration, tried, requirements, progress)
             prepared, needs, milp = _select_seeing_fields(prepared_for[rung.symmetric], vehicle, calibration, needs,
                                                           counts, tried, progress)
             break
@@ -631,17 +634,20 @@ def _select_seeing_fields(prepared: Prepared, vehicle: Vehicle, calibration: Cal
     presets = required_fields(requirements, settings)
     for round in range(MAX_FIELD_ROUNDS + 1):
         regions = field_coverage(milp.rig, vehicle, presets, settings)
-        unseen = [(r.key, _spread(r.unseen, MAX_NEW_FIELD_POINTS)) for r in regions if len(r.unseen)]
+        unseen = [(r.key, _spread(r.unseen, MAX_NEW_FIELD_POINTS), p)
+                  for r, p in zip(regions, presets) if len(r.unseen)]
         if not unseen:
             break
         if round == MAX_FIELD_ROUNDS:
             raise DesignInfeasible(f"after {MAX_FIELD_ROUNDS} rounds the design still misses field points in the "
-                                   f"dense check ({', '.join(f'{k}: {len(u)}' for k, u in unseen)}); allow more "
+                                   f"dense check ({', '.join(f'{k}: {len(u)}' for k, u, _ in unseen)}); allow more "
                                    "cameras (--cameras), zones or pitch angles, or fewer fields (--require)")
-        points = np.concatenate([u for _, u in unseen])
+        points = np.concatenate([u for _, u, _ in unseen])
+        demands = np.concatenate([preset.pixel_demands(len(u)) for _, u, preset in unseen])
         progress(f"{len(points)} field points unseen in the dense check; solving again with them required")
-        requirements = requirements.extended(points, [label for key, u in unseen for label in field_labels(key, u)])
-        prepared = with_points(prepared, vehicle, points, settings)
+        requirements = requirements.extended(points, [label for key, u, _ in unseen for label in field_labels(key, u)],
+                                             demands)
+        prepared = with_points(prepared, vehicle, points, demands, settings)
         milp = select_valid(prepared, vehicle, calibration, requirements, counts, settings, progress)
     return prepared, requirements, milp
 

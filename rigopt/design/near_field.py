@@ -39,7 +39,7 @@ from scipy.spatial import cKDTree
 
 from rigopt.camera import Lens
 from rigopt.coverage.regulations import RegionPreset, required_mask
-from rigopt.coverage.visibility import visible_by
+from rigopt.coverage.visibility import no_pixel_demand, resolved_by
 from rigopt.design.candidates import CandidateSet, build_candidates
 from rigopt.design.defaults import DEFAULT_MAX_NODES
 from rigopt.design.requirements import DENSE_SPACING, REGION_SPACING, field_labels
@@ -102,17 +102,22 @@ def fisheye_190() -> CatalogueCamera:
 
 @dataclass(frozen=True)
 class NearFieldPoints:
-    """What the near-field cameras must see: ``points`` (q, 3) m, vehicle frame, and ``labels`` (q,)."""
+    """What the near-field cameras must see: ``points`` (q, 3) m, vehicle frame, ``labels`` (q,) and
+    ``pixel_demand`` (q, 2) float, each point's test object height m and the pixels its image must span (the near
+    ring's: nothing, in view is enough; a field's: its test object's)."""
 
     points: np.ndarray
     labels: tuple[str, ...]
+    pixel_demand: np.ndarray
 
-    def extended(self, points: np.ndarray, labels) -> "NearFieldPoints":
-        return NearFieldPoints(np.concatenate([self.points, points]), self.labels + tuple(labels))
+    def extended(self, points: np.ndarray, labels, pixel_demand: np.ndarray) -> "NearFieldPoints":
+        return NearFieldPoints(np.concatenate([self.points, points]), self.labels + tuple(labels),
+                               np.concatenate([self.pixel_demand, pixel_demand]))
 
     def subset(self, keep: np.ndarray) -> "NearFieldPoints":
         """The points where ``keep`` (q,) bool holds."""
-        return NearFieldPoints(self.points[keep], tuple(label for label, k in zip(self.labels, keep) if k))
+        return NearFieldPoints(self.points[keep], tuple(label for label, k in zip(self.labels, keep) if k),
+                               self.pixel_demand[keep])
 
     @property
     def on_ring(self) -> np.ndarray:
@@ -125,19 +130,22 @@ def near_field_points(vehicle: Vehicle, presets: tuple[RegionPreset, ...], lifte
     points inside the footprint or a keep-out in force (a coupled trailer)."""
     footprint = vehicle.footprint
     azimuths = np.linspace(-np.pi, np.pi, NEAR_RING_SECTORS, endpoint=False)
-    parts, labels = [], []
+    parts, labels, demands = [], [], []
     for height in NEAR_RING_HEIGHTS:
         for distance in NEAR_RING_DISTANCES:
             parts.append(footprint.ring_points(azimuths, distance, height))
+            demands.append(no_pixel_demand(len(azimuths)))
             labels += [f"near ring {distance:g} m at height {height:g} m, azimuth {np.rad2deg(a):+.0f} deg"
                        for a in azimuths]
     for preset in presets:
         mine = preset.points(vehicle, REGION_SPACING)
         parts.append(mine)
+        demands.append(preset.pixel_demands(len(mine)))
         labels += field_labels(preset.key, mine)
     points = np.concatenate(parts)
     keep = required_mask(vehicle, points, lifted)
-    return NearFieldPoints(points[keep], tuple(label for label, k in zip(labels, keep) if k))
+    return NearFieldPoints(points[keep], tuple(label for label, k in zip(labels, keep) if k),
+                           np.concatenate(demands)[keep])
 
 
 def near_field_candidates(vehicle: Vehicle, spacing: float, symmetric: bool, rules: MountRules = MountRules(),
@@ -284,8 +292,8 @@ def choose_near_field(vehicle: Vehicle, presets: tuple[RegionPreset, ...], spaci
     # The near ring is seen as far as the body allows: its points no candidate sees are reported, not asked;
     # a field point no candidate sees is an error (select_near_field names it).
     def seen_by_candidates(required: NearFieldPoints) -> np.ndarray:
-        return visible_by(vehicle.ray_caster, model, candidates.positions[index], candidates.rotations[index],
-                          required.points, NEAR_FIELD_RANGE)
+        return resolved_by(vehicle.ray_caster, model, candidates.positions[index], candidates.rotations[index],
+                           required.points, required.pixel_demand, NEAR_FIELD_RANGE)
 
     sees = seen_by_candidates(points)
     unseeable = points.on_ring & ~sees.any(axis=0)
@@ -307,15 +315,16 @@ def choose_near_field(vehicle: Vehicle, presets: tuple[RegionPreset, ...], spaci
         if dense:
             chosen_model = candidates.model(picked)
             for preset, field in zip(presets, dense):
-                seen = visible_by(vehicle.ray_caster, chosen_model, candidates.positions[picked],
-                                  candidates.rotations[picked], field, NEAR_FIELD_RANGE).any(axis=0)
-                unseen.append((preset.key, field[~seen]))
+                seen = resolved_by(vehicle.ray_caster, chosen_model, candidates.positions[picked],
+                                   candidates.rotations[picked], field, preset.pixel_demands(len(field)),
+                                   NEAR_FIELD_RANGE).any(axis=0)
+                unseen.append((preset, field[~seen]))
         missing = sum(len(u) for _, u in unseen)
         if not missing or round_ == DENSE_ROUNDS:
             break
         progress(f"near field: {missing} dense field point(s) unseen; round {round_ + 1}")
-        for key, extra in unseen:
-            points = points.extended(extra, field_labels(key, extra))
+        for preset, extra in unseen:
+            points = points.extended(extra, field_labels(preset.key, extra), preset.pixel_demands(len(extra)))
     if missing:
         raise DesignInfeasible(f"after {DENSE_ROUNDS} rounds the near-field cameras still miss {missing} dense field "
                                "point(s); allow more zones or a finer --spacing")

@@ -63,7 +63,7 @@ def pareto_designs(vehicle: Vehicle, references: Sequence[ReferenceRig], calibra
     base = design_requirements(references, vehicle, settings)
     if settings.require is None:  # the sweep requires fields only when named; the category's are reported
         base, settings = base.sector_only(), replace(settings, require="none")
-    prepared = prepare(vehicle, rigs, calibration, settings, base.points, progress)
+    prepared = prepare(vehicle, rigs, calibration, settings, base, progress)
     points = []
     for level in levels:
         min_coverage, min_overlap = LEVELS[level]
@@ -90,14 +90,15 @@ def near_field(rig: Rig, vehicle: Vehicle, settings: DesignSettings) -> tuple[fl
     """(ground fraction seen on the 2 m ring, unseen ground m^2 within 5 m, smallest covered fraction of the
     vehicle category's regulation fields, relative mounting cost) of ``rig`` on ``vehicle``."""
     from rigopt.coverage.measures import CoverageSettings, blind_zone, ring_coverage
-    from rigopt.coverage.regulations import default_presets
     from rigopt.design.designer import field_coverage
+    from rigopt.design.requirements import required_presets
     from rigopt.mounting.practice import mounting_costs
 
     footprint, measures = vehicle.footprint, CoverageSettings(ring_distances=(2.0,), ring_heights=(0.0,))
     ring = ring_coverage(vehicle, rig, measures, footprint)[0].covered_frac
     blind = blind_zone(vehicle, rig, measures, footprint).area_m2
-    fields = min((r.covered_frac for r in field_coverage(rig, vehicle, default_presets(vehicle), settings)), default=1.0)
+    fields = min((r.covered_frac for r in field_coverage(rig, vehicle, required_presets(vehicle, settings, "default"),
+                                                        settings)), default=1.0)
     cost = float(mounting_costs(vehicle, [c.zone for c in rig.cameras], rig.positions).sum())
     return float(ring), float(blind), float(fields), cost
 

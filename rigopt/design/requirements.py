@@ -8,7 +8,9 @@ Two kinds of requirement points, in the target vehicle's frame (ISO, metres):
   ``min_coverage`` everywhere); none inside a keep-out in force (a coupled trailer).
 - **field points**: the regulation presets' regions (``DesignSettings.require``, see
   :mod:`rigopt.coverage.regulations`), a grid every REGION_SPACING m with the regions' outlines, at each
-  preset's test-object heights. Each needs one camera, except inside the footprint or a keep-out in force.
+  preset's test-object heights. Each needs one camera that resolves it (the preset's test object standing there
+  as many pixels tall in its image as asked, ``pixel_demand``), except inside the footprint or a keep-out in
+  force.
 
 The designer meets every point exactly in its MILP; afterwards the fields are checked densely (every
 ``regions.DENSE_SPACING`` m) and unseen dense points become requirements of another round
@@ -25,7 +27,7 @@ import numpy as np
 from rigopt.camera import CameraModel
 from rigopt.coverage.matrix import rig_coverage_matrix, sector_points
 from rigopt.coverage.regulations import RegionPreset, parse_require, required_mask
-from rigopt.coverage.visibility import visible_by
+from rigopt.coverage.visibility import no_pixel_demand, resolved_by
 from rigopt.design.problem import ReferenceRig
 from rigopt.design.settings import DesignSettings
 from rigopt.mounting.practice import in_keep_outs
@@ -43,7 +45,8 @@ class Requirements:
     """Requirement points and how many cameras each needs.
 
     points (q, 3) m, vehicle frame; needed (q,) int; labels (q,) str, what each point is (for messages);
-    the first ``n_sector`` are sector points, the rest field points of ``presets``.
+    the first ``n_sector`` are sector points, the rest field points of ``presets``; pixel_demand (q, 2) float
+    each point's (test object height m, pixels its image must span; 0: in view is enough), None: nothing asked.
     """
 
     points: np.ndarray
@@ -51,11 +54,18 @@ class Requirements:
     labels: tuple[str, ...]
     n_sector: int
     presets: tuple[RegionPreset, ...] = ()
+    pixel_demand: np.ndarray | None = None
+
+    @property
+    def demands(self) -> np.ndarray:
+        """(q, 2) float: ``pixel_demand``, nothing asked where None."""
+        return no_pixel_demand(len(self.points)) if self.pixel_demand is None else self.pixel_demand
 
     def counts_matrix(self, rig: Rig, vehicle: Vehicle, settings: DesignSettings) -> np.ndarray:
-        """(k, q) bool: which points each camera of ``rig`` on ``vehicle`` sees (occlusion-aware)."""
-        return visible_by(vehicle.caster(settings.coverage.backend), CameraModel.of_cameras(rig.cameras),
-                          rig.positions, rig.rotations, self.points, settings.coverage.max_range)
+        """(k, q) bool: which points each camera of ``rig`` on ``vehicle`` resolves (occlusion-aware, each point's
+        test object as many pixels tall as it asks)."""
+        return resolved_by(vehicle.caster(settings.coverage.backend), CameraModel.of_cameras(rig.cameras),
+                           rig.positions, rig.rotations, self.points, self.demands, settings.coverage.max_range)
 
     def counts(self, rig: Rig, vehicle: Vehicle, settings: DesignSettings) -> np.ndarray:
         """(q,) int: how many cameras of ``rig`` on ``vehicle`` see each point."""
@@ -72,11 +82,13 @@ class Requirements:
         """These requirements with the sector points' needs replaced by ``needed_sectors`` (n_sector,) int."""
         return replace(self, needed=np.concatenate([needed_sectors, self.needed[self.n_sector:]]).astype(int))
 
-    def extended(self, points: np.ndarray, labels: Sequence[str]) -> "Requirements":
-        """These requirements and ``points`` (k, 3) m more, each needing one camera."""
+    def extended(self, points: np.ndarray, labels: Sequence[str], pixel_demand=None) -> "Requirements":
+        """These requirements and ``points`` (k, 3) m more, each needing one camera that resolves it at
+        ``pixel_demand`` (k, 2) (None: in view is enough)."""
+        more = no_pixel_demand(len(points)) if pixel_demand is None else np.asarray(pixel_demand, dtype=float)
         return replace(self, points=np.concatenate([self.points, points]),
                        needed=np.concatenate([self.needed, np.ones(len(points), dtype=int)]),
-                       labels=self.labels + tuple(labels))
+                       labels=self.labels + tuple(labels), pixel_demand=np.concatenate([self.demands, more]))
 
 
 def reference_requirements(reference: Rig, reference_vehicle: Vehicle, settings: DesignSettings) -> np.ndarray:
@@ -101,9 +113,14 @@ def fleet_requirements(references: Sequence[ReferenceRig], settings: DesignSetti
     return needed
 
 
-def required_presets(vehicle: Vehicle, settings: DesignSettings) -> tuple[RegionPreset, ...]:
-    """The regulation presets ``settings.require`` names for ``vehicle`` ('default' or None: its category's)."""
-    return parse_require(settings.require or "default", vehicle)
+def required_presets(vehicle: Vehicle, settings: DesignSettings, require: str | None = None
+                     ) -> tuple[RegionPreset, ...]:
+    """The regulation presets ``require`` names for ``vehicle`` (None: ``settings.require``; 'default' or None:
+    its category's), each test object asking ``settings.field_pixels`` pixels when set."""
+    presets = parse_require(require or settings.require or "default", vehicle)
+    if settings.field_pixels is None:
+        return presets
+    return tuple(preset.with_min_px(settings.field_pixels) for preset in presets)
 
 
 def design_requirements(references: Sequence[ReferenceRig], vehicle: Vehicle,
@@ -116,14 +133,15 @@ def design_requirements(references: Sequence[ReferenceRig], vehicle: Vehicle,
     labels = [f"ring {d:g} m at height {h:g} m, azimuth {np.rad2deg(a):+.0f} deg"
               for d, h, a in zip(distance, height, azimuth)]
     presets = required_presets(vehicle, settings)
-    field_points, field_needed = [points], [needed]
+    field_points, field_needed, demands = [points], [needed], [no_pixel_demand(len(points))]
     for preset in presets:
         mine = preset.points(vehicle, REGION_SPACING)
         field_points.append(mine)
         field_needed.append(required_mask(vehicle, mine, settings.rules.practice.lifted).astype(int))
+        demands.append(preset.pixel_demands(len(mine)))
         labels += field_labels(preset.key, mine)
     return Requirements(np.concatenate(field_points), np.concatenate(field_needed).astype(int), tuple(labels),
-                        len(points), presets)
+                        len(points), presets, np.concatenate(demands))
 
 
 def field_labels(key: str, points: np.ndarray) -> list[str]:

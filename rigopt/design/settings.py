@@ -240,6 +240,9 @@ class DesignSettings:
     comma-separated preset keys, ``default`` (the vehicle category's: trucks r151, r159, r158; cars r158) or
     ``none``; None (the default) requires the category's fields unless no design sees them all, when they
     are dropped with a note and reported."""
+    field_pixels: float | None = None
+    """The pixels a field's test object must be tall in a camera's image for a field point to count as seen (None:
+    each preset's own, :data:`rigopt.coverage.regulations.MIN_OBJECT_PX`; 0: in view is enough)."""
     cost_weight: float = 0.0
     """Weight of the chosen cameras' mean relative mounting cost (zone cost, tyre spray) added to the
     calibrated RigCD in the MILP's objective (0: the cost is reported only)."""

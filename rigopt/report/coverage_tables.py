@@ -9,14 +9,17 @@ from rigopt.report.html_page import escape, num, pct, table
 
 def regions_dict(regions: tuple[RegionCoverage, ...]) -> list[dict]:
     """The regulation fields' coverage (:class:`RegionCoverage`) as plain JSON values, one entry per preset:
-    ``covered`` (every required point seen), ``covered_frac`` and per height, ``weighted_covered_frac`` (each point
+    ``covered`` (every required point seen), ``covered_frac`` and per height (seen at the pixels the field's
+    ``test_object`` asks: its name, height and ``min_px``), ``in_view_frac`` (in some camera's
+    view with nothing in between, however small), ``weighted_covered_frac`` (each point
     weighted by its criticality), the required points, those unseen and those not asked for (``n_excluded``:
     inside the body's footprint or a keep-out in force), the region's area and its unseen part
     (m^2), the sampling ``spacing_m``; ``cameras``: per camera the share of the field's required points it sees
     (``seen_frac``) and sees alone (``only_frac``); ``overlap_frac`` the share seen by two or more, so that the
     ``only_frac`` values and ``overlap_frac`` add up to ``covered_frac``."""
     return [{"key": r.key, "title": r.title, "source": r.source, "heights_m": [float(h) for h in r.heights],
-             "covered": r.covered, "covered_frac": r.covered_frac,
+             "covered": r.covered, "covered_frac": r.covered_frac, "in_view_frac": r.in_view_frac,
+             "test_object": r.test_object.as_dict() if r.test_object else None,
              "weighted_covered_frac": r.weighted_covered_frac,
              "height_covered_frac": [{"height_m": float(h), "covered_frac": f}
                                      for h, f in zip(r.heights, r.height_covered_frac)],
@@ -50,6 +53,15 @@ def camera_field_rows(regions: list[dict]) -> tuple[list[str], list[list[str]]]:
     return columns, rows
 
 
+def resolution_text(region: dict) -> str:
+    """What a field's points are seen at, e.g. "a cyclist 1.6 m tall at >= 25 px"; "in view" for a field without
+    a test object."""
+    thing = region.get("test_object")
+    if not thing:
+        return "in view"
+    return f"{thing['name']} {thing['height_m']:g} m tall at >= {thing['min_px']:g} px"
+
+
 def _heights_text(region: dict) -> str:
     """A field's seen share per test-object height, e.g. '0 m 100.0 %, 0.8 m 97.5 %'."""
     return ", ".join(f"{h['height_m']:g} m {pct(h['covered_frac'])}" for h in region["height_covered_frac"])
@@ -62,17 +74,19 @@ def field_tables_html(regions: list[dict]) -> list[str]:
     report."""
     spacing = ", ".join(dict.fromkeys(f"{r['spacing_m']:g}" for r in regions))
     rows = [[f"<td>{escape(r['key'])}</td>", f"<td>{escape(r['title'])}</td>", "yes" if r["covered"] else "no",
-             pct(r["covered_frac"]), num(r["unseen_area_m2"], 1, " m²"), pct(r["weighted_covered_frac"]),
+             pct(r["covered_frac"]), f"<td>{escape(resolution_text(r))}</td>", pct(r["in_view_frac"]),
+             num(r["unseen_area_m2"], 1, " m²"), pct(r["weighted_covered_frac"]),
              f"<td>{escape(_heights_text(r))}</td>", num(r["area_m2"], 1, " m²"), f"<td>{escape(r['source'])}</td>"]
             for r in regions]
     columns, shares = camera_field_rows(regions)
     return ['<p class="note">Share of each field\'s required points (a grid and the field\'s outline every '
             f"{escape(spacing)} m, at every test-object height, each checked for the body's occlusion) seen by at "
-            "least one camera, and the field's ground where some height is unseen; weighted seen: each point "
+            "least one camera with the field's test object at least as many pixels tall as asked (in view: seen "
+            "however small), and the field's ground where some height is unseen; weighted seen: each point "
             "weighted by its criticality (nearer the body and the nearside front corner weighs more). A field is "
             "covered when every point is. Fields, figures and sources: docs/regulations.md.</p>",
-            table(["field", "what", "covered", "seen", "unseen area", "weighted seen", "seen per height", "area",
-                   "source"], rows),
+            table(["field", "what", "covered", "seen", "seen at", "in view", "unseen area", "weighted seen",
+                   "seen per height", "area", "source"], rows),
             '<p class="note">Which camera covers which field: one row per camera that sees some field, each cell '
             "the share of the field's required points the camera sees and, where it is the only camera seeing some "
             "of them, the share it sees alone; the alone shares and the share seen by two cameras or more add up "

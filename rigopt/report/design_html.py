@@ -116,14 +116,16 @@ def packaging_section(packaging: list[dict], frame: str) -> list[str]:
              escape(", ".join(f"{v:.2f}" for v in c["mount_point_m"])),
              escape(", ".join(f"{v:.2f}" for v in c["surface_normal"])), num(c["wedge_angle_deg"], 1, "°"),
              num(c["protrusion_m"], 3), num(c["nearest_ground_m"], 2), num(c["nearest_ground_from_body_m"], 2),
-             escape(resolution(c)), escape(people(c, "adult")), escape(people(c, "child")), pct(c["blocked_frac"])]
+             escape(resolution(c)), escape(people(c, "adult")), escape(people(c, "child")), pct(c["blocked_frac"]),
+             escape(blocked_by_keep_outs_text(c) or "-")]
             for c in packaging]
     adult, child = heights.get("adult", 1.8), heights.get("child", 0.8)
     return ["<h2>Packaging</h2>",
             table(["camera", "body feature (zone)", f"mount point x, y, z (m, {frame})", "surface normal",
                    "bracket wedge", "protrusion (m)", "nearest ground from lens (m)", "from body (m)",
                    "ground px/m across / along", f"{adult:g} m adult px (left / centre / right)",
-                   f"{child:g} m child px (left / centre / right)", "image blocked by body"], rows, numeric_from=4),
+                   f"{child:g} m child px (left / centre / right)", "image blocked by body",
+                   "by keep-outs (trailer)"], rows, numeric_from=4),
             '<p class="note">Per camera, through its own lens: the body feature is the mounting zone of its mount '
             "point (the lens's foot on the body surface), or the nearest zone and its distance; the surface normal "
             "is the body's outward unit normal there, and the bracket wedge the angle between it and the optical "
@@ -135,8 +137,15 @@ def packaging_section(packaging: list[dict], frame: str) -> list[str]:
             f"does not see that ground). People: a person standing {PERSON_DISTANCE_M:g} m from the lens's ground "
             "point in the direction of the image's left edge, its centre and its right edge, height in pixels of "
             "the part in the image and not hidden by the body. Image blocked: the share of a "
-            f"{BLOCKED_GRID[0]} x {BLOCKED_GRID[1]} grid of pixel rays that meets the body. Definitions in "
+            f"{BLOCKED_GRID[0]} x {BLOCKED_GRID[1]} grid of pixel rays that meets the body; by keep-outs: the "
+            "share that meets a keep-out blocking views (a coupled trailer) before the body. Definitions in "
             "docs/design.md and rigopt/coverage/packaging.py.</p>", *bracket_section(packaging, frame)]
+
+
+def blocked_by_keep_outs_text(sheet: dict) -> str:
+    """The shares of a camera's image that keep-outs block, e.g. 'trailer 41 %' ('' where none does)."""
+    return ", ".join(f"{label} {100 * share:.0f} %" for label, share in sheet.get("blocked_by_keep_outs", {}).items()
+                     if share > 0)
 
 
 def bracket_section(packaging: list[dict], frame: str) -> list[str]:

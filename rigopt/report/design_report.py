@@ -108,10 +108,11 @@ def _pose_apart(camera, reference) -> dict:
             "lenses_apart_m": float(np.linalg.norm(camera.position - reference.position))}
 
 
-def packaging_rows(rig: Rig, vehicle) -> list[dict]:
+def packaging_rows(rig: Rig, vehicle, lifted=()) -> list[dict]:
     """Each camera's packaging sheet (:mod:`rigopt.coverage.packaging`: body feature, surface normal and
     bracket wedge angle, protrusion, nearest visible ground, ground resolution, people's heights in pixels,
-    blocked share) with its bracket sheet under ``bracket`` (:mod:`rigopt.coverage.bracket`: bracket angles,
+    blocked shares: the body's, and each keep-out's in force but those ``lifted``) with its bracket sheet under
+    ``bracket`` (:mod:`rigopt.coverage.bracket`: bracket angles,
     housing and depth behind the skin, clearances, harness, exposure) as JSON values, positions measured from the report's datum
     (:func:`rigopt.coverage.packaging.report_origin`). ``rig`` may be measured from any origin the vehicle
     can place."""
@@ -120,7 +121,7 @@ def packaging_rows(rig: Rig, vehicle) -> list[dict]:
 
     origin = report_origin(vehicle).point
     return [{**sheet.to_dict(origin), "bracket": bracket.to_dict(origin)}
-            for sheet, bracket in zip(rig_packaging(rig, vehicle), rig_brackets(rig, vehicle))]
+            for sheet, bracket in zip(rig_packaging(rig, vehicle, lifted=lifted), rig_brackets(rig, vehicle))]
 
 
 def frame_dict(vehicle) -> dict:
@@ -205,7 +206,7 @@ def design_dict(result: DesignResult, rig_file: Path | None) -> dict:
                    "offered_to_milp": milp.n_offered, "repairs": milp.repairs, "seconds": result.seconds,
                    "near_field": near_field_dict(result.near_field)},
         "cameras": camera_rows(design.rig, reference, breakdown.pairs, result.vehicle, result.stand_ins),
-        "packaging": packaging_rows(design.rig, result.vehicle),
+        "packaging": packaging_rows(design.rig, result.vehicle, result.settings.rules.practice.lifted),
         "symmetry": symmetry_dict(result),
         "roles": {"perception": len(design.rig) - design.rig.near_field_count,
                   "near_field": design.rig.near_field_count},

@@ -100,3 +100,18 @@ def test_coverage_counts_the_coupled_trailer_unless_lifted(hgv):
     in_trailer = np.all((points >= low) & (points <= high), axis=1)
     assert in_trailer.any() and coupled.counts[in_trailer].sum() == 0 and solo.counts[in_trailer].sum() > 0
     assert 0.0 < coupled.covered_frac < solo.covered_frac
+
+
+def test_the_packaging_sheet_gives_the_share_of_the_image_the_trailer_blocks(hgv):
+    """The mast camera looks back over the coupled trailer: part of its image is the trailer's box (the body's
+    share unchanged), none once the trailer is lifted; a camera looking forward sees no trailer."""
+    from rigopt.coverage.packaging import camera_packaging
+
+    mast = Camera.pinhole("CAM_MAST", MAST[0], BACK_DOWN[0], 90.0)
+    ahead = Camera.pinhole("CAM_AHEAD", MAST[0], rotation_from_yaw_pitch_roll(0.0, np.deg2rad(-10.0), 0.0), 90.0)
+    coupled, solo = camera_packaging(mast, hgv), camera_packaging(mast, hgv, lifted=("trailer",))
+    (label, share), = coupled.keep_out_blocked
+    assert label == "trailer (a coupled semi-trailer)" and 0.3 < share < 1.0
+    assert solo.keep_out_blocked == () and solo.blocked_frac == coupled.blocked_frac
+    assert dict(camera_packaging(ahead, hgv).keep_out_blocked) == {label: 0.0}
+    assert coupled.to_dict()["blocked_by_keep_outs"] == {label: share}

@@ -211,7 +211,7 @@ def test_the_sheet_as_json(box):
     assert set(entry) == {"camera", "zone", "nearest_zone", "nearest_zone_m", "position_m", "mount_point_m",
                           "surface_normal", "wedge_angle_deg", "protrusion_m", "nearest_ground_m",
                           "nearest_ground_from_body_m", "ground_resolution_px_per_m", "person_height_px",
-                          "blocked_frac"}
+                          "blocked_frac", "blocked_by_keep_outs"}
     assert [g["distance_m"] for g in entry["ground_resolution_px_per_m"]] == [5.0, 10.0, 20.0]
     assert entry["ground_resolution_px_per_m"][0]["lateral"] is None and entry["nearest_ground_m"] is None
     json.dumps(entry, allow_nan=False)  # plain, strict JSON values

@@ -167,7 +167,7 @@ def test_points_are_a_grid_and_the_outline_at_every_height(firetruck, spacing):
 def test_a_front_camera_leaves_r158_unseen_and_a_rear_camera_covers_it(box_vehicle, camera, rig):
     front = rig(camera([2.03, 0.0, 1.0], yaw_deg=0.0, fov=120.0, id="FRONT"))
     rear = rig(camera([-2.03, 0.0, 1.45], yaw_deg=180.0, pitch_deg=-50.0, fov=150.0, id="REAR"))
-    preset = PRESETS["r158"]
+    preset = PRESETS["r158"].with_min_px(0)  # in view is enough: the geometry alone
     (unseen,) = region_coverage(front, box_vehicle, [preset], spacing=0.1)
     (seen,) = region_coverage(rear, box_vehicle, [preset], spacing=0.1)
     n = len(preset.points(box_vehicle, 0.1))

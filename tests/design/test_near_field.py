@@ -7,7 +7,7 @@ import pytest
 
 from rigopt.camera import CameraModel
 from rigopt.coverage.regulations import parse_require, required_mask
-from rigopt.coverage.visibility import visible_by
+from rigopt.coverage.visibility import resolved_by
 from rigopt.design import near_field
 from rigopt.design.selection import DesignInfeasible
 from rigopt.rig.library import load_rig
@@ -99,12 +99,15 @@ def test_the_tt_sees_its_rear_field_and_near_ring_with_few_fisheyes():
     rig = Rig("nf", tt.blueprint, design.rig.cameras[1:])
     assert design.rig.cameras[0].role == "perception" and len(design.rig.perception()) == 1
     assert all(c.role == "near_field" for c in rig.cameras) and 3 <= len(rig) <= 8
-    points = near_field.near_field_points(tt, presets).points
-    dense = np.concatenate([p.points(tt, 0.1) for p in presets])
+    points = near_field.near_field_points(tt, presets)
+    (r158,) = presets
+    dense = r158.points(tt, 0.1)
+    dense = dense[required_mask(tt, dense)]
     model = CameraModel.of_cameras(rig.cameras)
-    for pts in (points, dense[required_mask(tt, dense)]):
-        seen = visible_by(tt.ray_caster, model, rig.positions, rig.rotations, pts, near_field.NEAR_FIELD_RANGE)
-        assert seen.any(axis=0).all()
+    for pts, demand in ((points.points, points.pixel_demand), (dense, r158.pixel_demands(len(dense)))):
+        seen = resolved_by(tt.ray_caster, model, rig.positions, rig.rotations, pts, demand, near_field.NEAR_FIELD_RANGE)
+        assert seen.any(axis=0).all()  # each at its field's pixels (the ring's points: in view)
+    assert points.pixel_demand[:, 1].max() == r158.test_object.min_px > 0
     backwards = [c for c in rig.cameras if c.forward[0] < -0.7]
     assert 1 <= len(backwards) <= 2
 
@@ -129,11 +132,12 @@ def test_a_two_role_design_leaves_the_fields_to_its_fisheyes():
     assert [r.key for r in result.regions] == ["r158"] and result.regions[0].covered_frac == 1.0
     assert result.design.check.valid, [c.problems for c in result.design.check.cameras if not c.valid]
     nf = Rig("nf", tt.blueprint, tuple(fisheyes))
-    dense = np.concatenate([p.points(tt, 0.1) for p in parse_require("default", tt)])
+    (r158,) = parse_require("default", tt)
+    dense = r158.points(tt, 0.1)
     dense = dense[required_mask(tt, dense)]
-    seen = visible_by(tt.ray_caster, CameraModel.of_cameras(nf.cameras), nf.positions, nf.rotations, dense,
-                      near_field.NEAR_FIELD_RANGE)
-    assert seen.any(axis=0).all()
+    seen = resolved_by(tt.ray_caster, CameraModel.of_cameras(nf.cameras), nf.positions, nf.rotations, dense,
+                       r158.pixel_demands(len(dense)), near_field.NEAR_FIELD_RANGE)
+    assert seen.any(axis=0).all()  # at R158's object's 25 px
     expected = predict_transfer(load_rig("R1"), [perception], load_weights("joint"))[0].predicted_drop
     assert result.design.prediction.predicted_drop == pytest.approx(expected)
 
@@ -176,3 +180,11 @@ def test_a_trucks_default_design_puts_its_fisheyes_where_production_surround_vie
     assert fisheyes and all(c.zone in near_field.SURROUND_VIEW_ZONES for c in fisheyes)
     assert any(c.zone == "mirror" for c in fisheyes)
     assert check_rig(result.design.rig, result.vehicle, result.settings.rules).valid
+    # the fields seen at their test objects' pixels, not only in view
+    assert [(r.key, r.covered_frac) for r in result.regions] == [("r151", 1.0), ("r159", 1.0), ("r158", 1.0)]
+    assert all(r.test_object.min_px == 25.0 for r in result.regions)
+    if name == "hgv":  # the coupled trailer blocks part of some camera's view, and the report says so
+        from rigopt.report.design_report import packaging_rows
+
+        rows = packaging_rows(result.design.rig, result.vehicle, result.settings.rules.practice.lifted)
+        assert any(share > 0 for row in rows for share in row["blocked_by_keep_outs"].values())

@@ -163,7 +163,8 @@ def _field(key: str, cameras: list[tuple[str, float, float]], covered: float, we
     """A ``regions_dict`` entry of a field seen by ``cameras`` [(id, seen, alone)]."""
     overlap = covered - sum(alone for _, _, alone in cameras)
     return {"key": key, "title": f"{key} field", "source": f"UN {key}", "heights_m": [0.0, 0.8], "covered": covered == 1,
-            "covered_frac": covered, "weighted_covered_frac": weighted,
+            "covered_frac": covered, "weighted_covered_frac": weighted, "in_view_frac": 1.0,
+            "test_object": {"name": "a child", "height_m": 1.15, "width_m": 0.3, "min_px": 25.0, "source": "test"},
             "height_covered_frac": [{"height_m": 0.0, "covered_frac": covered}, {"height_m": 0.8, "covered_frac": 1.0}],
             "n_points": 100, "n_unseen": 0, "area_m2": 12.0, "unseen_area_m2": 1.5, "spacing_m": 0.1,
             "cameras": [{"camera": c, "seen_frac": s, "only_frac": a} for c, s, a in cameras], "overlap_frac": overlap}
