@@ -15,9 +15,9 @@ Definitions (one camera; its mount point and outward normal n are the body surfa
   when the ray leaves through no face, on an open mesh), at most DEPTH_CAP_M;
 - clearances (m, 0 where the lens is inside): to the nearest door opening (a door's box) and whether the lens
   is in the door's swing (the quarter cylinder the door sweeps outside its opening about its hinge line, radius
-  the door's width across the hinge); to the wheels' envelope (each tyre, a steered one swept in plan through
-  a full turn of its half-diagonal about the wheel's vertical axis, every one raised by BUMP_TRAVEL_M of
-  suspension travel); whether the tilting cab sweeps the lens; for a lens on the wiped area's zone, how far it
+  the door's width across the hinge); to the wheels' envelope (each tyre up to its bump travel, a steered one
+  turned to its lock either way: :func:`rigopt.mounting.features.wheel_envelope_distances`; a mount rule keeps
+  lenses out of it); whether the tilting cab sweeps the lens; for a lens on the wiped area's zone, how far it
   lies outside the wipers' sweep (seen from the front);
 - harness: the ECU's place (``[ecu]`` is not a spec key: rigopt assumes the centreline halfway between the
   first and last axle, or the vehicle's centre, ECU_HEIGHT_M up, under the floor or a seat) and the cable's
@@ -47,8 +47,6 @@ from rigopt.vehicle.spec import HINGE_EDGES
 
 #: Deepest (m) the depth behind the skin is measured to.
 DEPTH_CAP_M = 1.0
-#: Suspension bump travel (m) above each wheel's rest position.
-BUMP_TRAVEL_M = 0.12
 #: The assumed ECU's height above the ground (m).
 ECU_HEIGHT_M = 0.5
 #: Cable kept for service at the camera (m).
@@ -144,25 +142,10 @@ def _in_swing(point, hinge: str, low, high) -> bool:
 
 
 def wheel_envelope_distance(vehicle: Vehicle, point) -> float | None:
-    """Distance (m, 0 inside) from ``point`` (3,) to the nearest wheel's envelope (module docstring); None for a
-    vehicle whose wheels are unknown. The front axle's wheels steer."""
-    point = np.asarray(point, dtype=float)
-    if not vehicle.wheels:
-        return None
-    front = max(vehicle.axles) if vehicle.axles else None
-    gaps = []
-    for centre, radius, width in vehicle.wheels:
-        d = point - centre
-        above = max(d[2] - BUMP_TRAVEL_M, 0.0) if d[2] > 0 else d[2]  # the centre anywhere up to its bump travel
-        if front is not None and abs(centre[0] - front) < 1e-6:  # steered: a vertical disc of the half-diagonal
-            radial = max(float(np.hypot(d[0], d[1])) - float(np.hypot(radius, width / 2.0)), 0.0)
-            vertical = max(abs(above) - radius, 0.0)
-            gaps.append(float(np.hypot(radial, vertical)))
-        else:  # the tyre: a cylinder across y
-            in_plane = max(float(np.hypot(d[0], above)) - radius, 0.0)
-            across = max(abs(d[1]) - width / 2.0, 0.0)
-            gaps.append(float(np.hypot(in_plane, across)))
-    return min(gaps)
+    """Distance (m, 0 inside) from ``point`` (3,) to the nearest wheel's envelope
+    (:func:`rigopt.mounting.features.wheel_envelope_distances`); None for a vehicle whose wheels are unknown."""
+    distance = features.wheel_envelope_distances(vehicle, point)
+    return None if distance is None else float(distance[0])
 
 
 def assumed_ecu(vehicle: Vehicle) -> np.ndarray:

@@ -23,7 +23,11 @@ Per lens position (the mount points of :mod:`rigopt.mounting.sampling` leave out
     ``[[keep_out]]``): a lens within that radius of the kingpin, above it, is hit in a turn (the near-view rule
     of :func:`rigopt.mounting.rules.check_rig` and the clear directions of :mod:`rigopt.mounting.candidates`
     also keep the swing out of every camera's first metre: :func:`trailer_swings`, :func:`segments_hit_swings`);
-  - *the wiped area* (``[wiped_area]``): a lens in the windscreen's zone must look through the wiped glass.
+  - *the wiped area* (``[wiped_area]``): a lens in the windscreen's zone must look through the wiped glass;
+  - *the wheels' envelope*: the space a wheel may take: each tyre (a cylinder across the vehicle) anywhere from
+    rest up to BUMP_TRAVEL_M of suspension travel, a steered (front-axle) one turned about its vertical axis to
+    any angle within STEER_LOCK_DEG either way (:func:`wheel_envelope_distances`); no lens inside it, whatever
+    the zone says.
 
 Frames and units: ISO 8855 vehicle frame, metres; angles in degrees where named ``_deg``.
 """
@@ -52,6 +56,12 @@ _FLIP = np.array([1.0, -1.0, 1.0])
 EXEMPT_REACH_M = 0.2
 #: Protrusions beyond the width this small (m) are rounding (rig files give positions to the centimetre).
 WIDTH_TOLERANCE_M = 0.005
+#: Suspension bump travel (m) above each wheel's rest position.
+BUMP_TRAVEL_M = 0.12
+#: A steered wheel's lock (deg) either way: cars turn their front wheels 30 to 40 deg (docs/design.md).
+STEER_LOCK_DEG = 40.0
+#: Steer angles the envelope is sampled at (deg): every 2.5 deg from lock to lock.
+STEER_SAMPLES_DEG = np.linspace(-STEER_LOCK_DEG, STEER_LOCK_DEG, 33)
 
 
 def _mirrored(low, high) -> tuple[np.ndarray, np.ndarray]:
@@ -150,6 +160,40 @@ def on_arch_lips(vehicle: Vehicle, points, lip_band: float, wheel_clearance: flo
                      else f"{-gap[k]:.2f} m inside the arch")
             found[k].append(f"on the wheel-arch lip of the {arch.name} ({where})")
     return found
+
+
+def wheel_envelope_distances(vehicle: Vehicle, points) -> np.ndarray | None:
+    """(n,) float m, 0 inside: each point's (n, 3) m distance to the nearest wheel's envelope (the module
+    docstring): a tyre, a cylinder of its radius and width across y, its centre anywhere from rest up to
+    BUMP_TRAVEL_M higher; a front-axle tyre also turned about its vertical axis to each of STEER_SAMPLES_DEG
+    (the distance to the nearest of those, a hair above the swept solid's between samples). None for a vehicle
+    whose wheels are unknown."""
+    points = np.atleast_2d(np.asarray(points, dtype=float))
+    if not vehicle.wheels:
+        return None
+    front = max(vehicle.axles) if vehicle.axles else None
+    gaps = []
+    for centre, radius, width in vehicle.wheels:
+        d = points - centre
+        up = np.where(d[:, 2] > 0, np.maximum(d[:, 2] - BUMP_TRAVEL_M, 0.0), d[:, 2])  # the centre up to its bump
+        steered = front is not None and abs(centre[0] - front) < 1e-6
+        angles = np.deg2rad(STEER_SAMPLES_DEG if steered else [0.0])[:, None]  # (a, 1)
+        along = d[:, 0] * np.cos(angles) + d[:, 1] * np.sin(angles)  # (a, n): in the turned tyre's frame
+        across = -d[:, 0] * np.sin(angles) + d[:, 1] * np.cos(angles)
+        in_plane = np.maximum(np.hypot(along, up) - radius, 0.0)
+        gaps.append(np.hypot(in_plane, np.maximum(np.abs(across) - width / 2.0, 0.0)).min(axis=0))
+    return np.min(gaps, axis=0)
+
+
+def in_wheel_envelopes(vehicle: Vehicle, points) -> list[list[str]]:
+    """For each lens position (n, 3) m: the wheels' envelope when it lies inside it (the tyres with their steer
+    and bump travel, :func:`wheel_envelope_distances`)."""
+    points = np.atleast_2d(np.asarray(points, dtype=float))
+    distance = wheel_envelope_distances(vehicle, points)
+    if distance is None:
+        return [[] for _ in range(len(points))]
+    reason = f"inside the wheels' envelope (a tyre at up to {STEER_LOCK_DEG:g} deg of steer and {BUMP_TRAVEL_M:g} m of bump)"
+    return [[reason] if gap <= 0.0 else [] for gap in distance]
 
 
 def in_spray_cones(vehicle: Vehicle, points, practice: MountPractice) -> list[list[str]]:

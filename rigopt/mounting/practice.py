@@ -10,8 +10,9 @@ Besides the geometric mount rules (:mod:`rigopt.mounting.rules`) a lens may not 
   - inside one of the vehicle's keep-out boxes (``[[keep_out]]`` in its spec: roll-up locker doors, a
     coupled semi-trailer), unless that keep-out is optional and lifted by name;
   - on the body features of :mod:`rigopt.mounting.features`: steps and tailboards, door frames and hinge
-    lines, rails, ladders, light bars and racks, wheel-arch lips, tyre-spray cones, beyond the legal width, in
-    the tilt-cab arc or the trailer's swing, on the windscreen outside the wiped area.
+    lines, rails, ladders, light bars and racks, wheel-arch lips, tyre-spray cones, the wheels' envelope (steer
+    and bump), beyond the legal width, in the tilt-cab arc or the trailer's swing, on the windscreen outside
+    the wiped area.
 
 And, for a whole rig (:func:`duplicates`): no two cameras duplicate each other (the same lens, lenses within
 ``duplicate_distance`` m, optical axes within ``duplicate_angle_deg``), unless they share a module (a stereo
@@ -108,7 +109,8 @@ def practice_problems(vehicle: Vehicle, points, practice: MountPractice = MountP
               features.in_door_frames(vehicle, points, margin, practice.hinge_band),
               features.on_fixtures(vehicle, points, margin),
               features.on_arch_lips(vehicle, points, practice.lip_band, practice.wheel_clearance),
-              features.in_spray_cones(vehicle, points, practice)]
+              features.in_spray_cones(vehicle, points, practice),
+              features.in_wheel_envelopes(vehicle, points)]
     protrusion, limit = features.width_protrusion(vehicle, points, surface.normal, zones, housing,
                                                   practice.width_exempt_zones)
     tilted = features.in_tilt_arc(vehicle, points, margin)

@@ -151,7 +151,8 @@ def blocked_by_keep_outs_text(sheet: dict) -> str:
 def bracket_section(packaging: list[dict], frame: str) -> list[str]:
     """The "Brackets" table: each camera's bracket sheet (``packaging[k]["bracket"]``,
     :mod:`rigopt.coverage.bracket`); the ECU in ``frame``."""
-    from rigopt.coverage.bracket import BUMP_TRAVEL_M, SERVICE_LOOP_M
+    from rigopt.coverage.bracket import SERVICE_LOOP_M
+    from rigopt.mounting.features import BUMP_TRAVEL_M, STEER_LOCK_DEG
 
     sheets = [(c["camera"], c["bracket"]) for c in packaging if "bracket" in c]
     if not sheets:
@@ -174,8 +175,9 @@ def bracket_section(packaging: list[dict], frame: str) -> list[str]:
             '<p class="note">Bracket angles: the camera\'s yaw, pitch and roll against a bracket looking straight '
             "out of the surface with its up along the surface's up. Depth behind the skin: how far the body reaches "
             "inward along the surface normal (at most 1 m). Clearances (0: inside): the nearest door opening, a "
-            f"door's swing about its hinge; the wheels' envelope (each tyre, a steered one swept through a full turn, "
-            f"raised by {BUMP_TRAVEL_M:g} m of bump travel); the tilting cab's sweep; the wipers' sweep for a camera "
+            f"door's swing about its hinge; the wheels' envelope (each tyre up to {BUMP_TRAVEL_M:g} m of bump travel, "
+            f"a steered one turned up to {STEER_LOCK_DEG:g} deg either way); the tilting cab's sweep; the wipers' "
+            "sweep for a camera "
             f"on the windscreen. Harness: the length along the vehicle's axes to an ECU assumed at ({escape(ecu)}) m "
             f"({escape(frame)}), plus a {SERVICE_LOOP_M:g} m service loop: an estimate to start routing from. "
             "Stone chips and soiling from where the lens sits and looks (docs/design.md, rigopt/coverage/bracket.py); "

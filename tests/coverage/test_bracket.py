@@ -9,6 +9,7 @@ from box_car import BOX_BODY, BOX_WHEELS, BOX_ZONES, spec_text
 
 from rigopt.coverage import bracket
 from rigopt.geometry import rotation_from_yaw_pitch_roll
+from rigopt.mounting.features import BUMP_TRAVEL_M, STEER_LOCK_DEG, in_wheel_envelopes
 from rigopt.rig.model import Camera
 from rigopt.vehicle.model import Vehicle
 from rigopt.vehicle.spec import read_spec
@@ -46,15 +47,25 @@ def test_bracket_angles_are_the_cameras_against_a_bracket_looking_straight_out(n
 
 
 def test_the_wheel_envelope_holds_the_tyre_its_steer_sweep_and_its_bump_travel(car):
-    r, half, bump = 0.35, 0.125, bracket.BUMP_TRAVEL_M
+    r, half, bump = 0.35, 0.125, BUMP_TRAVEL_M
     rear, front = np.array([-1.3, 0.8, 0.35]), np.array([1.3, 0.8, 0.35])
     assert bracket.wheel_envelope_distance(car, rear) == 0.0  # the tyre's centre
     # 0.2 m above the rear tyre at full bump
     assert bracket.wheel_envelope_distance(car, rear + [0, 0, r + bump + 0.2]) == pytest.approx(0.2)
     # the rear tyre does not steer: 0.1 m ahead of its tread at axle height
     assert bracket.wheel_envelope_distance(car, rear + [r + 0.1, 0, 0]) == pytest.approx(0.1)
-    # the front one does: its half-diagonal swept round, 0.2 m beyond it in plan
-    assert bracket.wheel_envelope_distance(car, front + [np.hypot(r, half) + 0.2, 0, 0]) == pytest.approx(0.2)
+    # the front one steers to 40 deg either way: its outer front corner then stands at (r cos 40 - w/2 sin 40,
+    # r sin 40 + w/2 cos 40) from the centre; 0.1 m outward of it the envelope is 0.1 m away, though the
+    # straight tyre's side is 0.296 m away
+    lock = np.deg2rad(STEER_LOCK_DEG)
+    corner = np.array([r * np.cos(lock) - half * np.sin(lock), r * np.sin(lock) + half * np.cos(lock), 0.0])
+    assert bracket.wheel_envelope_distance(car, front + corner + [0, 0.1, 0]) == pytest.approx(0.1, abs=1e-9)
+    assert bracket.wheel_envelope_distance(car, rear + corner + [0, 0.1, 0]) == pytest.approx(corner[1] + 0.1 - half)
+    # inside the sweep, outside the straight tyre: refused as a mount
+    inside = front + corner * 0.9
+    assert bracket.wheel_envelope_distance(car, inside) == 0.0 and corner[1] * 0.9 > half
+    assert in_wheel_envelopes(car, [inside, front + corner + [0, 0.1, 0]]) == [
+        ["inside the wheels' envelope (a tyre at up to 40 deg of steer and 0.12 m of bump)"], []]
 
 
 def test_a_lens_in_a_doors_swing_and_its_clearance_to_the_opening(car):
