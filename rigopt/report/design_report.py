@@ -318,7 +318,7 @@ def write_design_report(result: DesignResult, out_dir, background: Background = 
     pictures = background.submit(write_design_pictures, vehicle, result.references[0], result.design.rig,
                                  naive.rig if naive is not None else None, result.regions, out_dir,
                                  result.settings.rules.practice.lifted)
-    rig_file = write_rig(result.design.rig, out_dir / "rig.json")
+    rig_file = write_rig(result.design.rig, out_dir / "rig.json", say_frame=True)
     summary = design_dict(result, Path(rig_file.name))  # named relative to the report's folder: no machine paths
     if measured is not None:
         summary["measured"] = measured

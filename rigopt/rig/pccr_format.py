@@ -19,7 +19,8 @@ ignored. rigopt adds optional keys, written only when they differ from the bench
   and kept as the lens's stated FOV, :attr:`rigopt.camera.Lens.stated_hfov`); a benchmark pinhole is written
   without them, as its ``fov`` alone.
 - per rig: ``"origin": "rear_axle"`` or ``{"custom": [x, y, z]}`` (metres, CARLA frame) when the positions
-  are not measured from the benchmark's vehicle centre.
+  are not measured from the benchmark's vehicle centre; ``"frame"``, a sentence saying the file's frame (written
+  into a design's rig.json, :func:`frame_note`; readers ignore it).
 """
 
 from __future__ import annotations
@@ -144,8 +145,20 @@ def _numbers(values, count: int, what: str) -> list[float]:
     return out
 
 
-def rig_to_dict(rig: Rig) -> dict:
-    """The benchmark JSON object of ``rig`` (CARLA frame, degrees)."""
+def frame_note(rig: Rig) -> str:
+    """The sentence a design's rig.json carries as ``"frame"``: CARLA's axes and angles, and where the positions
+    are measured from (``rig.origin``)."""
+    origin = {"vehicle_centre": "the vehicle's centre on the ground (the benchmark's origin)",
+              "rear_axle": "the ground below the rear axle's centre",
+              "custom": "the point 'origin' gives"}.get(rig.origin.kind, rig.origin.kind)
+    return (f"CARLA's vehicle frame: location [x forward, y right, z up] in metres from {origin}; rotation [pitch, "
+            "yaw, roll] in degrees; report.json and the pictures use ISO 8855 (y left) from the ground below the "
+            "rear axle's centre")
+
+
+def rig_to_dict(rig: Rig, say_frame: bool = False) -> dict:
+    """The benchmark JSON object of ``rig`` (CARLA frame, degrees); ``say_frame`` adds ``"frame"``
+    (:func:`frame_note`)."""
     location, rotation = iso_to_carla(rig.positions, rig.rotations)
     cameras = []
     for camera, loc, rot in zip(rig.cameras, location, rotation):
@@ -170,6 +183,8 @@ def rig_to_dict(rig: Rig) -> dict:
                 entry["distortion"] = {"model": lens.distortion, "coefficients": [float(c) for c in lens.coefficients]}
         cameras.append(entry)
     data = {"vehicle_type": rig.vehicle}
+    if say_frame:
+        data["frame"] = frame_note(rig)
     if not rig.origin.is_benchmark:
         if rig.origin.kind == "custom":
             location, _ = iso_to_carla(np.array([rig.origin.point]), np.eye(3)[None])
@@ -204,11 +219,11 @@ def read_rig(path, name: str | None = None) -> Rig:
     return rig_from_dict(data, name or path.stem, str(path))
 
 
-def write_rig(rig: Rig, path) -> Path:
-    """Write ``rig`` as a benchmark rig file; returns the path."""
+def write_rig(rig: Rig, path, say_frame: bool = False) -> Path:
+    """Write ``rig`` as a benchmark rig file (with ``"frame"`` when ``say_frame``); returns the path."""
     from rigopt.output import write_text_atomic
 
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    write_text_atomic(path, json.dumps(rig_to_dict(rig), indent=2) + "\n")  # whole or not at all
+    write_text_atomic(path, json.dumps(rig_to_dict(rig, say_frame), indent=2) + "\n")  # whole or not at all
     return path

@@ -1,6 +1,7 @@
 """The rig JSON's optional real-lens and origin fields: written only when needed, read back exactly."""
 
 import json
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -95,3 +96,18 @@ def test_bad_camera_names_and_far_cameras_are_refused(change, message):
     data["cameras"][0].update(change)
     with pytest.raises(RigFileError, match=message.replace("[", r"\[")):
         rig_from_dict(data, "bad", "bad.json")
+
+
+def test_a_design_rig_file_says_its_frame_and_reads_back_the_same():
+    """A design's rig.json keeps the benchmark's format and adds one sentence naming its frame; readers ignore it."""
+    from rigopt.rig.pccr_format import frame_note
+
+    rig = load_rig("R1")
+    data = rig_to_dict(rig, say_frame=True)
+    assert list(data) == ["vehicle_type", "frame", "cameras"]
+    assert data["frame"] == frame_note(rig) and data["frame"].startswith("CARLA's vehicle frame: location [x forward, y right")
+    assert "the vehicle's centre on the ground" in data["frame"]
+    again = rig_from_dict(data, "R1", "R1.json")
+    assert rig_to_dict(again) == rig_to_dict(rig)
+    axle = replace(rig, origin=RigOrigin("rear_axle"))
+    assert "below the rear axle's centre" in frame_note(axle).split(";")[0]
