@@ -206,6 +206,12 @@ def vehicle_add_command(
         console.print(f"keep-outs: {len(added.keep_outs)} narrow part(s) where no housing fits (rails, ladders, "
                       "bars): " + "; ".join(f"{k['name']} x {k['min'][0]:.2f}..{k['max'][0]:.2f} m, z "
                                             f"{k['min'][2]:.2f}..{k['max'][2]:.2f} m" for k in added.keep_outs))
+    if added.mirror:
+        low, high = added.mirror["min"], added.mirror["max"]
+        console.print(f"mirrors: the narrow parts high on the front that reach out beyond the side are mirror arms; "
+                      f"the body outboard of the side around them (x {low[0]:.2f}..{high[0]:.2f} m, z "
+                      f"{low[2]:.2f}..{high[2]:.2f} m, both sides) is a 'mirror' zone, where side and surround-view "
+                      "cameras mount (the arms stay keep-outs)")
     console.print(f"category: {added.category}, {added.category_reason}; fields required by default: "
                   f"{', '.join(CATEGORY_DEFAULTS[added.category])} (--category, or category in vehicle.toml, to change)")
     console.print(f"added vehicle {name!r}: {added.path}")

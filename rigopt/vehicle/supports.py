@@ -11,6 +11,10 @@ sqrt(2) times its side). Narrow samples are grouped (``GROUP_REACH`` m) and each
 parts and one grid pitch, the lens's 3 cm and 3 cm more), so no lens is placed on it. Edges and corners of a
 body spread over two faces and stay mountable.
 
+A narrow part that is a mirror's arm (:func:`mirror_zone`: high on the front of the body, reaching out beyond the
+body's side) holds a mirror head at its end: the body outboard of the side around it becomes a ``mirror`` zone,
+where production surround view mounts its side cameras; the arm itself stays a keep-out.
+
 ISO vehicle frame, metres.
 """
 
@@ -68,3 +72,30 @@ def narrow_keep_outs(mesh: trimesh.Trimesh, margin: float) -> list[dict]:
              "min": np.round(group.min(axis=0) - margin, 4).tolist(),
              "max": np.round(group.max(axis=0) + margin, 4).tolist()}
             for k, group in enumerate(g for g in groups if len(g) >= MIN_GROUP)]
+
+
+#: A narrow part is a mirror's arm when its lowest point is above this share of the body's height, it reaches
+#: into the front MIRROR_FRONT_SHARE of the length and out beyond the body's side.
+MIRROR_LOW_SHARE, MIRROR_FRONT_SHARE = 0.4, 0.3
+#: How far (m) around a mirror arm's box, in x and z, the mirror zone reaches (the head hangs from its end).
+MIRROR_HEAD_REACH = 0.5
+
+
+def mirror_zone(keep_outs: list[dict], bounds: np.ndarray, half_width: float) -> dict | None:
+    """A ``[[zones]]`` table named ``mirror`` over the mirror heads of ``keep_outs`` (narrow_keep_outs' tables)
+    that are mirror arms (module doc) of a body of ``bounds`` (2, 3) m and ``half_width`` m without its mirrors:
+    outboard of the side (|y| > half_width), MIRROR_HEAD_REACH m around the arms in x and z, both sides
+    (mirrored), faces looking out, forward or back (normal +y within 90 deg); None when no arm is found."""
+    (x0, _, z0), (x1, _, z1) = bounds
+    arms = [(np.asarray(k["min"]), np.asarray(k["max"])) for k in keep_outs
+            if k["min"][2] > z0 + MIRROR_LOW_SHARE * (z1 - z0) and k["max"][0] > x1 - MIRROR_FRONT_SHARE * (x1 - x0)
+            and max(abs(k["min"][1]), abs(k["max"][1])) > half_width]
+    if not arms:
+        return None
+    low, high = np.min([a[0] for a in arms], axis=0), np.max([a[1] for a in arms], axis=0)
+    reach = max(abs(low[1]), abs(high[1]))
+    return {"name": "mirror", "min": [round(float(low[0] - MIRROR_HEAD_REACH), 4), round(float(half_width), 4),
+                                      round(float(low[2] - MIRROR_HEAD_REACH), 4)],
+            "max": [round(float(high[0] + MIRROR_HEAD_REACH), 4), round(float(reach + MIRROR_HEAD_REACH), 4),
+                    round(float(high[2] + MIRROR_HEAD_REACH), 4)],
+            "normal": [0, 1, 0], "cone_deg": 90, "mirrored": True}

@@ -22,11 +22,11 @@ from rigopt.errors import DataError, RigoptError
 from rigopt.output import atomic_folder
 from rigopt.vehicle.library import SPEC_FILE, broken_user_vehicles, find_spec, user_vehicles_dir
 from rigopt.vehicle.model import ZONE_QUERY_EDGE, Vehicle, expand_zones
-from rigopt.vehicle.category import width_warning
+from rigopt.vehicle.category import body_width, width_warning
 from rigopt.vehicle.closing import SHELL_PITCHES, ClosingReport, close_mesh
 from rigopt.vehicle.orientation import PoseError, check_pose, frame_rotation
 from rigopt.vehicle.spec import CATEGORIES, read_toml, spec_from_dict
-from rigopt.vehicle.supports import narrow_keep_outs
+from rigopt.vehicle.supports import mirror_zone, narrow_keep_outs
 from rigopt.vehicle.wheels import FoundWheels, contact_height, find_wheels
 
 FRAMES = ("carla", "iso")
@@ -64,7 +64,9 @@ class PreparedMesh:
 class AddedVehicle:
     """What ``add_user_vehicle`` stored: the spec ``path``, the ``axles`` (x m, front first), the
     ``wheels`` found, the ``closing`` report, the ``keep_outs`` made for narrow parts, ``warnings`` and
-    ``notes``; its UN ``category`` and why (``category_reason``: the shape's suggestion, or that it was given)."""
+    ``notes``; its UN ``category`` and why (``category_reason``: the shape's suggestion, or that it was given);
+    ``mirror``: the ``mirror`` zone inferred over its mirror heads (:func:`rigopt.vehicle.supports.mirror_zone`),
+    or None."""
 
     path: Path
     axles: tuple[float, ...]
@@ -75,6 +77,7 @@ class AddedVehicle:
     keep_outs: tuple[dict, ...] = ()
     category: str = "M1"
     category_reason: str = ""
+    mirror: dict | None = None
 
 
 def carla_mesh_to_iso(mesh: trimesh.Trimesh) -> trimesh.Trimesh:
@@ -309,6 +312,9 @@ def add_user_vehicle(name: str, mesh_path, zones_path=None, frame: str = "iso", 
         # beyond the narrow part: its thickening and one grid pitch (an enclosed ladder is filled up to it)
         reach = (SHELL_PITCHES + 1) * prepared.closing.pitch + KEEP_OUT_CLEARANCE
         data["keep_out"] = narrow_keep_outs(prepared.raw, reach)
+        mirror = mirror_zone(data["keep_out"], mesh.bounds, body_width(body) / 2)
+        if mirror is not None:
+            data["zones"] = [*zones, mirror]
     data = {k: v for k, v in data.items() if v != [] or k in ("axles", "aliases")}
     with atomic_folder(folder, force=True, option="vehicle store") as work:
         mesh.export(work / "body.ply")
@@ -317,7 +323,8 @@ def add_user_vehicle(name: str, mesh_path, zones_path=None, frame: str = "iso", 
         shutil.rmtree(old, ignore_errors=True)  # the same name in another case, replaced (force was given)
     return AddedVehicle(folder / SPEC_FILE, found_axles, prepared.wheels, prepared.closing,
                         prepared.warnings + ((too_wide,) if too_wide else ()), prepared.notes,
-                        tuple(data.get("keep_out", ())), data["category"], reason)
+                        tuple(data.get("keep_out", ())), data["category"], reason,
+                        next((z for z in data["zones"] if z["name"] == "mirror"), None))
 
 
 def _store_folder(name: str, force: bool) -> Path:
