@@ -80,6 +80,10 @@ def coverage_command(
                                                  help=FIELD_PIXELS_HELP),
     no_trailer: bool = typer.Option(False, "--no-trailer", help=NO_TRAILER_HELP + " It then neither blocks views nor "
                                     "shapes the fields."),
+    articulation: Optional[float] = typer.Option(None, "--articulation", min=0.0, max=90.0, callback=finite(),
+                                                 help="With --require on a tractor with a semi-trailer: also the fields "
+                                                      "with the trailer turned this many degrees about its kingpin, "
+                                                      "both ways (as a right and a left turn swing it)."),
 ):
     """Coverage of a rig around its vehicle: rings at 2-50 m, bird's-eye counts, near-field blind zone, per camera."""
     from rigopt.coverage.measures import CoverageSettings, compare_coverage, coverage_report
@@ -100,12 +104,16 @@ def coverage_command(
     _refuse_blind(report, loaded, on)
     regions = region_coverage(loaded, on, presets, backend=report.settings.backend,
                               max_range=report.settings.max_range, lifted=lifted)
+    turned = _articulated_regions(loaded, on, presets, articulation, report.settings, lifted)
     other = comparison = None
     if compare is not None:
         _, other, announce_other = _report(compare, None)
         comparison = compare_coverage(other, report)  # differences: RIG minus --compare
     data = report_dict(report, loaded, report_origin(on))  # the design report's frame, as the --out folder's
     data["regions"] = regions_dict(regions)
+    if turned:
+        data["regions_articulated"] = [{"articulation_deg": angle, "regions": regions_dict(found)}
+                                       for angle, found in turned]
     if comparison is not None:
         data["compare"] = comparison_dict(comparison)
 
@@ -125,6 +133,22 @@ def coverage_command(
         print_next(f"open {out_dir / 'report.html'} (the coverage page: rings, bird's-eye map, blind zone, 3D view)")
     else:
         print_next(f"rigopt coverage {rig} --out FOLDER (the same as figures and an HTML page)")
+
+
+def _articulated_regions(rig, vehicle, presets, articulation, settings, lifted) -> list[tuple[float, tuple]]:
+    """[(angle deg, the fields' coverage with the semi-trailer turned by it), ...] for +-``articulation`` (none
+    without it, without fields, or with the trailer lifted); an error on a vehicle without a semi-trailer."""
+    from rigopt.coverage.regulations import region_coverage
+    from rigopt.vehicle.articulation import articulated
+
+    if articulation is None or not presets or "trailer" in lifted:
+        return []
+    if not any(box.kingpin is not None for box in vehicle.spec.keep_outs):
+        raise RigoptError(f"--articulation turns a semi-trailer, and {vehicle.name} has none (a [[keep_out]] with a "
+                          "kingpin); drop --articulation")
+    return [(angle, region_coverage(rig, articulated(vehicle, angle), presets, backend=settings.backend,
+                                    max_range=settings.max_range, lifted=lifted))
+            for angle in (articulation, -articulation)]
 
 
 def _write_out(out_dir: Path, force: bool, report, rig, other, comparison, regions=(), vehicle=None) -> list[Path]:
@@ -196,6 +220,14 @@ def _print_tables(data: dict, other: dict | None) -> None:
         columns, rows = camera_field_rows(data["regions"])
         print_table("regulation fields by camera: share of each field's required points a camera sees (and sees "
                     "alone); the alone shares and 'seen by >= 2' add up to 'seen by any'", columns, rows)
+    if data.get("regions_articulated"):
+        straight = {r["key"]: r for r in data["regions"]}
+        print_table("regulation fields with the semi-trailer turned about its kingpin (> 0: its rear swung right, as "
+                    "in a right turn; < 0: left): share seen as above",
+                    ["field", "straight", *(f"turned {t['articulation_deg']:+g} deg" for t in data["regions_articulated"])],
+                    [[key, f"{100 * region['covered_frac']:.1f} %",
+                      *(f"{100 * next(r for r in t['regions'] if r['key'] == key)['covered_frac']:.1f} %"
+                        for t in data["regions_articulated"])] for key, region in straight.items()])
 
     if "compare" in data:
         diff = data["compare"]

@@ -37,3 +37,21 @@ def test_the_hgvs_trailer_blocks_views_unless_lifted():
     assert all(run.returncode == 0 for run in runs), [run.stderr for run in runs]
     coupled, lifted = ([ring["covered_frac"] for ring in json.loads(run.stdout)["rings"]] for run in runs)
     assert all(a <= b + 1e-12 for a, b in zip(coupled, lifted)) and sum(lifted) - sum(coupled) > 0.3
+
+
+def test_the_fields_with_the_trailer_turned_both_ways():
+    """--articulation 30 on the hgv: the fields again with its trailer turned +30 and -30 deg (R158's ground behind
+    the tractor is asked for once the trailer no longer covers it); a car has no trailer to turn."""
+    import json
+
+    run = run_rigopt("coverage", "R9", "--vehicle", "hgv", "--require", "r151,r158", "--articulation", "30", "--json")
+    assert run.returncode == 0, run.stderr
+    data = json.loads(run.stdout)
+    turned = data["regions_articulated"]
+    assert [t["articulation_deg"] for t in turned] == [30.0, -30.0]
+    assert all([r["key"] for r in t["regions"]] == ["r151", "r158"] for t in turned)
+    straight = {r["key"]: r for r in data["regions"]}
+    assert all(t["regions"][1]["n_points"] > straight["r158"]["n_points"] for t in turned)
+    refused = run_rigopt("coverage", "R1", "--require", "r158", "--articulation", "30")
+    assert refused.returncode == 2 and refused.stderr.count("rigopt: error:") == 1
+    assert "has none" in refused.stderr and "drop --articulation" in refused.stderr
