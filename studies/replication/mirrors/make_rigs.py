@@ -15,6 +15,7 @@ import os
 import subprocess
 import sys
 import tempfile
+from contextlib import contextmanager
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
@@ -34,19 +35,35 @@ def _predictor_rig_set():
 VEHICLE = "citybus"
 
 
-def main() -> int:
+@contextmanager
+def bus_home():
+    """A temporary RIGOPT_HOME (set in the environment while inside) holding the city bus, added from its example
+    mesh as the replication's bus was; yields the folder."""
+    from rigopt.vehicle.user import add_user_vehicle
+
+    before = os.environ.get("RIGOPT_HOME")
     with tempfile.TemporaryDirectory() as home:
         os.environ["RIGOPT_HOME"] = home
+        try:
+            added = add_user_vehicle(VEHICLE, ROOT / "examples" / "raw_bus.obj", forward="+x", allow_size=True)
+            print(f"added {VEHICLE} to {home}; mirror zone: {added.mirror}", flush=True)
+            yield Path(home)
+        finally:
+            if before is None:
+                os.environ.pop("RIGOPT_HOME", None)
+            else:
+                os.environ["RIGOPT_HOME"] = before
+
+
+def main() -> int:
+    with bus_home() as home:
         from rigopt.metrics.calibration import load_weights
         from rigopt.rig.library import load_rig
         from rigopt.rig.pccr_format import write_rig
         from rigopt.validation.designs import comparison_rigs, load_design
         from rigopt.vehicle.library import load_vehicle
-        from rigopt.vehicle.user import add_user_vehicle
 
-        added = add_user_vehicle(VEHICLE, ROOT / "examples" / "raw_bus.obj", forward="+x", allow_size=True)
-        print(f"added {VEHICLE}; mirror zone: {added.mirror}", flush=True)
-        out = Path(home) / "design"
+        out = home / "design"
         rigopt = Path(sys.executable).parent / "rigopt"
         subprocess.run([str(rigopt), "design", "--vehicle", VEHICLE, "--ref", "R1", "--out", str(out), "--json"],
                        check=True, capture_output=True, text=True)

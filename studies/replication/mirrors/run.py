@@ -18,6 +18,7 @@ ROOT = HERE.parents[2]
 COMMITTED = ROOT / "studies" / "predictor" / "rigs" / "citybus_from_R1_default.json"
 REPLICATION = HERE.parent / "results"
 sys.path.insert(0, str(ROOT / "studies"))  # studylib
+sys.path.insert(0, str(HERE))  # make_rigs.bus_home
 from studylib.paired import run_cells, vehicle_draws, vehicle_mean  # noqa: E402
 from studylib.tables import markdown  # noqa: E402
 
@@ -29,15 +30,20 @@ RESAMPLES, SEED, LEVEL = 2000, 0, 1 - 0.05 / len(YARDSTICKS)
 
 
 def measure_cell(vehicle: str, protocol_name: str, cache, workers: int, progress) -> dict:
+    """The cell of one scene set, the bus in a RIGOPT_HOME of its own (its body rendered: without it the renderer
+    would draw no ego body, and it only warns)."""
     import dataclasses
 
+    from make_rigs import bus_home
     from rigopt.rig.library import load_rig
     from rigopt.validation.detectors.measuring import protocol_named
     from rigopt.validation.detectors.shipped import measure, paired_differences, shipped_detector, without_resamples
 
     rigs = [load_rig(HERE / "rigs" / f"{name}.json") for name in ("citybus_from_R1_default", *YARDSTICKS.values())]
     rigs.append(dataclasses.replace(load_rig(COMMITTED), name="citybus_from_R1_default_committed"))
-    entries = measure(rigs, shipped_detector("lss", "R1"), cache, "cpu", workers, progress, protocol_named(protocol_name))
+    with bus_home():
+        entries = measure(rigs, shipped_detector("lss", "R1"), cache, "cpu", workers, progress,
+                          protocol_named(protocol_name))
     minus = {role: paired_differences(entries[0], entry) for role, entry in zip(YARDSTICKS, entries[1:4])}
     return {"vehicle": vehicle, "protocol": protocol_name, "rigs": [without_resamples(e) for e in entries],
             "design_minus": minus, "new_minus_committed": paired_differences(entries[0], entries[4])}
