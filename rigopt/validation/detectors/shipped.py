@@ -108,15 +108,23 @@ def shipped_detector(family: str, reference: str) -> ShippedDetector:
 
 def rig_key(rig: Rig) -> str:
     """12 hex digits that change with anything that changes the rig's renderings (its file form in its vehicle's
-    centre frame, vehicle included), not with its name."""
+    centre frame, vehicle included, and the ego body drawn into them: :func:`body_digest`), not with its name."""
     from rigopt.rig.pccr_format import rig_to_dict
-    from rigopt.vehicle.placement import in_vehicle_frame
+    from rigopt.vehicle.placement import in_vehicle_frame, known_vehicle
 
     placed, _ = in_vehicle_frame(rig)
     data = rig_to_dict(placed)
-    text = json.dumps({"vehicle": data.get("vehicle_type"), "cameras": data["cameras"], "origin": data.get("origin")},
-                      sort_keys=True)
+    vehicle = known_vehicle(rig)
+    text = json.dumps({"vehicle": data.get("vehicle_type"), "cameras": data["cameras"], "origin": data.get("origin"),
+                       "body": body_digest(vehicle.mesh) if vehicle is not None else None}, sort_keys=True)
     return hashlib.sha256(text.encode()).hexdigest()[:12]
+
+
+def body_digest(mesh) -> str:
+    """16 hex digits of a body mesh's vertices and faces: a vehicle added again with another mesh under the same
+    name renders anew, and a rig rendered without its body (its vehicle unknown then) is not taken for one with it."""
+    return hashlib.sha256(np.asarray(mesh.vertices, dtype=float).tobytes()
+                          + np.asarray(mesh.faces, dtype=np.int64).tobytes()).hexdigest()[:16]
 
 
 def cache_name(rig: Rig, protocol: Protocol = FULL) -> str:

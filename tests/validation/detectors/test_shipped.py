@@ -335,3 +335,17 @@ def test_compare_pairs_the_rig_with_each_yardstick_on_the_same_scene_resamples(u
             assert entry["ci"][0] <= entry["ci"][1]
         assert paired["difference"] == pytest.approx(np.mean([s["difference"] for s in paired["seeds"].values()]))
     assert all("resampled_drops" not in s for r in result["rigs"] for s in r["seeds"].values())
+
+
+def test_the_cache_key_changes_with_the_ego_body_drawn(monkeypatch):
+    """A rig rendered while its vehicle was unknown (no ego body drawn) is not reused once the vehicle is known, nor
+    after its mesh changes."""
+    from rigopt.vehicle import placement
+
+    r1 = load_rig("R1")
+    with_body = shipped.rig_key(r1)
+    monkeypatch.setattr(placement, "known_vehicle", lambda rig: None)
+    assert shipped.rig_key(r1) != with_body
+    monkeypatch.undo()
+    monkeypatch.setattr(shipped, "body_digest", lambda mesh: "another mesh")
+    assert shipped.rig_key(r1) != with_body
