@@ -95,6 +95,7 @@ def object_pixel_heights(model: CameraModel, positions, rotations, points, objec
     axis = np.repeat(points[which, None, :], OBJECT_SAMPLES, axis=1)  # (n, k, 3): foot to top
     axis[:, :, 2] = up[None, :] * heights[which, None]
     local = np.einsum("nji,nkj->nki", rotations[cameras], axis - positions[cameras, None, :])
+    model.valid_angles  # derived once for the batch: take() hands it to the pairs instead of one lens at a time
     pair_model = model.take(cameras)
     inside = pair_model.in_view(local)
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -109,9 +110,17 @@ def fine_enough(seen, model: CameraModel, positions, rotations, points, pixel_de
     its image must span; 0 asks nothing), :func:`object_pixel_heights`."""
     fine = np.array(seen, dtype=bool)
     demand = np.asarray(pixel_demand, dtype=float).reshape(-1, 2)
+    points = np.asarray(points, dtype=float)
     cam, point = np.nonzero(fine & (demand[:, 1] > 0)[None, :])
     if len(cam):
-        small = object_pixel_heights(model, positions, rotations, points, demand[:, 0], cam, point) < demand[point, 1]
+        # the points of one ground position (a test object's heights) stand on one object: measured once
+        stands, stand_of = np.unique(np.column_stack([points[:, :2], demand[:, 0]]), axis=0, return_inverse=True)
+        stand_of = stand_of.reshape(-1)
+        pairs, pair_of = np.unique(cam * len(stands) + stand_of[point], return_inverse=True)
+        feet = np.column_stack([stands[:, :2], np.zeros(len(stands))])
+        heights = object_pixel_heights(model, positions, rotations, feet, stands[:, 2], pairs // len(stands),
+                                       pairs % len(stands))
+        small = heights[pair_of.reshape(-1)] < demand[point, 1]
         fine[cam[small], point[small]] = False
     return fine
 

@@ -103,7 +103,7 @@ def main() -> None:
                             compare_with=benchmark_rigs(vehicle))
         folder = out / f"{vehicle_name}_from_{ref}"
         folder.mkdir(exist_ok=True)
-        rig_file = write_rig(result.design.rig, folder / "rig.json")
+        rig_file = write_rig(result.design.rig, folder / "rig.json", say_frame=True)
         (folder / "report.json").write_text(json.dumps(json_ready(design_dict(result, rig_file)), indent=2) + "\n")
         write_vehicle_figure(vehicle, folder / "design.png", result.design.rig, report_origin(vehicle))
         milp = result.milp

@@ -110,7 +110,7 @@ def test_the_python_api_the_command_and_the_studies_make_the_same_rig_file(desig
     spec.loader.exec_module(module)
     assert module.command_default() == DesignSettings.preset()
     result = design_rig("firetruck", "R1")
-    written = write_rig(result.design.rig, tmp_path / "rig.json")
+    written = write_rig(result.design.rig, tmp_path / "rig.json", say_frame=True)  # as the command writes it
     assert written.read_bytes() == (design_run[1] / "rig.json").read_bytes()
 
 
