@@ -8,6 +8,7 @@ from functools import cached_property
 import numpy as np
 import trimesh
 
+from rigopt.errors import DataError
 from rigopt.raycast import RayCaster, resolve_backend
 from rigopt.vehicle.arches import WheelArch, trace_arches
 from rigopt.vehicle.build import build_mesh
@@ -18,6 +19,9 @@ from rigopt.vehicle.symmetry import MirrorSymmetry, mirror_symmetry
 
 #: Longest edge (m) of the subdivided mesh used for per-face zone queries.
 ZONE_QUERY_EDGE = 0.05
+#: How far (m) beyond its half-diagonal a feature box's centre may lie from the body's surface.
+FEATURE_REACH = 0.10
+
 def subdivide_to_size(vertices, faces, max_edge: float, max_iter: int = 10) -> tuple[np.ndarray, np.ndarray]:
     """``trimesh.remesh.subdivide_to_size`` (every edge longer than ``max_edge`` m bisected at one shared midpoint,
     until none is), the same vertices (j, 3) float and faces (q, 3) int in the same order, faster: each round
@@ -132,7 +136,28 @@ class Vehicle:
 
     @classmethod
     def from_spec(cls, spec: VehicleSpec) -> "Vehicle":
-        return cls(spec, build_mesh(spec))
+        """The vehicle of ``spec``, its mesh built; a feature box off the body is an error (:meth:`check_features`)."""
+        vehicle = cls(spec, build_mesh(spec))
+        vehicle.check_features()
+        return vehicle
+
+    def check_features(self) -> None:
+        """Every ``[[steps]]``, ``[[fixtures]]`` and ``[[door_frames]]`` box of the spec meets the body: the mesh's
+        surface comes within FEATURE_REACH m of the box's half-diagonal from its centre. A box off the body
+        contradicts the mesh (a step 5 m beside a van), and DataError says which and how far."""
+        entries = [(kind, entry) for kind, group in (("steps", self.spec.steps), ("fixtures", self.spec.fixtures),
+                                                     ("door_frames", self.spec.door_frames)) for entry in group]
+        if not entries:
+            return
+        low, high = np.array([e.min for _, e in entries]), np.array([e.max for _, e in entries])
+        _, distance, _ = trimesh.proximity.closest_point(self.mesh, (low + high) / 2)
+        gap = distance - np.linalg.norm(high - low, axis=1) / 2
+        for (kind, entry), off in zip(entries, gap):
+            if off > FEATURE_REACH:
+                raise DataError(f"{self.spec.source}: [[{kind}]] {entry.name!r} (box {np.round(entry.min, 2).tolist()}.."
+                                f"{np.round(entry.max, 2).tolist()} m) lies {off:.2f} m off the body's surface: it "
+                                "contradicts the mesh; move the box onto the body (ISO frame, metres from the "
+                                "vehicle's centre) or remove it")
 
     def __getstate__(self) -> dict:
         """A pickled vehicle (to a worker process) is its spec and its mesh's vertices and faces: its derived data,

@@ -142,3 +142,22 @@ def test_the_arches_are_traced_where_the_bodies_leave_them(name, front_top, rear
 def test_the_legal_width_is_the_default_on_every_built_in_vehicle():
     for name in ("firetruck", "hgv", "etron", "tt"):
         assert load_vehicle(name).legal_width == 2.55
+
+
+def test_a_feature_box_off_the_body_is_an_error_naming_it(tmp_path):
+    """A [[steps]] box 5 m beside the box car contradicts its mesh: one DataError with the box and how far; the
+    same step against the body's side is accepted."""
+    from box_car import spec_text
+
+    from rigopt.errors import DataError
+    from rigopt.vehicle.model import Vehicle
+    from rigopt.vehicle.spec import read_spec
+
+    def with_step(low, high):
+        path = tmp_path / "vehicle.toml"
+        path.write_text(spec_text() + f'\n[[steps]]\nname = "side step"\nmin = {low}\nmax = {high}\n')
+        return Vehicle.from_spec(read_spec(path))
+
+    with pytest.raises(DataError, match=r"\[\[steps\]\] 'side step' .* lies 4\.\d\d m off the body's surface"):
+        with_step([0.0, 6.0, 0.2], [0.4, 6.3, 0.4])
+    assert with_step([0.0, 0.9, 0.2], [0.4, 1.2, 0.4]).spec.steps[0].name == "side step"
