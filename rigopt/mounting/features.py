@@ -49,6 +49,7 @@ FIXTURE_REASONS = {
     "ladder": "a ladder: climbed, loaded and moved",
     "light_bar": "a light bar: its lamps must stay uncovered",
     "rack": "a rack: loaded and unloaded",
+    "mud_flap": "a mud flap: it flexes, swings and takes the tyre's spray",
 }
 
 _FLIP = np.array([1.0, -1.0, 1.0])

@@ -32,10 +32,10 @@ BUMP_M, LOCK_DEG, NEAR_M = 0.12, 40, 0.05
 #: The user meshes added as in the README: (name, mesh, vehicle add's flags).
 USER_MESHES = {"citybus": ("raw_bus.obj", {"forward": "+x", "allow_size": True}),
                "van": ("raw_van.obj", {"scale": 0.001})}
-VEHICLES = ["firetruck", "hgv", "tt", "etron", "chrysler_pacifica_hybrid", "ford_fusion_hybrid", "renault_zoe",
-            "citybus", "van"]
+VEHICLES = ["firetruck", "hgv", "hgv --no-trailer", "tt", "etron", "chrysler_pacifica_hybrid", "ford_fusion_hybrid",
+            "renault_zoe", "citybus", "van"]
 #: Vehicles that must use a mirror or roof-edge mount.
-HEAVY_OR_BOXY = {"firetruck", "hgv", "citybus", "van"}
+HEAVY_OR_BOXY = {"firetruck", "hgv", "hgv --no-trailer", "citybus", "van"}
 
 
 @pytest.fixture(scope="module")
@@ -102,9 +102,13 @@ def _mud_flaps(vehicle):
 
 @pytest.mark.parametrize("name", VEHICLES)
 def test_the_default_design_passes_a_packaging_check_that_reads_no_zones(home, name):
-    from rigopt.design import design_rig
+    from rigopt.design import DesignSettings, design_rig
+    from rigopt.mounting.records import MountPractice, MountRules
 
-    result = design_rig(name, "R1")
+    vehicle_name, _, flag = name.partition(" ")
+    lifted = ("trailer",) if flag == "--no-trailer" else ()  # a tractor driven solo: its mud flaps exposed
+    result = design_rig(vehicle_name, "R1", settings=DesignSettings.preset(rules=MountRules(
+        practice=MountPractice(lifted=lifted))))
     vehicle = result.vehicle
     rig, _ = to_vehicle_centre(result.design.rig, vehicle)
     points, ids = rig.positions, [c.id for c in rig.cameras]

@@ -14,9 +14,9 @@ def test_vehicle_show_names_the_body_features_the_mount_rules_read_in_the_report
     result = run_rigopt("vehicle", "show", "hgv", "--out", tmp_path / "hgv.png")
     assert result.returncode == 0, result.stderr
     kinds = [row["kind"] for row in hgv.body_features()]
-    assert kinds == ["mirror zone", "step", "step", "door", "wiped area", "tilt cab", "keep-out"]
+    assert kinds == ["mirror zone", "step", "step", "mud_flap", "door", "wiped area", "tilt cab", "keep-out"]
     flat = " ".join(result.stdout.split())  # the table's title wraps
-    for text in ("cab entry step", "catwalk", "hinged front", "on zone windshield_front", "tilts up to 65 deg",
+    for text in ("cab entry step", "catwalk", "mud flap", "hinged front", "on zone windshield_front", "tilts up to 65 deg",
                  "a coupled semi-trailer", "below the rear axle"):
         assert text in flat, text
     mirror = next(r for r in hgv.body_features() if r["kind"] == "mirror zone")
