@@ -14,6 +14,7 @@ import numpy as np
 
 from rigopt.camera import CameraModel
 from rigopt.design.settings import CatalogueCamera, catalogue_of
+from rigopt.mounting.features import WINDSCREEN_ZONE, off_windscreen_view
 from rigopt.mounting.records import MountRules
 from rigopt.errors import RigoptError
 from rigopt.geometry import rotation_from_yaw_pitch_roll
@@ -74,6 +75,14 @@ class CandidateSet:
         return self.catalogue[self.lens[k]].camera(id, self.positions[k], self.rotations[k], zone)
 
 
+def windscreen_aside(names, yaws) -> np.ndarray:
+    """(m, j) bool: mount points in the windscreen's zone (``names`` (m,)) with the yaws (j,) rad that look aside
+    (:func:`rigopt.mounting.features.off_windscreen_view`, for a level axis)."""
+    forwards = np.column_stack([np.cos(yaws), np.sin(yaws), np.zeros(len(yaws))])
+    on_glass = np.asarray([name == WINDSCREEN_ZONE for name in names], dtype=bool)
+    return on_glass[:, None] & off_windscreen_view([WINDSCREEN_ZONE] * len(yaws), forwards)[None, :]
+
+
 def build_candidates(vehicle: Vehicle, lenses, spacing: float, yaws_deg, pitches_deg, zones=None,
                      rules: MountRules = MountRules(), max_body_fraction: float | None = None,
                      symmetric: bool = False, clear_lens=None) -> CandidateSet:
@@ -98,6 +107,8 @@ def build_candidates(vehicle: Vehicle, lenses, spacing: float, yaws_deg, pitches
     for index, entry in enumerate(catalogue):
         clear = clear_directions(vehicle, points, yaws, pitches, entry.lens if clear_lens is None else clear_lens,
                                  rules)  # (m, k, j)
+        if rules.practice.feature_rules:  # a windscreen camera looks out through the glass
+            clear &= ~windscreen_aside(names, yaws)[:, None, :]
         mount, pitch_index, yaw_index = np.nonzero(clear)
         parts.append((mount, pitch_index, yaw_index, np.full(len(mount), index)))
     mount, pitch_index, yaw_index, lens = (np.concatenate(column) for column in zip(*parts))

@@ -24,6 +24,9 @@ Per lens position (the mount points of :mod:`rigopt.mounting.sampling` leave out
     of :func:`rigopt.mounting.rules.check_rig` and the clear directions of :mod:`rigopt.mounting.candidates`
     also keep the swing out of every camera's first metre: :func:`trailer_swings`, :func:`segments_hit_swings`);
   - *the wiped area* (``[wiped_area]``): a lens in the windscreen's zone must look through the wiped glass;
+  - *through the windscreen*: a camera in the windscreen's zone (WINDSCREEN_ZONE) sits behind the glass and looks
+    out through it: its view within WINDSCREEN_VIEW_DEG of straight ahead in plan (:func:`off_windscreen_view`);
+    one looking sideways would be a housing on the glass's outside;
   - *the wheels' envelope*: the space a wheel may take: each tyre (a cylinder across the vehicle) anywhere from
     rest up to BUMP_TRAVEL_M of suspension travel, a steered (front-axle) one turned about its vertical axis to
     any angle within STEER_LOCK_DEG either way (:func:`wheel_envelope_distances`); no lens inside it, whatever
@@ -57,6 +60,10 @@ _FLIP = np.array([1.0, -1.0, 1.0])
 EXEMPT_REACH_M = 0.2
 #: Protrusions beyond the width this small (m) are rounding (rig files give positions to the centimetre).
 WIDTH_TOLERANCE_M = 0.005
+#: The zone of the front windscreen, whose cameras sit behind the glass and look out through it.
+WINDSCREEN_ZONE = "windshield_front"
+#: Largest angle (deg) in plan between a windscreen camera's optical axis and straight ahead.
+WINDSCREEN_VIEW_DEG = 60.0
 #: Suspension bump travel (m) above each wheel's rest position.
 BUMP_TRAVEL_M = 0.12
 #: A steered wheel's lock (deg) either way: cars turn their front wheels 30 to 40 deg (docs/design.md).
@@ -184,6 +191,17 @@ def wheel_envelope_distances(vehicle: Vehicle, points) -> np.ndarray | None:
         in_plane = np.maximum(np.hypot(along, up) - radius, 0.0)
         gaps.append(np.hypot(in_plane, np.maximum(np.abs(across) - width / 2.0, 0.0)).min(axis=0))
     return np.min(gaps, axis=0)
+
+
+def off_windscreen_view(zones, forwards) -> np.ndarray:
+    """(n,) bool: cameras in the windscreen's zone (``zones`` (n,) names) whose optical axes ``forwards`` (n, 3)
+    do not look out through it: in plan more than WINDSCREEN_VIEW_DEG from straight ahead (or straight up or
+    down)."""
+    forwards = np.atleast_2d(np.asarray(forwards, dtype=float))
+    on_glass = np.asarray([zone == WINDSCREEN_ZONE for zone in zones], dtype=bool)
+    heading = np.degrees(np.arctan2(np.abs(forwards[:, 1]), forwards[:, 0]))
+    level = np.hypot(forwards[:, 0], forwards[:, 1]) > 1e-9
+    return on_glass & (~level | (heading > WINDSCREEN_VIEW_DEG))
 
 
 def in_wheel_envelopes(vehicle: Vehicle, points) -> list[list[str]]:

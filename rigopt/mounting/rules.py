@@ -43,7 +43,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from rigopt.mounting.features import trailer_swings
+from rigopt.mounting.features import WINDSCREEN_VIEW_DEG, off_windscreen_view, trailer_swings
 from rigopt.mounting.practice import duplicates, keep_out_boxes, practice_problems, separate_housings
 from rigopt.mounting.records import CameraCheck, MountRules, RaisedMount, RigCheck
 from rigopt.mounting.shapes import (box_object, collides, frustum_object, housing_object, post_object, probe_rays,
@@ -109,6 +109,10 @@ def check_rig(rig: Rig, vehicle: Vehicle, rules: MountRules = MountRules()) -> R
         zone = mount.zone.name if mount is not None else zones[k]
         if zone is None:
             problems.append("outside every mounting zone")
+        elif rules.practice.feature_rules and off_windscreen_view([zone], camera.forward)[0]:
+            problems.append(f"on the windscreen looking aside: a windscreen camera sits behind the glass and looks out "
+                            f"through it, within {WINDSCREEN_VIEW_DEG:g} deg of straight ahead; one looking aside is a "
+                            "housing on the glass's outside")
         problems += _clash_problems(k, rig, housings)
         problems += [reason for reason in (duplicated[k], crowded[k]) if reason is not None]
         checks.append(CameraCheck(camera.id, not problems, distance, zone, tuple(problems)))
