@@ -229,3 +229,11 @@ def test_subset_takes_rows_and_keeps_the_mount_points(candidates):
     np.testing.assert_array_equal(part.fovs, candidates.fovs[index])
     np.testing.assert_array_equal(part.mount, candidates.mount[index])
     assert part.mount_points is candidates.mount_points
+
+
+def test_windscreen_mounts_keep_only_the_yaws_looking_out_through_the_glass():
+    from rigopt.design.candidates import windscreen_aside
+
+    yaws = np.radians([0.0, 55.0, 65.0, -90.0, 180.0])
+    assert windscreen_aside(["windshield_front", "b_pillar"], yaws).tolist() == [
+        [False, False, True, True, True], [False] * 5]

@@ -199,3 +199,31 @@ def test_lenses_closer_than_a_modules_size_become_one_module_chained_and_duplica
     named = as_modules(Rig("r", "vehicle.audi.tt", (_pinhole("A", 0.0), _pinhole("B", 0.2, fov=60.0, module="pod"))))
     assert [c.module for c in named.cameras] == ["pod", "pod"]  # a member's module is kept
     assert as_modules(rig, MountPractice(features=False)) is rig
+
+
+@pytest.mark.parametrize("forward, aside", [([1.0, 0.0, 0.0], False), ([0.5, -0.5, -0.2], False),
+                                            ([np.cos(np.radians(61)), np.sin(np.radians(61)), 0.0], True),
+                                            ([0.0, -1.0, 0.0], True), ([0.0, 0.0, -1.0], True)])
+def test_a_windscreen_camera_looks_out_through_the_glass(forward, aside):
+    from rigopt.mounting.features import WINDSCREEN_ZONE, off_windscreen_view
+
+    assert off_windscreen_view([WINDSCREEN_ZONE], forward)[0] == aside
+    assert not off_windscreen_view(["b_pillar"], forward)[0]  # elsewhere any way
+
+
+def test_check_refuses_a_camera_on_the_windscreen_looking_aside():
+    """On the etron's windscreen: a camera looking ahead passes this rule, the same one turned right is refused
+    (a housing on the glass's outside); the feature rules off, it is not."""
+    from rigopt.geometry import rotation_from_yaw_pitch_roll
+
+    etron = load_vehicle("etron")
+    points, _, names = sample_zone_points(etron, 0.1, ("windshield_front",))
+    spot = points[np.argmin(np.abs(points[:, 1]))]  # on the centreline
+    rig = Rig("glass", etron.blueprint, tuple(
+        Camera.pinhole(f"CAM_{yaw}", spot, rotation_from_yaw_pitch_roll(np.radians(yaw), 0.0, 0.0), 65.0)
+        for yaw in (0, -90)))
+    ahead, aside = check_rig(rig, etron).cameras
+    assert not any("windscreen" in p for p in ahead.problems)
+    assert any(p.startswith("on the windscreen looking aside") for p in aside.problems)
+    relaxed = check_rig(rig, etron, MountRules(practice=MountPractice(features=False))).cameras[1]
+    assert not any("windscreen" in p for p in relaxed.problems)
