@@ -135,6 +135,35 @@ def coverage_command(
         print_next(f"rigopt coverage {rig} --out FOLDER (the same as figures and an HTML page)")
 
 
+def _print_field_tables(data: dict) -> None:
+    """The regulation fields' tables of a coverage report (``data``: report_dict with ``regions`` and, with
+    --articulation, ``regions_articulated``): the fields, the cameras by field, the fields with the trailer turned."""
+    from rigopt.report.coverage_tables import camera_field_rows, resolution_text
+
+    if data.get("regions"):
+        print_table("regulation fields (--require): required points seen by >= 1 camera with the field's test object "
+                    "as many pixels tall as asked (in view: however small), the unseen ground beside it; weighted: "
+                    "each point by its criticality (docs/regulations.md); covered = all of them",
+                    ["field", "covered", "seen", "seen at", "in view", "unseen area (m²)", "weighted seen",
+                     "seen per height", "area (m²)", "points"],
+                    [[r["key"], "yes" if r["covered"] else "no", f"{100 * r['covered_frac']:.1f} %",
+                      resolution_text(r), f"{100 * r['in_view_frac']:.1f} %", f"{r['unseen_area_m2']:.1f}",
+                      f"{100 * r['weighted_covered_frac']:.1f} %",
+                      ", ".join(f"{h['height_m']:g} m {100 * h['covered_frac']:.1f} %" for h in r["height_covered_frac"]),
+                      f"{r['area_m2']:.1f}", r["n_points"]] for r in data["regions"]])
+        columns, rows = camera_field_rows(data["regions"])
+        print_table("regulation fields by camera: share of each field's required points a camera sees (and sees "
+                    "alone); the alone shares and 'seen by >= 2' add up to 'seen by any'", columns, rows)
+    if data.get("regions_articulated"):
+        turned = data["regions_articulated"]
+        print_table("regulation fields with the semi-trailer turned about its kingpin (> 0: its rear swung right, as "
+                    "in a right turn; < 0: left): share seen as above",
+                    ["field", "straight", *(f"turned {t['articulation_deg']:+g} deg" for t in turned)],
+                    [[r["key"], f"{100 * r['covered_frac']:.1f} %",
+                      *(f"{100 * t['regions'][k]['covered_frac']:.1f} %" for t in turned)]
+                     for k, r in enumerate(data["regions"])])
+
+
 def _articulated_regions(rig, vehicle, presets, articulation, settings, lifted) -> list[tuple[float, tuple]]:
     """[(angle deg, the fields' coverage with the semi-trailer turned by it), ...] for +-``articulation`` (none
     without it, without fields, or with the trailer lifted); an error on a vehicle without a semi-trailer."""
@@ -205,29 +234,7 @@ def _print_tables(data: dict, other: dict | None) -> None:
                   f"{100 * bev['covered_frac_within_20m']:.1f} % of cells within 20 m seen, "
                   f"{100 * bev['overlap2_frac_within_20m']:.1f} % by >= 2 cameras, at most {bev['max_count']}")
 
-    if data.get("regions"):
-        from rigopt.report.coverage_tables import camera_field_rows, resolution_text
-
-        print_table("regulation fields (--require): required points seen by >= 1 camera with the field's test object "
-                    "as many pixels tall as asked (in view: however small), the unseen ground beside it; weighted: "
-                    "each point by its criticality (docs/regulations.md); covered = all of them",
-                    ["field", "covered", "seen", "seen at", "in view", "unseen area (m²)", "weighted seen",
-                     "seen per height", "area (m²)", "points"],
-                    [[r["key"], "yes" if r["covered"] else "no", f"{100 * r['covered_frac']:.1f} %",
-                      resolution_text(r), f"{100 * r['in_view_frac']:.1f} %", f"{r['unseen_area_m2']:.1f}", f"{100 * r['weighted_covered_frac']:.1f} %",
-                      ", ".join(f"{h['height_m']:g} m {100 * h['covered_frac']:.1f} %" for h in r["height_covered_frac"]),
-                      f"{r['area_m2']:.1f}", r["n_points"]] for r in data["regions"]])
-        columns, rows = camera_field_rows(data["regions"])
-        print_table("regulation fields by camera: share of each field's required points a camera sees (and sees "
-                    "alone); the alone shares and 'seen by >= 2' add up to 'seen by any'", columns, rows)
-    if data.get("regions_articulated"):
-        straight = {r["key"]: r for r in data["regions"]}
-        print_table("regulation fields with the semi-trailer turned about its kingpin (> 0: its rear swung right, as "
-                    "in a right turn; < 0: left): share seen as above",
-                    ["field", "straight", *(f"turned {t['articulation_deg']:+g} deg" for t in data["regions_articulated"])],
-                    [[key, f"{100 * region['covered_frac']:.1f} %",
-                      *(f"{100 * next(r for r in t['regions'] if r['key'] == key)['covered_frac']:.1f} %"
-                        for t in data["regions_articulated"])] for key, region in straight.items()])
+    _print_field_tables(data)
 
     if "compare" in data:
         diff = data["compare"]
