@@ -216,6 +216,10 @@ def validate_command(
     cache: Optional[Path] = typer.Option(None, "--cache", help="Without --data: where the renderings are kept "
                                          "(default $RIGOPT_HOME/cache/validate, ~/.rigopt/cache/validate)."),
     workers: int = typer.Option(0, "--workers", min=0, help="Without --data: rendering processes (0: one per core)."),
+    ray: Optional[str] = typer.Option(None, "--ray", help="Without --data: render each (rig, scene) pair and score "
+                                      "each (rig, seed) as a task on the Ray cluster at this address ('local' "
+                                      "starts one here); --cache must be on storage every node sees. The same "
+                                      "figures as on one machine."),
     protocol: Optional[str] = typer.Option(None, "--protocol", help="Without --data: full (every frame of the "
                                            "reference's test scenes) or quick (every 4th frame, a quarter of the "
                                            "time; mean |quick - full| 0.005 on 63 rigs, "
@@ -253,8 +257,10 @@ def validate_command(
     if data is None and runs is not None:
         raise RigoptError("--runs names trained runs of a --data folder: add --data, or leave --runs out to use the "
                           "shipped models")
-    if data is not None and protocol is not None:
-        raise RigoptError("--protocol is for the shipped models (no --data); with --data every test sample is scored")
+    if data is not None and (protocol is not None or ray is not None):
+        option = "--protocol" if protocol is not None else "--ray"
+        raise RigoptError(f"{option} is for the shipped models (no --data); with --data every test sample is scored "
+                          "on this machine")
     chosen = protocol_named(protocol) if protocol is not None else DEFAULT_PROTOCOL
     if data is not None and (cache is not None or compare):
         raise RigoptError(f"--{'cache' if cache is not None else 'compare'} is for the shipped models (no --data); "
@@ -270,7 +276,7 @@ def validate_command(
     resolve_device(device)
     if data is None:
         _validate_shipped(rigs, ref, family, calibration, drop_model, device, cache, workers, chosen, compare, out,
-                          as_json)
+                          as_json, ray)
         return
     rig = rigs[0]
     with status_console.status("validating") as status:
@@ -302,8 +308,9 @@ def validate_command(
 
 
 def _validate_shipped(measured_rigs: list, ref: str, family: str, calibration, drop_model, device: str, cache,
-                      workers: int, protocol, compare: bool, out, as_json: bool) -> None:
-    """validate without --data: the shipped models, the reference's test scenes rendered into the cache."""
+                      workers: int, protocol, compare: bool, out, as_json: bool, ray: str | None = None) -> None:
+    """validate without --data: the shipped models, the reference's test scenes rendered into the cache (as Ray
+    tasks with ``ray``, a cluster's address or 'local')."""
     import json
     import os
 
@@ -340,7 +347,7 @@ def _validate_shipped(measured_rigs: list, ref: str, family: str, calibration, d
     workers = workers or os.cpu_count() or 1
     resumable(f"rerun the same command: the renderings finished so far are kept in {cache or default_cache()}")
     with status_console.status("validating") as status:
-        measured = measure([r for _, r in rigs], detector, cache, device, workers, status.update, protocol)
+        measured = measure([r for _, r in rigs], detector, cache, device, workers, status.update, protocol, ray)
     predictions = predict_transfer(reference, [r for _, r in rigs], calibration, drop_model, rig_body_share)
     card = detector.card
     result = {"reference": reference.name, "model": family, "models": "shipped", "detector": detector.folder.name,

@@ -683,6 +683,8 @@ CASES: list[tuple[str, list[str], str]] = [
      "unknown measurement protocol"),
     ("validate --protocol with --data", ["validate", "R5", "--ref", "R1", "--model", "lss", "--protocol", "quick",
                                          "--data", f"{T}/bench"], "--protocol is for the shipped models"),
+    ("validate --ray with --data", ["validate", "R5", "--ref", "R1", "--model", "lss", "--ray", "local",
+                                    "--data", f"{T}/bench"], "--ray is for the shipped models"),
     ("validate several rigs with --compare", ["validate", "R5", "R4", "--ref", "R1", "--model", "lss", "--compare"],
      "--compare validates one rig at a time"),
     ("design --measure with --pareto", ["design", "--vehicle", "tt", "--ref", "R1", "--measure", "--pareto", "--out",

@@ -144,22 +144,24 @@ def test_scenes(detector: ShippedDetector, protocol: Protocol = FULL):
 
 
 def render_cached(rigs: Sequence[Rig], detector: ShippedDetector, cache: Path, workers: int = 1,
-                  progress: Callable[[str], None] = lambda message: None, protocol: Protocol = FULL) -> list[str]:
+                  progress: Callable[[str], None] = lambda message: None, protocol: Protocol = FULL,
+                  ray_address: str | None = None) -> list[str]:
     """Render the reference's test scenes (the frames of ``protocol``) under each rig into ``cache`` (what is
-    there is kept); returns the rigs' folder names there."""
+    there is kept), in ``workers`` processes or as Ray tasks at ``ray_address``; returns the rigs' folder names
+    there."""
     from rigopt.validation.synthetic.generate import ego_body_lookup, generate_split
     from rigopt.validation.synthetic.render import render_rig
 
     named = [dataclasses.replace(rig, name=cache_name(rig, protocol)) for rig in rigs]
     size = tuple(detector.card["test_data"]["image_size"])
     generate_split(named, test_scenes(detector, protocol), cache, size, render_rig, ego_body_lookup(progress),
-                   progress, workers=workers)
+                   progress, ray_address=ray_address, workers=workers)
     return [rig.name for rig in named]
 
 
 def measure(rigs: Sequence[Rig], detector: ShippedDetector, cache: Path | None = None, device: str = "cpu",
             workers: int = 1, progress: Callable[[str], None] = lambda message: None,
-            protocol: Protocol = DEFAULT_PROTOCOL) -> list[dict]:
+            protocol: Protocol = DEFAULT_PROTOCOL, ray_address: str | None = None) -> list[dict]:
     """Each rig's measured drop with every shipped seed under ``protocol``: a list (one per rig) of JSON-ready dicts.
 
     Per seed: ``mAP`` and ``mAP_visible`` on the reference's test scenes (the protocol's frames) rendered under the
@@ -169,13 +171,15 @@ def measure(rigs: Sequence[Rig], detector: ShippedDetector, cache: Path | None =
     (resamples,) fixed-set drops under those resamples (``resampled_drops``, an array: :func:`paired_differences`
     pairs two rigs by them; :func:`without_resamples` before writing JSON). Rendering runs in ``workers``
     processes, and so does scoring on the CPU: one pool for every (rig, seed), each process loading a model
-    once, the cores shared among them (on a GPU one process). ``progress`` hears of each rig as it is scored.
+    once, the cores shared among them (on a GPU one process). With ``ray_address`` the renderings and the (rig,
+    seed) scorings run as Ray tasks there instead (``cache`` on storage every node sees); the figures are the same.
+    ``progress`` hears of each rig as it is scored.
     """
     from rigopt.validation.synthetic.cluster import run_tasks
 
     cache = Path(cache) if cache is not None else default_cache()
     references = reference_scores(detector, protocol)  # a pack without this protocol fails before any work
-    folders = render_cached(rigs, detector, cache, workers, progress, protocol)
+    folders = render_cached(rigs, detector, cache, workers, progress, protocol, ray_address)
     # On the CPU with workers > 1, as many one-thread processes as seeds, the cores shared among them: on 2 cores
     # three one-thread processes finish sooner than two (the third seed would run alone on one core) or than one
     # two-thread process in turn (a second thread speeds a small network up 1.75x, not 2x).
@@ -183,10 +187,10 @@ def measure(rigs: Sequence[Rig], detector: ShippedDetector, cache: Path | None =
     threads = max(1, (os.cpu_count() or 1) // scorers) if scorers > 1 else None
     calls = {(k, seed): (detector, seed, cache, folder, protocol, device, threads)
              for k, folder in enumerate(folders) for seed in detector.seeds}
-    progress(f"scoring {len(rigs)} rig(s) with {len(detector.seeds)} {detector.family} model(s)"
-             + (f" in {scorers} processes" if scorers > 1 else ""))
+    where = " as Ray tasks" if ray_address else f" in {scorers} processes" if scorers > 1 else ""
+    progress(f"scoring {len(rigs)} rig(s) with {len(detector.seeds)} {detector.family} model(s){where}")
     scores, left = {}, {k: len(detector.seeds) for k in range(len(rigs))}
-    for (k, seed), scored in run_tasks(score_seed, calls, workers=scorers, what="scoring (rig, seed)"):
+    for (k, seed), scored in run_tasks(score_seed, calls, ray_address, workers=scorers, what="scoring (rig, seed)"):
         scores[k, seed] = scored
         left[k] -= 1
         if not left[k]:

@@ -349,3 +349,27 @@ def test_the_cache_key_changes_with_the_ego_body_drawn(monkeypatch):
     monkeypatch.undo()
     monkeypatch.setattr(shipped, "body_digest", lambda mesh: "another mesh")
     assert shipped.rig_key(r1) != with_body
+
+
+@pytest.mark.slow
+def test_validate_on_a_local_ray_cluster_gives_the_figures_of_one_machine(use_packed, tmp_path):
+    """R3 and R6 measured with the renderings and the (rig, seed) scorings as Ray tasks ('local') give the same
+    drops, resampled drops too, as two separate runs on this machine, each into a cache of its own; so does the
+    command ``rigopt validate R3 R6 --ref R1 --ray local``."""
+    ray = pytest.importorskip("ray")
+    detector = shipped.shipped_detector("lss", "R1")
+    rigs = [load_rig("R3"), load_rig("R6")]
+    alone = [shipped.measure([rig], detector, tmp_path / f"alone-{rig.name}")[0] for rig in rigs]
+    try:
+        clustered = shipped.measure(rigs, detector, tmp_path / "ray", ray_address="local")
+        command = run_rigopt("validate", "R3", "R6", "--ref", "R1", "--model", "lss", "--ray", "local", "--json",
+                             "--cache", tmp_path / "cli")
+    finally:
+        ray.shutdown()
+    for one, other in zip(alone, clustered):
+        figures = [{k: v for k, v in shipped.without_resamples(e).items() if k != "cache"} for e in (one, other)]
+        assert figures[0] == figures[1] and other["cache"].startswith(str(tmp_path / "ray"))
+        for seed, entry in one["seeds"].items():
+            assert np.array_equal(entry["resampled_drops"], other["seeds"][seed]["resampled_drops"])
+    assert command.returncode == 0, command.stderr
+    assert [e["drop"] for e in json.loads(command.stdout)["rigs"]] == [e["drop"] for e in alone]
