@@ -247,8 +247,8 @@ class Vehicle:
         reason, the wiped area's zone) and the box ``min``, ``max`` (3,) m, vehicle-centre frame (a mirrored
         entry gives its +y box; None for the wiped area, an outline on the glass)."""
         spec = self.spec
-        rows = [{"kind": "mirror zone", "name": z.name, "note": "mounting zone", "min": z.min, "max": z.max}
-                for z in spec.zones if z.name.startswith("mirror")]
+        rows = [{"kind": "mirror zone", "name": z.name, "note": "mounting zone" + (", mirrored" if z.mirrored else ""),
+                 "min": z.min, "max": z.max} for z in spec.zones if z.name.startswith("mirror")]
         rows += [{"kind": f.kind, "name": f.name, "note": "mirrored" if f.mirrored else "", "min": f.min,
                   "max": f.max} for f in (*spec.steps, *spec.fixtures)]
         rows += [{"kind": "door", "name": d.name, "note": f"hinged {d.hinge}" if d.hinge else "sliding or unknown",
