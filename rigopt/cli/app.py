@@ -78,6 +78,10 @@ def note_fallback(calibration) -> None:
 MIN_HEIGHT_HELP = ("Lowest lens height above the ground (m); default: the vehicle's min_lens_height, else 0.5 "
                    "(tyre spray, kerbs).")
 NO_TRAILER_HELP = "Lift the vehicle's optional trailer keep-out (a tractor unit driven without its semi-trailer)."
+#: The --field-pixels option's help (design and coverage).
+FIELD_PIXELS_HELP = ("Pixels a field's test object must be tall in a camera's image for its point to count as seen "
+                     "(default 25, KITTI's smallest evaluated box; 0: in view is enough, however small). The test "
+                     "objects and their heights: docs/regulations.md.")
 
 
 def mount_rules(min_height, no_trailer: bool):

@@ -8,8 +8,8 @@ from typing import Optional
 
 import typer
 
-from rigopt.cli.app import (FORCE_HELP, NO_TRAILER_HELP, app, console, finite, note_vehicle, print_json,
-                            print_next, print_table)
+from rigopt.cli.app import (FIELD_PIXELS_HELP, FORCE_HELP, NO_TRAILER_HELP, app, console, finite, note_vehicle,
+                            print_json, print_next, print_table)
 from rigopt.errors import RigoptError
 
 
@@ -19,12 +19,6 @@ REQUIRE_HELP = ("Regulation fields every camera-visible point of which is checke
                 "classes II, IV, V, VI), dvs (London Direct Vision Standard); default (the vehicle category's: trucks "
                 "and buses r151,r159,r158, cars and vans r158) or none. Add :lht for left-hand traffic (nearside on the left), e.g. "
                 "r151:lht. See docs/regulations.md.")
-
-#: The --field-pixels option's help (design and coverage).
-FIELD_PIXELS_HELP = ("Pixels a field's test object must be tall in a camera's image for its point to count as seen "
-                     "(default 25, KITTI's smallest evaluated box; 0: in view is enough, however small). The test "
-                     "objects and their heights: docs/regulations.md.")
-
 
 def _placed(rig_name: str, vehicle: Optional[str]):
     """The rig on ``vehicle`` (or its own), origin converted to the vehicle's centre, cameras inside the body

@@ -8,9 +8,8 @@ from typing import TYPE_CHECKING, Optional
 
 import typer
 
-from rigopt.cli.app import (FORCE_HELP, MIN_HEIGHT_HELP, NO_TRAILER_HELP, app, between, finite, more_than,
-                            mount_rules, note, note_fallback, print_json, print_next, print_table)
-from rigopt.cli.coverage_command import FIELD_PIXELS_HELP
+from rigopt.cli.app import (FIELD_PIXELS_HELP, FORCE_HELP, MIN_HEIGHT_HELP, NO_TRAILER_HELP, app, between, finite,
+                            more_than, mount_rules, note, note_fallback, print_json, print_next, print_table)
 from rigopt.cli.metric_commands import METRIC_HELP, PREDICTOR_HELP
 from rigopt.cli.parsing import image_size_text, parse_image_size
 from rigopt.benchmark import BENCHMARK_IMAGE_SIZE

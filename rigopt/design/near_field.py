@@ -51,6 +51,7 @@ from rigopt.design.selection import (
 )
 from rigopt.design.settings import CatalogueCamera
 from rigopt.errors import RigoptError
+from rigopt.mounting.features import GLASS_ZONES
 from rigopt.mounting.practice import as_modules, mounting_costs
 from rigopt.mounting.records import MountPractice, MountRules
 from rigopt.mounting.shapes import NEAR_FIELD_CLEAR_CONE_DEG
@@ -87,9 +88,6 @@ SURROUND_VIEW_ZONES = ("mirror", "bumper_front", "bumper_rear", "roof_rear")
 #: Extra mounting cost of a near-field fisheye anywhere else, in units of an ordinary panel's (1): with the fewest
 #: cameras first, it decides between mounts that see as much.
 OFF_SPOT_COST = 1.0
-#: Glass no near-field fisheye is mounted on the outside of (a surround-view camera behind a windscreen would see
-#: the dashboard; on it, it sits in the wipers' sweep).
-GLASS_ZONES = ("windshield_front", "windshield_rear")
 
 
 def fisheye_190() -> CatalogueCamera:
@@ -164,7 +162,8 @@ def near_field_candidates(vehicle: Vehicle, spacing: float, symmetric: bool, rul
 
 def near_field_zones(vehicle: Vehicle, zones=None) -> tuple[str, ...]:
     """The zones a near-field fisheye may sit on: ``zones`` (None: the vehicle's zones that are sampled without being
-    named, those on the body's surface) less GLASS_ZONES."""
+    named, those on the body's surface) less the glass (GLASS_ZONES: a surround-view camera behind a windscreen would
+    see the dashboard; on it, it sits in the wipers' sweep)."""
     asked = zones if zones is not None else [z.name for z in vehicle.zones if not z.raised_max]
     allowed = tuple(name for name in dict.fromkeys(asked) if name not in GLASS_ZONES)
     if not allowed:

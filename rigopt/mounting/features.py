@@ -62,6 +62,8 @@ EXEMPT_REACH_M = 0.2
 WIDTH_TOLERANCE_M = 0.005
 #: The zone of the front windscreen, whose cameras sit behind the glass and look out through it.
 WINDSCREEN_ZONE = "windshield_front"
+#: The glass zones (windscreen and rear window), as the built-in vehicles and ``vehicle add`` name them.
+GLASS_ZONES = (WINDSCREEN_ZONE, "windshield_rear")
 #: Largest angle (deg) in plan between a windscreen camera's optical axis and straight ahead.
 WINDSCREEN_VIEW_DEG = 60.0
 #: Suspension bump travel (m) above each wheel's rest position.

@@ -22,12 +22,7 @@ RESULTS = HERE / "results"
 sys.path.insert(0, str(HERE.parent))  # studies/: the studies' shared code (studylib)
 from studylib.paired import run_cells, vehicle_draws, vehicle_mean  # noqa: E402
 from studylib.tables import markdown  # noqa: E402
-
-VEHICLES = ("tt", "renault_zoe", "ford_fusion_hybrid", "chrysler_pacifica_hybrid", "citybus")
-PROTOCOLS = ("quick", "quick-s1")
-YARDSTICKS = {"naive copy": "{v}_naive_{v}_from_R1", "height-matched copy": "{v}_height_matched_{v}_from_R1",
-              "searched copy": "{v}_height_matched_{v}_from_R1_searched"}
-RESAMPLES, SEED, LEVEL = 2000, 0, 1 - 0.05 / len(YARDSTICKS)
+from remake import LEVEL, PROTOCOLS, RESAMPLES, SEED, VEHICLES, YARDSTICKS  # noqa: E402  (the test's constants)
 
 
 def measure_vehicle(vehicle: str, protocol_name: str, cache, workers: int, progress) -> dict:

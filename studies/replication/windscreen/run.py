@@ -9,16 +9,14 @@ Cells (``results/<vehicle>_<protocol>.json``) are written as soon as measured (a
 
 from __future__ import annotations
 
-import json
 import sys
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[2]
-REPLICATION = HERE.parent / "results"
-sys.path.insert(0, str(ROOT / "studies"))  # studylib
-sys.path.insert(0, str(HERE.parent / "mirrors"))  # make_rigs.bus_home
-from studylib.paired import run_cells, vehicle_draws, vehicle_mean  # noqa: E402
+sys.path.insert(0, str(HERE.parent))  # the replication's shared pieces (remake)
+from remake import LEVEL, PROTOCOLS, YARDSTICKS, measure_remade, with_new_cells  # noqa: E402
+from studylib.paired import run_cells  # noqa: E402
 from studylib.tables import markdown  # noqa: E402
 
 CHANGED = ("tt", "chrysler_pacifica_hybrid", "citybus")
@@ -26,45 +24,19 @@ CHANGED = ("tt", "chrysler_pacifica_hybrid", "citybus")
 BEFORE = {"tt": ROOT / "studies" / "predictor" / "rigs" / "tt_from_R1_default.json",
           "chrysler_pacifica_hybrid": ROOT / "studies" / "predictor" / "rigs" / "chrysler_pacifica_hybrid_from_R1_default.json",
           "citybus": HERE.parent / "mirrors" / "rigs" / "citybus_from_R1_default.json"}
-AMENDMENT_2 = HERE.parent / "mirrors" / "results"
-PROTOCOLS = ("quick", "quick-s1")
-YARDSTICKS = {"naive copy": "{v}_naive_{v}_from_R1", "height-matched copy": "{v}_height_matched_{v}_from_R1",
-              "searched copy": "{v}_height_matched_{v}_from_R1_searched"}
-VEHICLES = ("tt", "renault_zoe", "ford_fusion_hybrid", "chrysler_pacifica_hybrid", "citybus")
-RESAMPLES, SEED, LEVEL = 2000, 0, 1 - 0.05 / len(YARDSTICKS)
 
 
 def measure_cell(vehicle: str, protocol_name: str, cache, workers: int, progress) -> dict:
-    """One vehicle's cell on one scene set: its four new rigs and the design measured before."""
-    import dataclasses
-
-    from make_rigs import bus_home
-    from rigopt.rig.library import load_rig
-    from rigopt.validation.detectors.measuring import protocol_named
-    from rigopt.validation.detectors.shipped import measure, paired_differences, shipped_detector, without_resamples
-
-    names = [f"{vehicle}_from_R1_default", *(p.format(v=vehicle) for p in YARDSTICKS.values())]
-    rigs = [load_rig(HERE / "rigs" / f"{name}.json") for name in names]
-    rigs.append(dataclasses.replace(load_rig(BEFORE[vehicle]), name=f"{vehicle}_from_R1_default_before"))
-    with bus_home():
-        entries = measure(rigs, shipped_detector("lss", "R1"), cache, "cpu", workers, progress,
-                          protocol_named(protocol_name))
-    return {"vehicle": vehicle, "protocol": protocol_name, "rigs": [without_resamples(e) for e in entries],
-            "design_minus": {role: paired_differences(entries[0], entry) for role, entry in zip(YARDSTICKS, entries[1:4])},
-            "new_minus_before": paired_differences(entries[0], entries[4])}
+    """One vehicle's cell on one scene set: its four new rigs and the design measured before (remake.measure_remade)."""
+    return measure_remade(vehicle, protocol_name, HERE / "rigs", BEFORE[vehicle], f"{vehicle}_from_R1_default_before",
+                          "new_minus_before", cache, workers, progress)
 
 
 def analyse(found: dict) -> dict:
     primary = {v: {p: found[(v, p)]["new_minus_before"] for p in PROTOCOLS} for v in CHANGED}
     costs = [v for v in CHANGED if all(primary[v][p]["ci"][0] > 0 for p in PROTOCOLS)]
-    draws = vehicle_draws(len(VEHICLES), RESAMPLES, SEED)
-    recomputed = {}
-    for p in PROTOCOLS:
-        cells = [found[(v, p)] if v in CHANGED else json.loads((REPLICATION / f"{v}_{p}.json").read_text())
-                 for v in VEHICLES]
-        recomputed[p] = {role: vehicle_mean([c["design_minus"][role] for c in cells], VEHICLES, draws, LEVEL)
-                         for role in YARDSTICKS}
-    return {"new_minus_before": primary, "worse_on_both_scene_sets": costs, "replication_with_new_cells": recomputed}
+    return {"new_minus_before": primary, "worse_on_both_scene_sets": costs,
+            "replication_with_new_cells": with_new_cells(found)}
 
 
 def report(found: dict, result: dict) -> str:
