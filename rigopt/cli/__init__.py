@@ -15,7 +15,7 @@ import sys
 from rigopt.cli.app import app
 from rigopt.cli import (  # noqa: F401  (importing registers the commands)
     detector_commands, bench_commands, calibrate_command, coverage_command, design_command, metric_commands,
-    rig_commands, vehicle_commands,
+    pack_commands, rig_commands, vehicle_commands,
 )
 from rigopt.errors import RigoptError
 

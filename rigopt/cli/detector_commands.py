@@ -202,7 +202,15 @@ def validate_command(
                                          "rigopt design or library rigs (several share the loaded models; one with "
                                          "--data or --compare)."),
     ref: str = typer.Option(..., "--ref", help="Reference rig the detector was trained on."),
-    model: str = typer.Option(..., "--model", help=MODEL_HELP),
+    model: Optional[str] = typer.Option(None, "--model", help=MODEL_HELP + " Or --detector."),
+    detector: Optional[str] = typer.Option(None, "--detector", help="Your own detector behind rigopt's detector "
+                                           "contract (docs/detectors.md): a TorchScript file (rigopt detectors "
+                                           "export makes one from a rigopt model) or package.module:factory. It is "
+                                           "scored as the shipped models are, on the reference's test scenes "
+                                           "rendered at its declared image size, the reference included."),
+    detectors: Optional[Path] = typer.Option(None, "--detectors", help="Without --data: the folder of packed models "
+                                             "to take --model's from (<dir>/<model>-<ref>/, made by rigopt detectors "
+                                             "train); default $RIGOPT_DETECTORS, else the shipped ones."),
     data: Optional[Path] = typer.Option(None, "--data", help="Benchmark folder with the reference's test split and a "
                                         "trained run (rigopt bench generate, bench train). Without it, the models "
                                         "rigopt ships score the rig on the reference's test scenes, rendered into "
@@ -236,7 +244,7 @@ def validate_command(
     require_torch()
     import json
 
-    from rigopt.validation.detectors.config import model_config
+    from rigopt.validation.detectors.config import EXTERNAL_FAMILY, model_config
     from rigopt.validation.detectors.models import resolve_device
     from rigopt.validation.designs import contradictions, load_design, validate_design
     from rigopt.metrics.calibration import load_weights
@@ -261,14 +269,29 @@ def validate_command(
         option = "--protocol" if protocol is not None else "--ray"
         raise RigoptError(f"{option} is for the shipped models (no --data); with --data every test sample is scored "
                           "on this machine")
+    if (model is None) == (detector is None):
+        raise RigoptError("give --model (rigopt's detectors, e.g. --model lss) or --detector (your own: a TorchScript "
+                          "file or package.module:factory), one of the two")
+    if detectors is not None:
+        from rigopt.output import existing_folder
+
+        existing_folder(detectors, "packed models (<dir>/<model>-<ref>/card.json, made by rigopt detectors train)",
+                        option="--detectors")
+    if data is not None and detector is not None:
+        raise RigoptError("--detector is scored on the reference's test scenes rendered here (no --data); with --data "
+                          "give --model and the folder's trained runs")
     chosen = protocol_named(protocol) if protocol is not None else DEFAULT_PROTOCOL
+    if data is not None and detectors is not None:
+        raise RigoptError("--detectors names packed models (no --data); with --data the folder's trained runs are "
+                          "scored")
     if data is not None and (cache is not None or compare):
         raise RigoptError(f"--{'cache' if cache is not None else 'compare'} is for the shipped models (no --data); "
                           "with --data the renderings go into that folder and the comparison rigs are always measured")
     if data is not None:
         check_data(data)
     check_runs(runs, must_exist=True)
-    family, calibration = model_config(model).family, load_weights(weights or "joint", metric)
+    family = model_config(model).family if model is not None else EXTERNAL_FAMILY
+    calibration = load_weights(weights or "joint", metric)
     drop_model = choose_model(predictor, load_rig(ref).perception(), weights is not None or metric != "rigcd")
     rigs = [load_design(design) for design in designs]
     if drop_model is None:
@@ -276,7 +299,7 @@ def validate_command(
     resolve_device(device)
     if data is None:
         _validate_shipped(rigs, ref, family, calibration, drop_model, device, cache, workers, chosen, compare, out,
-                          as_json, ray)
+                          as_json, ray, detector, detectors)
         return
     rig = rigs[0]
     with status_console.status("validating") as status:
@@ -308,9 +331,11 @@ def validate_command(
 
 
 def _validate_shipped(measured_rigs: list, ref: str, family: str, calibration, drop_model, device: str, cache,
-                      workers: int, protocol, compare: bool, out, as_json: bool, ray: str | None = None) -> None:
-    """validate without --data: the shipped models, the reference's test scenes rendered into the cache (as Ray
-    tasks with ``ray``, a cluster's address or 'local')."""
+                      workers: int, protocol, compare: bool, out, as_json: bool, ray: str | None = None,
+                      yours: str | None = None, root: Path | None = None) -> None:
+    """validate without --data: the packed models (in ``root``, default the shipped ones) or ``yours``, a detector
+    behind the contract; the reference's test scenes rendered into the cache (as Ray tasks with ``ray``, a
+    cluster's address or 'local')."""
     import json
     import os
 
@@ -319,6 +344,7 @@ def _validate_shipped(measured_rigs: list, ref: str, family: str, calibration, d
         measure,
         paired_differences,
         shipped_detector,
+        user_detector,
         without_resamples,
     )
     from rigopt.validation.designs import WHOLE_ROLE, comparison_rigs, contradictions, fed_rigs
@@ -328,8 +354,13 @@ def _validate_shipped(measured_rigs: list, ref: str, family: str, calibration, d
     from rigopt.report.json_values import json_ready
     from rigopt.rig.library import load_rig
 
-    detector = shipped_detector(family, load_rig(ref).name)
-    reference = load_rig(detector.reference)
+    if yours is not None:
+        from rigopt.validation.detectors.external import load_detector
+
+        detector = user_detector(load_detector(yours), load_rig(ref), root)
+    else:
+        detector = shipped_detector(family, load_rig(ref).name, root)
+    reference = load_rig(ref) if yours is not None else load_rig(detector.reference)
     if cache is not None and cache.exists():
         existing_folder(cache, "renderings of the reference's test scenes (made by rigopt validate)", option="--cache")
     rigs, records = [], []
@@ -350,8 +381,9 @@ def _validate_shipped(measured_rigs: list, ref: str, family: str, calibration, d
         measured = measure([r for _, r in rigs], detector, cache, device, workers, status.update, protocol, ray)
     predictions = predict_transfer(reference, [r for _, r in rigs], calibration, drop_model, rig_body_share)
     card = detector.card
-    result = {"reference": reference.name, "model": family, "models": "shipped", "detector": detector.folder.name,
-              "seeds": detector.seeds, "epochs": card["recipe"]["epochs"],
+    result = {"reference": reference.name, "model": family, "models": "yours" if yours else "shipped",
+              "detector": yours or detector.folder.name, "seeds": list(detector.seeds),
+              "epochs": card["recipe"]["epochs"] if not yours else None,
               "protocol": {"name": protocol.name, "frame_stride": protocol.frame_stride,
                            "samples": protocol.samples(card["test_data"]), "description": protocol.describe(card["test_data"])},
               "reference_mAP": {s: measured[0]["seeds"][str(s)]["reference_mAP"] for s in detector.seeds},
@@ -383,8 +415,9 @@ def _validate_shipped(measured_rigs: list, ref: str, family: str, calibration, d
              _number(e["drop"]), _interval(e["drop_ci"]), _number(e["drop_visible"]), _number(e["predicted_drop"]),
              _predicted_interval(e), "yes" if e["extrapolation"] else "-"] for e in result["rigs"]]
     own = " / ".join(_number(v) for v in result["reference_mAP"].values())
-    print_table(f"{family} trained on {reference.name}, shipped ({len(detector.seeds)} seeds, {result['epochs']} "
-                f"epochs; own mAP {own}), {protocol.describe(card['test_data'])}; predicted by {result['predicted_by']}",
+    which = (f"{detector.detector.name} ({yours}; own mAP {own})" if yours else f"{family} trained on "
+             f"{reference.name}, shipped ({len(detector.seeds)} seeds, {result['epochs']} epochs; own mAP {own})")
+    print_table(f"{which}, {protocol.describe(card['test_data'])}; predicted by {result['predicted_by']}",
                 ["role", "rig", "cameras", "drop per seed", "mean drop", "95 % interval (test scenes)",
                  "visible-only drop", "predicted drop", "90 % prediction interval", "extrapolates"], rows)
     _note_uninformative(result["rigs"], result["predicted_by"])

@@ -84,23 +84,26 @@ class CenterHead(nn.Module):
     @torch.no_grad()
     def decode(self, outputs: dict, top_k: int = 100) -> list[dict]:
         """Per sample the ``top_k`` local heatmap maxima: centers (k, 3) m, sizes (k, 3), yaws (k,), classes
-        (k,), scores (k,), tensors on the CPU."""
+        (k,), scores (k,), tensors on the CPU (:meth:`decode_batch`'s rows)."""
+        found = self.decode_batch(outputs, top_k)
+        return [{key: value[i].cpu() for key, value in found.items()} for i in range(len(found["scores"]))]
+
+    def decode_batch(self, outputs: dict, top_k: int = 100) -> dict:
+        """The ``top_k`` local heatmap maxima of every sample, best first, as (B, k, ...) tensors on the
+        outputs' device: centers (B, k, 3) m, sizes (B, k, 3), yaws (B, k), classes (B, k), scores (B, k).
+        No Python loop over the batch, so that a traced model takes any batch size."""
         heat = torch.sigmoid(outputs["heatmap"])
         peaks = heat * (F.max_pool2d(heat, 3, 1, 1) == heat)
         b, k, g, _ = heat.shape
         scores, flat = peaks.reshape(b, -1).topk(min(top_k, k * g * g), dim=1)
         classes, cell = flat // (g * g), flat % (g * g)
         ix, iy = cell // g, cell % g
-        results = []
-        for i in range(b):
-            reg = outputs["regression"][i][:, ix[i], iy[i]].T  # (k, 8)
-            x = (ix[i] + reg[:, 0]) * self.cell - self.bev_range
-            y = (iy[i] + reg[:, 1]) * self.cell - self.bev_range
-            results.append({"centers": torch.stack([x, y, reg[:, 2]], dim=1).cpu(),
-                            "sizes": torch.exp(reg[:, 3:6].clamp(max=4)).cpu(),
-                            "yaws": torch.atan2(reg[:, 6], reg[:, 7]).cpu(),
-                            "classes": classes[i].cpu(), "scores": scores[i].cpu()})
-        return results
+        regression = outputs["regression"].flatten(2)  # (B, 8, G * G)
+        reg = regression.gather(2, cell[:, None].expand(-1, regression.shape[1], -1)).transpose(1, 2)  # (B, k, 8)
+        x = (ix + reg[..., 0]) * self.cell - self.bev_range
+        y = (iy + reg[..., 1]) * self.cell - self.bev_range
+        return {"centers": torch.stack([x, y, reg[..., 2]], dim=-1), "sizes": torch.exp(reg[..., 3:6].clamp(max=4)),
+                "yaws": torch.atan2(reg[..., 6], reg[..., 7]), "classes": classes, "scores": scores}
 
 
 def focal_heatmap_loss(logits: torch.Tensor, target: torch.Tensor) -> torch.Tensor:

@@ -11,6 +11,9 @@ from dataclasses import asdict, dataclass, fields, replace
 from rigopt.errors import RigoptError, unknown_name
 
 SIZES = ("tiny", "small", "base")
+#: The family name of a detector of the user's behind the detector contract (``external.py``), which takes every
+#: lens through its pixel ray maps.
+EXTERNAL_FAMILY = "external"
 
 #: Family name -> the ``ModelConfig`` fields it starts from before the size preset and the user's overrides
 #: (its learning rate); the registry ``families.DETECTORS`` has the same names (tested).

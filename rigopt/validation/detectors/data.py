@@ -11,6 +11,9 @@ order of their sorted channel names)::
                                 when the dataset has no depth maps
     lenses      CameraModel (N,) of the images as they are (size, intrinsics, distortion), or None when
                                 every camera is a pinhole of its intrinsics (the split records no distortion)
+    rays        (B, N, H, W, 3) float32 optical-frame ray of each pixel centre at unit depth (0 where none in
+                                front of the lens), or None: the detector contract's form of the lenses
+                                (``external.pixel_ray_maps``); where given, a detector's rays come from it
 
 Images are decoded once and kept as uint8 in memory (a 480-sample, 8-camera split at 160 x 90 is 170 MB).
 """
@@ -55,11 +58,13 @@ class Batch:
     tokens: list
     depths: torch.Tensor | None = None
     lenses: CameraModel | None = None
+    rays: torch.Tensor | None = None
 
     def to(self, device) -> Batch:
         return Batch(self.images.to(device), self.intrinsics.to(device), self.cam_to_ego.to(device),
                      [b.to(device) for b in self.boxes], self.tokens,
-                     None if self.depths is None else self.depths.to(device), self.lenses)
+                     None if self.depths is None else self.depths.to(device), self.lenses,
+                     None if self.rays is None else self.rays.to(device))
 
     @property
     def n_cameras(self) -> int:
@@ -176,7 +181,8 @@ def augment(batch: Batch, rng: np.random.Generator, max_yaw: float = np.pi / 8) 
         heading = heading @ A.T
         boxes.append(BoxTargets(targets.centers @ A.T, targets.sizes, torch.atan2(heading[:, 1], heading[:, 0]),
                                 targets.classes))
-    return Batch(batch.images, batch.intrinsics, cam_to_ego, boxes, batch.tokens, batch.depths, batch.lenses)
+    return Batch(batch.images, batch.intrinsics, cam_to_ego, boxes, batch.tokens, batch.depths, batch.lenses,
+                 batch.rays)
 
 
 def _lens_models(sample: TrainingSample, channels, native_size, image_size, root) -> CameraModel | None:

@@ -12,7 +12,7 @@ from typing import Mapping, Protocol, runtime_checkable
 
 import torch
 
-from rigopt.validation.detectors.config import ModelConfig
+from rigopt.validation.detectors.config import EXTERNAL_FAMILY, ModelConfig
 from rigopt.validation.detectors.data import Batch
 from rigopt.validation.detectors.lss import LSSDetector
 from rigopt.validation.detectors.petr import PETRDetector
@@ -66,5 +66,6 @@ DETECTORS: dict[str, type[Detector]] = {
 
 
 def takes_lenses(family: str) -> bool:
-    """True when the detectors of ``family`` take distorted cameras (``Detector.takes_lenses``)."""
-    return bool(getattr(DETECTORS[family], "takes_lenses", False))
+    """True when the detectors of ``family`` take distorted cameras (``Detector.takes_lenses``; the contract's
+    detectors, :data:`EXTERNAL_FAMILY`, do)."""
+    return family == EXTERNAL_FAMILY or bool(getattr(DETECTORS[family], "takes_lenses", False))

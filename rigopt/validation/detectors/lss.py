@@ -7,7 +7,8 @@
    below it (points more than 2 m below the ground or 6 m above it are dropped); cells sum their points.
    The rays come from the intrinsics for pinholes; where the batch carries lens models (``Batch.lenses``:
    some camera is distorted, e.g. a fisheye), every camera's rays come from its lens model's unprojection,
-   and a fisheye's cells 90 degrees or more off its axis (no point at positive depth) are not lifted.
+   and a fisheye's cells 90 degrees or more off its axis (no point at positive depth) are not lifted; where
+   it carries pixel ray maps (``Batch.rays``, the detector contract's input), from those.
 4. A bird's-eye CNN and a centre-heatmap head (``center_head.py``) detect the boxes.
 
 Depth supervision (as BEVDepth): where the batch carries the renderer's depth maps, each feature cell's depth
@@ -75,7 +76,11 @@ class LSSDetector(nn.Module):
         b, n, d, h, w = depth.shape
         g, cell, half = self.head.grid, self.config.bev_cell, self.config.bev_range
         camera_rays = in_front = None
-        if batch.lenses is not None:  # some lens is distorted: every camera's rays through its lens model
+        if batch.rays is not None:  # pixel ray maps: a cell's ray is its centre pixel's (pixel_rays' convention)
+            stride = self.encoder.stride
+            camera_rays = batch.rays[:, :, ::stride, ::stride][:, :, :h, :w]  # (B, N, h, w, 3)
+            in_front = camera_rays[..., 2] > 0
+        elif batch.lenses is not None:  # some lens is distorted: every camera's rays through its lens model
             camera_rays, in_front = lens_cells(batch.lenses, (h, w), self.encoder.stride, depth.dtype)
         origins, directions = pixel_rays(batch.intrinsics, batch.cam_to_ego, (h, w), self.encoder.stride,
                                          camera_rays)
@@ -85,7 +90,7 @@ class LSSDetector(nn.Module):
         kept = (ix >= 0) & (ix < g) & (iy >= 0) & (iy < g) & (points[..., 2] >= HEIGHT_LIMITS[0]) & (
             points[..., 2] <= HEIGHT_LIMITS[1])
         if in_front is not None:  # a fisheye's cells that look behind its lens plane have no point to lift
-            kept &= in_front.to(kept.device)[None, :, None]
+            kept &= in_front.to(kept.device).expand(b, n, h, w)[:, :, None]
         sample, camera, _, row, col = kept.nonzero(as_tuple=True)  # in the volume's order
         flat = sample * g * g + ix[kept] * g + iy[kept]
         values = depth[kept][:, None] * context.permute(0, 1, 3, 4, 2)[sample, camera, row, col]  # (P, Cc)

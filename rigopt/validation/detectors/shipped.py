@@ -38,9 +38,11 @@ from typing import Callable, Sequence
 
 import numpy as np
 
+from rigopt.benchmark import SYNTHETIC_IMAGE_SIZE
 from rigopt.errors import DataError
 from rigopt.resources import data_dir
 from rigopt.rig.model import Rig
+from rigopt.validation.detectors.config import EXTERNAL_FAMILY
 from rigopt.validation.detectors.measuring import DEFAULT_PROTOCOL, FULL, PROTOCOLS, Protocol
 
 CARD = "card.json"
@@ -78,9 +80,82 @@ class ShippedDetector:
     def size_bytes(self) -> int:
         return sum(self.checkpoint(seed).stat().st_size for seed in self.seeds)
 
+    def scores_file(self, seed: int) -> str:
+        """The name under which a rendering keeps model ``seed``'s scores: it changes with the weights and the
+        card's bootstrap."""
+        boot = self.card["bootstrap"]
+        digest = hashlib.sha256(self.checkpoint(seed).read_bytes()
+                                + f"{boot['resamples']}/{boot['seed']}".encode()).hexdigest()[:16]
+        return f"{self.folder.name}-seed{seed}-{digest}.npz"
 
-def detectors_root() -> Path | None:
-    """``$RIGOPT_DETECTORS`` when set, else the shipped ``detectors/`` folder (None if this installation has none)."""
+    def match(self, seed: int, split, device: str = "cpu"):
+        """Model ``seed``'s detections on ``split`` matched to its ground truth (``inference.match_split``)."""
+        from rigopt.validation.detectors.inference import match_split
+
+        return match_split(_loaded_model(self.checkpoint(seed), self.family), split, device)
+
+    def own_scores(self, protocol: Protocol) -> dict[int, dict]:
+        """The reference's own scores under ``protocol`` (:func:`reference_scores`)."""
+        return reference_scores(self, protocol)
+
+
+#: The test set and bootstrap a detector is scored with on a reference that no pack gives them for: those of the
+#: shipped packs (16 test scenes of 40 frames, scene seed offset 0; 1000 scene resamples drawn with seed 0).
+DEFAULT_TEST_DATA = {"split": "test", "scenes": 16, "frames": 40, "seed_offset": 0}
+DEFAULT_BOOTSTRAP = {"resamples": 1000, "seed": 0, "blocks": 16, "unit": "scene"}
+
+
+@dataclass(frozen=True)
+class UserDetector:
+    """A detector of the user's (``external.ExternalDetector``: the detector contract) measured as the shipped
+    ones are: on ``reference``'s test scenes and bootstrap (``card``: a shipped pack's on that reference where
+    there is one, else DEFAULT_TEST_DATA and DEFAULT_BOOTSTRAP), rendered at the detector's image size. One
+    model ("seed" 0); the reference's own scores are measured beside the rigs (``own_scores`` None)."""
+
+    detector: object
+    reference_rig: Rig
+    card: dict
+    family = EXTERNAL_FAMILY
+    seeds = (0,)
+
+    @property
+    def reference(self) -> str:
+        return self.reference_rig.name
+
+    @property
+    def folder(self) -> Path:
+        return Path(self.detector.name)
+
+    def scores_file(self, seed: int) -> str:
+        boot = self.card["bootstrap"]
+        return f"external-{self.detector.digest}-{boot['resamples']}-{boot['seed']}.npz"
+
+    def match(self, seed: int, split, device: str = "cpu"):
+        return self.detector.match(split, device)
+
+    def own_scores(self, protocol: Protocol) -> None:
+        return None
+
+
+def user_detector(detector, reference: Rig, root: Path | None = None) -> UserDetector:
+    """``detector`` (``external.ExternalDetector``) measured on ``reference``'s test scenes: those of a pack on
+    that reference in :func:`detectors_root` (the same fixed annotation set and scene resamples as its models),
+    else the defaults."""
+    packs = [name for name in shipped_names(root) if name.split("-", 1)[1] == reference.name]
+    card = json.loads((detectors_root(root) / packs[0] / CARD).read_text()) if packs else {
+        "test_data": DEFAULT_TEST_DATA, "bootstrap": DEFAULT_BOOTSTRAP}
+    test_data = {key: card["test_data"][key] for key in DEFAULT_TEST_DATA}
+    size = list(detector.image_size)
+    return UserDetector(detector, reference, {"reference": reference.name, "bootstrap": card["bootstrap"],
+                                              "test_data": {**test_data, "image_size": size,
+                                                            "samples": test_data["scenes"] * test_data["frames"]}})
+
+
+def detectors_root(root: Path | None = None) -> Path | None:
+    """``root`` when given (validate's ``--detectors``), else ``$RIGOPT_DETECTORS`` when set, else the shipped
+    ``detectors/`` folder (None if this installation has none)."""
+    if root is not None:
+        return Path(root)
     if os.environ.get("RIGOPT_DETECTORS"):
         return Path(os.environ["RIGOPT_DETECTORS"])
     try:
@@ -89,20 +164,24 @@ def detectors_root() -> Path | None:
         return None
 
 
-def shipped_names() -> list[str]:
-    """``<family>-<reference>`` of every shipped detector."""
-    root = detectors_root()
+def shipped_names(root: Path | None = None) -> list[str]:
+    """``<family>-<reference>`` of every packed detector in :func:`detectors_root`."""
+    root = detectors_root(root)
     return sorted(p.parent.name for p in root.glob(f"*/{CARD}")) if root is not None else []
 
 
-def shipped_detector(family: str, reference: str) -> ShippedDetector:
-    """The shipped ``family`` models trained on ``reference``; a DataError that lists what ships otherwise."""
+def shipped_detector(family: str, reference: str, root: Path | None = None) -> ShippedDetector:
+    """The packed ``family`` models trained on ``reference`` (in :func:`detectors_root`); a DataError that lists
+    the packs there otherwise."""
     name = f"{family}-{reference}"
-    if name not in shipped_names():
-        listed = ", ".join(shipped_names()) or "none"
-        raise DataError(f"rigopt ships no {family} models trained on {reference} (shipped: {listed}); pass --data "
-                        f"with a benchmark folder holding a trained run (rigopt bench generate, rigopt bench train)")
-    folder = detectors_root() / name
+    if name not in shipped_names(root):
+        listed = ", ".join(shipped_names(root)) or "none"
+        where = (f"rigopt ships no {family} models trained on {reference} (shipped: {listed})" if root is None and
+                 not os.environ.get("RIGOPT_DETECTORS") else
+                 f"no {family} models trained on {reference} in {detectors_root(root)} (packed there: {listed})")
+        raise DataError(f"{where}; make them with rigopt detectors train --ref {reference} --out DIR and pass "
+                        "--detectors DIR, or pass --data with a benchmark folder holding a trained run")
+    folder = detectors_root(root) / name
     return ShippedDetector(folder, json.loads((folder / CARD).read_text()))
 
 
@@ -127,11 +206,12 @@ def body_digest(mesh) -> str:
                           + np.asarray(mesh.faces, dtype=np.int64).tobytes()).hexdigest()[:16]
 
 
-def cache_name(rig: Rig, protocol: Protocol = FULL) -> str:
-    """The cache folder of a rig: its name (letters, digits, ._- kept), :func:`rig_key` and, but for ``full``,
-    the protocol's name."""
+def cache_name(rig: Rig, protocol: Protocol = FULL, size: tuple[int, int] = SYNTHETIC_IMAGE_SIZE) -> str:
+    """The cache folder of a rig: its name (letters, digits, ._- kept), :func:`rig_key`, but for ``full`` the
+    protocol's name, and but for the benchmark's image size the rendering's (``-WxH``)."""
     safe = re.sub(r"[^A-Za-z0-9._-]+", "_", rig.name).strip("._") or "rig"
-    return f"{safe[:60]}-{rig_key(rig)}" + ("" if protocol == FULL else f"-{protocol.name}")
+    return (f"{safe[:60]}-{rig_key(rig)}" + ("" if protocol == FULL else f"-{protocol.name}")
+            + ("" if tuple(size) == SYNTHETIC_IMAGE_SIZE else f"-{size[0]}x{size[1]}"))
 
 
 def test_scenes(detector: ShippedDetector, protocol: Protocol = FULL):
@@ -152,20 +232,22 @@ def render_cached(rigs: Sequence[Rig], detector: ShippedDetector, cache: Path, w
     from rigopt.validation.synthetic.generate import ego_body_lookup, generate_split
     from rigopt.validation.synthetic.render import render_rig
 
-    named = [dataclasses.replace(rig, name=cache_name(rig, protocol)) for rig in rigs]
     size = tuple(detector.card["test_data"]["image_size"])
+    named = [dataclasses.replace(rig, name=cache_name(rig, protocol, size)) for rig in rigs]
     generate_split(named, test_scenes(detector, protocol), cache, size, render_rig, ego_body_lookup(progress),
                    progress, ray_address=ray_address, workers=workers)
     return [rig.name for rig in named]
 
 
-def measure(rigs: Sequence[Rig], detector: ShippedDetector, cache: Path | None = None, device: str = "cpu",
-            workers: int = 1, progress: Callable[[str], None] = lambda message: None,
+def measure(rigs: Sequence[Rig], detector: ShippedDetector | UserDetector, cache: Path | None = None,
+            device: str = "cpu", workers: int = 1, progress: Callable[[str], None] = lambda message: None,
             protocol: Protocol = DEFAULT_PROTOCOL, ray_address: str | None = None) -> list[dict]:
-    """Each rig's measured drop with every shipped seed under ``protocol``: a list (one per rig) of JSON-ready dicts.
+    """Each rig's measured drop with every shipped seed (or the user's detector) under ``protocol``: a list (one
+    per rig) of JSON-ready dicts.
 
     Per seed: ``mAP`` and ``mAP_visible`` on the reference's test scenes (the protocol's frames) rendered under the
-    rig, the reference's own on the same frames, the relative drops and their 95 % intervals over the card's
+    rig, the reference's own on the same frames (the pack's; a user's detector's, measured here beside the rigs),
+    the relative drops and their 95 % intervals over the card's
     scene resamples (paired with the reference's scores under the same resamples: test noise only). Over the
     seeds: the mean drops and the interval of the mean drop over the same resamples. Each seed's entry keeps its
     (resamples,) fixed-set drops under those resamples (``resampled_drops``, an array: :func:`paired_differences`
@@ -178,8 +260,9 @@ def measure(rigs: Sequence[Rig], detector: ShippedDetector, cache: Path | None =
     from rigopt.validation.synthetic.cluster import run_tasks
 
     cache = Path(cache) if cache is not None else default_cache()
-    references = reference_scores(detector, protocol)  # a pack without this protocol fails before any work
-    folders = render_cached(rigs, detector, cache, workers, progress, protocol, ray_address)
+    references = detector.own_scores(protocol)  # a pack without this protocol fails before any work
+    scored_rigs = list(rigs) if references is not None else [detector.reference_rig, *rigs]
+    folders = render_cached(scored_rigs, detector, cache, workers, progress, protocol, ray_address)
     # On the CPU with workers > 1, as many one-thread processes as seeds, the cores shared among them: on 2 cores
     # three one-thread processes finish sooner than two (the third seed would run alone on one core) or than one
     # two-thread process in turn (a second thread speeds a small network up 1.75x, not 2x).
@@ -188,15 +271,18 @@ def measure(rigs: Sequence[Rig], detector: ShippedDetector, cache: Path | None =
     calls = {(k, seed): (detector, seed, cache, folder, protocol, device, threads)
              for k, folder in enumerate(folders) for seed in detector.seeds}
     where = " as Ray tasks" if ray_address else f" in {scorers} processes" if scorers > 1 else ""
-    progress(f"scoring {len(rigs)} rig(s) with {len(detector.seeds)} {detector.family} model(s){where}")
-    scores, left = {}, {k: len(detector.seeds) for k in range(len(rigs))}
+    progress(f"scoring {len(scored_rigs)} rig(s) with {len(detector.seeds)} {detector.family} model(s){where}")
+    scores, left = {}, {k: len(detector.seeds) for k in range(len(scored_rigs))}
     for (k, seed), scored in run_tasks(score_seed, calls, ray_address, workers=scorers, what="scoring (rig, seed)"):
         scores[k, seed] = scored
         left[k] -= 1
         if not left[k]:
-            progress(f"{rigs[k].name}: scored ({sum(not n for n in left.values())} of {len(rigs)} rigs)")
+            progress(f"{scored_rigs[k].name}: scored ({sum(not n for n in left.values())} of {len(scored_rigs)} rigs)")
+    if references is None:  # the reference, measured first
+        references = {seed: scores[0, seed] for seed in detector.seeds}
+    first = len(scored_rigs) - len(rigs)
     return [_rig_entry(rig, protocol, cache / folder, {seed: scores[k, seed] for seed in detector.seeds}, references)
-            for k, (rig, folder) in enumerate(zip(rigs, folders))]
+            for k, (rig, folder) in enumerate(zip(scored_rigs, folders)) if k >= first]
 
 
 def _rig_entry(rig: Rig, protocol: Protocol, folder: Path, scores: dict[int, dict],
@@ -261,22 +347,19 @@ def paired_differences(first: dict, other: dict) -> dict:
             "ci": interval(np.mean(resampled, axis=0))}
 
 
-def score_seed(detector: ShippedDetector, seed: int, cache: Path, folder: str, protocol: Protocol = FULL,
-               device: str = "cpu", threads: int | None = None) -> dict:
-    """One shipped model (``seed``) scored on the rendering ``cache/folder`` (made under ``protocol``): ``mAP``
+def score_seed(detector: ShippedDetector | UserDetector, seed: int, cache: Path, folder: str,
+               protocol: Protocol = FULL, device: str = "cpu", threads: int | None = None) -> dict:
+    """One model (``seed``) scored on the rendering ``cache/folder`` (made under ``protocol``): ``mAP``
     and ``mAP_visible``, and their (resamples,) values under the card's scene resamples (``resampled``,
     ``resampled_visible``). Kept in ``cache/folder/scores/`` and read from there when scored before.
     ``threads``: torch's CPU threads (None: as set)."""
     from rigopt.validation.detectors.data import RigSplit
-    from rigopt.validation.detectors.inference import match_split
     from rigopt.validation.detectors.protocol import TEST_SPLIT
     from rigopt.validation.synthetic.evaluation import sample_blocks
     from rigopt.output import atomic_file
 
     boot = detector.card["bootstrap"]
-    checkpoint = detector.checkpoint(seed)
-    digest = hashlib.sha256(checkpoint.read_bytes() + f"{boot['resamples']}/{boot['seed']}".encode()).hexdigest()[:16]
-    kept = Path(cache) / folder / SCORES / f"{detector.folder.name}-seed{seed}-{digest}.npz"
+    kept = Path(cache) / folder / SCORES / detector.scores_file(seed)
     if kept.is_file():
         with np.load(kept) as stored:
             return {key: stored[key] if stored[key].ndim else float(stored[key]) for key in stored.files}
@@ -290,7 +373,7 @@ def score_seed(detector: ShippedDetector, seed: int, cache: Path, folder: str, p
         import torch
 
         torch.set_num_threads(threads)
-    matched = match_split(_loaded_model(checkpoint, detector.family), split, device)
+    matched = detector.match(seed, split, device)
     scores = scores_on_frames(matched, blocks, FULL, boot["resamples"], boot["seed"])
     with atomic_file(kept) as work:
         with open(work, "wb") as handle:
@@ -407,7 +490,7 @@ def add_protocol(detector: ShippedDetector, protocol: Protocol, cache: Path, dev
     torch.set_num_threads(1)  # as measure's scoring processes run on the CPU
     for seed in detector.seeds:
         progress(f"scoring seed {seed} on {detector.reference}'s test split ({rendered.name})")
-        matched[seed] = match_split(_loaded_model(detector.checkpoint(seed), detector.family), split, device)
+        matched[seed] = detector.match(seed, split, device)
         own = detector.card["seeds"][str(seed)]
         # another thread count sums a convolution in another order: a score moves by about 1e-7, no more
         if known_scenes and not np.isclose(matched[seed].evaluation().map, own["mAP"], rtol=0, atol=1e-6):
