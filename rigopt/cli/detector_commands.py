@@ -360,7 +360,7 @@ def _validate_shipped(measured_rigs: list, ref: str, family: str, calibration, d
         detector = user_detector(load_detector(yours), load_rig(ref), root)
     else:
         detector = shipped_detector(family, load_rig(ref).name, root)
-    reference = load_rig(ref) if yours is not None else load_rig(detector.reference)
+    reference = load_rig(ref)  # a rig file's name is its pack's reference
     if cache is not None and cache.exists():
         existing_folder(cache, "renderings of the reference's test scenes (made by rigopt validate)", option="--cache")
     rigs, records = [], []
@@ -381,7 +381,8 @@ def _validate_shipped(measured_rigs: list, ref: str, family: str, calibration, d
         measured = measure([r for _, r in rigs], detector, cache, device, workers, status.update, protocol, ray)
     predictions = predict_transfer(reference, [r for _, r in rigs], calibration, drop_model, rig_body_share)
     card = detector.card
-    result = {"reference": reference.name, "model": family, "models": "yours" if yours else "shipped",
+    result = {"reference": reference.name, "model": family,
+              "models": "yours" if yours else "shipped" if root is None else "packed",
               "detector": yours or detector.folder.name, "seeds": list(detector.seeds),
               "epochs": card["recipe"]["epochs"] if not yours else None,
               "protocol": {"name": protocol.name, "frame_stride": protocol.frame_stride,
@@ -416,7 +417,8 @@ def _validate_shipped(measured_rigs: list, ref: str, family: str, calibration, d
              _predicted_interval(e), "yes" if e["extrapolation"] else "-"] for e in result["rigs"]]
     own = " / ".join(_number(v) for v in result["reference_mAP"].values())
     which = (f"{detector.detector.name} ({yours}; own mAP {own})" if yours else f"{family} trained on "
-             f"{reference.name}, shipped ({len(detector.seeds)} seeds, {result['epochs']} epochs; own mAP {own})")
+             f"{reference.name}, {result['models']} ({len(detector.seeds)} seed(s), {result['epochs']} epochs; own "
+             f"mAP {own})")
     print_table(f"{which}, {protocol.describe(card['test_data'])}; predicted by {result['predicted_by']}",
                 ["role", "rig", "cameras", "drop per seed", "mean drop", "95 % interval (test scenes)",
                  "visible-only drop", "predicted drop", "90 % prediction interval", "extrapolates"], rows)

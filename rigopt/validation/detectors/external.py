@@ -68,13 +68,13 @@ ENTRY_POINT = re.compile(r"[A-Za-z_][\w.]*:[A-Za-z_]\w*")
 @dataclass(frozen=True)
 class ExternalDetector:
     """A detector that keeps the contract: ``source`` (a TorchScript file's path or ``package.module:factory``),
-    its ``card`` (the contract's declaration) and ``digest`` (16 hex digits of what it is: the file's bytes, or
-    the entry point, its module's source and the card), which names its kept scores. Picklable: the model is
-    loaded in each process that runs it (:func:`loaded`)."""
+    its ``card`` (the contract's declaration) and ``digest`` (16 hex digits of a file's bytes, which name its kept
+    scores; None for an entry point, whose weights may change behind the same name: it is scored afresh each
+    time). Picklable: the model is loaded in each process that runs it (:func:`loaded`)."""
 
     source: str
     card: dict
-    digest: str
+    digest: str | None
 
     @property
     def name(self) -> str:
@@ -109,11 +109,7 @@ def load_detector(source: str) -> ExternalDetector:
         card = _card(_torchscript(path)[1], text)
         return ExternalDetector(text, card, hashlib.sha256(path.read_bytes()).hexdigest()[:16])
     if ENTRY_POINT.fullmatch(text):
-        _, card = _entry_point(text)
-        module = importlib.import_module(text.split(":")[0])
-        code = Path(module.__file__).read_bytes() if getattr(module, "__file__", None) else b""
-        digest = hashlib.sha256(text.encode() + code + json.dumps(card, sort_keys=True).encode()).hexdigest()[:16]
-        return ExternalDetector(text, card, digest)
+        return ExternalDetector(text, _entry_point(text)[1], None)
     raise DataError(f"--detector {text}: no such file, nor an entry point package.module:factory; give a TorchScript "
                     "file (rigopt detectors export makes one from a rigopt model) or an importable factory")
 

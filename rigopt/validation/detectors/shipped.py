@@ -80,7 +80,7 @@ class ShippedDetector:
     def size_bytes(self) -> int:
         return sum(self.checkpoint(seed).stat().st_size for seed in self.seeds)
 
-    def scores_file(self, seed: int) -> str:
+    def scores_file(self, seed: int) -> str | None:
         """The name under which a rendering keeps model ``seed``'s scores: it changes with the weights and the
         card's bootstrap."""
         boot = self.card["bootstrap"]
@@ -126,9 +126,11 @@ class UserDetector:
     def folder(self) -> Path:
         return Path(self.detector.name)
 
-    def scores_file(self, seed: int) -> str:
+    def scores_file(self, seed: int) -> str | None:
+        """None for an entry point: scored afresh each time (``ExternalDetector.digest``)."""
         boot = self.card["bootstrap"]
-        return f"external-{self.detector.digest}-{boot['resamples']}-{boot['seed']}.npz"
+        digest = self.detector.digest
+        return f"external-{digest}-{boot['resamples']}-{boot['seed']}.npz" if digest else None
 
     def match(self, seed: int, split, device: str = "cpu"):
         return self.detector.match(split, device)
@@ -359,8 +361,9 @@ def score_seed(detector: ShippedDetector | UserDetector, seed: int, cache: Path,
     from rigopt.output import atomic_file
 
     boot = detector.card["bootstrap"]
-    kept = Path(cache) / folder / SCORES / detector.scores_file(seed)
-    if kept.is_file():
+    name = detector.scores_file(seed)
+    kept = Path(cache) / folder / SCORES / name if name else None
+    if kept is not None and kept.is_file():
         with np.load(kept) as stored:
             return {key: stored[key] if stored[key].ndim else float(stored[key]) for key in stored.files}
     split = RigSplit(cache, folder, TEST_SPLIT, None, depths=False)
@@ -375,9 +378,10 @@ def score_seed(detector: ShippedDetector | UserDetector, seed: int, cache: Path,
         torch.set_num_threads(threads)
     matched = detector.match(seed, split, device)
     scores = scores_on_frames(matched, blocks, FULL, boot["resamples"], boot["seed"])
-    with atomic_file(kept) as work:
-        with open(work, "wb") as handle:
-            np.savez(handle, **scores)
+    if kept is not None:
+        with atomic_file(kept) as work:
+            with open(work, "wb") as handle:
+                np.savez(handle, **scores)
     return scores
 
 
@@ -473,7 +477,6 @@ def add_protocol(detector: ShippedDetector, protocol: Protocol, cache: Path, dev
     card's (a DataError otherwise), and the protocol's frames are taken by weight (:func:`scores_on_frames`); on
     new scenes (``protocol.scene_offset``) the reference is rendered under the protocol and scored as it is."""
     from rigopt.validation.detectors.data import RigSplit
-    from rigopt.validation.detectors.inference import match_split
     from rigopt.validation.detectors.protocol import TEST_SPLIT
     from rigopt.validation.synthetic.evaluation import sample_blocks
     from rigopt.output import write_text_atomic

@@ -21,38 +21,7 @@ from rigopt.cli import INPUT_ERROR, run  # noqa: E402
 from rigopt.rig.library import load_rig  # noqa: E402
 from rigopt.errors import DataError  # noqa: E402
 
-SIZE, FRAMES = (64, 36), 4
-
-
-@pytest.fixture(scope="module")
-def packed(tmp_path_factory):
-    """(data, detectors root): R1's test split (one scene of 4 frames, ego body rendered) and tiny lss models of
-    seeds 0 and 1 fitted to it (60 steps on its one batch, so that their own mAP is above 0), packed into
-    <root>/lss-R1."""
-    from rigopt.validation.detectors.config import model_config
-    from rigopt.validation.detectors.data import RigSplit
-    from rigopt.validation.detectors.training import train
-    from rigopt.validation.synthetic.generate import ego_body_lookup, generate_split
-    from rigopt.validation.synthetic.render import render_rig
-    from rigopt.validation.synthetic.scenes import split_scenes
-
-    base = tmp_path_factory.mktemp("shipped")
-    data = base / "data"
-    generate_split([load_rig("R1")], split_scenes("test", 1, FRAMES), data, SIZE, render_rig, ego_body_lookup())
-    config = model_config("lss", "tiny", lr=1e-2, weight_decay=0.0, batch_size=FRAMES, epochs=60)
-    runs = {seed: base / f"run{seed}" for seed in (0, 1)}
-    for seed, folder in runs.items():
-        train(RigSplit(data, "R1", "test"), config, folder, seed=seed)
-    root = base / "detectors"
-    shipped.pack(runs, data, root / "lss-R1", {"preset": "tiny", "epochs": 60}, {"split": "test", "scenes": 1},
-                 resamples=200)
-    return data, root
-
-
-@pytest.fixture
-def use_packed(packed, monkeypatch):
-    monkeypatch.setenv("RIGOPT_DETECTORS", str(packed[1]))
-    return packed
+SIZE, FRAMES = (64, 36), 4  # the packed fixture's test split (conftest.packed)
 
 
 @pytest.mark.slow
