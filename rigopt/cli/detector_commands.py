@@ -252,7 +252,8 @@ def validate_command(
     from rigopt.report.json_values import json_ready
 
     from rigopt.output import check_out_file, existing_file, write_text_atomic
-    from rigopt.rig.library import load_rig, rig_names
+    from rigopt.rig.library import rig_names
+    from rigopt.validation.detectors.shipped import reference_rig
 
     if out is not None:
         check_out_file(out, suffixes=(".json",))
@@ -292,7 +293,8 @@ def validate_command(
     check_runs(runs, must_exist=True)
     family = model_config(model).family if model is not None else EXTERNAL_FAMILY
     calibration = load_weights(weights or "joint", metric)
-    drop_model = choose_model(predictor, load_rig(ref).perception(), weights is not None or metric != "rigcd")
+    drop_model = choose_model(predictor, reference_rig(ref, detectors).perception(),
+                              weights is not None or metric != "rigcd")
     rigs = [load_design(design) for design in designs]
     if drop_model is None:
         note_fallback(calibration)
@@ -343,6 +345,7 @@ def _validate_shipped(measured_rigs: list, ref: str, family: str, calibration, d
         default_cache,
         measure,
         paired_differences,
+        reference_rig,
         shipped_detector,
         user_detector,
         without_resamples,
@@ -352,15 +355,14 @@ def _validate_shipped(measured_rigs: list, ref: str, family: str, calibration, d
     from rigopt.mounting.candidates import rig_body_share
     from rigopt.output import existing_folder, write_text_atomic
     from rigopt.report.json_values import json_ready
-    from rigopt.rig.library import load_rig
 
     if yours is not None:
         from rigopt.validation.detectors.external import load_detector
 
-        detector = user_detector(load_detector(yours), load_rig(ref), root)
+        detector = user_detector(load_detector(yours), reference_rig(ref, root), root)
     else:
-        detector = shipped_detector(family, load_rig(ref).name, root)
-    reference = load_rig(ref)  # a rig file's name is its pack's reference
+        detector = shipped_detector(family, reference_rig(ref, root).name, root)
+    reference = reference_rig(ref, root)  # a rig file's name is its pack's reference
     if cache is not None and cache.exists():
         existing_folder(cache, "renderings of the reference's test scenes (made by rigopt validate)", option="--cache")
     rigs, records = [], []

@@ -62,15 +62,15 @@ def train_command(
     import os
 
     from rigopt.output import check_out_folder
-    from rigopt.rig.library import load_rig
     from rigopt.validation.detectors.config import model_config
     from rigopt.validation.detectors.models import resolve_device
     from rigopt.validation.detectors.reference_models import Recipe, default_work, train_pack
+    from rigopt.validation.detectors.shipped import reference_rig
 
     check_out_folder(out, resume=True)
     if work is not None:
         check_out_folder(work, resume=True, option="--work")
-    reference = load_rig(ref)
+    reference = reference_rig(ref, out if out.is_dir() else None)  # a pack's reference there trains on
     family = model_config(model, size).family
     resolve_device(device)
     recipe = Recipe(family, size.lower(), epochs, seed_list(seeds), scenes, test_scenes, frames,
@@ -111,7 +111,7 @@ def export_command(
     from rigopt.cli.parsing import parse_image_size
     from rigopt.output import check_out_file, existing_file
     from rigopt.validation.detectors.external import export_torchscript
-    from rigopt.validation.detectors.shipped import shipped_detector
+    from rigopt.validation.detectors.shipped import reference_rig, shipped_detector
 
     check_out_file(out, suffixes=(".pt",))
     if (ref is None) == (checkpoint is None):
@@ -122,9 +122,7 @@ def export_command(
         existing_file(checkpoint, "checkpoint file (checkpoint.pt of rigopt bench train, or a pack's seed<k>.pt)",
                       option="--checkpoint")
     else:
-        from rigopt.rig.library import load_rig
-
-        packed = shipped_detector(model, load_rig(ref).name, detectors)
+        packed = shipped_detector(model, reference_rig(ref, detectors).name, detectors)
         if seed not in packed.seeds:
             raise RigoptError(f"--seed {seed}: the pack {packed.folder} holds seeds {', '.join(map(str, packed.seeds))}")
         checkpoint = packed.checkpoint(seed)

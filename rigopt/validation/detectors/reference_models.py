@@ -90,4 +90,4 @@ def train_pack(reference: Rig, recipe: Recipe, out: Path, work: Path, device: st
                   "image_size": list(recipe.image_size), "samples": recipe.train_scenes * recipe.frames}
     progress(f"packing {len(runs)} model(s) into {Path(out) / f'{config.family}-{reference.name}'}")
     return pack(runs, data, Path(out) / f"{config.family}-{reference.name}", card_recipe, train_data, device=device,
-                progress=progress)
+                progress=progress, trained_on=reference)

@@ -47,6 +47,8 @@ from rigopt.validation.detectors.measuring import DEFAULT_PROTOCOL, FULL, PROTOC
 
 CARD = "card.json"
 BOOTSTRAP = "bootstrap.npz"
+#: The reference rig a pack was trained on, when it is no library rig (``rigopt detectors train --ref FILE``).
+REFERENCE_RIG = "rig.json"
 SCORES = "scores"
 
 
@@ -97,6 +99,15 @@ class ShippedDetector:
     def own_scores(self, protocol: Protocol) -> dict[int, dict]:
         """The reference's own scores under ``protocol`` (:func:`reference_scores`)."""
         return reference_scores(self, protocol)
+
+    @property
+    def reference_rig(self) -> Rig:
+        """The rig the models were trained on: the pack's ``rig.json`` where it has one, else the library's."""
+        from rigopt.rig.library import load_rig
+        from rigopt.rig.pccr_format import read_rig
+
+        path = self.folder / REFERENCE_RIG
+        return read_rig(path, self.reference) if path.is_file() else load_rig(self.reference)
 
 
 #: The test set and bootstrap a detector is scored with on a reference that no pack gives them for: those of the
@@ -170,6 +181,25 @@ def shipped_names(root: Path | None = None) -> list[str]:
     """``<family>-<reference>`` of every packed detector in :func:`detectors_root`."""
     root = detectors_root(root)
     return sorted(p.parent.name for p in root.glob(f"*/{CARD}")) if root is not None else []
+
+
+def reference_rig(ref: str, root: Path | None = None) -> Rig:
+    """``--ref``: a library rig, a rig file, or else the reference of a pack in :func:`detectors_root` that
+    carries its rig (``rig.json``: a pack made by ``rigopt detectors train --ref FILE``, e.g. ``nuscenes``). The
+    library's error, naming those packs too, otherwise."""
+    from rigopt.errors import UnknownNameError
+    from rigopt.rig.library import load_rig
+
+    try:
+        return load_rig(ref)
+    except UnknownNameError as error:
+        carried = {name.split("-", 1)[1]: name for name in shipped_names(root)
+                   if (detectors_root(root) / name / REFERENCE_RIG).is_file()}
+        if str(ref) in carried:
+            return shipped_detector(*carried[str(ref)].split("-", 1), root).reference_rig
+        if carried:
+            raise UnknownNameError(f"{error}; or a packed reference: {', '.join(sorted(carried))}") from None
+        raise
 
 
 def shipped_detector(family: str, reference: str, root: Path | None = None) -> ShippedDetector:
@@ -416,10 +446,12 @@ def scores_on_frames(matched, blocks: Sequence[np.ndarray], protocol: Protocol, 
 
 def pack(runs: dict[int, Path], data: Path, out: Path, recipe: dict, train_data: dict,
          resamples: int = 1000, bootstrap_seed: int = 0, device: str = "cpu",
-         progress: Callable[[str], None] = lambda message: None) -> ShippedDetector:
+         progress: Callable[[str], None] = lambda message: None, trained_on: Rig | None = None) -> ShippedDetector:
     """Write a shipped detector folder ``out`` from trained run folders ``runs`` {seed: folder holding
     checkpoint.pt, train_log.csv} whose reference's test split is in ``data``: float16 weights, the card with each
-    seed's own mAP measured with the packed weights. ``recipe`` and ``train_data`` go into the card as given."""
+    seed's own mAP measured with the packed weights. ``recipe`` and ``train_data`` go into the card as given;
+    ``trained_on``, the reference rig, into ``rig.json`` (``--ref`` then finds it by name)."""
+    from rigopt.rig.pccr_format import write_rig
     from rigopt.validation.detectors.data import RigSplit
     from rigopt.validation.detectors.inference import match_split
     from rigopt.validation.detectors.models import (
@@ -465,6 +497,8 @@ def pack(runs: dict[int, Path], data: Path, out: Path, recipe: dict, train_data:
                 _write_protocol(card, work, protocol, matched, blocks)
         card["size_bytes"] = sum((work / f"seed{seed}.pt").stat().st_size for seed in states)
         (work / CARD).write_text(json.dumps(card, indent=1) + "\n")
+        if trained_on is not None:
+            write_rig(trained_on, work / REFERENCE_RIG)
     return ShippedDetector(Path(out), card)
 
 
@@ -480,13 +514,12 @@ def add_protocol(detector: ShippedDetector, protocol: Protocol, cache: Path, dev
     from rigopt.validation.detectors.protocol import TEST_SPLIT
     from rigopt.validation.synthetic.evaluation import sample_blocks
     from rigopt.output import write_text_atomic
-    from rigopt.rig.library import load_rig
 
     import torch
 
     known_scenes = protocol.scene_offset is None
     rendered = FULL if known_scenes else protocol
-    folder = render_cached([load_rig(detector.reference)], detector, cache, workers, progress, rendered)[0]
+    folder = render_cached([detector.reference_rig], detector, cache, workers, progress, rendered)[0]
     split = RigSplit(cache, folder, TEST_SPLIT, None, depths=False)
     blocks = sample_blocks(split.samples)
     matched = {}

@@ -53,8 +53,9 @@ def test_the_pack_records_its_recipe_and_own_scores_and_validate_uses_it(referen
     assert card["test_data"]["scenes"] == 1 and card["test_data"]["image_size"] == [64, 36]
     assert all(card["seeds"][seed]["mAP"] > 0 for seed in ("0", "1"))
     assert set(card["protocols"]) == {"quick"}
+    assert (out / "lss-myref" / "rig.json").is_file()  # the reference travels with its pack: --ref myref finds it
     home = {**os.environ, "RIGOPT_HOME": str(out / "home")}
-    measured = run_console("validate", reference_file, "R1", "--ref", reference_file, "--model", "lss",
+    measured = run_console("validate", reference_file, "R1", "--ref", "myref", "--model", "lss",
                            "--detectors", out, "--workers", "1", "--json", env=home)
     assert measured.returncode == 0, measured.stderr
     result = json.loads(measured.stdout)
@@ -63,6 +64,15 @@ def test_the_pack_records_its_recipe_and_own_scores_and_validate_uses_it(referen
         assert result["reference_mAP"][seed] == card["protocols"]["quick"]["seeds"][seed]["mAP"]
     itself, other = result["rigs"]
     assert itself["drop"] == pytest.approx(0, abs=1e-12) and other["rig"] == "R1" and other["n_cameras"] == 8
+    exported = run_console("detectors", "export", "--ref", "myref", "--detectors", out, "--seed", "1", "--out",
+                           out / "mine.pt", env=home)
+    assert exported.returncode == 0, exported.stderr
+    yours = run_console("validate", "R1", "--ref", "myref", "--detector", out / "mine.pt", "--detectors", out,
+                        "--workers", "1", "--json", env=home)
+    assert yours.returncode == 0, yours.stderr
+    assert json.loads(yours.stdout)["rigs"][0]["drop"] == pytest.approx(other["seeds"]["1"]["drop"], abs=1e-6)
+    unknown = run_console("validate", "R1", "--ref", "theirs", "--model", "lss", "--detectors", out, env=home)
+    assert unknown.returncode == 2 and "or a packed reference: myref" in unknown.stderr
 
 
 def test_killed_half_way_it_resumes_and_makes_the_same_models(reference_file, trained, tmp_path):
