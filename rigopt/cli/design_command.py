@@ -501,12 +501,13 @@ def _excluded_text(region: dict) -> str:
 
 
 def _reference(name: str, vehicle: Optional[str]):
-    """A --ref rig on its vehicle (``vehicle`` when given), origin converted (noted), cameras inside refused."""
+    """A --ref rig (a library rig, a rig file or a packed reference: ``shipped.reference_rig``) on its vehicle
+    (``vehicle`` when given), origin converted (noted), cameras inside refused."""
     from rigopt.design.problem import ReferenceRig
-    from rigopt.rig.library import load_rig
+    from rigopt.validation.detectors.shipped import reference_rig
     from rigopt.vehicle.placement import rig_on_vehicle
 
-    rig, on, change = rig_on_vehicle(load_rig(name), vehicle)
+    rig, on, change = rig_on_vehicle(reference_rig(name), vehicle)
     if change is not None:
         note(change.describe())
     return ReferenceRig(rig, on)
