@@ -350,9 +350,7 @@ def _validate_shipped(measured_rigs: list, ref: str, family: str, calibration, d
         user_detector,
         without_resamples,
     )
-    from rigopt.validation.designs import WHOLE_ROLE, comparison_rigs, contradictions, fed_rigs
-    from rigopt.metrics.ranking import predict_transfer
-    from rigopt.mounting.candidates import rig_body_share
+    from rigopt.validation.designs import WHOLE_ROLE, comparison_rigs, contradictions, fed_rigs, predicted_transfers
     from rigopt.output import existing_folder, write_text_atomic
     from rigopt.report.json_values import json_ready
 
@@ -381,7 +379,7 @@ def _validate_shipped(measured_rigs: list, ref: str, family: str, calibration, d
     resumable(f"rerun the same command: the renderings finished so far are kept in {cache or default_cache()}")
     with status_console.status("validating") as status:
         measured = measure([r for _, r in rigs], detector, cache, device, workers, status.update, protocol, ray)
-    predictions = predict_transfer(reference, [r for _, r in rigs], calibration, drop_model, rig_body_share)
+    predictions = predicted_transfers(reference, [r for _, r in rigs], calibration, drop_model)
     card = detector.card
     result = {"reference": reference.name, "model": family,
               "models": "yours" if yours else "shipped" if root is None else "packed",

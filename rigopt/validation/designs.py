@@ -98,6 +98,16 @@ def load_design(path) -> Rig:
     return rig
 
 
+def predicted_transfers(reference: Rig, rigs, calibration: Calibration, drop_model=None) -> list:
+    """``metrics.ranking.predict_transfer`` of ``rigs`` from ``reference`` (one Prediction each), the rigs first
+    brought to one origin: an imported reference measures from its rear axle, designs from the vehicle's centre."""
+    from rigopt.metrics.ranking import predict_transfer
+    from rigopt.vehicle.placement import comparable_rigs
+
+    placed, _ = comparable_rigs([reference, *rigs])
+    return predict_transfer(placed[0], placed[1:], calibration, drop_model, rig_body_share)
+
+
 def comparison_rigs(design: Rig, reference: Rig, calibration: Calibration | None = None) -> list[tuple[str, Rig]]:
     """(role, rig): the design, the library's hand-designed rigs for its vehicle, the naive transfer (with the
     ``calibration``, refined as a design is: ``designer.refine_comparison``, the same continuous stage,
@@ -110,8 +120,10 @@ def comparison_rigs(design: Rig, reference: Rig, calibration: Calibration | None
     from rigopt.design.requirements import design_requirements
     from rigopt.design.settings import DesignSettings
     from rigopt.vehicle.library import load_vehicle
+    from rigopt.vehicle.placement import in_vehicle_frame
 
     vehicle = load_vehicle(design.vehicle)
+    reference = in_vehicle_frame(reference)[0]  # from its vehicle's centre, as designs are (an import: its rear axle)
     settings = DesignSettings(symmetric=False, require="none")
     rigs = [("design", design)] + [("hand-designed", rig) for rig in benchmark_rigs(vehicle)
                                    if rig.name not in (design.name, reference.name)]
@@ -148,7 +160,6 @@ def validate_design(design: Rig, reference: str, family: str, data, calibration:
     """
     from rigopt.validation.synthetic.generate import ego_body_lookup, generate_split, split_layout
     from rigopt.validation.synthetic.render import render_rig
-    from rigopt.metrics.ranking import predict_transfer
 
     reference_rig = load_rig(reference)
     runs = Path(runs) if runs is not None else Path(data) / "runs"
@@ -177,7 +188,7 @@ def validate_design(design: Rig, reference: str, family: str, data, calibration:
     resampled_visible = resampled_maps(runs_matched, blocks, resamples, seed, visible_only=True)
     drops, resampled_drops = relative_drops(maps), relative_drops(resampled)
     drops_visible, resampled_drops_visible = relative_drops(maps_visible), relative_drops(resampled_visible)
-    predictions = predict_transfer(reference_rig, [rig for _, rig in rigs], calibration, drop_model, rig_body_share)
+    predictions = predicted_transfers(reference_rig, [rig for _, rig in rigs], calibration, drop_model)
     entries = []
     for k, ((role, rig), prediction) in enumerate(zip(rigs, predictions), start=1):
         predicted = prediction.to_dict()
@@ -224,7 +235,6 @@ def measure_design(design: Rig, reference: Rig, calibration: Calibration, protoc
     interval excludes 0), so that a report never shows both without saying so. The predicted drops are
     ``drop_model``'s where one is given, else RigCD's under ``calibration`` (``predicted_by``).
     """
-    from rigopt.metrics.ranking import predict_transfer
     from rigopt.validation.detectors.shipped import measure, paired_differences, shipped_detector, without_resamples
 
     detector = shipped_detector("lss", reference.name)
@@ -232,7 +242,7 @@ def measure_design(design: Rig, reference: Rig, calibration: Calibration, protoc
               if role in ("naive transfer", "height-matched transfer")]
     rigs = [("design", dataclasses.replace(design.perception(), name=f"{design.name}_perception"))] + copies
     measured = measure([rig for _, rig in rigs], detector, cache, "cpu", workers, progress, protocol)
-    predictions = predict_transfer(reference, [rig for _, rig in rigs], calibration, drop_model, rig_body_share)
+    predictions = predicted_transfers(reference, [rig for _, rig in rigs], calibration, drop_model)
     rows = [{"role": role, "rig": rig.name, "n_cameras": len(rig), "predicted_drop": p.predicted_drop,
              "predicted_interval": p.to_dict()["interval"], "interval_informative": p.interval_informative,
              "measured_drop": m["drop"], "measured_drop_ci": m["drop_ci"],
