@@ -13,6 +13,7 @@ again (the pack is written whole, replacing the one before).
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
@@ -77,7 +78,8 @@ def train_pack(reference: Rig, recipe: Recipe, out: Path, work: Path, device: st
     for k, seed in enumerate(recipe.seeds):
         left = f"; about {sum(spent) / len(spent) * (len(recipe.seeds) - k) / 60:.0f} min of training left" if spent else ""
         progress(f"training seed {seed} ({k + 1} of {len(recipe.seeds)}){left}")
-        run = train_on(data, reference.name, config, Path(work) / "runs" / f"seed{seed}", device, seed, step)
+        run = train_on(data, reference.name, config, Path(work) / "runs" / f"seed{seed}", device, seed,
+                       _epoch_lines(step, progress, f"seed {seed}", config.epochs))
         runs[seed] = run.folder
         spent.append(training_seconds(run.folder / "train_log.csv"))  # over every session it trained in
     steps = max(1, -(-recipe.train_scenes * recipe.frames // config.batch_size)) * config.epochs
@@ -91,3 +93,23 @@ def train_pack(reference: Rig, recipe: Recipe, out: Path, work: Path, device: st
     progress(f"packing {len(runs)} model(s) into {Path(out) / f'{config.family}-{reference.name}'}")
     return pack(runs, data, Path(out) / f"{config.family}-{reference.name}", card_recipe, train_data, device=device,
                 progress=progress, trained_on=reference)
+
+
+def _epoch_lines(step: Callable, progress: Callable[[str], None], label: str, epochs: int) -> Callable:
+    """``step`` that also says, as each epoch begins, where training stands and the minutes left for this seed at
+    the pace of this session (a line a log keeps, where a progress bar is not drawn)."""
+    began = {"time": time.monotonic(), "step": None, "epoch": None}
+
+    def each(epoch: int, done: int, total: int, loss: float) -> None:
+        step(epoch, done, total, loss)
+        if began["step"] is None:
+            began["step"] = done - 1
+        if epoch != began["epoch"]:
+            began["epoch"] = epoch
+            taken = done - began["step"] - 1  # the steps of this session before this one
+            pace = (time.monotonic() - began["time"]) / max(1, taken)
+            left = f"; about {pace * (total - done) / 60:.0f} min left for it" if taken else ""
+            progress(f"{label}: epoch {epoch + 1} of {epochs}, step {done} of {total}, loss {loss:.3f}{left}")
+
+    return each
+
