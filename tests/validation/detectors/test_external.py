@@ -37,10 +37,11 @@ def exported(packed, tmp_path_factory):
 @pytest.fixture(scope="module")
 def home(packed, tmp_path_factory):
     """The environment of a validate run on the packed models: their folder, a cache of its own (shared by the
-    tests here: the reference is rendered once), this folder's entry points on PYTHONPATH."""
+    tests here: the reference is rendered once), this folder's entry points on PYTHONPATH, one torch thread."""
     entry_points = tmp_path_factory.mktemp("entry_points")
     (entry_points / "contract_cases.py").write_text(CONTRACT_CASES)
-    return {**os.environ, "RIGOPT_DETECTORS": str(packed[1]), "RIGOPT_HOME": str(tmp_path_factory.mktemp("home")),
+    return {**os.environ, "OMP_NUM_THREADS": "1", "RIGOPT_DETECTORS": str(packed[1]),
+            "RIGOPT_HOME": str(tmp_path_factory.mktemp("home")),
             "PYTHONPATH": os.pathsep.join(filter(None, [str(entry_points), os.environ.get("PYTHONPATH")]))}
 
 

@@ -17,6 +17,9 @@ from console import console_script, run_console
 
 torch = pytest.importorskip("torch")
 
+#: One torch thread in the commands' processes, as in the tests' own (conftest): a tiny model's OpenMP threads spin
+#: against any other load on a shared machine.
+ONE_THREAD = {**os.environ, "OMP_NUM_THREADS": "1"}
 TRAIN = ["--size", "tiny", "--seeds", "0,1", "--scenes", "8", "--test-scenes", "1", "--frames", "4",
          "--image-size", "64x36", "--epochs", "30", "--workers", "1"]
 
@@ -37,7 +40,7 @@ def trained(reference_file, tmp_path_factory):
     """(packs folder, the command's result) of one uninterrupted run."""
     out = tmp_path_factory.mktemp("packs")
     done = run_console("detectors", "train", "--ref", reference_file, "--out", out, *TRAIN,
-                       env={**os.environ, "RIGOPT_HOME": str(out / "home")})
+                       env={**ONE_THREAD, "RIGOPT_HOME": str(out / "home")})
     return out, done
 
 
@@ -54,7 +57,7 @@ def test_the_pack_records_its_recipe_and_own_scores_and_validate_uses_it(referen
     assert all(card["seeds"][seed]["mAP"] > 0 for seed in ("0", "1"))
     assert set(card["protocols"]) == {"quick"}
     assert (out / "lss-myref" / "rig.json").is_file()  # the reference travels with its pack: --ref myref finds it
-    home = {**os.environ, "RIGOPT_HOME": str(out / "home")}
+    home = {**ONE_THREAD, "RIGOPT_HOME": str(out / "home")}
     measured = run_console("validate", reference_file, "R1", "--ref", "myref", "--model", "lss",
                            "--detectors", out, "--workers", "1", "--json", env=home)
     assert measured.returncode == 0, measured.stderr
@@ -77,7 +80,7 @@ def test_the_pack_records_its_recipe_and_own_scores_and_validate_uses_it(referen
 
 def test_killed_half_way_it_resumes_and_makes_the_same_models(reference_file, trained, tmp_path):
     out = tmp_path / "packs"
-    env = {**os.environ, "RIGOPT_HOME": str(tmp_path / "home")}
+    env = {**ONE_THREAD, "RIGOPT_HOME": str(tmp_path / "home")}
     command = [str(console_script()), "detectors", "train", "--ref", str(reference_file), "--out", str(out), *TRAIN]
     running = subprocess.Popen(command, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     first_epoch = None
