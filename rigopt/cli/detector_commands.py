@@ -281,10 +281,10 @@ def validate_command(
     if data is not None and detector is not None:
         raise RigoptError("--detector is scored on the reference's test scenes rendered here (no --data); with --data "
                           "give --model and the folder's trained runs")
-    chosen = protocol_named(protocol) if protocol is not None else DEFAULT_PROTOCOL
     if data is not None and detectors is not None:
         raise RigoptError("--detectors names packed models (no --data); with --data the folder's trained runs are "
                           "scored")
+    chosen = protocol_named(protocol) if protocol is not None else DEFAULT_PROTOCOL
     if data is not None and (cache is not None or compare):
         raise RigoptError(f"--{'cache' if cache is not None else 'compare'} is for the shipped models (no --data); "
                           "with --data the renderings go into that folder and the comparison rigs are always measured")
@@ -354,13 +354,13 @@ def _validate_shipped(measured_rigs: list, ref: str, family: str, calibration, d
     from rigopt.output import existing_folder, write_text_atomic
     from rigopt.report.json_values import json_ready
 
+    reference = reference_rig(ref, root)  # a library rig, a rig file (its name is its pack's) or a packed reference
     if yours is not None:
         from rigopt.validation.detectors.external import load_detector
 
-        detector = user_detector(load_detector(yours), reference_rig(ref, root), root)
+        detector = user_detector(load_detector(yours), reference, root)
     else:
-        detector = shipped_detector(family, reference_rig(ref, root).name, root)
-    reference = reference_rig(ref, root)  # a rig file's name is its pack's reference
+        detector = shipped_detector(family, reference.name, root)
     if cache is not None and cache.exists():
         existing_folder(cache, "renderings of the reference's test scenes (made by rigopt validate)", option="--cache")
     rigs, records = [], []
