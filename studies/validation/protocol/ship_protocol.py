@@ -1,7 +1,7 @@
-"""Add a protocol's reference scores to the shipped R1 detectors (detectors/lss-R1: the card's ``protocols`` entry and
-``bootstrap-<protocol>.npz``).
+"""Add a protocol's reference scores to shipped detectors (default detectors/lss-R1: the card's ``protocols`` entry
+and ``bootstrap-<protocol>.npz``).
 
-    python studies/validation/protocol/ship_protocol.py --protocol quick [--cache DIR] [--workers 2]
+    python studies/validation/protocol/ship_protocol.py --protocol quick [--ref R1] [--cache DIR] [--workers 2]
 
 On the card's own scenes (quick) R1's full test split is rendered into the cache and scored with every shipped
 seed; the full protocol's scores must equal the card's (checked), and the protocol's frames are taken from the
@@ -18,6 +18,7 @@ from pathlib import Path
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--protocol", default="quick", help="the protocol to add (a name of measuring.PROTOCOLS)")
+    parser.add_argument("--ref", default="R1", help="the reference of the shipped lss models (R1, nuscenes)")
     parser.add_argument("--cache", type=Path, default=None, help="renderings (default: rigopt validate's cache)")
     parser.add_argument("--workers", type=int, default=2)
     args = parser.parse_args(argv)
@@ -25,7 +26,7 @@ def main(argv=None) -> int:
     from rigopt.validation.detectors.shipped import add_protocol, default_cache, shipped_detector
 
     protocol = protocol_named(args.protocol)
-    detector = add_protocol(shipped_detector("lss", "R1"), protocol, args.cache or default_cache(), "cpu",
+    detector = add_protocol(shipped_detector("lss", args.ref), protocol, args.cache or default_cache(), "cpu",
                             args.workers, lambda message: print(message, flush=True))
     for seed, own in detector.card["protocols"][protocol.name]["seeds"].items():
         print(f"seed {seed}: {protocol.name} mAP {own['mAP']:.4f} (full {detector.card['seeds'][seed]['mAP']:.4f})")
