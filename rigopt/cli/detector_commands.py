@@ -202,7 +202,7 @@ def validate_command(
                                          "rigopt design or library rigs (several share the loaded models; one with "
                                          "--data or --compare)."),
     ref: str = typer.Option(..., "--ref", help="Reference rig the detector was trained on."),
-    model: Optional[str] = typer.Option(None, "--model", help=MODEL_HELP + " Or --detector."),
+    model: Optional[str] = typer.Option(None, "--model", help=MODEL_HELP + " Default lss, unless --detector."),
     detector: Optional[str] = typer.Option(None, "--detector", help="Your own detector behind rigopt's detector "
                                            "contract (docs/detectors.md): a TorchScript file (rigopt detectors "
                                            "export makes one from a rigopt model) or package.module:factory. It is "
@@ -270,9 +270,9 @@ def validate_command(
         option = "--protocol" if protocol is not None else "--ray"
         raise RigoptError(f"{option} is for the shipped models (no --data); with --data every test sample is scored "
                           "on this machine")
-    if (model is None) == (detector is None):
+    if model is not None and detector is not None:
         raise RigoptError("give --model (rigopt's detectors, e.g. --model lss) or --detector (your own: a TorchScript "
-                          "file or package.module:factory), one of the two")
+                          "file or package.module:factory), not both")
     if detectors is not None:
         from rigopt.output import existing_folder
 
@@ -291,7 +291,7 @@ def validate_command(
     if data is not None:
         check_data(data)
     check_runs(runs, must_exist=True)
-    family = model_config(model).family if model is not None else EXTERNAL_FAMILY
+    family = EXTERNAL_FAMILY if detector is not None else model_config(model or "lss").family
     calibration = load_weights(weights or "joint", metric)
     drop_model = choose_model(predictor, reference_rig(ref, detectors).perception(),
                               weights is not None or metric != "rigcd")

@@ -689,9 +689,8 @@ CASES: list[tuple[str, list[str], str]] = [
     ("validate several rigs with --compare", ["validate", "R5", "R4", "--ref", "R1", "--model", "lss", "--compare"],
      "--compare validates one rig at a time"),
     # --- your own detector, models for any reference (issue 45) ---
-    ("validate without --model or --detector", ["validate", "R5", "--ref", "R1"], "give --model"),
     ("validate --model and --detector", ["validate", "R5", "--ref", "R1", "--model", "lss", "--detector",
-                                         f"{T}/file.txt"], "one of the two"),
+                                         f"{T}/file.txt"], "not both"),
     ("validate --detector missing", ["validate", "R5", "--ref", "R1", "--detector", f"{T}/none.pt"],
      "no such file, nor an entry point"),
     ("validate --detector not TorchScript", ["validate", "R5", "--ref", "R1", "--detector", f"{T}/file.txt"],

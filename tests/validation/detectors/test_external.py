@@ -140,8 +140,7 @@ def test_a_detector_at_another_image_size_is_scored_on_renderings_of_that_size(e
 
 
 @pytest.mark.parametrize("args, message", [
-    (["validate", "R5", "--ref", "R1"], "give --model (rigopt's detectors, e.g. --model lss) or --detector"),
-    (["validate", "R5", "--ref", "R1", "--model", "lss", "--detector", "x.pt"], "one of the two"),
+    (["validate", "R5", "--ref", "R1", "--model", "lss", "--detector", "x.pt"], "or --detector (your own"),
     (["validate", "R5", "--ref", "R1", "--detector", "{tmp}/none.pt"], "no such file, nor an entry point"),
     (["validate", "R5", "--ref", "R1", "--detector", "{tmp}/model.onnx"], "ONNX files are not read"),
     (["validate", "R5", "--ref", "R1", "--detector", "{tmp}/model.pt"], "not a TorchScript file torch can load"),
