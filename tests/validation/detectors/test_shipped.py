@@ -342,3 +342,38 @@ def test_validate_on_a_local_ray_cluster_gives_the_figures_of_one_machine(use_pa
             assert np.array_equal(entry["resampled_drops"], other["seeds"][seed]["resampled_drops"])
     assert command.returncode == 0, command.stderr
     assert [e["drop"] for e in json.loads(command.stdout)["rigs"]] == [e["drop"] for e in alone]
+
+
+def test_both_shipped_packs_test_on_the_default_test_set_and_nuscenes_names_its_own_rig(monkeypatch):
+    """The shipped packs (no $RIGOPT_DETECTORS): lss-R1 and lss-nuscenes score on the 16 x 40 test scenes a user's
+    detector is scored on where no pack says otherwise, and ``--ref nuscenes`` is the rig inside its pack."""
+    monkeypatch.delenv("RIGOPT_DETECTORS", raising=False)
+    assert {"lss-R1", "lss-nuscenes"} <= set(shipped.shipped_names())
+    for reference in ("R1", "nuscenes"):
+        card = shipped.shipped_detector("lss", reference).card
+        assert {key: card["test_data"][key] for key in shipped.DEFAULT_TEST_DATA} == shipped.DEFAULT_TEST_DATA
+        assert card["bootstrap"] == shipped.DEFAULT_BOOTSTRAP
+        assert {"quick", "quick-s1"} <= set(card["protocols"])
+        assert all(seed["mAP"] > 0.2 for seed in card["seeds"].values())
+    rig = shipped.reference_rig("nuscenes")
+    assert rig.name == "nuscenes" and len(rig) == 6 and rig.origin.kind == "rear_axle"
+    assert sorted(c.id for c in rig.cameras) == sorted(["CAM_FRONT", "CAM_FRONT_LEFT", "CAM_FRONT_RIGHT", "CAM_BACK",
+                                                         "CAM_BACK_LEFT", "CAM_BACK_RIGHT"])
+    from rigopt.vehicle.placement import known_vehicle
+
+    assert known_vehicle(rig).name == "renault_zoe"
+
+
+@pytest.mark.slow
+def test_a_nuscenes_rig_is_validated_from_the_nuscenes_reference_with_its_shipped_model(tmp_path):
+    """The issue's acceptance: ``rigopt validate <nuScenes rig> --ref nuscenes``, from the shipped pack alone (the
+    rig as the benchmark placed it on the tt), one seed, a drop with its interval."""
+    rig = Path(__file__).resolve().parents[3] / "measurements" / "rigs" / "real" / "nuscenes.json"
+    env = {k: v for k, v in os.environ.items() if k != "RIGOPT_DETECTORS"}
+    done = run_console("validate", rig, "--ref", "nuscenes", "--workers", "1", "--json",
+                       env={**env, "RIGOPT_HOME": str(tmp_path), "OMP_NUM_THREADS": "1"}, timeout=900)
+    assert done.returncode == 0, done.stderr
+    result = json.loads(done.stdout)
+    assert result["reference"] == "nuscenes" and result["detector"] == "lss-nuscenes" and result["seeds"] == [0]
+    entry = result["rigs"][0]
+    assert entry["seeds"]["0"]["reference_mAP"] > 0.2 and entry["drop_ci"][0] <= entry["drop"] <= entry["drop_ci"][1]
