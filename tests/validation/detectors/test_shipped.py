@@ -70,7 +70,7 @@ def test_under_the_quick_protocol_the_reference_loses_nothing_and_scores_are_kep
     detector = shipped.shipped_detector("lss", "R1")
     assert detector.card["protocols"]["quick"]["samples"] == 1  # frame 0 of the one 4-frame scene
     first = shipped.measure([load_rig("R1"), load_rig("R5")], detector, tmp_path / "cache", protocol=QUICK)
-    assert first[0]["protocol"] == "quick" and first[0]["cache"].endswith("-quick")
+    assert first[0]["protocol"] == "quick" and first[0]["cache"].endswith("-quick-64x36")  # not 160 x 90: named
     for seed in ("0", "1"):
         assert first[0]["seeds"][seed]["drop"] == pytest.approx(0, abs=1e-12)
     kept = sorted((Path(first[1]["cache"]) / shipped.SCORES).glob("*.npz"))
@@ -102,7 +102,7 @@ def test_a_protocol_on_named_scenes_is_added_to_a_pack_as_its_frames_score_there
     for seed, own in detector.card["protocols"]["quick"]["seeds"].items():
         assert detector.card["protocols"]["quick-s0"]["seeds"][seed] == pytest.approx(own, abs=1e-12)
     reference = shipped.measure([load_rig("R1")], detector, tmp_path / "cache", protocol=named)[0]
-    assert reference["drop"] == pytest.approx(0, abs=1e-12) and reference["cache"].endswith("-quick-s0")
+    assert reference["drop"] == pytest.approx(0, abs=1e-12) and reference["cache"].endswith("-quick-s0-64x36")
     with pytest.raises(DataError, match="scores mAP 0 on R1's quick-s1 scenes"):
         shipped.add_protocol(detector, QUICK_NEW_SCENES, tmp_path / "cache")
     assert "quick-s1" not in shipped.shipped_detector("lss", "R1").card["protocols"]
@@ -207,7 +207,9 @@ def test_design_measure_through_the_console_script(packed, tmp_path):
 
 
 @pytest.mark.parametrize("args, message", [
-    (["validate", "R5", "--ref", "R5", "--model", "lss"], "rigopt ships no lss models trained on R5 (shipped: lss-R1)"),
+    (["validate", "R5", "--ref", "R5", "--model", "lss"], "no lss models trained on R5 in "),
+    (["validate", "R5", "--ref", "R5", "--model", "lss"], "(packed there: lss-R1); make them with rigopt detectors "
+                                                           "train --ref R5"),
     (["validate", "R5", "--ref", "R1", "--model", "lss", "--runs", "{tmp}"], "--runs names trained runs of a --data"),
     (["validate", "R5", "--ref", "R1", "--model", "lss", "--data", "{tmp}", "--compare"], "--compare is for the shipped"),
     (["validate", "R5", "--ref", "R1", "--model", "lss", "--cache", "{file}"], "--cache"),
