@@ -319,7 +319,11 @@ class Vehicle:
         points = np.atleast_2d(np.asarray(points, dtype=float))
         foot, unsigned, face = trimesh.proximity.closest_point(self.mesh, points)
         inside = self.ray_caster.inside(points)
-        normal = self.mesh.face_normals[face]
+        normal = np.array(self.mesh.face_normals[face])
+        flat = np.linalg.norm(normal, axis=1) < 0.5  # a zero-area face has no normal (trimesh gives 0): its corners'
+        if flat.any():
+            corners = np.asarray(self.mesh.vertex_normals)[np.asarray(self.mesh.faces)[face[flat]]].sum(axis=1)
+            normal[flat] = corners / np.linalg.norm(corners, axis=1, keepdims=True)
         return SurfaceQuery(foot, np.where(inside, -unsigned, unsigned), normal, face)
 
     def zone_indices(self, points, normals) -> np.ndarray:

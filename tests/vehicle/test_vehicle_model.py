@@ -131,3 +131,24 @@ def test_a_pickled_vehicle_is_its_spec_and_mesh(box_car):
     points = [[2.03, 0.1, 1.0], [1.9, 0.1, 1.0], [0.5, -0.95, 0.8]]
     np.testing.assert_array_equal(copy.surface(points).distance, box_car.surface(points).distance)
     assert copy.fine_face_zones.tolist() == box_car.fine_face_zones.tolist()
+
+
+def test_a_point_nearest_a_zero_area_face_gets_a_unit_normal():
+    """Built-in meshes hold zero-area faces (the ford_fusion_hybrid 20), whose trimesh normal is 0; a point nearest
+    one gets its corners' normal, so that the checks built on it (zones, housing frames, the width limit) never see
+    a zero or NaN normal (the width check passed such a point silently: NaN compares false)."""
+    import numpy as np
+
+    from rigopt.mounting import features
+    from rigopt.vehicle.library import load_vehicle
+
+    vehicle = load_vehicle("ford_fusion_hybrid")
+    mesh = vehicle.mesh
+    flat = np.flatnonzero(np.linalg.norm(mesh.face_normals, axis=1) < 0.5)
+    assert len(flat) > 0
+    points = mesh.triangles_center[flat] + 1e-4  # on (next to) each zero-area face
+    surface = vehicle.surface(points)
+    assert np.allclose(np.linalg.norm(surface.normal, axis=1), 1.0)
+    protrusion, limit = features.width_protrusion(vehicle, surface.foot, surface.normal, [None] * len(points),
+                                                  (0.06, 0.05, 0.04))
+    assert np.isfinite(protrusion).all() and np.isfinite(limit).all()
