@@ -137,12 +137,12 @@ def rank_command(
 def _comparable(names: List[str], vehicle: Optional[str]):
     """The perception cameras of the rigs ``names`` in one frame (:func:`rigopt.vehicle.placement.comparable_rigs`),
     the origin changes made (:func:`_note_changes` says them once the command has succeeded) and {rig name: number
-    of near_field cameras left out} of the rigs that have some."""
-    from rigopt.rig.library import load_rig
+    of near_field cameras left out} of the rigs that have some. A name may be a packed reference (``nuscenes``)."""
+    from rigopt.validation.detectors.shipped import reference_rig
     from rigopt.vehicle.library import load_vehicle
     from rigopt.vehicle.placement import comparable_rigs
 
-    loaded = [load_rig(name) for name in names]
+    loaded = [reference_rig(name) for name in names]
     rigs, changes = comparable_rigs([_perception(rig) for rig in loaded],
                                     load_vehicle(vehicle) if vehicle is not None else None)
     return rigs, changes, {rig.name: rig.near_field_count for rig in loaded if rig.near_field_count}

@@ -379,3 +379,15 @@ def test_a_nuscenes_rig_is_validated_from_the_nuscenes_reference_with_its_shippe
     assert result["reference"] == "nuscenes" and result["detector"] == "lss-nuscenes" and result["seeds"] == [0]
     entry = result["rigs"][0]
     assert entry["seeds"]["0"]["reference_mAP"] > 0.2 and entry["drop_ci"][0] <= entry["drop"] <= entry["drop_ci"][1]
+
+
+def test_rank_and_rigcd_take_a_packed_reference_by_name():
+    """``--ref nuscenes`` (the rig inside its pack) in rank, and the name as a rig in rigcd: the same rig as its file,
+    so the distance between the two is 0."""
+    ranked = run_console("rank", "R1", "--ref", "nuscenes", "--json")
+    assert ranked.returncode == 0, ranked.stderr
+    assert [(r["reference"], r["rig"]) for r in json.loads(ranked.stdout)] == [("nuscenes", "R1")]
+    rig_file = Path(__file__).resolve().parents[3] / "studies" / "second_reference" / "nuscenes.json"
+    distance = run_console("rigcd", "nuscenes", rig_file, "--json")
+    assert distance.returncode == 0, distance.stderr
+    assert json.loads(distance.stdout)["rigcd"] == pytest.approx(0, abs=1e-9)
