@@ -20,7 +20,7 @@ HERE = Path(__file__).resolve().parent
 RIGS = HERE.parent / "predictor" / "rigs"
 RESULTS = HERE / "results"
 sys.path.insert(0, str(HERE.parent))  # studies/: the studies' shared code (studylib)
-from studylib.paired import run_cells, vehicle_draws, vehicle_mean  # noqa: E402
+from studylib.paired import beaten, cell_rows, run_cells, scene_set_means, summary_rows  # noqa: E402
 from studylib.tables import markdown  # noqa: E402
 from remake import LEVEL, PROTOCOLS, RESAMPLES, SEED, VEHICLES, YARDSTICKS  # noqa: E402  (the test's constants)
 
@@ -39,36 +39,15 @@ def measure_vehicle(vehicle: str, protocol_name: str, cache, workers: int, progr
 
 
 def analyse(found: dict) -> dict:
-    draws = vehicle_draws(len(VEHICLES), RESAMPLES, SEED)
-    out = {"level": LEVEL, "scene_sets": {}}
-    for protocol in PROTOCOLS:
-        out["scene_sets"][protocol] = {
-            role: vehicle_mean([found[(v, protocol)]["design_minus"][role] for v in VEHICLES], VEHICLES, draws, LEVEL)
-            for role in YARDSTICKS}
-    out["beats"] = {role: all(out["scene_sets"][p][role]["ci_bonferroni"][1] < 0
-                              and not out["scene_sets"][p][role]["vehicles_wholly_above_0"] for p in PROTOCOLS)
-                    for role in YARDSTICKS}
-    return out
+    scene_sets = scene_set_means(found, VEHICLES, PROTOCOLS, YARDSTICKS, RESAMPLES, SEED, LEVEL)
+    return {"level": LEVEL, "scene_sets": scene_sets, "beats": beaten(scene_sets, YARDSTICKS)}
 
 
 def report(found: dict, result: dict) -> str:
-    rows = [["vehicle", "scenes", "design", *YARDSTICKS, *(f"design - {r}" for r in YARDSTICKS)]]
-    for v in VEHICLES:
-        for p in PROTOCOLS:
-            entry = found[(v, p)]
-            minus = entry["design_minus"]
-            rows.append([v, p, *(f"{r['drop']:.3f}" for r in entry["rigs"]),
-                         *(f"{minus[r]['difference']:+.3f} [{minus[r]['ci'][0]:.3f}, {minus[r]['ci'][1]:.3f}]"
-                           for r in YARDSTICKS)])
-    summary = [["scenes", "yardstick", "mean design - yardstick", "95 % over vehicles",
-                f"{100 * LEVEL:.1f} % (Bonferroni)", "vehicles wholly above 0"]]
-    for p, per in result["scene_sets"].items():
-        for role, s in per.items():
-            summary.append([p, role, f"{s['mean']:+.3f}", "[{:.3f}, {:.3f}]".format(*s["ci95"]),
-                            "[{:.3f}, {:.3f}]".format(*s["ci_bonferroni"]), ", ".join(s["vehicles_wholly_above_0"]) or "-"])
     verdict = "; ".join(f"{role}: {'beaten' if won else 'not beaten'}" for role, won in result["beats"].items())
-    return (f"# The designer's claim on held-out vehicles and new scenes\n\n{markdown(rows)}\n\n{markdown(summary)}\n\n"
-            f"**Decision (pre-registered rule): {verdict}.**\n")
+    return (f"# The designer's claim on held-out vehicles and new scenes\n\n"
+            f"{markdown(cell_rows(found, VEHICLES, PROTOCOLS, YARDSTICKS))}\n\n"
+            f"{markdown(summary_rows(result['scene_sets'], LEVEL))}\n\n**Decision (pre-registered rule): {verdict}.**\n")
 
 
 def main(argv=None) -> int:

@@ -22,7 +22,7 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 RIGS, RESULTS = HERE / "rigs", HERE / "results"
 sys.path.insert(0, str(HERE.parent))  # studies/: the studies' shared code (studylib)
-from studylib.paired import run_cells, vehicle_draws, vehicle_mean  # noqa: E402
+from studylib.paired import beaten, cell_rows, run_cells, scene_set_means, summary_rows  # noqa: E402
 from studylib.tables import markdown  # noqa: E402
 
 #: The test (preregistration.md). The reference as imported (``rigopt import nuscenes
@@ -84,19 +84,12 @@ def measure_vehicle(vehicle: str, protocol_name: str, cache, workers: int, progr
 
 
 def analyse(found: dict) -> dict:
-    draws = vehicle_draws(len(VEHICLES), RESAMPLES, SEED)
     own = {p: found[(VEHICLES[0], p)]["rigs"][0]["seeds"]["0"]["reference_mAP"] for p in PROTOCOLS}
-    out = {"level": LEVEL, "own_mAP": own, "scene_sets": {}, "orders": {}}
-    for protocol in PROTOCOLS:
-        out["scene_sets"][protocol] = {
-            role: vehicle_mean([found[(v, protocol)]["design_minus"][role] for v in VEHICLES], VEHICLES, draws, LEVEL)
-            for role in YARDSTICKS}
-        out["orders"][protocol] = {v: _same_order(found[(v, protocol)]["rigs"]) for v in VEHICLES}
-    out["inconclusive"] = min(own.values()) < WEAKEST_MODEL
-    out["beats"] = {role: not out["inconclusive"] and all(
-        out["scene_sets"][p][role]["ci_bonferroni"][1] < 0 and not out["scene_sets"][p][role]["vehicles_wholly_above_0"]
-        for p in PROTOCOLS) for role in YARDSTICKS}
-    return out
+    scene_sets = scene_set_means(found, VEHICLES, PROTOCOLS, YARDSTICKS, RESAMPLES, SEED, LEVEL)
+    orders = {p: {v: _same_order(found[(v, p)]["rigs"]) for v in VEHICLES} for p in PROTOCOLS}
+    inconclusive = min(own.values()) < WEAKEST_MODEL
+    return {"level": LEVEL, "own_mAP": own, "scene_sets": scene_sets, "orders": orders, "inconclusive": inconclusive,
+            "beats": {role: not inconclusive and won for role, won in beaten(scene_sets, YARDSTICKS).items()}}
 
 
 def _same_order(rigs: list) -> bool:
@@ -106,28 +99,17 @@ def _same_order(rigs: list) -> bool:
 
 
 def report(found: dict, result: dict) -> str:
-    rows = [["vehicle", "scenes", "design", *YARDSTICKS, *(f"design - {r}" for r in YARDSTICKS),
-             "predicted (design / naive / height-matched)", "same order"]]
-    for v in VEHICLES:
-        for p in PROTOCOLS:
-            entry = found[(v, p)]
-            minus = entry["design_minus"]
-            rows.append([v, p, *(f"{r['drop']:.3f}" for r in entry["rigs"]),
-                         *(f"{minus[r]['difference']:+.3f} [{minus[r]['ci'][0]:.3f}, {minus[r]['ci'][1]:.3f}]"
-                           for r in YARDSTICKS),
-                         " / ".join(f"{r['predicted_drop']:.3f}" for r in entry["rigs"]),
-                         "yes" if result["orders"][p][v] else "no"])
-    summary = [["scenes", "yardstick", "mean design - yardstick", "95 % over vehicles",
-                f"{100 * LEVEL:.1f} % (Bonferroni)", "vehicles wholly above 0"]]
-    for p, per in result["scene_sets"].items():
-        for role, s in per.items():
-            summary.append([p, role, f"{s['mean']:+.3f}", "[{:.3f}, {:.3f}]".format(*s["ci95"]),
-                            "[{:.3f}, {:.3f}]".format(*s["ci_bonferroni"]), ", ".join(s["vehicles_wholly_above_0"]) or "-"])
+    rows = cell_rows(found, VEHICLES, PROTOCOLS, YARDSTICKS)
+    rows[0] += ["predicted (design / naive / height-matched)", "same order"]
+    for row, (v, p) in zip(rows[1:], [(v, p) for v in VEHICLES for p in PROTOCOLS]):
+        row += [" / ".join(f"{r['predicted_drop']:.3f}" for r in found[(v, p)]["rigs"]),
+                "yes" if result["orders"][p][v] else "no"]
     own = ", ".join(f"{p} {value:.3f}" for p, value in result["own_mAP"].items())
     verdict = ("inconclusive: the model's own mAP is below the pre-registered 0.10" if result["inconclusive"] else
                "; ".join(f"{role}: {'beaten' if won else 'not beaten'}" for role, won in result["beats"].items()))
     return (f"# The designer's claim from a second reference ({REFERENCE}, one lss model trained on it; own mAP "
-            f"{own})\n\n{markdown(rows)}\n\n{markdown(summary)}\n\n**Decision (pre-registered rule): {verdict}.**\n")
+            f"{own})\n\n{markdown(rows)}\n\n{markdown(summary_rows(result['scene_sets'], LEVEL))}\n\n"
+            f"**Decision (pre-registered rule): {verdict}.**\n")
 
 
 def main(argv=None) -> int:

@@ -34,6 +34,48 @@ def vehicle_mean(paired: Sequence[dict], vehicles: Sequence[str], draws: np.ndar
             "vehicles_wholly_above_0": [v for v, p in zip(vehicles, paired) if p["ci"][0] > 0]}
 
 
+def scene_set_means(found: dict, vehicles: Sequence[str], protocols: Sequence[str], yardsticks, resamples: int,
+                    seed: int, level: float) -> dict:
+    """{protocol: {yardstick: :func:`vehicle_mean`}} of the cells ``found`` {(vehicle, protocol): cell with
+    ``design_minus`` per yardstick}, the vehicles drawn alike for every scene set and yardstick."""
+    draws = vehicle_draws(len(vehicles), resamples, seed)
+    return {p: {role: vehicle_mean([found[(v, p)]["design_minus"][role] for v in vehicles], vehicles, draws, level)
+                for role in yardsticks} for p in protocols}
+
+
+def beaten(scene_sets: dict, yardsticks) -> dict:
+    """{yardstick: the replications' rule}: on every scene set the mean design minus yardstick has its Bonferroni
+    vehicle interval below 0 and no vehicle's scene interval lies wholly above 0."""
+    return {role: all(per[role]["ci_bonferroni"][1] < 0 and not per[role]["vehicles_wholly_above_0"]
+                      for per in scene_sets.values()) for role in yardsticks}
+
+
+def cell_rows(found: dict, vehicles: Sequence[str], protocols: Sequence[str], yardsticks) -> list[list[str]]:
+    """One table row per (vehicle, scene set), header first: each rig's drop, then design minus each yardstick with
+    its paired scene interval."""
+    rows = [["vehicle", "scenes", "design", *yardsticks, *(f"design - {r}" for r in yardsticks)]]
+    for v in vehicles:
+        for p in protocols:
+            entry = found[(v, p)]
+            minus = entry["design_minus"]
+            rows.append([v, p, *(f"{r['drop']:.3f}" for r in entry["rigs"]),
+                         *(f"{minus[r]['difference']:+.3f} [{minus[r]['ci'][0]:.3f}, {minus[r]['ci'][1]:.3f}]"
+                           for r in yardsticks)])
+    return rows
+
+
+def summary_rows(scene_sets: dict, level: float) -> list[list[str]]:
+    """The table of :func:`scene_set_means`, header first: per scene set and yardstick the mean, its 95 % and
+    Bonferroni vehicle intervals and the vehicles whose scene interval lies wholly above 0."""
+    rows = [["scenes", "yardstick", "mean design - yardstick", "95 % over vehicles",
+             f"{100 * level:.1f} % (Bonferroni)", "vehicles wholly above 0"]]
+    for p, per in scene_sets.items():
+        for role, s in per.items():
+            rows.append([p, role, f"{s['mean']:+.3f}", "[{:.3f}, {:.3f}]".format(*s["ci95"]),
+                         "[{:.3f}, {:.3f}]".format(*s["ci_bonferroni"]), ", ".join(s["vehicles_wholly_above_0"]) or "-"])
+    return rows
+
+
 def run_cells(argv, description: str, results: Path, vehicles: Sequence[str], protocols: Sequence[str],
               measure_cell: Callable, analyse: Callable[[dict], dict], report: Callable[[dict, dict], str]) -> int:
     """A study's command line (--cache, --workers, --analyse-only): ``measure_cell(vehicle, protocol, cache,
