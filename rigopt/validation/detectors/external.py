@@ -51,7 +51,7 @@ import torch
 from rigopt.errors import DataError
 from rigopt.validation.detectors.data import Batch, RigSplit
 from rigopt.validation.detectors.inference import TOP_K
-from rigopt.validation.detectors.layers import lens_cells
+from rigopt.validation.detectors.layers import lens_cells, pinhole_rays
 from rigopt.validation.detectors.models import resolve_device
 from rigopt.validation.synthetic.evaluation import (EVAL_RANGE, Detections, GroundTruth, MatchedDetections,
                                                    SamplePrediction, match)
@@ -177,19 +177,13 @@ def _card(card, source: str) -> dict:
 
 def pixel_ray_maps(batch: Batch) -> torch.Tensor:
     """(B, N, H, W, 3) float32: the contract's ``rays`` of a batch, each pixel centre's optical-frame ray at unit
-    depth. Pinholes: from the intrinsics in torch, as ``layers.pixel_rays`` computes them (the same numbers);
+    depth. Pinholes: from the intrinsics (``layers.pinhole_rays``, as the detectors compute theirs: the same numbers);
     distorted lenses: through ``batch.lenses`` (``layers.lens_cells``), (0, 0, 0) where no ray is in front."""
     b, n, _, h, w = batch.images.shape
     if batch.lenses is not None:
         rays, _ = lens_cells(batch.lenses, (h, w), 1, torch.float32)
         return rays.expand(b, n, h, w, 3).clone()
-    k = batch.intrinsics
-    v = torch.arange(h, dtype=k.dtype) + 0.5
-    u = torch.arange(w, dtype=k.dtype) + 0.5
-    vv, uu = torch.meshgrid(v, u, indexing="ij")
-    fx, fy = k[..., 0, 0, None, None], k[..., 1, 1, None, None]
-    cx, cy = k[..., 0, 2, None, None], k[..., 1, 2, None, None]
-    return torch.stack([(uu - cx) / fx, (vv - cy) / fy, torch.ones_like(uu).expand_as(fx * uu)], dim=-1)
+    return pinhole_rays(batch.intrinsics, (h, w), 1)
 
 
 @torch.no_grad()

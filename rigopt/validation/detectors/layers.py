@@ -83,6 +83,20 @@ def lens_cells(model: CameraModel, feature_hw: tuple[int, int], stride: int = 8,
             torch.as_tensor(in_front.reshape(*model.shape, h, w)))
 
 
+def pinhole_rays(intrinsics: torch.Tensor, feature_hw: tuple[int, int], stride: int = 8) -> torch.Tensor:
+    """(..., h, w, 3) optical-frame rays at unit depth of distortion-free lenses with ``intrinsics`` (..., 3, 3) px
+    through the cells of a feature map made by ``stride`` (cell (i, j) at pixel (stride j + 0.5, stride i + 0.5));
+    stride 1: through every pixel's centre (the detector contract's ray maps)."""
+    h, w = feature_hw
+    device, dtype = intrinsics.device, intrinsics.dtype
+    v = torch.arange(h, device=device, dtype=dtype) * stride + 0.5
+    u = torch.arange(w, device=device, dtype=dtype) * stride + 0.5
+    vv, uu = torch.meshgrid(v, u, indexing="ij")  # (h, w)
+    fx, fy = intrinsics[..., 0, 0, None, None], intrinsics[..., 1, 1, None, None]
+    cx, cy = intrinsics[..., 0, 2, None, None], intrinsics[..., 1, 2, None, None]
+    return torch.stack([(uu - cx) / fx, (vv - cy) / fy, torch.ones_like(uu).expand_as(fx * uu)], dim=-1)
+
+
 def pixel_rays(intrinsics: torch.Tensor, cam_to_ego: torch.Tensor, feature_hw: tuple[int, int],
                stride: int = 8, camera_rays: torch.Tensor | None = None) -> tuple[torch.Tensor, torch.Tensor]:
     """Rays through the centres of a feature map's cells, in the ego frame.
@@ -101,16 +115,11 @@ def pixel_rays(intrinsics: torch.Tensor, cam_to_ego: torch.Tensor, feature_hw: t
     :func:`lens_rays` or :func:`lens_cells`): they replace the ``intrinsics`` rays.
     """
     h, w = feature_hw
-    device, dtype = intrinsics.device, intrinsics.dtype
     if camera_rays is None:
-        v = torch.arange(h, device=device, dtype=dtype) * stride + 0.5
-        u = torch.arange(w, device=device, dtype=dtype) * stride + 0.5
-        vv, uu = torch.meshgrid(v, u, indexing="ij")  # (h, w)
-        fx, fy = intrinsics[..., 0, 0, None, None], intrinsics[..., 1, 1, None, None]
-        cx, cy = intrinsics[..., 0, 2, None, None], intrinsics[..., 1, 2, None, None]
-        camera_rays = torch.stack([(uu - cx) / fx, (vv - cy) / fy, torch.ones_like(uu).expand_as(fx * uu)], dim=-1)
+        camera_rays = pinhole_rays(intrinsics, feature_hw, stride)
     else:
-        camera_rays = camera_rays.to(device=device, dtype=dtype).expand(*cam_to_ego.shape[:2], h, w, 3)
+        camera_rays = camera_rays.to(device=intrinsics.device, dtype=intrinsics.dtype).expand(*cam_to_ego.shape[:2], h,
+                                                                                             w, 3)
     rotation = cam_to_ego[..., :3, :3]  # (B, N, 3, 3)
     directions = torch.einsum("bnij,bnhwj->bnhwi", rotation, camera_rays)
     return cam_to_ego[..., None, None, :3, 3], directions
