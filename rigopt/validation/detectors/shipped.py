@@ -133,10 +133,6 @@ class UserDetector:
     def reference(self) -> str:
         return self.reference_rig.name
 
-    @property
-    def folder(self) -> Path:
-        return Path(self.detector.name)
-
     def scores_file(self, seed: int) -> str | None:
         """None for an entry point: scored afresh each time (``ExternalDetector.digest``)."""
         boot = self.card["bootstrap"]
