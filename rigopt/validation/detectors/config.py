@@ -34,7 +34,8 @@ class ModelConfig:
     pass over each query's reference point; token_supervision : PETR's auxiliary loss on its image tokens
     (object centre and depth); depth_weight : weight of LSS's depth supervision from the renderer's depth maps
     (0: none; used only where the data holds depth maps); bev_augment : train on randomly turned and mirrored
-    ego frames (``data.augment``); image_size :
+    ego frames (``data.augment``); feature_stride : pixels per image feature cell, 8 or 4 (LSS lifts along
+    each cell's ray: 4 gives rays twice as fine in each direction); image_size :
     (width, height) pixels the images are resized to, None to keep them as stored.
     """
 
@@ -56,6 +57,7 @@ class ModelConfig:
     token_supervision: bool = True
     depth_weight: float = 0.0
     bev_augment: bool = False
+    feature_stride: int = 8
     image_size: tuple | None = None
     lr: float = 1e-3
     weight_decay: float = 1e-2
@@ -96,6 +98,8 @@ def model_config(family: str, size: str = "small", **overrides) -> ModelConfig:
                  "batch_size", "epochs"):
         if getattr(config, name) < 1:
             raise RigoptError(f"model setting {name} must be at least 1, got {getattr(config, name)}")
+    if config.feature_stride not in (4, 8):
+        raise RigoptError(f"model setting feature_stride is 4 or 8 (pixels per feature cell), got {config.feature_stride}")
     if config.dn_groups < 0:
         raise RigoptError(f"model setting dn_groups must be 0 (no denoising queries) or more, got {config.dn_groups}")
     if not (config.bev_range > 0 and 0 < config.bev_cell <= config.bev_range and 0 < config.depth_min

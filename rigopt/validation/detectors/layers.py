@@ -21,16 +21,18 @@ def conv_block(c_in: int, c_out: int, stride: int = 1) -> nn.Sequential:
 
 
 class ImageEncoder(nn.Module):
-    """A small CNN: (M, 3, H, W) images in [0, 1] -> (M, 2 * width, ~H/8, ~W/8) features.
+    """A small CNN: (M, 3, H, W) images in [0, 1] -> (M, 2 * width, ~H/stride, ~W/stride) features, stride 8 or 4.
 
     Four stride-2 stages (to 1/16) and a top-down merge of the last stage into the 1/8 map, so that each
-    1/8 feature sees a wide context.
+    1/8 feature sees a wide context; at stride 4 the merged 1/8 map is merged once more, top-down, into the
+    second stage's 1/4 map (finer rays to lift along, at the cost of four times the cells).
     """
 
-    stride = 8
-
-    def __init__(self, width: int):
+    def __init__(self, width: int, stride: int = 8):
         super().__init__()
+        if stride not in (4, 8):
+            raise ValueError(f"ImageEncoder stride is 4 or 8, got {stride}")
+        self.stride = stride
         self.out_channels = 2 * width
         self.stage1 = nn.Sequential(conv_block(3, width, 2), conv_block(width, width))
         self.stage2 = nn.Sequential(conv_block(width, width, 2), conv_block(width, width))
@@ -38,13 +40,21 @@ class ImageEncoder(nn.Module):
         self.stage4 = nn.Sequential(conv_block(2 * width, 4 * width, 2), conv_block(4 * width, 4 * width))
         self.lateral = nn.Conv2d(4 * width, 2 * width, 1)
         self.merge = conv_block(2 * width, 2 * width)
+        if stride == 4:
+            self.lateral_quarter = nn.Conv2d(width, 2 * width, 1)
+            self.merge_quarter = conv_block(2 * width, 2 * width)
 
     def forward(self, images: torch.Tensor) -> torch.Tensor:
         x = (images - IMAGE_MEAN) / IMAGE_STD
-        eighth = self.stage3(self.stage2(self.stage1(x)))
+        quarter = self.stage2(self.stage1(x))
+        eighth = self.stage3(quarter)
         sixteenth = self.stage4(eighth)
         top_down = F.interpolate(self.lateral(sixteenth), size=eighth.shape[-2:], mode="bilinear", align_corners=False)
-        return self.merge(eighth + top_down)
+        merged = self.merge(eighth + top_down)
+        if self.stride == 8:
+            return merged
+        top_down = F.interpolate(merged, size=quarter.shape[-2:], mode="bilinear", align_corners=False)
+        return self.merge_quarter(self.lateral_quarter(quarter) + top_down)
 
 
 def cell_centres(feature_hw: tuple[int, int], stride: int = 8) -> np.ndarray:

@@ -1,6 +1,6 @@
 """An LSS-style detector (the family of BEVDet and BEVFusion's camera branch): lift, splat, detect.
 
-1. Encode each camera image to (C, h, w) features at 1/8 resolution.
+1. Encode each camera image to (C, h, w) features at 1/8 (or, ``feature_stride`` 4, 1/4) resolution.
 2. Lift: per feature cell predict a distribution over D depth bins and a context vector; the outer
    product places the context along the cell's ray at every bin's depth, weighted by its probability.
 3. Splat: every lifted point goes, through the camera calibration, to the ego-frame bird's-eye cell
@@ -42,7 +42,7 @@ class LSSDetector(nn.Module):
     def __init__(self, config: ModelConfig):
         super().__init__()
         self.config = config
-        self.encoder = ImageEncoder(config.width)
+        self.encoder = ImageEncoder(config.width, config.feature_stride)
         channels = self.encoder.out_channels
         self.context_channels = config.bev_channels
         self.depth_net = nn.Conv2d(channels, config.depth_bins + config.bev_channels, 1)

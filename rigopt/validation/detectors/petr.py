@@ -91,7 +91,7 @@ class PETRDetector(nn.Module):
     def __init__(self, config: ModelConfig, n_classes: int = len(CLASSES)):
         super().__init__()
         self.config, self.n_classes = config, n_classes
-        self.encoder = ImageEncoder(config.width)
+        self.encoder = ImageEncoder(config.width, config.feature_stride)
         c = self.encoder.out_channels
         fraction = (torch.arange(config.position_depths) + 0.5) / config.position_depths
         self.register_buffer("depths", config.depth_min + (config.depth_max - config.depth_min) * fraction ** 1.5,

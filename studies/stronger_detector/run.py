@@ -1,0 +1,115 @@
+"""A stronger shipped detector (issue 45, part 4): the pre-registered candidates (PREREGISTRATION.md), each trained
+on R1's train split and scored on R1's val split beside the one it changes.
+
+    python studies/stronger_detector/run.py --data DIR [--candidates s4 s4d60] [--threads 2]
+
+``--data`` holds R1's train split (48 scenes) and val split (16 scenes) from ``rigopt bench generate``. Runs go to
+``<data>/stronger-runs/<candidate>`` (resumable: rerun the same command); each candidate's row is written to
+``results/val.csv`` as soon as it is scored, and its matched detections are kept beside its run so that later
+comparisons need no second scoring.
+"""
+
+from __future__ import annotations
+
+import argparse
+import pickle
+import sys
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # studies/: the studies' shared code (studylib)
+from studylib.tables import markdown, read_csv, write_csv  # noqa: E402
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parents[1]
+#: candidate -> (the candidate it changes, its settings of the small preset); the shipped recipe is 8 epochs
+CANDIDATES = {
+    "baseline": (None, None),
+    "s4": ("baseline", dict(feature_stride=4)),
+    "s4d60": ("s4", dict(feature_stride=4, depth_bins=60)),
+}
+SHIPPED_EPOCHS = 8
+RESAMPLES, BOOT_SEED, LEVEL = 1000, 0, 0.95
+HEADER = ["candidate", "changes", "mAP fixed", "minus compared", "ci low", "ci high", "mAP visible", "AP 0.5 m",
+          "AP 1 m", "AP 2 m", "AP 4 m", "train minutes"]
+
+
+def matched_on_val(data: Path, name: str, threads: int):
+    """The candidate's detections on R1's val split, matched (trained first where needed) and its training minutes."""
+    from rigopt.validation.detectors.config import model_config
+    from rigopt.validation.detectors.data import RigSplit
+    from rigopt.validation.detectors.inference import match_split
+    from rigopt.validation.detectors.models import build_model, load_checkpoint
+    from rigopt.validation.detectors.shipped import training_seconds
+    from rigopt.validation.detectors.training import train
+
+    folder = data / "stronger-runs" / name
+    kept = folder / "val_matched.pkl"
+    if kept.is_file():
+        return pickle.loads(kept.read_bytes())
+    if name == "baseline":
+        checkpoint, minutes = ROOT / "detectors" / "lss-R1" / "seed0.pt", float("nan")
+        config = model_config("lss", "small")
+    else:
+        config = model_config("lss", "small", epochs=SHIPPED_EPOCHS, **CANDIDATES[name][1])
+        split = RigSplit(data, "R1", "train", max_range=config.bev_range)
+        step_every = max(1, len(split) // config.batch_size // 4)
+        run = train(split, config, folder, progress=lambda epoch, step, steps, loss: step % step_every or print(
+            f"{name}: epoch {epoch + 1}/{config.epochs}, step {step}/{steps}, loss {loss:.3f}", flush=True))
+        checkpoint, minutes = run.checkpoint, training_seconds(folder / "train_log.csv") / 60
+    model = build_model(config)
+    model.load_state_dict(load_checkpoint(checkpoint)["model"])
+    split = RigSplit(data, "R1", "val", max_range=config.bev_range)
+    matched = match_split(model, split)
+    scenes = np.array([s.scene for s in split.samples])
+    folder.mkdir(parents=True, exist_ok=True)
+    kept.write_bytes(pickle.dumps((matched, scenes, minutes)))
+    return matched, scenes, minutes
+
+
+def scene_weights(scenes: np.ndarray) -> np.ndarray:
+    """(RESAMPLES, S) int: how often each sample counts when the split's scenes are drawn with replacement."""
+    names, index = np.unique(scenes, return_inverse=True)
+    draws = np.random.default_rng(BOOT_SEED).integers(len(names), size=(RESAMPLES, len(names)))
+    counts = np.stack([np.bincount(d, minlength=len(names)) for d in draws])
+    return counts[:, index]
+
+
+def row(data: Path, name: str, threads: int) -> list:
+    matched, scenes, minutes = matched_on_val(data, name, threads)
+    fixed, visible = matched.evaluation(), matched.evaluation(visible_only=True)
+    compared = CANDIDATES[name][0]
+    difference, low, high = (float("nan"),) * 3
+    if compared:
+        if compared != "baseline" and not (data / "stronger-runs" / compared / "val_matched.pkl").is_file():
+            raise SystemExit(f"{name} is compared with {compared}: score {compared} first (--candidates {compared})")
+        other = matched_on_val(data, compared, threads)[0]
+        weights = scene_weights(scenes)
+        differences = [matched.evaluation(w).map - other.evaluation(w).map for w in weights]
+        difference = fixed.map - other.evaluation().map
+        low, high = np.percentile(differences, [100 * (1 - LEVEL) / 2, 100 * (1 + LEVEL) / 2])
+    changes = ", ".join(f"{k} {v}" for k, v in (CANDIDATES[name][1] or {}).items()) or "shipped seed 0"
+    by_threshold = np.nanmean(fixed.ap, axis=0)
+    return [name, changes, fixed.map, difference, low, high, visible.map, *by_threshold, minutes]
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--data", type=Path, required=True)
+    parser.add_argument("--candidates", nargs="+", default=list(CANDIDATES), choices=list(CANDIDATES))
+    parser.add_argument("--threads", type=int, default=2)
+    args = parser.parse_args()
+    import torch
+
+    torch.set_num_threads(args.threads)
+    out = HERE / "results" / "val.csv"
+    rows = {r[0]: r for r in read_csv(out)[1:]} if out.is_file() else {}
+    for name in args.candidates:
+        rows[name] = row(args.data, name, args.threads)
+        write_csv(out, HEADER, [rows[n] for n in CANDIDATES if n in rows])
+    print(markdown(read_csv(out)))
+
+
+if __name__ == "__main__":
+    main()
