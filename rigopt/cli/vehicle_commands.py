@@ -185,7 +185,11 @@ def vehicle_add_command(
                                            "default. Default: the one the shape suggests (stated, with why)."),
 ):
     """Check a mesh and store it as a vehicle so that --vehicle NAME works everywhere."""
+    import numpy as np
+
+    from rigopt.coverage.packaging import report_origin
     from rigopt.coverage.regulations import CATEGORY_DEFAULTS
+    from rigopt.vehicle.library import load_vehicle
     from rigopt.vehicle.user import add_user_vehicle
 
     added = add_user_vehicle(name, mesh, zones, frame, force=force, scale=scale, length=length, forward=forward,
@@ -202,16 +206,25 @@ def vehicle_add_command(
     else:
         console.print("wheels: none found (give --axles X1,X2 to set the axles)" if not added.axles else
                       f"axles: {', '.join(f'{x:.2f}' for x in added.axles)} m (given; no tyre found at them)")
+    datum = report_origin(load_vehicle(name))
+
+    def span(box: dict, axes=(0, 2)) -> str:
+        low, high = (np.asarray(box[k], dtype=float) - datum.point for k in ("min", "max"))
+        return ", ".join(f"{'xyz'[a]} {low[a]:.2f}..{high[a]:.2f} m" for a in axes)
+
+    if added.keep_outs or added.mirror or added.treads:
+        console.print(f"found on the mesh (x, y, z m, {datum.frame}):")
     if added.keep_outs:
         console.print(f"keep-outs: {len(added.keep_outs)} narrow part(s) where no housing fits (rails, ladders, "
-                      "bars): " + "; ".join(f"{k['name']} x {k['min'][0]:.2f}..{k['max'][0]:.2f} m, z "
-                                            f"{k['min'][2]:.2f}..{k['max'][2]:.2f} m" for k in added.keep_outs))
+                      "bars): " + "; ".join(f"{k['name']} {span(k)}" for k in added.keep_outs))
     if added.mirror:
-        low, high = added.mirror["min"], added.mirror["max"]
         console.print(f"mirrors: the narrow parts high on the front that reach out beyond the side are mirror arms; "
-                      f"the body outboard of the side around them (x {low[0]:.2f}..{high[0]:.2f} m, z "
-                      f"{low[2]:.2f}..{high[2]:.2f} m, both sides) is a 'mirror' zone, where side and surround-view "
-                      "cameras mount (the arms stay keep-outs)")
+                      f"the body outboard of the side around them ({span(added.mirror)}, both sides) is a 'mirror' "
+                      "zone, where side and surround-view cameras mount (the arms stay keep-outs)")
+    if added.treads:
+        console.print("steps: patches facing up at step height, shallow enough to stand on, are treads where no lens "
+                      "sits: " + "; ".join(f"{t['name']} {span(t, (0, 1))}" for t in added.treads)
+                      + r" ([\[steps]] in vehicle.toml to change)")
     console.print(f"category: {added.category}, {added.category_reason}; fields required by default: "
                   f"{', '.join(CATEGORY_DEFAULTS[added.category])} (--category, or category in vehicle.toml, to change)")
     console.print(f"added vehicle {name!r}: {added.path}")

@@ -27,6 +27,7 @@ from rigopt.vehicle.closing import SHELL_PITCHES, ClosingReport, close_mesh
 from rigopt.vehicle.orientation import PoseError, check_pose, frame_rotation
 from rigopt.vehicle.spec import CATEGORIES, read_toml, spec_from_dict
 from rigopt.vehicle.supports import mirror_zone, narrow_keep_outs
+from rigopt.vehicle.treads import step_treads
 from rigopt.vehicle.wheels import FoundWheels, contact_height, find_wheels
 
 FRAMES = ("carla", "iso")
@@ -66,7 +67,7 @@ class AddedVehicle:
     ``wheels`` found, the ``closing`` report, the ``keep_outs`` made for narrow parts, ``warnings`` and
     ``notes``; its UN ``category`` and why (``category_reason``: the shape's suggestion, or that it was given);
     ``mirror``: the ``mirror`` zone inferred over its mirror heads (:func:`rigopt.vehicle.supports.mirror_zone`),
-    or None."""
+    or None; ``treads``: the step treads found on it (``[[steps]]`` entries, :func:`rigopt.vehicle.treads.step_treads`)."""
 
     path: Path
     axles: tuple[float, ...]
@@ -78,6 +79,7 @@ class AddedVehicle:
     category: str = "M1"
     category_reason: str = ""
     mirror: dict | None = None
+    treads: tuple[dict, ...] = ()
 
 
 def carla_mesh_to_iso(mesh: trimesh.Trimesh) -> trimesh.Trimesh:
@@ -298,7 +300,8 @@ def add_user_vehicle(name: str, mesh_path, zones_path=None, frame: str = "iso", 
             "solids": [{"name": "body", "type": "mesh", "file": "body.ply"}],
             "wheels": [{"axles": [round(w.x, 4)], "radius": round(w.radius, 4), "width": round(w.width, 4),
                         "track": round(w.track, 4)} for w in prepared.wheels],
-            "zones": zones, "keep_out": []}
+            "zones": zones, "keep_out": [],
+            "steps": step_treads(prepared.raw, [(w.x, w.radius) for w in prepared.wheels])}
     # validated before anything is written; problems name the user's zones file (or the mesh for default zones)
     spec = spec_from_dict({k: v for k, v in data.items() if v != []}, str(zones_path or mesh_path))
     _check_zones_select_surface(spec, mesh)
@@ -324,7 +327,7 @@ def add_user_vehicle(name: str, mesh_path, zones_path=None, frame: str = "iso", 
     return AddedVehicle(folder / SPEC_FILE, found_axles, prepared.wheels, prepared.closing,
                         prepared.warnings + ((too_wide,) if too_wide else ()), prepared.notes,
                         tuple(data.get("keep_out", ())), data["category"], reason,
-                        next((z for z in data["zones"] if z["name"] == "mirror"), None))
+                        next((z for z in data["zones"] if z["name"] == "mirror"), None), tuple(data.get("steps", ())))
 
 
 def _store_folder(name: str, force: bool) -> Path:
