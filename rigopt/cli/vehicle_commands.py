@@ -190,6 +190,7 @@ def vehicle_add_command(
     from rigopt.coverage.packaging import report_origin
     from rigopt.coverage.regulations import CATEGORY_DEFAULTS
     from rigopt.vehicle.library import load_vehicle
+    from rigopt.vehicle.supports import KEEP_OUT_REASON
     from rigopt.vehicle.user import add_user_vehicle
 
     added = add_user_vehicle(name, mesh, zones, frame, force=force, scale=scale, length=length, forward=forward,
@@ -212,11 +213,19 @@ def vehicle_add_command(
         low, high = (np.asarray(box[k], dtype=float) - datum.point for k in ("min", "max"))
         return ", ".join(f"{'xyz'[a]} {low[a]:.2f}..{high[a]:.2f} m" for a in axes)
 
-    if added.keep_outs or added.mirror or added.treads:
-        console.print(f"found on the mesh (x, y, z m, {datum.frame}):")
-    if added.keep_outs:
-        console.print(f"keep-outs: {len(added.keep_outs)} narrow part(s) where no housing fits (rails, ladders, "
-                      "bars): " + "; ".join(f"{k['name']} {span(k)}" for k in added.keep_outs))
+    narrow = [k for k in added.keep_outs if k["reason"] == KEEP_OUT_REASON]
+    panes = [k for k in added.keep_outs if k["reason"] != KEEP_OUT_REASON]
+    console.print(f"found on the mesh (x, y, z m, {datum.frame}):")
+    if narrow:
+        console.print(f"keep-outs: {len(narrow)} narrow part(s) where no housing fits (rails, ladders, bars): "
+                      + "; ".join(f"{k['name']} {span(k)}" for k in narrow))
+    if added.glass or panes:
+        console.print("glass (parts its materials call glass): " + "; ".join(
+            [f"{z['name']} zone {span(z)} (a camera there sits behind the glass)" for z in added.glass]
+            + [f"{k['name']} {span(k, (0, 1, 2))} ({k['reason']})" for k in panes]))
+    elif not zones:
+        console.print("glass: no part of the file is marked glass (no material named glass or window, none "
+                      "see-through): the windshield zones are the box's upper front and rear")
     if added.mirror:
         console.print(f"mirrors: the narrow parts high on the front that reach out beyond the side are mirror arms; "
                       f"the body outboard of the side around them ({span(added.mirror)}, both sides) is a 'mirror' "

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import re
 import shutil
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from xml.etree import ElementTree
 
@@ -26,6 +26,7 @@ from rigopt.vehicle.category import body_width, width_warning
 from rigopt.vehicle.closing import SHELL_PITCHES, ClosingReport, close_mesh
 from rigopt.vehicle.orientation import PoseError, check_pose, frame_rotation
 from rigopt.vehicle.spec import CATEGORIES, read_toml, spec_from_dict
+from rigopt.vehicle.glass import glass_features, glass_triangles
 from rigopt.vehicle.supports import mirror_zone, narrow_keep_outs
 from rigopt.vehicle.treads import step_treads
 from rigopt.vehicle.wheels import FoundWheels, contact_height, find_wheels
@@ -49,7 +50,8 @@ class PreparedMesh:
     input in that frame before closing; ``closing`` how it was closed; ``wheels`` found (front first);
     ``scale`` applied (file unit -> m); ``offset`` (3,) m added to every point after the flags (the file's
     origin moved to the vehicle centre: the centre of the footprint box, on the ground); ``warnings`` and
-    ``notes`` (what was inferred)."""
+    ``notes`` (what was inferred); ``glass`` (k, 3, 3) the triangles of the parts its materials call glass, in
+    the same frame (:mod:`rigopt.vehicle.glass`)."""
 
     mesh: trimesh.Trimesh
     raw: trimesh.Trimesh
@@ -59,6 +61,7 @@ class PreparedMesh:
     notes: tuple[str, ...] = ()
     scale: float = 1.0
     offset: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    glass: np.ndarray = field(default_factory=lambda: np.zeros((0, 3, 3)))
 
 
 @dataclass(frozen=True)
@@ -67,7 +70,9 @@ class AddedVehicle:
     ``wheels`` found, the ``closing`` report, the ``keep_outs`` made for narrow parts, ``warnings`` and
     ``notes``; its UN ``category`` and why (``category_reason``: the shape's suggestion, or that it was given);
     ``mirror``: the ``mirror`` zone inferred over its mirror heads (:func:`rigopt.vehicle.supports.mirror_zone`),
-    or None; ``treads``: the step treads found on it (``[[steps]]`` entries, :func:`rigopt.vehicle.treads.step_treads`)."""
+    or None; ``treads``: the step treads found on it (``[[steps]]`` entries, :func:`rigopt.vehicle.treads.step_treads`);
+    ``glass``: the zones its glass became (``windshield_front``, ``windshield_rear``), its side and roof panes
+    being among ``keep_outs`` (:mod:`rigopt.vehicle.glass`)."""
 
     path: Path
     axles: tuple[float, ...]
@@ -80,6 +85,7 @@ class AddedVehicle:
     category_reason: str = ""
     mirror: dict | None = None
     treads: tuple[dict, ...] = ()
+    glass: tuple[dict, ...] = ()
 
 
 def carla_mesh_to_iso(mesh: trimesh.Trimesh) -> trimesh.Trimesh:
@@ -181,8 +187,12 @@ def prepare_user_mesh(path, frame: str = "iso", *, scale: float | None = None, l
         _check_axles(axles, raw.bounds[:, 0])
     wheels = find_wheels(raw, axles) if axles is not None else wheels_guess
     closed, report = close_mesh(raw, str(path), pitch=pitch)
+    glass = glass_triangles(path).reshape(-1, 3)
+    if frame == "carla":
+        glass = glass * np.array([1.0, -1.0, 1.0])
+    glass = (glass @ rotation.T * scale + offset).reshape(-1, 3, 3)
     return PreparedMesh(closed, raw, report, wheels, tuple(warnings), tuple(notes), float(scale),
-                        tuple(float(v) for v in offset))
+                        tuple(float(v) for v in offset), glass)
 
 
 def _ground_lift(raw: trimesh.Trimesh, wheels, ground: bool, source: str, notes: list) -> float:
@@ -292,6 +302,11 @@ def add_user_vehicle(name: str, mesh_path, zones_path=None, frame: str = "iso", 
                                  allow_size=allow_size, axles=axles, ground=ground, pitch=pitch)
     mesh = prepared.mesh
     zones = _read_zones(zones_path) if zones_path else default_zones(mesh.bounds)
+    glass_zones, glass_keep_outs = glass_features(prepared.glass, [0.0, 0.0, float(mesh.bounds[:, 2].mean())])
+    if not zones_path:
+        # the glass first: a zone is the first holding a camera's foot and normal, and the roof's cone reaches a
+        # raked windscreen
+        zones = glass_zones + [z for z in zones if z["name"] not in {g["name"] for g in glass_zones}]
     if roof_rack is not None:
         zones = [z for z in zones if z.get("name") != "roof_rack"] + [roof_rack_zone(mesh.bounds, roof_rack)]
     found_axles = tuple(axles) if axles is not None else tuple(w.x for w in prepared.wheels)
@@ -300,7 +315,7 @@ def add_user_vehicle(name: str, mesh_path, zones_path=None, frame: str = "iso", 
             "solids": [{"name": "body", "type": "mesh", "file": "body.ply"}],
             "wheels": [{"axles": [round(w.x, 4)], "radius": round(w.radius, 4), "width": round(w.width, 4),
                         "track": round(w.track, 4)} for w in prepared.wheels],
-            "zones": zones, "keep_out": [],
+            "zones": zones, "keep_out": glass_keep_outs,
             "steps": step_treads(prepared.raw, [(w.x, w.radius) for w in prepared.wheels])}
     # validated before anything is written; problems name the user's zones file (or the mesh for default zones)
     spec = spec_from_dict({k: v for k, v in data.items() if v != []}, str(zones_path or mesh_path))
@@ -314,8 +329,9 @@ def add_user_vehicle(name: str, mesh_path, zones_path=None, frame: str = "iso", 
     if not zones_path:
         # beyond the narrow part: its thickening and one grid pitch (an enclosed ladder is filled up to it)
         reach = (SHELL_PITCHES + 1) * prepared.closing.pitch + KEEP_OUT_CLEARANCE
-        data["keep_out"] = narrow_keep_outs(prepared.raw, reach)
-        mirror = mirror_zone(data["keep_out"], mesh.bounds, body_width(body) / 2)
+        narrow = narrow_keep_outs(prepared.raw, reach)
+        data["keep_out"] = narrow + glass_keep_outs
+        mirror = mirror_zone(narrow, mesh.bounds, body_width(body) / 2)
         if mirror is not None:
             data["zones"] = [*zones, mirror]
     data = {k: v for k, v in data.items() if v != [] or k in ("axles", "aliases")}
@@ -327,7 +343,8 @@ def add_user_vehicle(name: str, mesh_path, zones_path=None, frame: str = "iso", 
     return AddedVehicle(folder / SPEC_FILE, found_axles, prepared.wheels, prepared.closing,
                         prepared.warnings + ((too_wide,) if too_wide else ()), prepared.notes,
                         tuple(data.get("keep_out", ())), data["category"], reason,
-                        next((z for z in data["zones"] if z["name"] == "mirror"), None), tuple(data.get("steps", ())))
+                        next((z for z in data["zones"] if z["name"] == "mirror"), None), tuple(data.get("steps", ())),
+                        tuple(glass_zones) if not zones_path else ())
 
 
 def _store_folder(name: str, force: bool) -> Path:
