@@ -226,6 +226,9 @@ def vehicle_add_command(
     elif not zones:
         console.print("glass: no part of the file is marked glass (no material named glass or window, none "
                       "see-through): the windshield zones are the box's upper front and rear")
+    if added.fixtures:
+        console.print("lamps and number plates (named by their materials), where no lens sits: " + "; ".join(
+            f"{f['name']} {span(f, (0, 1, 2))}" for f in added.fixtures))
     if added.mirror:
         console.print(f"mirrors: the narrow parts high on the front that reach out beyond the side are mirror arms; "
                       f"the body outboard of the side around them ({span(added.mirror)}, both sides) is a 'mirror' "

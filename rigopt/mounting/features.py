@@ -53,6 +53,8 @@ FIXTURE_REASONS = {
     "light_bar": "a light bar: its lamps must stay uncovered",
     "rack": "a rack: loaded and unloaded",
     "mud_flap": "a mud flap: it flexes, swings and takes the tyre's spray",
+    "lamp": "a lamp: its lens must stay uncovered",
+    "number_plate": "a number plate: it must stay legible",
 }
 
 _FLIP = np.array([1.0, -1.0, 1.0])

@@ -74,7 +74,7 @@ Features mounting practice refuses lenses on (:mod:`rigopt.mounting.features`), 
     mirrored = true                         # bottom); no lens within the rules' hinge band of it
 
     [[fixtures]]                            # a part that carries no camera: kind = rail, ladder,
-    name = "aerial ladder"                  # light_bar, rack or mud_flap
+    name = "aerial ladder"                  # light_bar, rack, mud_flap, lamp or number_plate
     kind = "ladder"
     min = [x, y, z]
     max = [x, y, z]
@@ -106,7 +106,7 @@ from rigopt.errors import DataError, not_utf8
 
 SOLID_TYPES = ("prism", "wheels", "box", "mesh")
 #: Kinds of ``[[fixtures]]``: parts that carry no camera.
-FIXTURE_KINDS = ("rail", "ladder", "light_bar", "rack", "mud_flap")
+FIXTURE_KINDS = ("rail", "ladder", "light_bar", "rack", "mud_flap", "lamp", "number_plate")
 #: The edges a door's hinge may run along, as (axis, side): front = +x, left = +y, top = +z.
 HINGE_EDGES = {"front": (0, 1), "rear": (0, -1), "left": (1, 1), "right": (1, -1), "top": (2, 1), "bottom": (2, -1)}
 #: The width (m) a vehicle may not exceed (EU: Directive 96/53/EC), and that of a refrigerated body.

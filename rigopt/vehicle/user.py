@@ -26,7 +26,8 @@ from rigopt.vehicle.category import body_width, width_warning
 from rigopt.vehicle.closing import SHELL_PITCHES, ClosingReport, close_mesh
 from rigopt.vehicle.orientation import PoseError, check_pose, frame_rotation
 from rigopt.vehicle.spec import CATEGORIES, read_toml, spec_from_dict
-from rigopt.vehicle.glass import glass_features, glass_triangles
+from rigopt.vehicle.glass import glass_features
+from rigopt.vehicle.materials import KINDS, material_parts, part_fixtures
 from rigopt.vehicle.supports import mirror_zone, narrow_keep_outs
 from rigopt.vehicle.treads import step_treads
 from rigopt.vehicle.wheels import FoundWheels, contact_height, find_wheels
@@ -50,8 +51,8 @@ class PreparedMesh:
     input in that frame before closing; ``closing`` how it was closed; ``wheels`` found (front first);
     ``scale`` applied (file unit -> m); ``offset`` (3,) m added to every point after the flags (the file's
     origin moved to the vehicle centre: the centre of the footprint box, on the ground); ``warnings`` and
-    ``notes`` (what was inferred); ``glass`` (k, 3, 3) the triangles of the parts its materials call glass, in
-    the same frame (:mod:`rigopt.vehicle.glass`)."""
+    ``notes`` (what was inferred); ``parts``: the parts its materials name (glass, lamps, number plates:
+    :func:`rigopt.vehicle.materials.material_parts`) in the same frame."""
 
     mesh: trimesh.Trimesh
     raw: trimesh.Trimesh
@@ -61,7 +62,7 @@ class PreparedMesh:
     notes: tuple[str, ...] = ()
     scale: float = 1.0
     offset: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    glass: np.ndarray = field(default_factory=lambda: np.zeros((0, 3, 3)))
+    parts: dict = field(default_factory=lambda: {kind: [] for kind in KINDS})
 
 
 @dataclass(frozen=True)
@@ -72,7 +73,8 @@ class AddedVehicle:
     ``mirror``: the ``mirror`` zone inferred over its mirror heads (:func:`rigopt.vehicle.supports.mirror_zone`),
     or None; ``treads``: the step treads found on it (``[[steps]]`` entries, :func:`rigopt.vehicle.treads.step_treads`);
     ``glass``: the zones its glass became (``windshield_front``, ``windshield_rear``), its side and roof panes
-    being among ``keep_outs`` (:mod:`rigopt.vehicle.glass`)."""
+    being among ``keep_outs`` (:mod:`rigopt.vehicle.glass`); ``fixtures``: its lamps and number plates
+    (``[[fixtures]]`` entries, :func:`rigopt.vehicle.materials.part_fixtures`)."""
 
     path: Path
     axles: tuple[float, ...]
@@ -86,6 +88,7 @@ class AddedVehicle:
     mirror: dict | None = None
     treads: tuple[dict, ...] = ()
     glass: tuple[dict, ...] = ()
+    fixtures: tuple[dict, ...] = ()
 
 
 def carla_mesh_to_iso(mesh: trimesh.Trimesh) -> trimesh.Trimesh:
@@ -187,12 +190,11 @@ def prepare_user_mesh(path, frame: str = "iso", *, scale: float | None = None, l
         _check_axles(axles, raw.bounds[:, 0])
     wheels = find_wheels(raw, axles) if axles is not None else wheels_guess
     closed, report = close_mesh(raw, str(path), pitch=pitch)
-    glass = glass_triangles(path).reshape(-1, 3)
-    if frame == "carla":
-        glass = glass * np.array([1.0, -1.0, 1.0])
-    glass = (glass @ rotation.T * scale + offset).reshape(-1, 3, 3)
+    reflect = np.array([1.0, -1.0, 1.0]) if frame == "carla" else np.ones(3)
+    parts = {kind: [(name, ((triangles * reflect) @ rotation.T * scale + offset).reshape(-1, 3, 3))
+                    for name, triangles in found] for kind, found in material_parts(path).items()}
     return PreparedMesh(closed, raw, report, wheels, tuple(warnings), tuple(notes), float(scale),
-                        tuple(float(v) for v in offset), glass)
+                        tuple(float(v) for v in offset), parts)
 
 
 def _ground_lift(raw: trimesh.Trimesh, wheels, ground: bool, source: str, notes: list) -> float:
@@ -302,7 +304,8 @@ def add_user_vehicle(name: str, mesh_path, zones_path=None, frame: str = "iso", 
                                  allow_size=allow_size, axles=axles, ground=ground, pitch=pitch)
     mesh = prepared.mesh
     zones = _read_zones(zones_path) if zones_path else default_zones(mesh.bounds)
-    glass_zones, glass_keep_outs = glass_features(prepared.glass, [0.0, 0.0, float(mesh.bounds[:, 2].mean())])
+    glass = np.concatenate([triangles for _, triangles in prepared.parts["glass"]] + [np.zeros((0, 3, 3))])
+    glass_zones, glass_keep_outs = glass_features(glass, [0.0, 0.0, float(mesh.bounds[:, 2].mean())])
     if not zones_path:
         # the glass first: a zone is the first holding a camera's foot and normal, and the roof's cone reaches a
         # raked windscreen
@@ -316,7 +319,8 @@ def add_user_vehicle(name: str, mesh_path, zones_path=None, frame: str = "iso", 
             "wheels": [{"axles": [round(w.x, 4)], "radius": round(w.radius, 4), "width": round(w.width, 4),
                         "track": round(w.track, 4)} for w in prepared.wheels],
             "zones": zones, "keep_out": glass_keep_outs,
-            "steps": step_treads(prepared.raw, [(w.x, w.radius) for w in prepared.wheels])}
+            "steps": step_treads(prepared.raw, [(w.x, w.radius) for w in prepared.wheels]),
+            "fixtures": part_fixtures(prepared.parts)}
     # validated before anything is written; problems name the user's zones file (or the mesh for default zones)
     spec = spec_from_dict({k: v for k, v in data.items() if v != []}, str(zones_path or mesh_path))
     _check_zones_select_surface(spec, mesh)
@@ -344,7 +348,7 @@ def add_user_vehicle(name: str, mesh_path, zones_path=None, frame: str = "iso", 
                         prepared.warnings + ((too_wide,) if too_wide else ()), prepared.notes,
                         tuple(data.get("keep_out", ())), data["category"], reason,
                         next((z for z in data["zones"] if z["name"] == "mirror"), None), tuple(data.get("steps", ())),
-                        tuple(glass_zones) if not zones_path else ())
+                        tuple(glass_zones) if not zones_path else (), tuple(data.get("fixtures", ())))
 
 
 def _store_folder(name: str, force: bool) -> Path:
