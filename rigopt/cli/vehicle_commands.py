@@ -226,9 +226,14 @@ def vehicle_add_command(
     elif not zones:
         console.print("glass: no part of the file is marked glass (no material named glass or window, none "
                       "see-through): the windshield zones are the box's upper front and rear")
-    if added.fixtures:
+    named = [f for f in added.fixtures if f["kind"] != "mud_flap"]
+    flaps = [f for f in added.fixtures if f["kind"] == "mud_flap"]
+    if named:
         console.print("lamps and number plates (named by their materials), where no lens sits: " + "; ".join(
-            f"{f['name']} {span(f, (0, 1, 2))}" for f in added.fixtures))
+            f"{f['name']} {span(f, (0, 1, 2))}" for f in named))
+    if flaps:
+        console.print("mud flaps: thin plates hanging behind the tyres, where no lens sits: " + "; ".join(
+            f"{f['name']} {span(f, (0, 1, 2))}" for f in flaps))
     if added.mirror:
         console.print(f"mirrors: the narrow parts high on the front that reach out beyond the side are mirror arms; "
                       f"the body outboard of the side around them ({span(added.mirror)}, both sides) is a 'mirror' "

@@ -28,6 +28,7 @@ from rigopt.vehicle.orientation import PoseError, check_pose, frame_rotation
 from rigopt.vehicle.spec import CATEGORIES, read_toml, spec_from_dict
 from rigopt.vehicle.glass import glass_features
 from rigopt.vehicle.materials import KINDS, material_parts, part_fixtures
+from rigopt.vehicle.mud_flaps import mud_flaps
 from rigopt.vehicle.supports import mirror_zone, narrow_keep_outs
 from rigopt.vehicle.treads import step_treads
 from rigopt.vehicle.wheels import FoundWheels, contact_height, find_wheels
@@ -74,7 +75,8 @@ class AddedVehicle:
     or None; ``treads``: the step treads found on it (``[[steps]]`` entries, :func:`rigopt.vehicle.treads.step_treads`);
     ``glass``: the zones its glass became (``windshield_front``, ``windshield_rear``), its side and roof panes
     being among ``keep_outs`` (:mod:`rigopt.vehicle.glass`); ``fixtures``: its lamps and number plates
-    (``[[fixtures]]`` entries, :func:`rigopt.vehicle.materials.part_fixtures`)."""
+    (:func:`rigopt.vehicle.materials.part_fixtures`) and mud flaps (:mod:`rigopt.vehicle.mud_flaps`), ``[[fixtures]]``
+    entries."""
 
     path: Path
     axles: tuple[float, ...]
@@ -320,7 +322,7 @@ def add_user_vehicle(name: str, mesh_path, zones_path=None, frame: str = "iso", 
                         "track": round(w.track, 4)} for w in prepared.wheels],
             "zones": zones, "keep_out": glass_keep_outs,
             "steps": step_treads(prepared.raw, [(w.x, w.radius) for w in prepared.wheels]),
-            "fixtures": part_fixtures(prepared.parts)}
+            "fixtures": part_fixtures(prepared.parts) + mud_flaps(prepared.raw, prepared.wheels)}
     # validated before anything is written; problems name the user's zones file (or the mesh for default zones)
     spec = spec_from_dict({k: v for k, v in data.items() if v != []}, str(zones_path or mesh_path))
     _check_zones_select_surface(spec, mesh)
