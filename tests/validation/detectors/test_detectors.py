@@ -193,6 +193,8 @@ def test_bad_model_settings_are_refused():
     with pytest.raises(RigoptError, match="heads"):
         model_config("petr", "tiny", width=8, heads=3)
     assert model_config("LSS", "Tiny", width=None).width == model_config("lss", "tiny").width  # None ignored
+    with pytest.raises(RigoptError, match="feature_stride is 4 or 8"):
+        model_config("lss", "tiny", feature_stride=6)
 
 
 def test_cuda_device_without_cuda_is_refused():
@@ -350,6 +352,43 @@ def test_splat_puts_each_lifted_feature_in_the_cell_below_it():
     assert bev.shape == (2, channels, 128, 128)
     assert torch.count_nonzero(bev) == 2
     torch.testing.assert_close(bev, expected)
+
+
+@pytest.mark.parametrize("family", sorted(DETECTORS))
+def test_stride_four_features_are_twice_as_fine_and_train(tiny_data, family):
+    """At feature_stride 4 the encoder gives (M, 2 width, ceil(H / 4), ceil(W / 4)) features, four times the cells of
+    stride 8, and each family trains on them (finite loss, a gradient into the encoder's first layer)."""
+    torch.manual_seed(0)
+    coarse, fine = (build_model(model_config(family, "tiny", feature_stride=s)) for s in (8, 4))
+    batch = RigSplit(tiny_data, "R5", "train").batch([0, 1])
+    images = batch.images.flatten(0, 1)
+    h, w = images.shape[-2:]
+    assert fine.encoder.stride == 4 and coarse.encoder.stride == 8
+    assert fine.encoder(images).shape == (len(images), fine.encoder.out_channels, -(-h // 4), -(-w // 4))
+    assert coarse.encoder(images).shape[-2:] == (-(-h // 8), -(-w // 8))
+    loss, _ = fine.loss(fine(batch), batch)
+    loss.backward()
+    assert torch.isfinite(loss) and float(fine.encoder.stage1[0][0].weight.grad.abs().sum()) > 0
+
+
+def test_stride_four_lifts_along_the_rays_of_its_own_cells():
+    """A cell (i, j) of stride-4 features is centred on pixel (4 j + 0.5, 4 i + 0.5): the same splat as at stride 8
+    with intrinsics whose fx, fy are doubled and cx, cy moved to 2 c - 0.5 (so that 8 j + 0.5 maps to the same ray)."""
+    torch.manual_seed(0)
+    fine = LSSDetector(model_config("lss", "tiny", feature_stride=4))
+    coarse = LSSDetector(model_config("lss", "tiny"))
+    fx, fy, cx, cy = 30.0, 28.0, 33.0, 17.0
+    T = torch.stack([camera_to_ego(0.3, [1.0, 0.5, 1.5]), camera_to_ego(-2.0, [-2.0, 0.2, 2.0])])[None]
+    empty = BoxTargets(torch.zeros(0, 3), torch.zeros(0, 3), torch.zeros(0), torch.zeros(0, dtype=torch.int64))
+    k_fine = intrinsics(fx, fy, cx, cy).expand(1, 2, 3, 3).clone()
+    k_coarse = intrinsics(2 * fx, 2 * fy, 2 * cx - 0.5, 2 * cy - 0.5).expand(1, 2, 3, 3).clone()
+    images = torch.zeros(1, 2, 3, HEIGHT, WIDTH)
+    depth = torch.rand(1, 2, fine.config.depth_bins, 9, 16).softmax(dim=2)
+    context = torch.rand(1, 2, fine.config.bev_channels, 9, 16)
+    bev_fine = fine.splat(depth, context, Batch(images, k_fine, T, [empty], ["a"]))
+    bev_coarse = coarse.splat(depth, context, Batch(images, k_coarse, T, [empty], ["a"]))
+    assert torch.count_nonzero(bev_fine) > 0
+    torch.testing.assert_close(bev_fine, bev_coarse, rtol=1e-5, atol=1e-5)
 
 
 def test_splat_equals_summing_the_whole_lifted_volume():
