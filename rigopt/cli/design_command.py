@@ -406,10 +406,12 @@ def _print_matches(summary: dict, label: str) -> None:
 
 def _print_design_notes(summary: dict) -> None:
     """Symmetry, the fields seen, the height moves and the solver's figures (stderr), then the report's notes."""
+    from rigopt.coverage.regulations import category_text
     from rigopt.report.coverage_tables import resolution_text
     from rigopt.report.design_html import blocked_by_keep_outs_text
 
     print(f"{summary['symmetry']['describe']}", file=sys.stderr)
+    print(category_text(summary["vehicle_category"]), file=sys.stderr)
     if summary["regions_fallback"]:
         print(f"rigopt: note: {summary['regions_fallback']}", file=sys.stderr)
     blocked = [f"{sheet['camera']} {blocked_by_keep_outs_text(sheet)}" for sheet in summary["packaging"]

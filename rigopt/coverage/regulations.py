@@ -475,12 +475,29 @@ CATEGORY_DEFAULTS = {"M1": ("r158",), "N1": ("r158",), "M2": ("r151", "r159", "r
                      "N2": ("r151", "r159", "r158"), "N3": ("r151", "r159", "r158")}
 
 
+#: Regulations that apply to a category and that rigopt does not model: category -> ((regulation, why), ...).
+NOT_MODELLED = {category: (("UN R166", "the driver's awareness of vulnerable road users close to the front and sides "
+                                       "(M1 and N1: the front's full width, both sides ahead of the mirrors); its "
+                                       "field distances and test object were not found (docs/regulations.md)"),)
+                for category in ("M1", "N1")}
+
+
 def category_dict(vehicle: Vehicle) -> dict:
     """The vehicle's category in a report: ``category``, ``reason`` (stated in its spec, or the shape's suggestion
-    and why) and ``default_fields`` (the presets it asks for, CATEGORY_DEFAULTS)."""
+    and why), ``default_fields`` (the presets it asks for, CATEGORY_DEFAULTS) and ``not_modelled`` (the
+    regulations that apply to it and are not modelled, NOT_MODELLED: [{regulation, why}])."""
     reason = ("stated in its vehicle.toml" if vehicle.spec.category
               else f"suggested by its shape: {vehicle.category_guess.reason}")
-    return {"category": vehicle.category, "reason": reason, "default_fields": list(CATEGORY_DEFAULTS[vehicle.category])}
+    return {"category": vehicle.category, "reason": reason, "default_fields": list(CATEGORY_DEFAULTS[vehicle.category]),
+            "not_modelled": [{"regulation": name, "why": why} for name, why in NOT_MODELLED.get(vehicle.category, ())]}
+
+
+def category_text(category: dict) -> str:
+    """One line of a report: the category, why, the fields it asks for by default and what applies unmodelled."""
+    text = (f"category {category['category']} ({category['reason']}): fields asked for by default "
+            f"{', '.join(category['default_fields'])}")
+    return text + "".join(f"; {m['regulation']} also applies and is not modelled: {m['why']}"
+                          for m in category["not_modelled"])
 
 
 def default_presets(vehicle: Vehicle, traffic: str = "right") -> tuple[RegionPreset, ...]:

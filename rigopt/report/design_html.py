@@ -5,7 +5,7 @@ from __future__ import annotations
 from datetime import datetime, timezone
 from pathlib import Path
 
-
+from rigopt.coverage.regulations import category_text
 from rigopt.report.coverage_tables import field_tables_html
 from rigopt.report.html_page import escape, image, num, page, pct, table
 
@@ -285,6 +285,8 @@ def render_design_html(summary: dict, figures: dict[str, bytes], scene: str | No
         state = ("reported, not required (--require to enforce)" if not summary["regions_required"] else
                  "required of the near-field cameras" if summary["solver"].get("near_field") else "required")
         parts += [f"<h2>Regulation fields ({escape(state)})</h2>", *field_tables_html(summary["regions"])]
+    if summary.get("vehicle_category"):
+        parts += [f'<p class="note">Vehicle {escape(category_text(summary["vehicle_category"]))}.</p>']
     if scene is not None:
         parts += scene_section(scene, compared, summary.get("frame"))
     if figures:

@@ -1,7 +1,7 @@
 """A stronger shipped detector (issue 45, part 4): the pre-registered candidates (PREREGISTRATION.md), each trained
 on R1's train split and scored on R1's val split beside the one it changes.
 
-    python studies/stronger_detector/run.py --data DIR [--candidates s4 s4d60] [--threads 2]
+    python studies/stronger_detector/run.py --data DIR [--candidates s4 s4d60] [--threads 2] [--device cuda]
 
 ``--data`` holds R1's train split (48 scenes) and val split (16 scenes) from ``rigopt bench generate``. Runs go to
 ``<data>/stronger-runs/<candidate>`` (resumable: rerun the same command); each candidate's row is written to
@@ -35,7 +35,7 @@ HEADER = ["candidate", "changes", "mAP fixed", "minus compared", "ci low", "ci h
           "AP 1 m", "AP 2 m", "AP 4 m", "train minutes"]
 
 
-def matched_on_val(data: Path, name: str, threads: int):
+def matched_on_val(data: Path, name: str, device: str = "cpu"):
     """The candidate's detections on R1's val split, matched (trained first where needed) and its training minutes."""
     from rigopt.validation.detectors.config import model_config
     from rigopt.validation.detectors.data import RigSplit
@@ -55,13 +55,13 @@ def matched_on_val(data: Path, name: str, threads: int):
         config = model_config("lss", "small", epochs=SHIPPED_EPOCHS, **CANDIDATES[name][1])
         split = RigSplit(data, "R1", "train", max_range=config.bev_range)
         step_every = max(1, len(split) // config.batch_size // 4)
-        run = train(split, config, folder, progress=lambda epoch, step, steps, loss: step % step_every or print(
+        run = train(split, config, folder, device, progress=lambda epoch, step, steps, loss: step % step_every or print(
             f"{name}: epoch {epoch + 1}/{config.epochs}, step {step}/{steps}, loss {loss:.3f}", flush=True))
         checkpoint, minutes = run.checkpoint, training_seconds(folder / "train_log.csv") / 60
     model = build_model(config)
     model.load_state_dict(load_checkpoint(checkpoint)["model"])
     split = RigSplit(data, "R1", "val", max_range=config.bev_range)
-    matched = match_split(model, split)
+    matched = match_split(model.to(device), split, device)
     scenes = np.array([s.scene for s in split.samples])
     folder.mkdir(parents=True, exist_ok=True)
     kept.write_bytes(pickle.dumps((matched, scenes, minutes)))
@@ -76,15 +76,15 @@ def scene_weights(scenes: np.ndarray) -> np.ndarray:
     return counts[:, index]
 
 
-def row(data: Path, name: str, threads: int) -> list:
-    matched, scenes, minutes = matched_on_val(data, name, threads)
+def row(data: Path, name: str, device: str) -> list:
+    matched, scenes, minutes = matched_on_val(data, name, device)
     fixed, visible = matched.evaluation(), matched.evaluation(visible_only=True)
     compared = CANDIDATES[name][0]
     difference, low, high = (float("nan"),) * 3
     if compared:
         if compared != "baseline" and not (data / "stronger-runs" / compared / "val_matched.pkl").is_file():
             raise SystemExit(f"{name} is compared with {compared}: score {compared} first (--candidates {compared})")
-        other = matched_on_val(data, compared, threads)[0]
+        other = matched_on_val(data, compared, device)[0]
         weights = scene_weights(scenes)
         differences = [matched.evaluation(w).map - other.evaluation(w).map for w in weights]
         difference = fixed.map - other.evaluation().map
@@ -99,6 +99,7 @@ def main() -> None:
     parser.add_argument("--data", type=Path, required=True)
     parser.add_argument("--candidates", nargs="+", default=list(CANDIDATES), choices=list(CANDIDATES))
     parser.add_argument("--threads", type=int, default=2)
+    parser.add_argument("--device", default="cpu", help="cpu, cuda or cuda:K (training minutes are then a GPU's)")
     args = parser.parse_args()
     import torch
 
@@ -106,7 +107,7 @@ def main() -> None:
     out = HERE / "results" / "val.csv"
     rows = {r[0]: r for r in read_csv(out)[1:]} if out.is_file() else {}
     for name in args.candidates:
-        rows[name] = row(args.data, name, args.threads)
+        rows[name] = row(args.data, name, args.device)
         write_csv(out, HEADER, [rows[n] for n in CANDIDATES if n in rows])
     print(markdown(read_csv(out)))
 

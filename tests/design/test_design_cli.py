@@ -134,6 +134,22 @@ def test_a_small_design_has_the_documented_keys_and_its_rig_file(small_run):
     assert {p.name for p in out.iterdir()} >= {"rig.json", "report.json", "report.html"}
 
 
+def test_the_report_states_the_category_its_fields_and_what_applies_unmodelled(small_run):
+    """The tt is M1: r158 by default, and UN R166 applies to it unmodelled, said in the JSON and the page; a truck's
+    category names no such regulation."""
+    from rigopt.coverage.regulations import category_dict, category_text
+    from rigopt.vehicle.library import load_vehicle
+
+    summary, out = small_run
+    category = summary["vehicle_category"]
+    assert category["category"] == "M1" and category["default_fields"] == ["r158"]
+    assert [m["regulation"] for m in category["not_modelled"]] == ["UN R166"]
+    page = " ".join((out / "report.html").read_text().split())
+    assert "category M1 (stated in its vehicle.toml): fields asked for by default r158; UN R166 also applies" in page
+    hgv = category_dict(load_vehicle("hgv"))
+    assert hgv["not_modelled"] == [] and category_text(hgv).endswith("r151, r159, r158")
+
+
 @pytest.mark.slow
 def test_each_predicted_drop_is_the_drop_models_with_its_interval(design_run):
     """From R1 the report's predictions are the default shipped drop model's: each drop with its bin's 90 %
