@@ -82,7 +82,7 @@ def coverage_command(
     """Coverage of a rig around its vehicle: rings at 2-50 m, bird's-eye counts, near-field blind zone, per camera."""
     from rigopt.coverage.measures import CoverageSettings, compare_coverage, coverage_report
     from rigopt.coverage.packaging import report_origin
-    from rigopt.coverage.regulations import parse_require, region_coverage
+    from rigopt.coverage.regulations import category_dict, parse_require, region_coverage
     from rigopt.report.coverage_figures import comparison_dict, report_dict
     from rigopt.report.coverage_tables import regions_dict
 
@@ -104,6 +104,7 @@ def coverage_command(
         _, other, announce_other = _report(compare, None)
         comparison = compare_coverage(other, report)  # differences: RIG minus --compare
     data = report_dict(report, loaded, report_origin(on))  # the design report's frame, as the --out folder's
+    data["vehicle_category"] = category_dict(on)
     data["regions"] = regions_dict(regions)
     if turned:
         data["regions_articulated"] = [{"articulation_deg": angle, "regions": regions_dict(found)}
@@ -194,6 +195,8 @@ def _lens_text(lens: dict | None) -> str:
 
 
 def _print_tables(data: dict, other: dict | None) -> None:
+    from rigopt.coverage.regulations import category_text
+
     others = {(r["distance_m"], r["height_m"]): r for r in other["rings"]} if other is not None else {}
     columns = ["distance (m)", "height (m)", "covered", "overlap >= 2"]
     if other is not None:
@@ -228,6 +231,7 @@ def _print_tables(data: dict, other: dict | None) -> None:
                   f"{100 * bev['covered_frac_within_20m']:.1f} % of cells within 20 m seen, "
                   f"{100 * bev['overlap2_frac_within_20m']:.1f} % by >= 2 cameras, at most {bev['max_count']}")
 
+    console.print(category_text(data["vehicle_category"]))
     _print_field_tables(data)
 
     if "compare" in data:

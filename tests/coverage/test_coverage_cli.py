@@ -55,3 +55,17 @@ def test_the_fields_with_the_trailer_turned_both_ways():
     refused = run_rigopt("coverage", "R1", "--require", "r158", "--articulation", "30")
     assert refused.returncode == 2 and refused.stderr.count("rigopt: error:") == 1
     assert "has none" in refused.stderr and "drop --articulation" in refused.stderr
+
+
+def test_the_report_states_the_vehicle_category_and_what_applies_unmodelled():
+    """R1 on its etron (M1): the JSON and the text name the category, its default field r158 and UN R166 unmodelled;
+    R9 on the hgv (N3) asks for r151, r159, r158 and names nothing unmodelled."""
+    import json
+
+    car, truck = run_rigopt("coverage", "R1", "--json"), run_rigopt("coverage", "R9", "--json")
+    assert car.returncode == truck.returncode == 0, car.stderr + truck.stderr
+    category = json.loads(car.stdout)["vehicle_category"]
+    assert category["category"] == "M1" and [m["regulation"] for m in category["not_modelled"]] == ["UN R166"]
+    assert json.loads(truck.stdout)["vehicle_category"]["not_modelled"] == []
+    text = " ".join(run_rigopt("coverage", "R1").stdout.split())
+    assert "category M1 (stated in its vehicle.toml): fields asked for by default r158; UN R166 also applies" in text
