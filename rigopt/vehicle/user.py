@@ -24,11 +24,11 @@ from rigopt.vehicle.library import SPEC_FILE, broken_user_vehicles, find_spec, u
 from rigopt.vehicle.model import ZONE_QUERY_EDGE, Vehicle, expand_zones
 from rigopt.vehicle.category import body_width, width_warning
 from rigopt.vehicle.closing import SHELL_PITCHES, ClosingReport, close_mesh
-from rigopt.vehicle.orientation import PoseError, check_pose, frame_rotation
-from rigopt.vehicle.spec import CATEGORIES, read_toml, spec_from_dict
 from rigopt.vehicle.glass import glass_features
 from rigopt.vehicle.materials import KINDS, material_parts, part_fixtures
 from rigopt.vehicle.mud_flaps import mud_flaps
+from rigopt.vehicle.orientation import PoseError, check_pose, frame_rotation
+from rigopt.vehicle.spec import CATEGORIES, read_toml, spec_from_dict
 from rigopt.vehicle.supports import mirror_zone, narrow_keep_outs
 from rigopt.vehicle.treads import step_treads
 from rigopt.vehicle.wheels import FoundWheels, contact_height, find_wheels
@@ -91,6 +91,27 @@ class AddedVehicle:
     treads: tuple[dict, ...] = ()
     glass: tuple[dict, ...] = ()
     fixtures: tuple[dict, ...] = ()
+
+
+@dataclass(frozen=True)
+class FoundFeatures:
+    """What a user's mesh shows beyond its box: ``glass_zones`` (the windscreen and rear window as zones),
+    ``keep_outs`` (side and roof glass), ``steps`` (treads) and ``fixtures`` (lamps, number plates, mud flaps), as
+    ``vehicle.toml`` entries."""
+
+    glass_zones: list[dict]
+    keep_outs: list[dict]
+    steps: list[dict]
+    fixtures: list[dict]
+
+
+def found_features(prepared: PreparedMesh) -> FoundFeatures:
+    """The body features :mod:`rigopt.vehicle.glass`, :mod:`~rigopt.vehicle.treads`, :mod:`~rigopt.vehicle.materials`
+    and :mod:`~rigopt.vehicle.mud_flaps` find on ``prepared`` (vehicle frame)."""
+    glass = np.concatenate([triangles for _, triangles in prepared.parts["glass"]] + [np.zeros((0, 3, 3))])
+    glass_zones, keep_outs = glass_features(glass, [0.0, 0.0, float(prepared.mesh.bounds[:, 2].mean())])
+    return FoundFeatures(glass_zones, keep_outs, step_treads(prepared.raw, [(w.x, w.radius) for w in prepared.wheels]),
+                         part_fixtures(prepared.parts) + mud_flaps(prepared.raw, prepared.wheels))
 
 
 def carla_mesh_to_iso(mesh: trimesh.Trimesh) -> trimesh.Trimesh:
@@ -306,12 +327,11 @@ def add_user_vehicle(name: str, mesh_path, zones_path=None, frame: str = "iso", 
                                  allow_size=allow_size, axles=axles, ground=ground, pitch=pitch)
     mesh = prepared.mesh
     zones = _read_zones(zones_path) if zones_path else default_zones(mesh.bounds)
-    glass = np.concatenate([triangles for _, triangles in prepared.parts["glass"]] + [np.zeros((0, 3, 3))])
-    glass_zones, glass_keep_outs = glass_features(glass, [0.0, 0.0, float(mesh.bounds[:, 2].mean())])
+    found = found_features(prepared)
     if not zones_path:
         # the glass first: a zone is the first holding a camera's foot and normal, and the roof's cone reaches a
         # raked windscreen
-        zones = glass_zones + [z for z in zones if z["name"] not in {g["name"] for g in glass_zones}]
+        zones = found.glass_zones + [z for z in zones if z["name"] not in {g["name"] for g in found.glass_zones}]
     if roof_rack is not None:
         zones = [z for z in zones if z.get("name") != "roof_rack"] + [roof_rack_zone(mesh.bounds, roof_rack)]
     found_axles = tuple(axles) if axles is not None else tuple(w.x for w in prepared.wheels)
@@ -320,9 +340,7 @@ def add_user_vehicle(name: str, mesh_path, zones_path=None, frame: str = "iso", 
             "solids": [{"name": "body", "type": "mesh", "file": "body.ply"}],
             "wheels": [{"axles": [round(w.x, 4)], "radius": round(w.radius, 4), "width": round(w.width, 4),
                         "track": round(w.track, 4)} for w in prepared.wheels],
-            "zones": zones, "keep_out": glass_keep_outs,
-            "steps": step_treads(prepared.raw, [(w.x, w.radius) for w in prepared.wheels]),
-            "fixtures": part_fixtures(prepared.parts) + mud_flaps(prepared.raw, prepared.wheels)}
+            "zones": zones, "keep_out": found.keep_outs, "steps": found.steps, "fixtures": found.fixtures}
     # validated before anything is written; problems name the user's zones file (or the mesh for default zones)
     spec = spec_from_dict({k: v for k, v in data.items() if v != []}, str(zones_path or mesh_path))
     _check_zones_select_surface(spec, mesh)
@@ -336,7 +354,7 @@ def add_user_vehicle(name: str, mesh_path, zones_path=None, frame: str = "iso", 
         # beyond the narrow part: its thickening and one grid pitch (an enclosed ladder is filled up to it)
         reach = (SHELL_PITCHES + 1) * prepared.closing.pitch + KEEP_OUT_CLEARANCE
         narrow = narrow_keep_outs(prepared.raw, reach)
-        data["keep_out"] = narrow + glass_keep_outs
+        data["keep_out"] = narrow + found.keep_outs
         mirror = mirror_zone(narrow, mesh.bounds, body_width(body) / 2)
         if mirror is not None:
             data["zones"] = [*zones, mirror]
@@ -350,7 +368,7 @@ def add_user_vehicle(name: str, mesh_path, zones_path=None, frame: str = "iso", 
                         prepared.warnings + ((too_wide,) if too_wide else ()), prepared.notes,
                         tuple(data.get("keep_out", ())), data["category"], reason,
                         next((z for z in data["zones"] if z["name"] == "mirror"), None), tuple(data.get("steps", ())),
-                        tuple(glass_zones) if not zones_path else (), tuple(data.get("fixtures", ())))
+                        tuple(found.glass_zones) if not zones_path else (), tuple(data.get("fixtures", ())))
 
 
 def _store_folder(name: str, force: bool) -> Path:
