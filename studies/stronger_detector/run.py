@@ -30,6 +30,7 @@ CANDIDATES = {
     "s4": ("baseline", dict(feature_stride=4), 48),
     "s4d60": ("s4", dict(feature_stride=4, depth_bins=60), 48),
     "d96": ("baseline", dict(epochs=4), 96),  # amendment 1
+    "e16": ("d96", dict(epochs=16), 96),  # registered: the adopted recipe (d96) at 16 epochs
 }
 SHIPPED_EPOCHS = 8
 RESAMPLES, BOOT_SEED, LEVEL = 1000, 0, 0.95
@@ -57,10 +58,10 @@ def matched_on_val(data: Path, name: str, device: str = "cpu"):
         _, settings, scenes = CANDIDATES[name]
         config = model_config("lss", "small", **{"epochs": SHIPPED_EPOCHS, **settings})
         split = RigSplit(data, "R1", "train", max_range=config.bev_range)
-        kept = sorted({s.scene for s in split.samples})[:scenes]
-        if len(kept) < scenes:
-            raise SystemExit(f"{name} trains on {scenes} scenes; {data} holds {len(kept)} of R1's train split")
-        split.samples = [s for s in split.samples if s.scene in kept]
+        chosen = sorted({s.scene for s in split.samples})[:scenes]
+        if len(chosen) < scenes:
+            raise SystemExit(f"{name} trains on {scenes} scenes; {data} holds {len(chosen)} of R1's train split")
+        split.samples = [s for s in split.samples if s.scene in chosen]
         step_every = max(1, len(split) // config.batch_size // 4)
         run = train(split, config, folder, device, progress=lambda epoch, step, steps, loss: step % step_every or print(
             f"{name}: epoch {epoch + 1}/{config.epochs}, step {step}/{steps}, loss {loss:.3f}", flush=True))
