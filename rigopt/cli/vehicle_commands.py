@@ -151,6 +151,47 @@ def _parse_axles(text: str | None):
             from None
 
 
+def _print_found(added, datum, zones_given: bool) -> None:
+    """What ``vehicle add`` found on the mesh (an ``AddedVehicle``), each box measured from ``datum`` (ReportDatum)."""
+    import numpy as np
+
+    from rigopt.vehicle.supports import KEEP_OUT_REASON
+
+    def span(box: dict, axes=(0, 2)) -> str:
+        low, high = (np.asarray(box[k], dtype=float) - datum.point for k in ("min", "max"))
+        return ", ".join(f"{'xyz'[a]} {low[a]:.2f}..{high[a]:.2f} m" for a in axes)
+
+    narrow = [k for k in added.keep_outs if k["reason"] == KEEP_OUT_REASON]
+    panes = [k for k in added.keep_outs if k["reason"] != KEEP_OUT_REASON]
+    console.print(f"found on the mesh (x, y, z m, {datum.frame}):")
+    if narrow:
+        console.print(f"keep-outs: {len(narrow)} narrow part(s) where no housing fits (rails, ladders, bars): "
+                      + "; ".join(f"{k['name']} {span(k)}" for k in narrow))
+    if added.glass or panes:
+        console.print("glass (parts its materials call glass): " + "; ".join(
+            [f"{z['name']} zone {span(z)} (a camera there sits behind the glass)" for z in added.glass]
+            + [f"{k['name']} {span(k, (0, 1, 2))} ({k['reason']})" for k in panes]))
+    elif not zones_given:
+        console.print("glass: no part of the file is marked glass (no material named glass or window, none "
+                      "see-through): the windshield zones are the box's upper front and rear")
+    named = [f for f in added.fixtures if f["kind"] != "mud_flap"]
+    flaps = [f for f in added.fixtures if f["kind"] == "mud_flap"]
+    if named:
+        console.print("lamps and number plates (named by their materials), where no lens sits: " + "; ".join(
+            f"{f['name']} {span(f, (0, 1, 2))}" for f in named))
+    if flaps:
+        console.print("mud flaps: thin plates hanging behind the tyres, where no lens sits: " + "; ".join(
+            f"{f['name']} {span(f, (0, 1, 2))}" for f in flaps))
+    if added.mirror:
+        console.print(f"mirrors: the narrow parts high on the front that reach out beyond the side are mirror arms; "
+                      f"the body outboard of the side around them ({span(added.mirror)}, both sides) is a 'mirror' "
+                      "zone, where side and surround-view cameras mount (the arms stay keep-outs)")
+    if added.treads:
+        console.print("steps: patches facing up at step height, shallow enough to stand on, are treads where no lens "
+                      "sits: " + "; ".join(f"{t['name']} {span(t, (0, 1))}" for t in added.treads)
+                      + r" ([\[steps]] in vehicle.toml to change)")
+
+
 @vehicle_app.command("add")
 def vehicle_add_command(
     name: str = typer.Argument(..., help="Name to give the vehicle."),
@@ -185,12 +226,9 @@ def vehicle_add_command(
                                            "default. Default: the one the shape suggests (stated, with why)."),
 ):
     """Check a mesh and store it as a vehicle so that --vehicle NAME works everywhere."""
-    import numpy as np
-
     from rigopt.coverage.packaging import report_origin
     from rigopt.coverage.regulations import CATEGORY_DEFAULTS
     from rigopt.vehicle.library import load_vehicle
-    from rigopt.vehicle.supports import KEEP_OUT_REASON
     from rigopt.vehicle.user import add_user_vehicle
 
     added = add_user_vehicle(name, mesh, zones, frame, force=force, scale=scale, length=length, forward=forward,
@@ -207,41 +245,7 @@ def vehicle_add_command(
     else:
         console.print("wheels: none found (give --axles X1,X2 to set the axles)" if not added.axles else
                       f"axles: {', '.join(f'{x:.2f}' for x in added.axles)} m (given; no tyre found at them)")
-    datum = report_origin(load_vehicle(name))
-
-    def span(box: dict, axes=(0, 2)) -> str:
-        low, high = (np.asarray(box[k], dtype=float) - datum.point for k in ("min", "max"))
-        return ", ".join(f"{'xyz'[a]} {low[a]:.2f}..{high[a]:.2f} m" for a in axes)
-
-    narrow = [k for k in added.keep_outs if k["reason"] == KEEP_OUT_REASON]
-    panes = [k for k in added.keep_outs if k["reason"] != KEEP_OUT_REASON]
-    console.print(f"found on the mesh (x, y, z m, {datum.frame}):")
-    if narrow:
-        console.print(f"keep-outs: {len(narrow)} narrow part(s) where no housing fits (rails, ladders, bars): "
-                      + "; ".join(f"{k['name']} {span(k)}" for k in narrow))
-    if added.glass or panes:
-        console.print("glass (parts its materials call glass): " + "; ".join(
-            [f"{z['name']} zone {span(z)} (a camera there sits behind the glass)" for z in added.glass]
-            + [f"{k['name']} {span(k, (0, 1, 2))} ({k['reason']})" for k in panes]))
-    elif not zones:
-        console.print("glass: no part of the file is marked glass (no material named glass or window, none "
-                      "see-through): the windshield zones are the box's upper front and rear")
-    named = [f for f in added.fixtures if f["kind"] != "mud_flap"]
-    flaps = [f for f in added.fixtures if f["kind"] == "mud_flap"]
-    if named:
-        console.print("lamps and number plates (named by their materials), where no lens sits: " + "; ".join(
-            f"{f['name']} {span(f, (0, 1, 2))}" for f in named))
-    if flaps:
-        console.print("mud flaps: thin plates hanging behind the tyres, where no lens sits: " + "; ".join(
-            f"{f['name']} {span(f, (0, 1, 2))}" for f in flaps))
-    if added.mirror:
-        console.print(f"mirrors: the narrow parts high on the front that reach out beyond the side are mirror arms; "
-                      f"the body outboard of the side around them ({span(added.mirror)}, both sides) is a 'mirror' "
-                      "zone, where side and surround-view cameras mount (the arms stay keep-outs)")
-    if added.treads:
-        console.print("steps: patches facing up at step height, shallow enough to stand on, are treads where no lens "
-                      "sits: " + "; ".join(f"{t['name']} {span(t, (0, 1))}" for t in added.treads)
-                      + r" ([\[steps]] in vehicle.toml to change)")
+    _print_found(added, report_origin(load_vehicle(name)), zones_given=zones is not None)
     console.print(f"category: {added.category}, {added.category_reason}; fields required by default: "
                   f"{', '.join(CATEGORY_DEFAULTS[added.category])} (--category, or category in vehicle.toml, to change)")
     console.print(f"added vehicle {name!r}: {added.path}")
