@@ -38,7 +38,12 @@ HEADER = ["candidate", "changes", "mAP fixed", "minus compared", "ci low", "ci h
           "AP 1 m", "AP 2 m", "AP 4 m", "train minutes"]
 
 
-def matched_on_val(data: Path, name: str, device: str = "cpu"):
+def run_name(name: str, seed: int) -> str:
+    """A candidate's run (and row) name: the candidate for seed 0, ``<candidate>-seed<S>`` for another seed."""
+    return name if seed == 0 else f"{name}-seed{seed}"
+
+
+def matched_on_val(data: Path, name: str, device: str = "cpu", seed: int = 0):
     """The candidate's detections on R1's val split, matched (trained first where needed) and its training minutes."""
     from rigopt.validation.detectors.config import model_config
     from rigopt.validation.detectors.data import RigSplit
@@ -47,12 +52,12 @@ def matched_on_val(data: Path, name: str, device: str = "cpu"):
     from rigopt.validation.detectors.shipped import training_seconds
     from rigopt.validation.detectors.training import train
 
-    folder = data / "stronger-runs" / name
+    folder = data / "stronger-runs" / run_name(name, seed)
     kept = folder / "val_matched.pkl"
     if kept.is_file():
         return pickle.loads(kept.read_bytes())
     if name == "baseline":
-        checkpoint, minutes = ROOT / "detectors" / "lss-R1" / "seed0.pt", float("nan")
+        checkpoint, minutes = ROOT / "detectors" / "lss-R1" / f"seed{seed}.pt", float("nan")
         config = model_config("lss", "small")
     else:
         _, settings, scenes = CANDIDATES[name]
@@ -63,7 +68,7 @@ def matched_on_val(data: Path, name: str, device: str = "cpu"):
             raise SystemExit(f"{name} trains on {scenes} scenes; {data} holds {len(chosen)} of R1's train split")
         split.samples = [s for s in split.samples if s.scene in chosen]
         step_every = max(1, len(split) // config.batch_size // 4)
-        run = train(split, config, folder, device, progress=lambda epoch, step, steps, loss: step % step_every or print(
+        run = train(split, config, folder, device, seed, progress=lambda epoch, step, steps, loss: step % step_every or print(
             f"{name}: epoch {epoch + 1}/{config.epochs}, step {step}/{steps}, loss {loss:.3f}", flush=True))
         checkpoint, minutes = run.checkpoint, training_seconds(folder / "train_log.csv") / 60
     model = build_model(config)
@@ -84,23 +89,23 @@ def scene_weights(scenes: np.ndarray) -> np.ndarray:
     return counts[:, index]
 
 
-def row(data: Path, name: str, device: str) -> list:
-    matched, scenes, minutes = matched_on_val(data, name, device)
+def row(data: Path, name: str, device: str, seed: int = 0) -> list:
+    matched, scenes, minutes = matched_on_val(data, name, device, seed)
     fixed, visible = matched.evaluation(), matched.evaluation(visible_only=True)
     compared = CANDIDATES[name][0]
     difference, low, high = (float("nan"),) * 3
     if compared:
-        if compared != "baseline" and not (data / "stronger-runs" / compared / "val_matched.pkl").is_file():
+        if compared != "baseline" and not (data / "stronger-runs" / run_name(compared, seed) / "val_matched.pkl").is_file():
             raise SystemExit(f"{name} is compared with {compared}: score {compared} first (--candidates {compared})")
-        other = matched_on_val(data, compared, device)[0]
+        other = matched_on_val(data, compared, device, seed)[0]
         weights = scene_weights(scenes)
         differences = [matched.evaluation(w).map - other.evaluation(w).map for w in weights]
         difference = fixed.map - other.evaluation().map
         low, high = np.percentile(differences, [100 * (1 - LEVEL) / 2, 100 * (1 + LEVEL) / 2])
     changes = ", ".join([f"{k} {v}" for k, v in (CANDIDATES[name][1] or {}).items()]
-                        + ([f"{CANDIDATES[name][2]} scenes"] if CANDIDATES[name][2] != 48 else [])) or "shipped seed 0"
+                        + ([f"{CANDIDATES[name][2]} scenes"] if CANDIDATES[name][2] != 48 else [])) or f"shipped seed {seed}"
     by_threshold = np.nanmean(fixed.ap, axis=0)
-    return [name, changes, fixed.map, difference, low, high, visible.map, *by_threshold, minutes]
+    return [run_name(name, seed), changes, fixed.map, difference, low, high, visible.map, *by_threshold, minutes]
 
 
 def main() -> None:
@@ -108,6 +113,7 @@ def main() -> None:
     parser.add_argument("--data", type=Path, required=True)
     parser.add_argument("--candidates", nargs="+", default=list(CANDIDATES), choices=list(CANDIDATES))
     parser.add_argument("--threads", type=int, default=2)
+    parser.add_argument("--seed", type=int, default=0, help="training seed (the baseline: the shipped seed's model)")
     parser.add_argument("--device", default="cpu", help="cpu, cuda or cuda:K (training minutes are then a GPU's)")
     args = parser.parse_args()
     import torch
@@ -116,8 +122,8 @@ def main() -> None:
     out = HERE / "results" / "val.csv"
     rows = {r[0]: r for r in read_csv(out)[1:]} if out.is_file() else {}
     for name in args.candidates:
-        rows[name] = row(args.data, name, args.device)
-        write_csv(out, HEADER, [rows[n] for n in CANDIDATES if n in rows])
+        rows[run_name(name, args.seed)] = row(args.data, name, args.device, args.seed)
+        write_csv(out, HEADER, [rows[n] for n in sorted(rows, key=lambda n: (list(CANDIDATES).index(n.split("-seed")[0]), n))])
     print(markdown(read_csv(out)))
 
 
