@@ -18,8 +18,9 @@ ISO vehicle frame, metres.
 from __future__ import annotations
 
 import numpy as np
+import trimesh
 
-from rigopt.vehicle.materials import connected_pieces
+from rigopt.vehicle.supports import box_around, connected_pieces
 
 LEAN = 0.3
 ZONE_MARGIN, ZONE_CONE_DEG = 0.05, 50.0
@@ -30,13 +31,10 @@ SIDE_REASON, ROOF_REASON = "side window glass: it winds down", "glass roof: no h
 def _outer_faces(triangles: np.ndarray, centre: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The triangles (k, 3, 3) of the glass's outside skin (normals pointing away from ``centre`` (3,) m), their
     unit normals (k, 3) and areas (k,)."""
-    cross = np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0])
-    area = 0.5 * np.linalg.norm(cross, axis=1)
-    keep = area > 1e-9
-    normals = cross[keep] / (2 * area[keep, None])
-    centres = triangles[keep].mean(axis=1)
-    outward = np.einsum("ij,ij->i", normals, centres - centre) > 0
-    return triangles[keep][outward], normals[outward], area[keep][outward]
+    normals, valid = trimesh.triangles.normals(triangles)  # unit normals of the faces with an area
+    triangles = triangles[valid]
+    outward = np.einsum("ij,ij->i", normals, triangles.mean(axis=1) - centre) > 0
+    return triangles[outward], normals[outward], trimesh.triangles.area(triangles[outward])
 
 
 def glass_features(triangles: np.ndarray, centre) -> tuple[list[dict], list[dict]]:
@@ -59,19 +57,13 @@ def glass_features(triangles: np.ndarray, centre) -> tuple[list[dict], list[dict
     zones = []
     for name, kind in (("windshield_front", "front"), ("windshield_rear", "rear")):
         if kinds[kind]:
-            corners = np.concatenate([c for c, _ in kinds[kind]])
             normal = np.sum([n for _, n in kinds[kind]], axis=0)
-            zones.append({"name": name, "min": _rounded(corners.min(axis=0) - ZONE_MARGIN),
-                          "max": _rounded(corners.max(axis=0) + ZONE_MARGIN),
-                          "normal": _rounded(normal / np.linalg.norm(normal)), "cone_deg": ZONE_CONE_DEG,
+            zones.append({"name": name, **box_around(np.concatenate([c for c, _ in kinds[kind]]), ZONE_MARGIN),
+                          "normal": np.round(normal / np.linalg.norm(normal), 3).tolist(), "cone_deg": ZONE_CONE_DEG,
                           "mirrored": False})
-    keep_outs = [{"name": f"{label} {k + 1}", "reason": reason, "min": _rounded(corners.min(axis=0) - KEEP_OUT_MARGIN),
-                  "max": _rounded(corners.max(axis=0) + KEEP_OUT_MARGIN)}
+    keep_outs = [{"name": f"{label} {k + 1}", "reason": reason, **box_around(corners, KEEP_OUT_MARGIN)}
                  for label, reason, kind in (("side window", SIDE_REASON, "side"), ("glass roof", ROOF_REASON, "roof"))
                  for k, (corners, _) in enumerate(sorted(kinds[kind], key=lambda pane: (-pane[0][:, 0].max(),
                                                                                         -pane[0][:, 1].max())))]
     return zones, keep_outs
 
-
-def _rounded(values) -> list[float]:
-    return [round(float(v), 3) for v in values]

@@ -19,6 +19,8 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
+from rigopt.vehicle.supports import box_around, connected_pieces
+
 GLASS_WORDS = ("glass", "window", "windscreen", "windshield", "screen")
 LAMP_WORDS = ("lamp", "light", "indicator", "blinker", "reflector")
 PLATE_WORDS = ("plate", "licen")
@@ -84,15 +86,6 @@ def material_parts(path) -> dict[str, list[tuple[str, np.ndarray]]]:
     return parts
 
 
-def connected_pieces(triangles: np.ndarray) -> list[np.ndarray]:
-    """The connected pieces of triangles (k, 3, 3) (sharing an edge once coincident corners are merged): each
-    piece's indices into ``triangles``, in order."""
-    mesh = trimesh.Trimesh(triangles.reshape(-1, 3), np.arange(3 * len(triangles)).reshape(-1, 3), process=False)
-    mesh.merge_vertices()
-    groups = trimesh.graph.connected_components(mesh.face_adjacency, nodes=np.arange(len(triangles)), min_len=1)
-    return sorted((np.sort(np.asarray(group)) for group in groups), key=lambda group: group[0])
-
-
 def part_fixtures(parts: dict[str, list[tuple[str, np.ndarray]]]) -> list[dict]:
     """``[[fixtures]]`` entries (name, kind, min, max) over each connected lamp and number plate of ``parts`` (as
     :func:`material_parts` returns them, in the vehicle frame), each box grown by FIXTURE_MARGIN m."""
@@ -100,8 +93,6 @@ def part_fixtures(parts: dict[str, list[tuple[str, np.ndarray]]]) -> list[dict]:
     for kind, label in (("lamp", "lamp"), ("number_plate", "number plate")):
         pieces = [(name, triangles[piece]) for name, triangles in parts[kind] for piece in connected_pieces(triangles)]
         for k, (name, piece) in enumerate(sorted(pieces, key=lambda item: (-item[1][..., 0].max(), -item[1][..., 1].max()))):
-            corners = piece.reshape(-1, 3)
             fixtures.append({"name": f"{label} {k + 1} (material {name})", "kind": kind,
-                             "min": [round(float(v), 3) for v in corners.min(axis=0) - FIXTURE_MARGIN],
-                             "max": [round(float(v), 3) for v in corners.max(axis=0) + FIXTURE_MARGIN]})
+                             **box_around(piece, FIXTURE_MARGIN)})
     return fixtures

@@ -15,6 +15,8 @@ from __future__ import annotations
 import numpy as np
 import trimesh
 
+from rigopt.vehicle.supports import box_around
+
 FACING_DEG = 20.0
 GAP, REACH = 0.02, 1.0
 LOW, ABOVE = 0.05, 0.3
@@ -43,11 +45,9 @@ def mud_flaps(mesh: trimesh.Trimesh, wheels) -> list[dict]:
             thin = faces[_thin(mesh, faces)]
             if mesh.area_faces[thin].sum() / 2 < MIN_AREA:  # a sheet's two faces
                 continue
-            corners = mesh.vertices[mesh.faces[thin]].reshape(-1, 3)
             where = "left" if side > 0 else "right"
             flaps.append({"name": f"mud flap behind the {label}-{where} wheel (found)", "kind": "mud_flap",
-                          "min": [round(float(v), 3) for v in corners.min(axis=0) - MARGIN],
-                          "max": [round(float(v), 3) for v in corners.max(axis=0) + MARGIN]})
+                          **box_around(mesh.triangles[thin], MARGIN)})
     return flaps
 
 

@@ -15,6 +15,9 @@ A narrow part that is a mirror's arm (:func:`mirror_zone`: high on the front of 
 body's side) holds a mirror head at its end: the body outboard of the side around it becomes a ``mirror`` zone,
 where production surround view mounts its side cameras; the arm itself stays a keep-out.
 
+:func:`box_around` and :func:`connected_pieces` are the box and the grouping every part found on a mesh uses
+(treads, glass, lamps, mud flaps).
+
 ISO vehicle frame, metres.
 """
 
@@ -53,6 +56,23 @@ def narrow_points(points: np.ndarray) -> np.ndarray:
     return (count >= 6) & (np.sqrt(12.0) * spread[:, 1] < NARROW_WIDTH)
 
 
+def box_around(points, margin: float, digits: int = 3) -> dict:
+    """{"min": [x, y, z], "max": [x, y, z]} of a found part's points (..., 3) m grown by ``margin`` m on every side,
+    rounded to ``digits``: the box of a ``vehicle.toml`` entry."""
+    points = np.asarray(points, dtype=float).reshape(-1, 3)
+    return {"min": np.round(points.min(axis=0) - margin, digits).tolist(),
+            "max": np.round(points.max(axis=0) + margin, digits).tolist()}
+
+
+def connected_pieces(triangles: np.ndarray) -> list[np.ndarray]:
+    """The connected pieces of triangles (k, 3, 3) (sharing an edge once coincident corners are merged): each
+    piece's indices into ``triangles``, in order."""
+    mesh = trimesh.Trimesh(triangles.reshape(-1, 3), np.arange(3 * len(triangles)).reshape(-1, 3), process=False)
+    mesh.merge_vertices()
+    groups = trimesh.graph.connected_components(mesh.face_adjacency, nodes=np.arange(len(triangles)), min_len=1)
+    return sorted((np.sort(np.asarray(group)) for group in groups), key=lambda group: group[0])
+
+
 def narrow_keep_outs(mesh: trimesh.Trimesh, margin: float) -> list[dict]:
     """``[[keep_out]]`` tables (name, reason, min, max) over the narrow parts of ``mesh``'s surface (ISO, m),
     each box grown by ``margin`` m; largest first."""
@@ -68,9 +88,7 @@ def narrow_keep_outs(mesh: trimesh.Trimesh, margin: float) -> list[dict]:
     _, label = connected_components(tree.sparse_distance_matrix(tree, GROUP_REACH, output_type="coo_matrix"),
                                     directed=False)
     groups = sorted((narrow[label == k] for k in np.unique(label)), key=len, reverse=True)
-    return [{"name": f"narrow_{k + 1}", "reason": KEEP_OUT_REASON,
-             "min": np.round(group.min(axis=0) - margin, 4).tolist(),
-             "max": np.round(group.max(axis=0) + margin, 4).tolist()}
+    return [{"name": f"narrow_{k + 1}", "reason": KEEP_OUT_REASON, **box_around(group, margin, 4)}
             for k, group in enumerate(g for g in groups if len(g) >= MIN_GROUP)]
 
 

@@ -17,6 +17,8 @@ from __future__ import annotations
 import numpy as np
 import trimesh
 
+from rigopt.vehicle.supports import connected_pieces
+
 UP_CONE_DEG = 15.0
 TREAD_Z = (0.2, 1.0)
 MIN_AREA, MAX_DEPTH = 0.02, 0.6
@@ -32,27 +34,18 @@ def step_treads(mesh: trimesh.Trimesh, wheels=()) -> list[dict]:
     low_z, high_z = mesh.bounds[:, 2]
     if high_z - low_z < MIN_BODY_HEIGHT:
         return []
-    mesh = mesh.copy()
-    mesh.merge_vertices()  # a triangle soup (STL) shares no vertex until merged
     centres = mesh.triangles_center
     up = ((mesh.face_normals[:, 2] >= np.cos(np.radians(UP_CONE_DEG)))
           & (centres[:, 2] >= TREAD_Z[0]) & (centres[:, 2] <= TREAD_Z[1]))
     for x, radius in wheels:
         up &= np.hypot(centres[:, 0] - x, centres[:, 2] - radius) > radius + WHEEL_MARGIN
-    faces = np.flatnonzero(up)
-    if not len(faces):
-        return []
-    adjacency = mesh.face_adjacency
-    both = up[adjacency].all(axis=1)
-    patches = trimesh.graph.connected_components(adjacency[both], nodes=faces, min_len=1)
+    triangles = mesh.triangles[up]
     treads = []
-    for patch in patches:
-        patch = np.asarray(patch)
-        corners = mesh.vertices[mesh.faces[patch]].reshape(-1, 3)
+    for piece in connected_pieces(triangles):  # a triangle soup's (STL's) corners are merged there
+        corners = triangles[piece].reshape(-1, 3)
         low, high = corners.min(axis=0), corners.max(axis=0)
-        if mesh.area_faces[patch].sum() < MIN_AREA or min(high[:2] - low[:2]) > MAX_DEPTH:
-            continue
-        treads.append((low, high))
+        if trimesh.triangles.area(triangles[piece]).sum() >= MIN_AREA and min(high[:2] - low[:2]) <= MAX_DEPTH:
+            treads.append((low, high))
     treads.sort(key=lambda box: -box[1][0])
     return [{"name": f"tread {k + 1} (found: faces up at {high[2]:.2f} m)",
              "min": [round(float(v), 3) for v in (low[0], low[1], high[2] - RISER)],
