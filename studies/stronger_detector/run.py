@@ -3,10 +3,10 @@ on R1's train split and scored on R1's val split beside the one it changes.
 
     python studies/stronger_detector/run.py --data DIR [--candidates s4 s4d60] [--threads 2] [--device cuda]
 
-``--data`` holds R1's train split (48 scenes) and val split (16 scenes) from ``rigopt bench generate``. Runs go to
-``<data>/stronger-runs/<candidate>`` (resumable: rerun the same command); each candidate's row is written to
-``results/val.csv`` as soon as it is scored, and its matched detections are kept beside its run so that later
-comparisons need no second scoring.
+``--data`` holds R1's train split (96 scenes: the shipped recipe's 48 are its first) and val split (16 scenes)
+from ``rigopt bench generate``. Runs go to ``<data>/stronger-runs/<candidate>`` (resumable: rerun the same
+command); each candidate's row is written to ``results/val.csv`` as soon as it is scored, and its matched
+detections are kept beside its run so that later comparisons need no second scoring.
 """
 
 from __future__ import annotations
