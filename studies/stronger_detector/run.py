@@ -21,6 +21,8 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # studies/: the studies' shared code (studylib)
 from studylib.tables import markdown, read_csv, write_csv  # noqa: E402
 
+from rigopt.validation.detectors.reference_models import SHIPPED_EPOCHS  # noqa: E402
+
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
 #: candidate -> (the candidate it changes, its settings of the small preset, training scenes); the shipped recipe
@@ -32,7 +34,6 @@ CANDIDATES = {
     "d96": ("baseline", dict(epochs=4), 96),  # amendment 1
     "e16": ("d96", dict(epochs=16), 96),  # registered: the adopted recipe (d96) at 16 epochs
 }
-SHIPPED_EPOCHS = 8
 RESAMPLES, BOOT_SEED, LEVEL = 1000, 0, 0.95
 HEADER = ["candidate", "changes", "mAP fixed", "minus compared", "ci low", "ci high", "mAP visible", "AP 0.5 m",
           "AP 1 m", "AP 2 m", "AP 4 m", "train minutes"]
