@@ -78,16 +78,20 @@ def summary_rows(scene_sets: dict, level: float) -> list[list[str]]:
 
 def run_cells(argv, description: str, results: Path, vehicles: Sequence[str], protocols: Sequence[str],
               measure_cell: Callable, analyse: Callable[[dict], dict], report: Callable[[dict, dict], str]) -> int:
-    """A study's command line (--cache, --workers, --analyse-only): ``measure_cell(vehicle, protocol, cache,
-    workers, progress)`` for every cell not yet in ``results``, then, with every cell in, ``analyse(found)`` to
-    ``results/results.json`` and ``report(found, result)`` to ``results/results.md`` (and stdout); the log to
-    ``results/run.log``. ``found``: {(vehicle, protocol): the cell's JSON}."""
+    """A study's command line (--cache, --workers, --analyse-only, --results): ``measure_cell(vehicle, protocol,
+    cache, workers, progress)`` for every cell not yet in ``results``, then, with every cell in, ``analyse(found)``
+    to ``results/results.json`` and ``report(found, result)`` to ``results/results.md`` (and stdout); the log to
+    ``results/run.log``. ``found``: {(vehicle, protocol): the cell's JSON}. ``--results DIR`` keeps a measurement
+    with other detectors (``$RIGOPT_DETECTORS``) apart from the study's own."""
     from rigopt.output import write_text_atomic
 
     parser = argparse.ArgumentParser(description=description)
     add_measuring_options(parser)
     parser.add_argument("--analyse-only", action="store_true")
+    parser.add_argument("--results", type=Path, default=results, help=f"the cells and analysis (default {results})")
     args = parser.parse_args(argv)
+    results = args.results
+    results.mkdir(parents=True, exist_ok=True)
     found = {}
     with timestamped_log(results / "run.log") as progress:
         for protocol in protocols:
