@@ -209,8 +209,8 @@ def _warn_prediction(predictions, calibration, model=None) -> None:
     from rigopt.metrics.prediction import UNINFORMATIVE_TEXT
 
     if model is not None:
-        note(f"predicted by the {model.name} drop model, a model of the shipped {model.detector} detectors' measured "
-             f"drop ({model.study}); RigCD under --weights is in its columns and with --predictor rigcd")
+        note(f"predicted by the {model.name} drop model, a model of the measured drop of {model.detector} "
+             f"({model.study}); RigCD under --weights is in its columns and with --predictor rigcd")
         for p in predictions:
             if p.extrapolation is not None:
                 note(f"{p.reference} -> {p.rig} lies beyond the model's fitting rigs: {p.extrapolation.describe()}; "

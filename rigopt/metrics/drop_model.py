@@ -254,8 +254,8 @@ MODELS_FOLDER = "drop_models"
 class DropModel:
     """A fitted model of one detector's measured drop from one reference rig (shipped under ``metrics/drop_models``).
 
-    name : what the outputs call it (e.g. "lss-R1"); detector : the shipped detector folder whose drops it was
-    fitted on; reference : the reference rig's name; reference_cameras : (N, 7) float, :func:`camera_table` of the
+    name : what the outputs call it (e.g. "lss-R1"); detector : the detector models whose measured drops it was
+    fitted on (their pack and the commit that shipped them); reference : the reference rig's name; reference_cameras : (N, 7) float, :func:`camera_table` of the
     reference's perception cameras, vehicle frame from the centre on the ground; features : the terms it was
     fitted with (FEATURES in order; the model file lists them); weights : (len(FEATURES),) float >= 0, 0 outside
     ``features``; halfwidths : (len(INTERVAL_BINS) + 1,) float, the 90 % interval's half-width per predicted-drop

@@ -183,6 +183,7 @@ def design_dict(result: DesignResult, rig_file: Path | None) -> dict:
         "metric": result.calibration.metric,
         "weights": result.calibration.name,
         "predictor_evidence": result.drop_model.study if result.drop_model is not None else None,
+        "predictor_detector": result.drop_model.detector if result.drop_model is not None else None,
         "predicted_drop": design.prediction.predicted_drop,
         **prediction_extras(design.prediction),
         "rigcd": design.prediction.rigcd,
@@ -247,8 +248,8 @@ def comparison_notes(summary: dict) -> list[str]:
     design is predicted to lose more than the naive transfer when it is (``summary`` is :func:`design_dict`
     without its notes)."""
     if summary["predictor_evidence"] is not None:
-        notes = [f"The predicted drops are the {summary['predictor']}'s, a model of the shipped detectors' measured "
-                 f"drop ({summary['predictor_evidence']}); RigCD is in its column"]
+        notes = [f"The predicted drops are the {summary['predictor']}'s, a model of the measured drop of "
+                 f"{summary['predictor_detector']} ({summary['predictor_evidence']}); RigCD is in its column"]
     else:
         notes = [RIGCD_ON_DESIGNS] if summary["metric"].startswith("rigcd") else []
     naive = summary["comparisons"]["naive_transfer"]

@@ -19,6 +19,9 @@ from pathlib import Path
 import numpy as np
 
 HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE.parent))  # studies/: the studies' shared code (studylib)
+from studylib.packs import PREVIOUS_R1_PACK  # noqa: E402
+
 TARGET = HERE.parents[1] / "metrics" / "drop_models" / "lss-R1.json"
 
 
@@ -42,7 +45,7 @@ def main() -> int:
     # printed by default when it beat RigCD, unless the second study's model replaced it (studies/predictor_v2/)
     later = HERE.parent / "predictor_v2" / "results" / "analysis.json"
     replaced = later.is_file() and json.loads(later.read_text())["v2_replaces_v1"]
-    model = drop_model.DropModel("lss-R1", "lss-R1", "R1", drop_model.camera_table(reference), weights,
+    model = drop_model.DropModel("lss-R1", PREVIOUS_R1_PACK, "R1", drop_model.camera_table(reference), weights,
                                  drop_model.interval_halfwidths(held_out, measured), np.zeros((len(weights), 2)),
                                  bool(analysis["replaces_rigcd"]) and not replaced, study, features=terms)
     terms = model.terms(reference, rigs)  # each term's range over the fitting rigs, under the model's matching

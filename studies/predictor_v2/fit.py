@@ -22,6 +22,7 @@ HERE = Path(__file__).resolve().parent
 STUDIES = HERE.parent
 MODEL = HERE / "models" / "lss-R1-v2.json"
 sys.path.insert(0, str(STUDIES))  # studies/: the studies' shared code (studylib)
+from studylib.packs import PREVIOUS_R1_PACK  # noqa: E402
 from studylib.tables import markdown  # noqa: E402
 
 
@@ -73,7 +74,7 @@ def main() -> int:
     weights = drop_model.fit_weights(terms, drops)
     study = (f"studies/predictor_v2 (pre-registered): fitted on {len(rigs)} rigs of {len(set(vehicles))} vehicles "
              "measured before it; tested on 54 new rigs (see its results)")
-    model = drop_model.DropModel("lss-R1-v2", "lss-R1", "R1", drop_model.camera_table(reference), weights,
+    model = drop_model.DropModel("lss-R1-v2", PREVIOUS_R1_PACK, "R1", drop_model.camera_table(reference), weights,
                                  drop_model.interval_halfwidths(predicted, drops), np.zeros((len(weights), 2)),
                                  False, study)
     x = model.terms(reference, [r["rig"] for r in rigs], rig_body_share)

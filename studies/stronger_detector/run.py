@@ -21,12 +21,12 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # studies/: the studies' shared code (studylib)
 from studylib.tables import markdown, read_csv, write_csv  # noqa: E402
 
-from rigopt.validation.detectors.reference_models import SHIPPED_EPOCHS  # noqa: E402
-
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
-#: candidate -> (the candidate it changes, its settings of the small preset, training scenes); the shipped recipe
-#: is 8 epochs of 48 scenes
+#: The baseline: the lss-R1 pack shipped when the study was registered (8 epochs of 48 scenes), replaced by its
+#: outcome since; its weights are read from git at that commit.
+BASELINE_COMMIT, BASELINE_EPOCHS = "c16e580", 8
+#: candidate -> (the candidate it changes, its settings of the small preset, training scenes)
 CANDIDATES = {
     "baseline": (None, None, 48),
     "s4": ("baseline", dict(feature_stride=4), 48),
@@ -44,6 +44,19 @@ def run_name(name: str, seed: int) -> str:
     return name if seed == 0 else f"{name}-seed{seed}"
 
 
+def baseline_checkpoint(data: Path, seed: int) -> Path:
+    """The baseline's model ``seed`` (the pack of BASELINE_COMMIT), written from git into ``data`` once."""
+    import subprocess
+
+    path = data / f"baseline-{BASELINE_COMMIT}" / f"seed{seed}.pt"
+    if not path.is_file():
+        weights = subprocess.run(["git", "-C", str(ROOT), "show", f"{BASELINE_COMMIT}:detectors/lss-R1/seed{seed}.pt"],
+                                 check=True, capture_output=True).stdout
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_bytes(weights)
+    return path
+
+
 def matched_on_val(data: Path, name: str, device: str = "cpu", seed: int = 0):
     """The candidate's detections on R1's val split, matched (trained first where needed) and its training minutes."""
     from rigopt.validation.detectors.config import model_config
@@ -58,11 +71,11 @@ def matched_on_val(data: Path, name: str, device: str = "cpu", seed: int = 0):
     if kept.is_file():
         return pickle.loads(kept.read_bytes())
     if name == "baseline":
-        checkpoint, minutes = ROOT / "detectors" / "lss-R1" / f"seed{seed}.pt", float("nan")
+        checkpoint, minutes = baseline_checkpoint(data, seed), float("nan")
         config = model_config("lss", "small")
     else:
         _, settings, scenes = CANDIDATES[name]
-        config = model_config("lss", "small", **{"epochs": SHIPPED_EPOCHS, **settings})
+        config = model_config("lss", "small", **{"epochs": BASELINE_EPOCHS, **settings})
         split = RigSplit(data, "R1", "train", max_range=config.bev_range)
         chosen = sorted({s.scene for s in split.samples})[:scenes]
         if len(chosen) < scenes:
