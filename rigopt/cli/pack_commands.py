@@ -14,6 +14,7 @@ from rigopt.cli.bench_commands import render_size
 from rigopt.cli.detector_commands import DEVICE_HELP, MODEL_HELP, SIZE_HELP, require_torch, training_bar
 from rigopt.cli.parsing import image_size_text
 from rigopt.errors import RigoptError
+from rigopt.validation.detectors.reference_models import SHIPPED_EPOCHS, SHIPPED_TRAIN_SCENES
 
 #: Own mAP under which ``detectors train`` says the pack's drops will be mostly noise.
 NOISY_MAP = 0.05
@@ -42,9 +43,11 @@ def train_command(
                                                 "resume from is kept in <out>/.work/ unless --work."),
     model: str = typer.Option("lss", "--model", help=MODEL_HELP),
     size: str = typer.Option("small", "--size", help=SIZE_HELP),
-    epochs: int = typer.Option(8, "--epochs", min=1, help="Epochs per seed (the shipped models: 8)."),
+    epochs: int = typer.Option(SHIPPED_EPOCHS, "--epochs", min=1,
+                               help=f"Epochs per seed (the shipped models: {SHIPPED_EPOCHS})."),
     seeds: str = typer.Option("0,1,2", "--seeds", help="Training seeds, one model each (e.g. 0,1,2)."),
-    scenes: int = typer.Option(48, "--scenes", min=1, help="Training scenes (the shipped models: 48)."),
+    scenes: int = typer.Option(SHIPPED_TRAIN_SCENES, "--scenes", min=1,
+                               help=f"Training scenes (the shipped models: {SHIPPED_TRAIN_SCENES})."),
     test_scenes: int = typer.Option(16, "--test-scenes", min=1, help="Test scenes the pack scores its models and "
                                     "every rig on (the shipped models: 16)."),
     frames: int = typer.Option(40, "--frames", min=1, help="Samples per scene (2 Hz)."),
@@ -84,7 +87,8 @@ def train_command(
     own = ", ".join(f"seed {seed} {value:.3f}" for seed, value in maps.items())
     if min(maps.values()) < NOISY_MAP:
         note(f"own mAP below {NOISY_MAP}: a drop relative to it is mostly test noise; train longer (--epochs, "
-             "--scenes; the shipped models: 8 epochs of 48 scenes, own mAP 0.22-0.24)")
+             f"--scenes; the shipped models: {SHIPPED_EPOCHS} epochs of {SHIPPED_TRAIN_SCENES} scenes, own mAP 0.34-0.35 "
+             "on R1)")
     console.print(f"packed {len(packed.seeds)} {family} model(s) trained on {reference.name} into {packed.folder}; "
                   f"own mAP on its {test_scenes} test scenes: {own}")
     print_next(f"rigopt validate RIG --ref {ref} --model {family} --detectors {out} (a rig's drop with these models)")

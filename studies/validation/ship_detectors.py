@@ -1,4 +1,5 @@
-"""Train (resumable) and pack the detectors rigopt ships: the LSS-style family trained on R1, one per seed.
+"""Train (resumable) and pack the R1 detectors rigopt shipped until commit c16e580: the LSS-style family trained on
+R1, one per seed (8 epochs of 48 scenes). The packs shipped since are made by ``studies/stronger_detector/ship.py``.
 
     python studies/validation/ship_detectors.py --data DIR [--seeds 0 1 2] [--train]
 
@@ -9,8 +10,9 @@
     rigopt bench generate --rigs R1 --split test --scenes 16 --out DIR --workers 2
 
 With ``--train`` each seed is trained (or resumed) first, as ``rigopt bench train --data DIR --rig R1 --model
-lss --epochs 8 --seed K --runs DIR/runs-epochs8-seedK``; then the runs are packed into ``detectors/lss-R1/``
-(float16 weights, the card with each model's own mAP on R1's test split: ``rigopt.validation.detectors.shipped.pack``).
+lss --epochs 8 --seed K --runs DIR/runs-epochs8-seedK``; then the runs are packed into ``detectors/lss-R1/``,
+replacing the pack there (float16 weights, the card with each model's own mAP on R1's test split:
+``rigopt.validation.detectors.shipped.pack``).
 """
 
 from __future__ import annotations

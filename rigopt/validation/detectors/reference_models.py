@@ -21,8 +21,8 @@ from typing import Callable
 from rigopt.benchmark import SYNTHETIC_IMAGE_SIZE
 from rigopt.rig.model import Rig
 
-#: The epochs of the shipped recipe (detectors/lss-R1/card.json): 8 epochs of the small preset.
-SHIPPED_EPOCHS = 8
+#: The shipped recipe (detectors/lss-R1/card.json): 16 epochs of the small preset on 96 training scenes.
+SHIPPED_EPOCHS, SHIPPED_TRAIN_SCENES = 16, 96
 
 
 @dataclass(frozen=True)
@@ -35,7 +35,7 @@ class Recipe:
     size: str = "small"
     epochs: int = SHIPPED_EPOCHS
     seeds: tuple[int, ...] = (0, 1, 2)
-    train_scenes: int = 48
+    train_scenes: int = SHIPPED_TRAIN_SCENES
     test_scenes: int = 16
     frames: int = 40
     image_size: tuple[int, int] = SYNTHETIC_IMAGE_SIZE

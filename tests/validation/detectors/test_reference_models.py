@@ -124,3 +124,22 @@ def test_killed_half_way_it_resumes_and_makes_the_same_models(reference_file, tr
     assert all(cards[0]["seeds"][seed]["mAP"] == cards[1]["seeds"][seed]["mAP"] > 0 for seed in ("0", "1"))
     with np.load(whole / "bootstrap.npz") as a, np.load(resumed / "bootstrap.npz") as b:
         assert all(np.array_equal(a[key], b[key]) for key in a.files)
+
+
+def test_the_defaults_are_the_shipped_recipe(monkeypatch):
+    """``rigopt detectors train`` with no recipe options makes what rigopt ships: every shipped pack's card records the
+    default preset, epochs, training scenes, frames and image size of ``Recipe``."""
+    from rigopt.validation.detectors.reference_models import Recipe
+    from rigopt.validation.detectors.shipped import shipped_detector, shipped_names
+
+    monkeypatch.delenv("RIGOPT_DETECTORS", raising=False)
+    recipe = Recipe()
+    packs = [shipped_detector(*name.split("-", 1)) for name in shipped_names()]
+    assert {pack.reference for pack in packs} >= {"R1", "nuscenes"}
+    for pack in packs:
+        card = pack.card
+        assert (card["recipe"]["family"], card["recipe"]["preset"], card["recipe"]["epochs"]) == (
+            recipe.family, recipe.size, recipe.epochs)
+        assert (card["train_data"]["scenes"], card["train_data"]["frames"], tuple(card["train_data"]["image_size"])) == (
+            recipe.train_scenes, recipe.frames, tuple(recipe.image_size))
+        assert card["test_data"]["scenes"] == recipe.test_scenes

@@ -348,7 +348,8 @@ def test_validate_on_a_local_ray_cluster_gives_the_figures_of_one_machine(use_pa
 
 def test_both_shipped_packs_test_on_the_default_test_set_and_nuscenes_names_its_own_rig(monkeypatch):
     """The shipped packs (no $RIGOPT_DETECTORS): lss-R1 and lss-nuscenes score on the 16 x 40 test scenes a user's
-    detector is scored on where no pack says otherwise, and ``--ref nuscenes`` is the rig inside its pack."""
+    detector is scored on where no pack says otherwise, each model at own mAP 0.30 or more there, and ``--ref
+    nuscenes`` is the rig inside its pack."""
     monkeypatch.delenv("RIGOPT_DETECTORS", raising=False)
     assert {"lss-R1", "lss-nuscenes"} <= set(shipped.shipped_names())
     for reference in ("R1", "nuscenes"):
@@ -356,7 +357,7 @@ def test_both_shipped_packs_test_on_the_default_test_set_and_nuscenes_names_its_
         assert {key: card["test_data"][key] for key in shipped.DEFAULT_TEST_DATA} == shipped.DEFAULT_TEST_DATA
         assert card["bootstrap"] == shipped.DEFAULT_BOOTSTRAP
         assert {"quick", "quick-s1"} <= set(card["protocols"])
-        assert all(seed["mAP"] > 0.2 for seed in card["seeds"].values())
+        assert all(seed["mAP"] >= 0.30 for seed in card["seeds"].values())  # the stronger detector's bar
     rig = shipped.reference_rig("nuscenes")
     assert rig.name == "nuscenes" and len(rig) == 6 and rig.origin.kind == "rear_axle"
     assert sorted(c.id for c in rig.cameras) == sorted(["CAM_FRONT", "CAM_FRONT_LEFT", "CAM_FRONT_RIGHT", "CAM_BACK",
