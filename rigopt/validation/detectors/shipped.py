@@ -184,13 +184,15 @@ def reference_rig(ref: str, root: Path | None = None) -> Rig:
     carries its rig (``rig.json``: a pack made by ``rigopt detectors train --ref FILE``, e.g. ``nuscenes``). The
     library's error, naming those packs too, otherwise."""
     from rigopt.errors import UnknownNameError
-    from rigopt.rig.library import load_rig
+    from rigopt.rig.library import load_rig, rig_names
 
     try:
         return load_rig(ref)
     except UnknownNameError as error:
+        library = {name.lower() for name in rig_names()}  # a library rig's pack may carry it too: not named here
         carried = {name.split("-", 1)[1]: name for name in shipped_names(root)
-                   if (detectors_root(root) / name / REFERENCE_RIG).is_file()}
+                   if (detectors_root(root) / name / REFERENCE_RIG).is_file()
+                   and name.split("-", 1)[1].lower() not in library}
         if str(ref) in carried:
             return shipped_detector(*carried[str(ref)].split("-", 1), root).reference_rig
         if carried:
