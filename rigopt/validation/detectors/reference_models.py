@@ -16,10 +16,12 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
+from typing import TYPE_CHECKING, Callable
 
 from rigopt.benchmark import SYNTHETIC_IMAGE_SIZE
-from rigopt.rig.model import Rig
+
+if TYPE_CHECKING:  # the command line imports this module for the recipe's defaults: no numpy at import
+    from rigopt.rig.model import Rig
 
 #: The shipped recipe (detectors/lss-R1/card.json): 16 epochs of the small preset on 96 training scenes.
 SHIPPED_EPOCHS, SHIPPED_TRAIN_SCENES = 16, 96
