@@ -13,7 +13,6 @@ resamples of the rigs (a rig's two scene sets drawn together), against the new p
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import sys
 from pathlib import Path
@@ -23,6 +22,7 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 STUDIES = HERE.parent
 sys.path.insert(0, str(STUDIES))  # studies/: the studies' shared code (studylib)
+from studylib.modules import study_module  # noqa: E402
 from studylib.tables import markdown  # noqa: E402
 
 PACKS = {"previous pack (c16e580)": STUDIES / "replication" / "results",
@@ -32,20 +32,10 @@ PREDICTOR = "lss-R1-v2"
 #: The rule (amendment 4): the bar of predictor_v2's replication.
 BAR = {"pooled_rho": 0.8, "mae": 0.10}
 
-
-
-def _study_module(name: str, path: Path):
-    """Another study's module, loaded under its own name (several studies have an ``analysis.py``)."""
-    spec = importlib.util.spec_from_file_location(name, path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
 # predictor_v2's statistics (Spearman rho, the percentile interval over resampled groups); the replication's vehicles
-_analysis = _study_module("predictor_v2_analysis", STUDIES / "predictor_v2" / "analysis.py")
+_analysis = study_module("predictor_v2_analysis", STUDIES / "predictor_v2" / "analysis.py")
 interval, rho = _analysis.interval, _analysis.rho
-VEHICLES = _study_module("replication_remake", STUDIES / "replication" / "remake.py").VEHICLES
+VEHICLES = study_module("replication_remake", STUDIES / "replication" / "remake.py").VEHICLES
 
 
 def measured_cells(folder: Path) -> list[dict]:
